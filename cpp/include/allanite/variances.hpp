@@ -1,0 +1,226 @@
+// Allan-family variance kernels on a detrended phase array (see phase.hpp).
+//
+// Every kernel works in "sample units": tau0 = 1, phase in rate * samples. The caller scales by
+// 1 / tau0^2 where the phase carries angle units. Each averaging factor m costs O(M) work and
+// one streaming pass over the phase rows; all channels are handled in the same pass.
+//
+// Definitions (x = phase, M rows, d2(k) = x[k+2m] - 2 x[k+m] + x[k]):
+//   overlapping AVAR   sum_{k=0}^{M-2m-1} d2(k)^2 / (2 m^2 (M-2m))
+//   standard AVAR      same over k = 0, m, 2m, ...; n = floor((M-1)/m) - 1 terms
+//   modified AVAR      sum_{j=0}^{M-3m} (sum_{i=j}^{j+m-1} d2(i))^2 / (2 m^4 (M-3m+1))
+//   overlapping HVAR   sum_{k=0}^{M-3m-1} d3(k)^2 / (6 m^2 (M-3m)),
+//                      d3(k) = x[k+3m] - 3 x[k+2m] + 3 x[k+m] - x[k]
+//   standard HVAR      same over k = 0, m, 2m, ...; n = floor((M-1)/m) - 2 terms
+//   total variance     sum_{i=1}^{M-2} (x*[i-m] - 2 x[i] + x*[i+m])^2 / (2 m^2 (M-2)), x* the
+//                      phase extended by point reflection at both ends (NIST SP1065 eq. 25):
+//                      x*[-j] = 2 x[0] - x[j], x*[M-1+j] = 2 x[M-1] - x[M-1-j].
+#pragma once
+
+#include <Eigen/Core>
+#include <algorithm>
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "allanite/compensated.hpp"
+#include "allanite/parallel.hpp"
+#include "allanite/phase.hpp"
+
+namespace allanite {
+
+/// A read-only view of a row-major phase array (rows: time, columns: channels).
+using PhaseRef = Eigen::Ref<const RowMatrix>;
+
+enum class VarianceKind { Overlapping, Standard, Modified, Hadamard, StandardHadamard, Total };
+
+inline VarianceKind parse_variance_kind(const std::string& s) {
+  if (s == "overlapping") return VarianceKind::Overlapping;
+  if (s == "standard") return VarianceKind::Standard;
+  if (s == "modified") return VarianceKind::Modified;
+  if (s == "hadamard") return VarianceKind::Hadamard;
+  if (s == "standard_hadamard") return VarianceKind::StandardHadamard;
+  if (s == "total") return VarianceKind::Total;
+  throw std::invalid_argument(
+      "kind must be one of 'overlapping', 'standard', 'modified', 'hadamard', "
+      "'standard_hadamard', 'total'; got '" + s + "'");
+}
+
+/// Largest averaging factor the kind supports for M phase points (0 if none).
+inline std::int64_t max_m(VarianceKind kind, std::int64_t M) {
+  switch (kind) {
+    case VarianceKind::Overlapping:
+    case VarianceKind::Standard:
+    case VarianceKind::Total:
+      return (M - 1) / 2;
+    case VarianceKind::Modified:
+      return M / 3;
+    case VarianceKind::Hadamard:
+    case VarianceKind::StandardHadamard:
+      return (M - 1) / 3;
+  }
+  return 0;
+}
+
+/// Number of difference terms the estimator averages for factor m.
+inline std::int64_t n_terms(VarianceKind kind, std::int64_t M, std::int64_t m) {
+  switch (kind) {
+    case VarianceKind::Overlapping: return M - 2 * m;
+    case VarianceKind::Standard: return (M - 1) / m - 1;
+    case VarianceKind::Modified: return M - 3 * m + 1;
+    case VarianceKind::Hadamard: return M - 3 * m;
+    case VarianceKind::StandardHadamard: return (M - 1) / m - 2;
+    case VarianceKind::Total: return M - 2;
+  }
+  return 0;
+}
+
+namespace detail {
+
+/// Sum over j in [0, count) of value(j, c)^2 for every channel c, blocked + compensated.
+template <class Fn>
+void square_sums(std::int64_t count, Eigen::Index nc, Fn&& value, double* out) {
+  constexpr std::int64_t kBlock = 512;
+  std::vector<NeumaierSum> total(static_cast<std::size_t>(nc));
+  std::vector<double> block(static_cast<std::size_t>(nc));
+  for (std::int64_t start = 0; start < count; start += kBlock) {
+    const std::int64_t end = std::min(count, start + kBlock);
+    std::fill(block.begin(), block.end(), 0.0);
+    for (std::int64_t j = start; j < end; ++j) {
+      for (Eigen::Index c = 0; c < nc; ++c) {
+        const double d = value(j, c);
+        block[static_cast<std::size_t>(c)] += d * d;
+      }
+    }
+    for (Eigen::Index c = 0; c < nc; ++c) total[static_cast<std::size_t>(c)].add(block[static_cast<std::size_t>(c)]);
+  }
+  for (Eigen::Index c = 0; c < nc; ++c) out[c] = total[static_cast<std::size_t>(c)].value();
+}
+
+/// Specialised single-channel sum of squared second differences (the hot path).
+inline double overlapping_1ch(const double* x, std::int64_t count, std::int64_t m) {
+  constexpr std::int64_t kBlock = 1024;
+  NeumaierSum total;
+  for (std::int64_t start = 0; start < count; start += kBlock) {
+    const std::int64_t end = std::min(count, start + kBlock);
+    double a0 = 0.0, a1 = 0.0, a2 = 0.0, a3 = 0.0;
+    std::int64_t k = start;
+    for (; k + 4 <= end; k += 4) {
+      const double d0 = x[k + 2 * m] - 2.0 * x[k + m] + x[k];
+      const double d1 = x[k + 1 + 2 * m] - 2.0 * x[k + 1 + m] + x[k + 1];
+      const double d2 = x[k + 2 + 2 * m] - 2.0 * x[k + 2 + m] + x[k + 2];
+      const double d3 = x[k + 3 + 2 * m] - 2.0 * x[k + 3 + m] + x[k + 3];
+      a0 += d0 * d0;
+      a1 += d1 * d1;
+      a2 += d2 * d2;
+      a3 += d3 * d3;
+    }
+    for (; k < end; ++k) {
+      const double d = x[k + 2 * m] - 2.0 * x[k + m] + x[k];
+      a0 += d * d;
+    }
+    total.add((a0 + a1) + (a2 + a3));
+  }
+  return total.value();
+}
+
+}  // namespace detail
+
+/// Variance of the given kind for one averaging factor m, all channels, into out[0..nc).
+inline void variance_one(const PhaseRef& phase, VarianceKind kind, std::int64_t m, double* out) {
+  const std::int64_t M = phase.rows();
+  const Eigen::Index nc = phase.cols();
+  const double* x = phase.data();
+  const Eigen::Index row_stride = phase.outerStride();
+  const auto at = [x, row_stride](std::int64_t k, Eigen::Index c) { return x[k * row_stride + c]; };
+  const std::int64_t n = n_terms(kind, M, m);
+  if (m < 1 || m > max_m(kind, M) || n < 1)
+    throw std::invalid_argument("averaging factor m = " + std::to_string(m) + " is outside [1, " +
+                                std::to_string(max_m(kind, M)) + "] for " + std::to_string(M) +
+                                " phase points");
+  const double md = static_cast<double>(m);
+  const double nd = static_cast<double>(n);
+  switch (kind) {
+    case VarianceKind::Overlapping:
+    case VarianceKind::Standard: {
+      const std::int64_t stride = kind == VarianceKind::Overlapping ? 1 : m;
+      if (nc == 1 && stride == 1 && row_stride == 1) {
+        out[0] = detail::overlapping_1ch(x, n, m);
+      } else {
+        detail::square_sums(n, nc, [&](std::int64_t j, Eigen::Index c) {
+          const std::int64_t k = j * stride;
+          return at(k + 2 * m, c) - 2.0 * at(k + m, c) + at(k, c);
+        }, out);
+      }
+      for (Eigen::Index c = 0; c < nc; ++c) out[c] /= 2.0 * md * md * nd;
+      return;
+    }
+    case VarianceKind::Hadamard:
+    case VarianceKind::StandardHadamard: {
+      const std::int64_t stride = kind == VarianceKind::Hadamard ? 1 : m;
+      detail::square_sums(n, nc, [&](std::int64_t j, Eigen::Index c) {
+        const std::int64_t k = j * stride;
+        return at(k + 3 * m, c) - 3.0 * at(k + 2 * m, c) + 3.0 * at(k + m, c) - at(k, c);
+      }, out);
+      for (Eigen::Index c = 0; c < nc; ++c) out[c] /= 6.0 * md * md * nd;
+      return;
+    }
+    case VarianceKind::Modified: {
+      // sliding window of m second differences, kept compensated so that it does not drift
+      const auto d2 = [&](std::int64_t i, Eigen::Index c) {
+        return at(i + 2 * m, c) - 2.0 * at(i + m, c) + at(i, c);
+      };
+      for (Eigen::Index c = 0; c < nc; ++c) {
+        NeumaierSum window;
+        for (std::int64_t i = 0; i < m; ++i) window.add(d2(i, c));
+        BlockedSum total;
+        for (std::int64_t j = 0; j < n; ++j) {
+          const double w = window.value();
+          total.add(w * w);
+          if (j + 1 < n) {
+            window.add(d2(j + m, c));
+            window.add(-d2(j, c));
+          }
+        }
+        out[c] = total.value() / (2.0 * md * md * md * md * nd);
+      }
+      return;
+    }
+    case VarianceKind::Total: {
+      const std::int64_t last = M - 1;
+      const auto ext = [&](std::int64_t j, Eigen::Index c) {
+        if (j < 0) return 2.0 * at(0, c) - at(-j, c);
+        if (j > last) return 2.0 * at(last, c) - at(2 * last - j, c);
+        return at(j, c);
+      };
+      detail::square_sums(n, nc, [&](std::int64_t j, Eigen::Index c) {
+        const std::int64_t i = j + 1;
+        return ext(i - m, c) - 2.0 * at(i, c) + ext(i + m, c);
+      }, out);
+      for (Eigen::Index c = 0; c < nc; ++c) out[c] /= 2.0 * md * md * nd;
+      return;
+    }
+  }
+}
+
+/// Variances for a list of averaging factors (rows of the result), threaded over factors.
+/// Bit-for-bit independent of `threads`: each factor is computed by one thread.
+inline RowMatrix variance(const PhaseRef& phase, const std::vector<std::int64_t>& ms,
+                          VarianceKind kind, int threads) {
+  const std::int64_t M = phase.rows();
+  for (const std::int64_t m : ms) {
+    if (m < 1 || m > max_m(kind, M) || n_terms(kind, M, m) < 1)
+      throw std::invalid_argument("averaging factor m = " + std::to_string(m) +
+                                  " is outside the supported range [1, " +
+                                  std::to_string(max_m(kind, M)) + "] for " + std::to_string(M) +
+                                  " phase points; use a shorter averaging time");
+  }
+  RowMatrix out(static_cast<Eigen::Index>(ms.size()), phase.cols());
+  // longest passes (small m) first keeps both cores busy to the end
+  parallel_for(ms.size(), resolve_threads(threads), [&](std::size_t i) {
+    variance_one(phase, kind, ms[i], out.data() + static_cast<Eigen::Index>(i) * phase.cols());
+  });
+  return out;
+}
+
+}  // namespace allanite

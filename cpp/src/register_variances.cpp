@@ -1,0 +1,74 @@
+// Bindings for prefix sums (phase) and the Allan-family variance kernels.
+#include <pybind11/eigen.h>
+#include <pybind11/numpy.h>
+#include <pybind11/stl.h>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "allanite/phase.hpp"
+#include "allanite/variances.hpp"
+#include "bindings.hpp"
+
+namespace py = pybind11;
+
+namespace allanite::bind {
+namespace {
+
+template <class T>
+RowMatrix phase_typed(const py::array& x, InputKind kind) {
+  const auto itemsize = static_cast<py::ssize_t>(sizeof(T));
+  const py::ssize_t s0 = x.strides(0), s1 = x.strides(1);
+  if (s0 % itemsize != 0 || s1 % itemsize != 0)
+    throw py::type_error("array strides are not a multiple of the item size (an exotic view); "
+                         "pass np.ascontiguousarray(x) instead");
+  StridedMap<T> view(static_cast<const T*>(x.data()), x.shape(0), x.shape(1),
+                     Strides(s0 / itemsize, s1 / itemsize));
+  py::gil_scoped_release release;
+  return build_phase<T>(view, kind);
+}
+
+RowMatrix phase(const py::array& x, const std::string& input) {
+  const InputKind kind = parse_input_kind(input);
+  if (x.ndim() != 2)
+    throw py::value_error("phase() expects a 2-D (samples, channels) array, got " +
+                          std::to_string(x.ndim()) + " dimensions");
+  const py::dtype dt = x.dtype();
+  if (dt.is(py::dtype::of<double>())) return phase_typed<double>(x, kind);
+  if (dt.is(py::dtype::of<float>())) return phase_typed<float>(x, kind);
+  if (dt.is(py::dtype::of<std::int16_t>())) return phase_typed<std::int16_t>(x, kind);
+  if (dt.is(py::dtype::of<std::int32_t>())) return phase_typed<std::int32_t>(x, kind);
+  if (dt.is(py::dtype::of<std::int64_t>())) return phase_typed<std::int64_t>(x, kind);
+  throw py::type_error("unsupported dtype " + std::string(py::str(dt)) +
+                       "; use float64, float32, int16, int32 or int64");
+}
+
+RowMatrix variance(const Eigen::Ref<const RowMatrix>& phase_ref, const std::vector<std::int64_t>& ms,
+                   const std::string& kind, int threads) {
+  const VarianceKind k = parse_variance_kind(kind);
+  py::gil_scoped_release release;
+  return allanite::variance(phase_ref, ms, k, threads);
+}
+
+}  // namespace
+
+void register_variances(py::module_& m) {
+  m.def("phase", &phase, py::arg("x"), py::arg("input"),
+        "Detrended, compensated phase (prefix sums) of a (N, C) record of rate, increment or "
+        "angle samples; returns (N+1, C) for rate/increment, (N, C) for angle.");
+  m.def("variance", &variance, py::arg("phase"), py::arg("m"), py::arg("kind"),
+        py::arg("threads") = 0,
+        "Allan-family variance (tau0 = 1, phase units) for each averaging factor in m; "
+        "returns (len(m), C).");
+  m.def("n_terms",
+        [](const std::string& kind, std::int64_t M, std::int64_t mm) {
+          return allanite::n_terms(parse_variance_kind(kind), M, mm);
+        },
+        py::arg("kind"), py::arg("n_phase"), py::arg("m"));
+  m.def("max_m",
+        [](const std::string& kind, std::int64_t M) { return allanite::max_m(parse_variance_kind(kind), M); },
+        py::arg("kind"), py::arg("n_phase"));
+}
+
+}  // namespace allanite::bind

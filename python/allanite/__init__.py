@@ -1,0 +1,36 @@
+"""allanite: how noisy is your gyroscope, fast, and why your simulated sensor is not the real one.
+
+Allan-family variances with confidence intervals from a C++ core, IEEE noise-term fits with
+honest uncertainty, noise simulation from a model, and a diagnosis of the sim-to-real gap.
+"""
+
+from __future__ import annotations
+
+from allanite.variance import (
+    KINDS,
+    AllanResult,
+    adev,
+    avar,
+    hdev,
+    mdev,
+    oadev,
+    ohdev,
+    tdev,
+    totdev,
+)
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "KINDS",
+    "AllanResult",
+    "__version__",
+    "adev",
+    "avar",
+    "hdev",
+    "mdev",
+    "oadev",
+    "ohdev",
+    "tdev",
+    "totdev",
+]

@@ -1,0 +1,82 @@
+"""The ``allanite`` command line: one module per subcommand, wired here.
+
+Each subcommand module defines ``register(subparsers)`` which adds its parser and sets
+``func=run`` (a callable ``run(args) -> int``). Errors the user can fix (:class:`ValueError`,
+:class:`TypeError`, :class:`OSError`, :class:`allanite.errors.InputError`) become one line on
+stderr and exit code 2; no partial output file is left behind (write through
+:func:`allanite.io.atomic.atomic_output`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+from collections.abc import Sequence
+
+__all__ = ["SUBCOMMANDS", "build_parser", "main"]
+
+#: subcommand name -> module under allanite.cli
+SUBCOMMANDS: dict[str, str] = {
+    "analyze": "allanite.cli.analyze",
+    "fit": "allanite.cli.fit",
+    "simulate": "allanite.cli.simulate",
+    "diagnose": "allanite.cli.diagnose",
+    "report": "allanite.cli.report",
+    "batch": "allanite.cli.batch",
+    "gui": "allanite.cli.gui",
+}
+
+EXIT_OK = 0
+EXIT_FAILURE = 1  # e.g. a pass/fail check failed
+EXIT_USAGE = 2  # bad input, bad arguments, unreadable file
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The top-level parser with every available subcommand registered."""
+    parser = argparse.ArgumentParser(
+        prog="allanite",
+        description="Gyroscope noise analysis: Allan deviation, noise-term fits, simulation and "
+        "sim-to-real diagnosis.",
+        epilog="examples:\n  allanite analyze --example\n  allanite analyze rec.csv --fs 100 "
+        "--input angle --json\n  allanite fit rec.npy --fs 2000 --units deg/s -o model.json\n"
+        "Run 'allanite COMMAND --help' for the options of each command.",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    from allanite import __version__
+
+    parser.add_argument("--version", action="version", version=f"allanite {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for name, module_name in SUBCOMMANDS.items():
+        try:
+            module = importlib.import_module(module_name)
+        except ModuleNotFoundError as exc:
+            if exc.name != module_name:
+                raise
+            continue
+        module.register(sub)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``allanite`` console script; returns the exit code."""
+    from allanite.errors import InputError
+
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if not getattr(args, "func", None):
+        parser.print_help(sys.stderr)
+        return EXIT_USAGE
+    try:
+        return int(args.func(args) or 0)
+    except (InputError, ValueError, TypeError, OSError) as exc:
+        message = " ".join(str(exc).split())
+        print(f"allanite {args.command}: error: {message}", file=sys.stderr)
+        return EXIT_USAGE
+    except KeyboardInterrupt:
+        print(f"allanite {args.command}: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,135 @@
+"""The one abstraction: a noise Term.
+
+Every effect the library knows is one :class:`Term` subclass, and fitting, simulation,
+diagnosis, reports and unit conversion all go through it. A Term is a frozen dataclass whose
+fields are its parameters (in the model's rate unit and seconds); the class declares the JSON
+``type``, the IEEE symbol, the unit of each parameter and whether the effect is stationary.
+
+Adding an effect = adding one subclass (it registers itself under its ``type``) and its tests.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from abc import ABC, abstractmethod
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, ClassVar
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+if TYPE_CHECKING:
+    from allanite.simulation.streams import TermStream
+    from allanite.variance import AllanResult
+
+__all__ = ["TERM_TYPES", "ParamSpec", "Term", "term_from_dict"]
+
+
+@dataclass(frozen=True)
+class ParamSpec:
+    """Unit of a parameter as powers of the model's rate unit and of seconds.
+
+    ``N`` (rate * sqrt(s)) is ``ParamSpec("N", rate=1, time=0.5)``; a correlation time is
+    ``ParamSpec("tau_c", rate=0, time=1)``.
+    """
+
+    name: str
+    rate: float
+    time: float
+    description: str = ""
+
+
+#: registry of every Term subclass by its JSON ``type``
+TERM_TYPES: dict[str, type[Term]] = {}
+
+
+class Term(ABC):
+    """Base class of all noise terms (subclasses are frozen dataclasses).
+
+    Class attributes
+    ----------------
+    type : str
+        JSON ``"type"`` of the term (``white``, ``quantization``, ``flicker``, ...).
+    symbol : str
+        IEEE symbol of the principal coefficient (``N``, ``Q``, ``B``, ``K``, ``R``, ...).
+    params : tuple of ParamSpec
+        The parameters, in field order, with their units.
+    stationary : bool
+        Whether the effect is wide-sense stationary (then :meth:`psd` exists).
+    """
+
+    type: ClassVar[str]
+    symbol: ClassVar[str]
+    params: ClassVar[tuple[ParamSpec, ...]]
+    stationary: ClassVar[bool] = True
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        term_type = cls.__dict__.get("type")
+        if isinstance(term_type, str):
+            TERM_TYPES[term_type] = cls
+
+    # --- parameters -------------------------------------------------------------------------
+    def values(self) -> dict[str, float]:
+        """Parameter values by name, in the model's units."""
+        return {p.name: float(getattr(self, p.name)) for p in self.params}
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary ``{"type": ..., <param>: value, ...}``."""
+        return {"type": self.type, **self.values()}
+
+    def with_values(self, **values: float) -> Term:
+        """A copy with some parameters replaced."""
+        return dataclasses.replace(self, **values)  # type: ignore[type-var]
+
+    # --- statistics -------------------------------------------------------------------------
+    @abstractmethod
+    def avar(self, tau: ArrayLike, dt: float) -> NDArray[np.float64]:
+        """Exact Allan variance of this effect for a record sampled at period ``dt``.
+
+        Parameters
+        ----------
+        tau : array_like
+            Averaging times in seconds (multiples of ``dt``).
+        dt : float
+            Sample period in seconds.
+
+        Returns
+        -------
+        numpy.ndarray
+            Allan variance in squared rate units.
+        """
+
+    def psd(self, f: ArrayLike) -> NDArray[np.float64]:
+        """One-sided power spectral density of the rate in rate^2/Hz (stationary terms only)."""
+        raise NotImplementedError(f"{type(self).__name__} is not stationary and has no PSD")
+
+    # --- simulation -------------------------------------------------------------------------
+    def stream(self, fs: float, n_channels: int, seed: Any) -> TermStream:
+        """A streaming generator of this effect's rate samples (see allanite.simulation)."""
+        raise NotImplementedError(f"{type(self).__name__} cannot be simulated yet")
+
+    # --- fitting ----------------------------------------------------------------------------
+    @classmethod
+    def guess(cls, result: AllanResult) -> Term | None:
+        """A starting value from an Allan curve, or None if the curve shows no sign of it."""
+        return None
+
+
+def term_from_dict(data: dict[str, Any]) -> Term:
+    """Build a Term from its JSON dictionary, with a clear error for unknown types or fields."""
+    if not isinstance(data, dict) or "type" not in data:
+        raise ValueError(f"a term must be an object with a 'type' field, got {data!r}")
+    kind = data["type"]
+    if kind not in TERM_TYPES:
+        raise ValueError(f"unknown term type {kind!r}; known types: {', '.join(sorted(TERM_TYPES))}")
+    cls = TERM_TYPES[kind]
+    names = [p.name for p in cls.params]
+    missing = [n for n in names if n not in data]
+    extra = [k for k in data if k != "type" and k not in names]
+    if missing or extra:
+        raise ValueError(
+            f"term {kind!r} needs fields {names}; missing {missing or 'none'}, unexpected "
+            f"{extra or 'none'}"
+        )
+    return cls(**{n: float(data[n]) for n in names})
