@@ -1,0 +1,555 @@
+"""Read records from text, .npy/.npz, raw binary, HDF5, Parquet and pandas DataFrames.
+
+Every reader ends in the same place, :func:`make_record`: column selection by index or name,
+an optional time column (sampling frequency inferred, gaps and jitter detected and handled by
+a policy, see :mod:`allanite.io.timebase`), a scale factor from counts to units, and a
+:class:`~allanite.io.record.Record` with the units attached. Problems with the file raise
+:class:`~allanite.errors.InputError` naming the file, the line or field, and the fix.
+"""
+
+from __future__ import annotations
+
+import os
+import zipfile
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+from numpy.typing import NDArray
+
+from allanite.errors import InputError
+from allanite.io.record import Record
+from allanite.io.text import read_text_table
+from allanite.io.timebase import resolve_time
+
+__all__ = [
+    "FORMATS",
+    "detect_format",
+    "from_frame",
+    "make_record",
+    "read_record",
+]
+
+#: format name -> file suffixes
+FORMATS: dict[str, tuple[str, ...]] = {
+    "text": (".txt", ".csv", ".tsv", ".dat", ".asc", ".log", ".gz"),
+    "npy": (".npy",),
+    "npz": (".npz",),
+    "raw": (".bin", ".raw", ".imu"),
+    "hdf5": (".h5", ".hdf5", ".hdf"),
+    "parquet": (".parquet", ".pq"),
+}
+
+Column = int | str
+Where = Callable[[int], str]
+
+
+def detect_format(path: str | os.PathLike[str]) -> str:
+    """Format name from the file suffix (unknown suffixes are read as text)."""
+    suffix = Path(path).suffix.lower()
+    for name, suffixes in FORMATS.items():
+        if suffix in suffixes:
+            return name
+    return "text"
+
+
+def _as_list(columns: Column | Sequence[Column] | None) -> list[Column] | None:
+    if columns is None:
+        return None
+    if isinstance(columns, (int, str, np.integer)):
+        columns = [columns]
+    out: list[Column] = []
+    for c in columns:
+        if isinstance(c, str) and "," in c:
+            out.extend(p.strip() for p in c.split(",") if p.strip())
+        else:
+            out.append(c)
+    return out
+
+
+def _resolve(names: tuple[str, ...], key: Column, source: str, what: str) -> int:
+    if isinstance(key, (int, np.integer)) and not isinstance(key, bool):
+        i = int(key)
+        if not -len(names) <= i < len(names):
+            raise InputError(
+                f"{what} {i} does not exist: the data has {len(names)} column(s) "
+                f"({', '.join(names)}); columns are numbered from 0",
+                path=source,
+            )
+        return i % len(names)
+    if isinstance(key, str):
+        if key in names:
+            return names.index(key)
+        if key.lstrip("-").isdigit():
+            return _resolve(names, int(key), source, what)
+        raise InputError(f"no {what} named {key!r}; available: {', '.join(names)}", path=source)
+    raise TypeError(f"a {what} is given by index or name, got {key!r}")
+
+
+def make_record(
+    table: NDArray[Any],
+    names: Sequence[str] | None,
+    *,
+    source: str,
+    fs: float | None = None,
+    input: str = "rate",
+    units: str | None = None,
+    columns: Column | Sequence[Column] | None = None,
+    time_column: Column | None = None,
+    time_scale: float = 1.0,
+    gaps: str = "error",
+    scale: float | None = None,
+    where: Where | None = None,
+) -> Record:
+    """Build a :class:`Record` from a 2-D table of numbers.
+
+    Parameters
+    ----------
+    table : numpy.ndarray
+        ``(rows, columns)`` numbers (a 1-D array is one column).
+    names : sequence of str, optional
+        Column names (``col0``, ``col1``, ... when omitted).
+    source : str
+        File name or description, for messages and :attr:`Record.source`.
+    fs : float, optional
+        Sampling frequency in Hz; inferred from ``time_column`` when omitted.
+    input : {"rate", "increment", "angle"}
+        What the samples are.
+    units : str, optional
+        Unit of the samples after scaling.
+    columns : int, str or sequence, optional
+        Channels to keep, by 0-based index or name (default: every column but the time
+        column). A string with commas is split.
+    time_column : int or str, optional
+        Column of time stamps.
+    time_scale : float
+        Seconds per time-stamp unit (1e-3 for milliseconds, 1e-6 for microseconds).
+    gaps : {"error", "split", "fill"}
+        Policy for gaps in the time column.
+    scale : float, optional
+        Factor from counts to units: ``samples = counts * scale``.
+    where : callable, optional
+        Maps a row index to a location for messages (default ``"row i"``).
+
+    Returns
+    -------
+    Record
+    """
+    arr = np.asarray(table)
+    if arr.ndim == 1:
+        arr = arr.reshape(-1, 1)
+    if arr.ndim != 2:
+        raise InputError(
+            f"expected a table of samples (1-D or 2-D), got shape {arr.shape}; select a 2-D array",
+            path=source,
+        )
+    if not (np.issubdtype(arr.dtype, np.number) and not np.iscomplexobj(arr)):
+        raise InputError(f"data type {arr.dtype} is not a real number type", path=source)
+    col_names = (
+        tuple(str(n) for n in names)
+        if names is not None
+        else tuple(f"col{i}" for i in range(arr.shape[1]))
+    )
+    if len(col_names) != arr.shape[1]:
+        raise InputError(f"{len(col_names)} column names for {arr.shape[1]} columns", path=source)
+    locate: Where = where if where is not None else (lambda row: f"row {row + 1}")
+    t_index = (
+        None if time_column is None else _resolve(col_names, time_column, source, "time column")
+    )
+    chosen = _as_list(columns)
+    if chosen is None:
+        idx = [i for i in range(arr.shape[1]) if i != t_index]
+    else:
+        idx = [_resolve(col_names, c, source, "column") for c in chosen]
+    if not idx:
+        raise InputError("no sample columns left after taking the time column", path=source)
+    if t_index is not None and t_index in idx:
+        raise InputError(
+            f"column {col_names[t_index]!r} is both the time column and a sample column; "
+            "leave it out of the columns",
+            path=source,
+        )
+    samples = arr[:, idx]
+    if scale is not None:
+        if not np.isfinite(scale) or scale == 0:
+            raise ValueError(f"scale must be a finite, non-zero factor, got {scale!r}")
+        samples = samples.astype(np.float64) * float(scale)
+    if samples.dtype.kind == "f":
+        bad = np.argwhere(~np.isfinite(samples))
+        if bad.size:
+            row, col = (int(v) for v in bad[0])
+            raise InputError(
+                f"{locate(row)}, column {col_names[idx[col]]!r}: sample is "
+                f"{samples[row, col]}; the Allan variance needs every sample: remove or "
+                "repair the row (or drop the column)",
+                path=source,
+            )
+    if arr.shape[0] < 3:
+        raise InputError(f"only {arr.shape[0]} sample(s); need at least 3", path=source)
+    channels = tuple(col_names[i] for i in idx)
+    if t_index is None:
+        return Record(
+            samples=samples,
+            fs=fs,
+            input=input,
+            units=units,
+            channels=channels,
+            source=source,
+            scale=scale,
+        )
+    if not np.isfinite(time_scale) or time_scale <= 0:
+        raise ValueError(f"time_scale must be a positive number of seconds, got {time_scale!r}")
+    t = np.asarray(arr[:, t_index], dtype=np.float64) * time_scale
+    base = resolve_time(
+        t, np.asarray(samples, dtype=np.float64), source=source, policy=gaps, fs=fs, where=locate
+    )
+    return Record(
+        samples=base.samples,
+        fs=base.fs,
+        input=input,
+        units=units,
+        channels=channels,
+        source=source,
+        segments=base.segments,
+        warnings=base.warnings,
+        timing=base.timing,
+        scale=scale,
+    )
+
+
+# --- per-format loaders: return (table, names, where) ----------------------------------------
+Loaded = tuple[NDArray[Any], tuple[str, ...] | None, Where | None]
+
+
+def _load_text(path: Path, *, delimiter: str | None, header: bool | None) -> Loaded:
+    table = read_text_table(path, delimiter=delimiter, header=header)
+    return table.data, table.names, lambda row: f"line {table.line_of(row)}"
+
+
+def _npy_truncated(path: Path) -> str | None:
+    """Explain a truncated or corrupt .npy file, or None if its size matches its header."""
+    with open(path, "rb") as handle:
+        try:
+            version = np.lib.format.read_magic(handle)
+            if version == (1, 0):
+                shape, _, dtype = np.lib.format.read_array_header_1_0(handle)
+            else:
+                shape, _, dtype = np.lib.format.read_array_header_2_0(handle)
+        except (ValueError, OSError) as exc:
+            return f"not a valid .npy file ({exc})"
+        offset = handle.tell()
+    if dtype.hasobject:
+        return None
+    expected = int(np.prod(shape)) * dtype.itemsize
+    found = path.stat().st_size - offset
+    if found < expected:
+        return (
+            f"truncated: the header announces shape {shape} ({expected} bytes of data) but only "
+            f"{found} bytes follow; the copy is incomplete, copy or export it again"
+        )
+    return None
+
+
+def _load_npy(path: Path) -> Loaded:
+    problem = _npy_truncated(path)
+    if problem is not None:
+        raise InputError(problem, path=str(path))
+    try:
+        arr = np.load(path, mmap_mode="r", allow_pickle=False)
+    except ValueError as exc:
+        raise InputError(
+            f"cannot read the array ({exc}); save plain numeric arrays with numpy.save",
+            path=str(path),
+        ) from exc
+    return arr, None, None
+
+
+def _load_npz(path: Path, key: str | None) -> Loaded:
+    try:
+        archive = np.load(path, allow_pickle=False)
+    except (ValueError, zipfile.BadZipFile, EOFError) as exc:
+        raise InputError(
+            f"not a readable .npz archive ({exc}); the file may be truncated, copy it again",
+            path=str(path),
+        ) from exc
+    with archive:
+        keys = list(archive.files)
+        if not keys:
+            raise InputError("the archive holds no arrays", path=str(path))
+        if key is None:
+            if len(keys) > 1:
+                raise InputError(
+                    f"the archive holds several arrays ({', '.join(keys)}); choose one with "
+                    "key= (CLI: --key NAME)",
+                    path=str(path),
+                )
+            key = keys[0]
+        if key not in keys:
+            raise InputError(
+                f"no array {key!r} in the archive; available: {', '.join(keys)}", path=str(path)
+            )
+        try:
+            arr = archive[key]
+        except (ValueError, zipfile.BadZipFile, EOFError, OSError) as exc:
+            raise InputError(
+                f"array {key!r} cannot be read ({exc}); the file may be truncated",
+                path=str(path),
+            ) from exc
+    names = None
+    if arr.ndim == 2 and arr.shape[1] > 1:
+        names = tuple(f"{key}[{i}]" for i in range(arr.shape[1]))
+    elif arr.ndim == 1:
+        names = (key,)
+    return arr, names, None
+
+
+def _load_raw(
+    path: Path, *, dtype: str | None, n_channels: int, byteorder: str, offset: int
+) -> Loaded:
+    if dtype is None:
+        raise InputError(
+            "raw binary needs the sample type; give dtype= (CLI: --dtype int16, float32, ...)",
+            path=str(path),
+        )
+    try:
+        dt = np.dtype(dtype)
+    except TypeError as exc:
+        raise ValueError(
+            f"unknown dtype {dtype!r}; use e.g. int16, int32, float32, float64"
+        ) from exc
+    orders: dict[str, Literal["<", ">", "="]] = {
+        "little": "<",
+        "big": ">",
+        "native": "=",
+        "<": "<",
+        ">": ">",
+        "=": "=",
+    }
+    if byteorder not in orders:
+        raise ValueError(f"byte order {byteorder!r}; use 'little', 'big' or 'native'")
+    dt = dt.newbyteorder(orders[byteorder])
+    if n_channels < 1:
+        raise ValueError(f"channels must be at least 1, got {n_channels}")
+    if offset < 0:
+        raise ValueError(f"offset must be a non-negative number of bytes, got {offset}")
+    size = path.stat().st_size - offset
+    frame = dt.itemsize * n_channels
+    if size <= 0:
+        raise InputError(f"no data after the {offset}-byte offset; check --offset", path=str(path))
+    if size % frame:
+        raise InputError(
+            f"{size} bytes after the offset are not a whole number of {n_channels}-channel "
+            f"{dt.name} frames ({frame} bytes each; {size % frame} bytes left over); check "
+            "--dtype, --n-channels and --offset, or the file is truncated",
+            path=str(path),
+        )
+    arr = np.memmap(path, dtype=dt, mode="r", offset=offset, shape=(size // frame, n_channels))
+    return np.asarray(arr), None, None
+
+
+def _load_hdf5(path: Path, key: str | None) -> Loaded:
+    try:
+        import h5py
+    except ImportError as exc:
+        raise ImportError("reading HDF5 needs h5py: pip install 'allanite[hdf5]'") from exc
+    try:
+        handle = h5py.File(path, "r")
+    except OSError as exc:
+        raise InputError(f"not a readable HDF5 file ({exc})", path=str(path)) from exc
+    with handle:
+        datasets: list[str] = []
+        handle.visititems(
+            lambda name, obj: datasets.append(name) if isinstance(obj, h5py.Dataset) else None
+        )
+        if key is None:
+            if len(datasets) != 1:
+                raise InputError(
+                    f"the file holds {len(datasets)} datasets ({', '.join(datasets) or 'none'}); "
+                    "choose one with key= (CLI: --key PATH)",
+                    path=str(path),
+                )
+            key = datasets[0]
+        if key not in handle or not isinstance(handle[key], h5py.Dataset):
+            raise InputError(
+                f"no dataset {key!r}; available: {', '.join(datasets)}", path=str(path)
+            )
+        ds = handle[key]
+        if ds.dtype.names:
+            names = tuple(ds.dtype.names)
+            arr = np.column_stack([np.asarray(ds[n], dtype=np.float64) for n in names])
+        else:
+            arr = ds[()]
+            names = None
+            col_attr = ds.attrs.get("columns")
+            if col_attr is not None and arr.ndim == 2 and len(col_attr) == arr.shape[1]:
+                names = tuple(c.decode() if isinstance(c, bytes) else str(c) for c in col_attr)
+    return arr, names, None
+
+
+def _load_parquet(path: Path, columns: list[Column] | None, time_column: Column | None) -> Loaded:
+    try:
+        import pyarrow.parquet as pq
+    except ImportError as exc:
+        raise ImportError("reading Parquet needs pyarrow: pip install 'allanite[parquet]'") from exc
+    try:
+        table = pq.read_table(path)
+    except Exception as exc:  # pyarrow raises its own ArrowInvalid / OSError types
+        raise InputError(f"not a readable Parquet file ({exc})", path=str(path)) from exc
+    names = tuple(table.column_names)
+    arrays = []
+    for name in names:
+        col = table.column(name)
+        try:
+            arrays.append(np.asarray(col.to_numpy(), dtype=np.float64))
+        except (ValueError, TypeError) as exc:
+            wanted = {*(columns or []), time_column}
+            if columns is None or name in wanted:
+                raise InputError(
+                    f"column {name!r} is not numeric ({col.type}); select numeric columns "
+                    "with --channels",
+                    path=str(path),
+                ) from exc
+            arrays.append(np.full(table.num_rows, np.nan))
+    return np.column_stack(arrays), names, None
+
+
+def from_frame(frame: Any, *, source: str = "DataFrame", **options: Any) -> Record:
+    """Build a :class:`Record` from a pandas DataFrame (columns by name, time column optional).
+
+    A ``DatetimeIndex`` or ``TimedeltaIndex`` becomes the time column when ``time_column`` is
+    ``"index"``. Other options are those of :func:`make_record`.
+    """
+    try:
+        import pandas as pd
+    except ImportError as exc:
+        raise ImportError("DataFrames need pandas: pip install 'allanite[pandas]'") from exc
+    if not isinstance(frame, pd.DataFrame):
+        raise TypeError(f"expected a pandas DataFrame, got {type(frame).__name__}")
+    if options.get("time_column") == "index":
+        index = frame.index
+        if isinstance(index, pd.DatetimeIndex):
+            seconds = (index - index[0]).total_seconds().to_numpy()
+        elif isinstance(index, pd.TimedeltaIndex):
+            seconds = index.total_seconds().to_numpy()
+        else:
+            seconds = np.asarray(index, dtype=np.float64)
+        frame = frame.assign(__time__=seconds)
+        options["time_column"] = "__time__"
+    names = tuple(str(c) for c in frame.columns)
+    numeric = [c for c in frame.columns if pd.api.types.is_numeric_dtype(frame[c])]
+    columns = _as_list(options.get("columns"))
+    wanted = set(columns or []) | {options.get("time_column")}
+    for c in frame.columns:
+        if c not in numeric and (columns is None or str(c) in wanted):
+            raise InputError(
+                f"column {c!r} is not numeric ({frame[c].dtype}); choose numeric columns with "
+                "columns=",
+                path=source,
+            )
+    table = np.column_stack(
+        [
+            frame[c].to_numpy(dtype=np.float64) if c in numeric else np.full(len(frame), np.nan)
+            for c in frame.columns
+        ]
+    )
+    return make_record(table, names, source=source, **options)
+
+
+def read_record(
+    source: str | os.PathLike[str] | Any,
+    *,
+    fs: float | None = None,
+    input: str = "rate",
+    units: str | None = None,
+    columns: Column | Sequence[Column] | None = None,
+    time_column: Column | None = None,
+    time_scale: float = 1.0,
+    gaps: str = "error",
+    scale: float | None = None,
+    format: str | None = None,
+    delimiter: str | None = None,
+    header: bool | None = None,
+    key: str | None = None,
+    dtype: str | None = None,
+    n_channels: int = 1,
+    byteorder: str = "little",
+    offset: int = 0,
+) -> Record:
+    """Read a record from a file or a pandas DataFrame.
+
+    Parameters
+    ----------
+    source : path or pandas.DataFrame
+        The file (format from its suffix unless ``format`` is given; unknown suffixes are read
+        as text) or a DataFrame.
+    fs : float, optional
+        Sampling frequency in Hz (inferred from ``time_column`` when omitted).
+    input : {"rate", "increment", "angle"}
+        What the samples are.
+    units : str, optional
+        Unit of the samples after ``scale`` (e.g. ``"deg/s"``).
+    columns : int, str or sequence, optional
+        Channels by 0-based index or name (header names, Parquet/DataFrame columns).
+    time_column : int or str, optional
+        Column of time stamps (seconds times ``time_scale``).
+    time_scale : float
+        Seconds per time-stamp unit.
+    gaps : {"error", "split", "fill"}
+        What to do about gaps in the time column.
+    scale : float, optional
+        Counts-to-units factor.
+    format : {"text", "npy", "npz", "raw", "hdf5", "parquet"}, optional
+        Override the suffix-based detection.
+    delimiter : str, optional
+        Text field separator (detected when omitted).
+    header : bool, optional
+        Whether a text file starts with column names (detected when omitted).
+    key : str, optional
+        Array in an .npz archive or dataset path in an HDF5 file.
+    dtype, n_channels, byteorder, offset
+        Raw binary layout: sample type, interleaved channels, ``"little"``/``"big"``/
+        ``"native"``, bytes to skip at the start.
+
+    Returns
+    -------
+    Record
+    """
+    options: dict[str, Any] = {
+        "fs": fs,
+        "input": input,
+        "units": units,
+        "columns": columns,
+        "time_column": time_column,
+        "time_scale": time_scale,
+        "gaps": gaps,
+        "scale": scale,
+    }
+    if not isinstance(source, (str, os.PathLike)):
+        return from_frame(source, **options)
+    path = Path(source)
+    if not path.exists():
+        raise InputError("no such file; check the path", path=str(path))
+    if path.is_dir():
+        raise InputError("is a directory; give a file", path=str(path))
+    fmt = format or detect_format(path)
+    if fmt not in FORMATS:
+        raise ValueError(f"unknown format {fmt!r}; use one of {', '.join(FORMATS)}")
+    if path.stat().st_size == 0:
+        raise InputError("the file is empty; check that the recording was written", path=str(path))
+    if fmt == "text":
+        loaded = _load_text(path, delimiter=delimiter, header=header)
+    elif fmt == "npy":
+        loaded = _load_npy(path)
+    elif fmt == "npz":
+        loaded = _load_npz(path, key)
+    elif fmt == "raw":
+        loaded = _load_raw(
+            path, dtype=dtype, n_channels=n_channels, byteorder=byteorder, offset=offset
+        )
+    elif fmt == "hdf5":
+        loaded = _load_hdf5(path, key)
+    else:
+        loaded = _load_parquet(path, _as_list(columns), time_column)
+    table, names, where = loaded
+    return make_record(table, names, source=str(path), where=where, **options)
