@@ -1,0 +1,247 @@
+"""Command-line options shared by the subcommands that read a record from a file.
+
+``add_record_arguments(parser)`` adds the reader options (format, columns, time column, gap
+policy, scale, units, raw layout) and ``read_from_args(path, args)`` turns them into a
+:class:`allanite.io.Record`. ``add_grid_arguments`` adds the Allan-grid options and
+``avar_from_args`` computes the variance of a record with them.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Iterable, Iterator
+from typing import Any, TypeVar
+
+from allanite.io.readers import FORMATS, read_record
+from allanite.io.record import INPUT_KINDS, Record
+from allanite.io.timebase import GAP_POLICIES
+from allanite.variance import KINDS, AllanResult, avar
+
+__all__ = [
+    "add_grid_arguments",
+    "add_record_arguments",
+    "avar_from_args",
+    "example_record",
+    "progress",
+    "rate_unit",
+    "read_from_args",
+]
+
+T = TypeVar("T")
+
+
+def add_record_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add the options that say how to read a record file."""
+    group = parser.add_argument_group("reading the record")
+    group.add_argument("--fs", type=float, help="sampling frequency in Hz (or use --time-column)")
+    group.add_argument(
+        "--input",
+        choices=INPUT_KINDS,
+        default=None,
+        help="what the samples are: rate, angle increments per sample, or angle "
+        "(default: rate; the example record is angle)",
+    )
+    group.add_argument(
+        "--units",
+        help="unit of the samples after --scale, e.g. deg/s (rate) or deg (angle, increment)",
+    )
+    group.add_argument(
+        "--scale", type=float, help="factor from counts to units: samples = counts * SCALE"
+    )
+    group.add_argument(
+        "--channels",
+        help="columns to analyse, by 0-based index or header name, comma separated (e.g. 1,2 or "
+        "gx,gy)",
+    )
+    group.add_argument(
+        "--time-column", help="column of time stamps (index or name); fs is inferred from it"
+    )
+    group.add_argument(
+        "--time-scale",
+        type=float,
+        default=1.0,
+        help="seconds per time-stamp unit (0.001 for ms, 1e-6 for us; default 1)",
+    )
+    group.add_argument(
+        "--gaps",
+        choices=GAP_POLICIES,
+        default="error",
+        help="what to do about gaps in the time column: refuse (error), analyse the longest "
+        "contiguous segment (split) or interpolate the missing samples (fill)",
+    )
+    group.add_argument("--format", choices=tuple(FORMATS), help="file format (default: suffix)")
+    group.add_argument("--delimiter", help="text field separator (default: detected)")
+    group.add_argument(
+        "--header",
+        choices=("auto", "yes", "no"),
+        default="auto",
+        help="whether a text file starts with column names (default: detected)",
+    )
+    group.add_argument("--key", help="array name in an .npz file or dataset path in HDF5")
+    group.add_argument("--dtype", help="raw binary sample type, e.g. int16, <f4, float64")
+    group.add_argument(
+        "--n-channels", type=int, default=1, help="raw binary: interleaved channels (default 1)"
+    )
+    group.add_argument(
+        "--byte-order",
+        choices=("little", "big", "native"),
+        default="little",
+        help="raw binary byte order (default little)",
+    )
+    group.add_argument(
+        "--offset", type=int, default=0, help="raw binary: bytes to skip at the start"
+    )
+
+
+def add_grid_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add the options of the Allan-variance computation."""
+    group = parser.add_argument_group("Allan variance")
+    group.add_argument(
+        "--kind", choices=KINDS, default="overlapping", help="estimator (default overlapping)"
+    )
+    group.add_argument(
+        "--taus",
+        choices=("log", "octave", "decade", "all"),
+        default="log",
+        help="tau grid (default log: the original program's log-spaced grid)",
+    )
+    group.add_argument(
+        "--points",
+        type=int,
+        default=100,
+        help="number of points of the log grid before duplicates are removed (default 100)",
+    )
+    group.add_argument(
+        "--level",
+        type=float,
+        default=0.683,
+        help="confidence level of the intervals (default 0.683, i.e. 1 sigma)",
+    )
+    group.add_argument("--threads", type=int, help="worker threads (default: all cores)")
+
+
+def _columns(text: str | None) -> list[int | str] | None:
+    if text is None:
+        return None
+    out: list[int | str] = []
+    for part in text.split(","):
+        part = part.strip()
+        if part:
+            out.append(int(part) if part.lstrip("-").isdigit() else part)
+    return out or None
+
+
+def _time_column(text: str | None) -> int | str | None:
+    if text is None:
+        return None
+    return int(text) if text.lstrip("-").isdigit() else text
+
+
+def example_record(args: argparse.Namespace | None = None) -> Record:
+    """Return the built-in example: a simulated 30-minute angle record at 100 Hz."""
+    try:
+        from allanite.examples import example_record as make_example
+    except ImportError as exc:
+        raise ValueError(
+            "the example record is not available in this installation; give a FILE"
+        ) from exc
+    example = make_example()
+    if isinstance(example, Record):
+        return example
+    samples = getattr(example, "samples", example)
+    return Record(
+        samples=samples,
+        fs=float(getattr(example, "fs", 100.0)),
+        input=str(getattr(example, "input", "angle")),
+        units=getattr(example, "units", "deg"),
+        source="example record (simulated, 30 min at 100 Hz)",
+    )
+
+
+def read_from_args(path: str | None, args: argparse.Namespace) -> Record:
+    """Read ``path`` (or the example record with ``--example``) with the reader options."""
+    if path is None:
+        if getattr(args, "example", False):
+            record = example_record(args)
+            chosen = _columns(args.channels)
+            return record.select(chosen) if chosen else record
+        raise ValueError("give a FILE to analyse, or --example for the built-in example record")
+    header = {"auto": None, "yes": True, "no": False}[args.header]
+    return read_record(
+        path,
+        fs=args.fs,
+        input=args.input or "rate",
+        units=args.units,
+        columns=_columns(args.channels),
+        time_column=_time_column(args.time_column),
+        time_scale=args.time_scale,
+        gaps=args.gaps,
+        scale=args.scale,
+        format=args.format,
+        delimiter=args.delimiter,
+        header=header,
+        key=args.key,
+        dtype=args.dtype,
+        n_channels=args.n_channels,
+        byteorder=args.byte_order,
+        offset=args.offset,
+    )
+
+
+def rate_unit(record: Record) -> str | None:
+    """Rate unit of a record: its unit for rate samples, unit per second for angle/increment."""
+    if record.units is None:
+        return None
+    if record.input == "rate":
+        return record.units
+    return f"{record.units}/s"
+
+
+def avar_from_args(record: Record, args: argparse.Namespace) -> AllanResult:
+    """Allan-family variance of a record (its longest segment when split) with the grid options."""
+    if args.points < 2:
+        raise ValueError(f"--points must be at least 2, got {args.points}")
+    if not 0.0 < args.level < 1.0:
+        raise ValueError(f"--level must lie between 0 and 1, got {args.level}")
+    part = record.longest_segment()
+    return avar(
+        part.samples if part.n_channels > 1 else part.samples[:, 0],
+        part.require_fs(),
+        input=part.input,  # type: ignore[arg-type]
+        kind=args.kind,
+        taus=args.taus,
+        points=args.points,
+        threads=args.threads,
+        units=rate_unit(part),
+    )
+
+
+def progress(items: Iterable[T], *, desc: str, total: int | None = None) -> Iterator[T]:
+    """Iterate with a tqdm progress bar on stderr when tqdm is installed and stderr is a tty."""
+    if sys.stderr.isatty():
+        try:
+            from tqdm import tqdm
+        except ImportError:
+            pass
+        else:
+            yield from tqdm(items, desc=desc, total=total, leave=False, file=sys.stderr)
+            return
+    yield from items
+
+
+def dump_json(data: Any) -> str:
+    """JSON text with NaN written as null (strict JSON readers reject NaN)."""
+    import json
+    import math
+
+    def clean(value: Any) -> Any:
+        if isinstance(value, float) and not math.isfinite(value):
+            return None
+        if isinstance(value, dict):
+            return {k: clean(v) for k, v in value.items()}
+        if isinstance(value, (list, tuple)):
+            return [clean(v) for v in value]
+        return value
+
+    return json.dumps(clean(data), indent=2)

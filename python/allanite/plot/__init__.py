@@ -1,0 +1,20 @@
+"""Matplotlib figures of Allan-family results (needs the ``plot`` extra).
+
+Figures are built on :class:`matplotlib.figure.Figure` directly (no pyplot state), so they are
+safe in scripts, servers, reports and the GUI alike.
+"""
+
+from __future__ import annotations
+
+from allanite.plot.allan import SLOPE_LABELS, allan_figure, model_figure, plot_allan, plot_model
+from allanite.plot.export import figure_bytes, save_figure
+
+__all__ = [
+    "SLOPE_LABELS",
+    "allan_figure",
+    "figure_bytes",
+    "model_figure",
+    "plot_allan",
+    "plot_model",
+    "save_figure",
+]
