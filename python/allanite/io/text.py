@@ -74,11 +74,14 @@ def _is_number(field: str) -> bool:
 
 
 def _sniff(lines: list[str]) -> str | None:
-    """Find the delimiter that splits the first line into several numbers, and every line alike."""
+    """Find the delimiter that splits the first data line into several numbers.
+
+    Later lines are not consulted: a ragged or broken row must be reported as such, not make
+    the detection fall back to whitespace.
+    """
     for cand in _CANDIDATES:
         first = _split(lines[0], cand)
-        counts = {len(_split(line, cand)) for line in lines}
-        if len(first) > 1 and len(counts) == 1 and all(_is_number(f) for f in first):
+        if len(first) > 1 and all(_is_number(f) for f in first):
             return cand
     return None
 

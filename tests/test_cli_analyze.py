@@ -1,0 +1,336 @@
+"""``allanite analyze`` end to end on every format, and on malformed files (exit 2, one line)."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import allanite
+from allanite.cli import main
+
+RNG = np.random.default_rng(11)
+FS = 100.0
+N = 3000
+COUNTS = RNG.integers(-200, 200, size=(N, 2)).astype(np.int16)
+SCALE = 0.05
+RATE = COUNTS * SCALE
+
+
+def _run(argv: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str, str]:
+    code = main(argv)
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def _text(tmp_path: Path) -> tuple[Path, list[str]]:
+    t = np.arange(N) / FS
+    rows = "\n".join(f"{a:.6f},{b},{c}" for a, (b, c) in zip(t, COUNTS, strict=True))
+    path = tmp_path / "rec.csv"
+    path.write_text("time,gx,gy\n" + rows + "\n")
+    return path, ["--time-column", "time"]
+
+
+def _npy(tmp_path: Path) -> tuple[Path, list[str]]:
+    path = tmp_path / "rec.npy"
+    np.save(path, COUNTS)
+    return path, ["--fs", str(FS)]
+
+
+def _npz(tmp_path: Path) -> tuple[Path, list[str]]:
+    path = tmp_path / "rec.npz"
+    np.savez(path, gyro_counts=COUNTS, other=np.zeros(3))
+    return path, ["--fs", str(FS), "--key", "gyro_counts"]
+
+
+def _raw(tmp_path: Path) -> tuple[Path, list[str]]:
+    path = tmp_path / "rec.bin"
+    path.write_bytes(b"\0" * 16 + COUNTS.astype(">i2").tobytes())
+    return path, [
+        "--fs",
+        str(FS),
+        "--dtype",
+        "int16",
+        "--n-channels",
+        "2",
+        "--byte-order",
+        "big",
+        "--offset",
+        "16",
+    ]
+
+
+def _hdf5(tmp_path: Path) -> tuple[Path, list[str]]:
+    h5py = pytest.importorskip("h5py")
+    path = tmp_path / "rec.h5"
+    with h5py.File(path, "w") as handle:
+        handle["gyro"] = COUNTS
+    return path, ["--fs", str(FS)]
+
+
+def _parquet(tmp_path: Path) -> tuple[Path, list[str]]:
+    pd = pytest.importorskip("pandas")
+    pytest.importorskip("pyarrow")
+    path = tmp_path / "rec.parquet"
+    pd.DataFrame({"gx": COUNTS[:, 0], "gy": COUNTS[:, 1]}).to_parquet(path)
+    return path, ["--fs", str(FS)]
+
+
+WRITERS: dict[str, Callable[[Path], tuple[Path, list[str]]]] = {
+    "text": _text,
+    "npy": _npy,
+    "npz": _npz,
+    "raw": _raw,
+    "hdf5": _hdf5,
+    "parquet": _parquet,
+}
+
+
+@pytest.mark.parametrize("fmt", list(WRITERS))
+def test_analyze_every_format_matches_library(
+    fmt: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path, extra = WRITERS[fmt](tmp_path)
+    argv = [
+        "analyze",
+        str(path),
+        *extra,
+        "--scale",
+        str(SCALE),
+        "--units",
+        "deg/s",
+        "--points",
+        "12",
+        "--json",
+    ]
+    code, out, err = _run(argv, capsys)
+    assert code == 0, err
+    data = json.loads(out)
+    expected = allanite.avar(RATE, FS, points=12, units="deg/s")
+    np.testing.assert_allclose(data["allan"]["tau"], expected.tau)
+    np.testing.assert_allclose(data["allan"]["dev"], expected.dev, rtol=1e-12)
+    lo, hi = expected.ci(0.683)
+    np.testing.assert_allclose(data["allan"]["dev_low"], lo, rtol=1e-12)
+    np.testing.assert_allclose(data["allan"]["dev_high"], hi, rtol=1e-12)
+    assert data["allan"]["units"] == "deg/s"
+    assert data["record"]["fs"] == pytest.approx(FS)
+    assert data["record"]["n_samples"] == N
+
+
+def test_analyze_text_table_channels_kind_and_outputs(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path, extra = _text(tmp_path)
+    csv_out = tmp_path / "adev.csv"
+    png_out = tmp_path / "adev.png"
+    argv = [
+        "analyze",
+        str(path),
+        *extra,
+        "--channels",
+        "gy",
+        "--scale",
+        str(SCALE),
+        "--kind",
+        "modified",
+        "--taus",
+        "octave",
+        "-o",
+        str(csv_out),
+        "--plot",
+        str(png_out),
+    ]
+    code, out, err = _run(argv, capsys)
+    assert code == 0, err
+    expected = allanite.avar(RATE[:, 1], FS, kind="modified", taus="octave")
+    assert "modified Allan deviation" in out and "channel gy:" in out
+    table = np.loadtxt(csv_out, delimiter=",", skiprows=1)
+    np.testing.assert_allclose(table[:, 0], expected.tau)
+    header = csv_out.read_text().splitlines()[0].split(",")
+    np.testing.assert_allclose(table[:, header.index("dev")], expected.dev, rtol=1e-12)
+    assert png_out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_angle_input_and_points(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    angle = np.cumsum(RATE[:, 0]) / FS
+    path = tmp_path / "angle.txt"
+    np.savetxt(path, angle, fmt="%.17g")
+    code, out, err = _run(
+        [
+            "analyze",
+            str(path),
+            "--fs",
+            "100",
+            "--input",
+            "angle",
+            "--units",
+            "deg",
+            "--points",
+            "30",
+            "--json",
+        ],
+        capsys,
+    )
+    assert code == 0, err
+    data = json.loads(out)
+    expected = allanite.avar(angle, FS, input="angle", points=30)
+    np.testing.assert_allclose(data["allan"]["dev"], expected.dev, rtol=1e-12)
+    assert data["allan"]["units"] == "deg/s"
+    assert len(data["allan"]["tau"]) == len(allanite.taus.log_grid(N, 30))
+
+
+def _truncated_npy(tmp_path: Path) -> Path:
+    path = tmp_path / "trunc.npy"
+    np.save(path, RNG.normal(size=(1000, 3)))
+    path.write_bytes(path.read_bytes()[:3000])
+    return path
+
+
+def _write(name: str, text: str) -> Callable[[Path], Path]:
+    def make(tmp_path: Path) -> Path:
+        path = tmp_path / name
+        path.write_text(text)
+        return path
+
+    return make
+
+
+MALFORMED: dict[str, tuple[Callable[[Path], Path], list[str], list[str]]] = {
+    "truncated npy": (_truncated_npy, ["--fs", "100"], ["trunc.npy", "truncated", "copy"]),
+    "wrong delimiter": (
+        _write("semi.csv", "1;2\n3;4\n5;6\n7;8\n"),
+        ["--fs", "100", "--delimiter", ","],
+        ["semi.csv", "line 1", "field 1", "separated by ';'", "--delimiter"],
+    ),
+    "non-numeric cell": (
+        _write("cells.csv", "t,gx\n0,1\n0.01,2\n0.02,x7\n0.03,1\n"),
+        ["--time-column", "t"],
+        ["cells.csv", "line 4", "field 2", "'x7'", "correct or remove the row"],
+    ),
+    "empty file": (_write("empty.txt", ""), ["--fs", "100"], ["empty.txt", "empty"]),
+    "only comments": (
+        _write("comments.txt", "# nothing\n"),
+        ["--fs", "100"],
+        ["comments.txt", "no data rows"],
+    ),
+    "unsorted stamps": (
+        _write("unsorted.csv", "t,gx\n0,1\n0.02,2\n0.01,3\n0.03,1\n"),
+        ["--time-column", "t"],
+        ["unsorted.csv", "line 4", "not sorted", "sort the rows"],
+    ),
+    "duplicated stamps": (
+        _write("dup.csv", "t,gx\n0,1\n0.01,2\n0.01,3\n0.02,1\n"),
+        ["--time-column", "t"],
+        ["dup.csv", "line 4", "duplicated time stamp", "remove the repeated rows"],
+    ),
+    "gaps without policy": (
+        _write("gap.csv", "t,gx\n0,1\n0.01,2\n0.02,3\n0.05,1\n0.06,1\n"),
+        ["--time-column", "t"],
+        ["gap.csv", "line 5", "--gaps split", "--gaps fill"],
+    ),
+    "ragged rows": (
+        _write("ragged.csv", "1,2\n3,4\n5\n7,8\n"),
+        ["--fs", "100"],
+        ["ragged.csv", "line 3", "1 field(s)", "2 columns"],
+    ),
+    "nan sample": (
+        _write("nan.txt", "1\n2\nnan\n4\n"),
+        ["--fs", "1"],
+        ["nan.txt", "line 3", "remove or repair"],
+    ),
+    "missing fs": (_write("nofs.txt", "1\n2\n3\n4\n"), [], ["nofs.txt", "--fs HZ"]),
+    "unknown column": (
+        _write("cols.csv", "a,b\n1,2\n3,4\n5,6\n"),
+        ["--fs", "1", "--channels", "c"],
+        ["cols.csv", "no column named 'c'", "available: a, b"],
+    ),
+    "missing file": (lambda p: p / "absent.csv", ["--fs", "1"], ["absent.csv", "no such file"]),
+}
+
+
+@pytest.mark.parametrize("case", list(MALFORMED))
+def test_malformed_input_one_line_exit_2_no_output(
+    case: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    make, extra, needles = MALFORMED[case]
+    path = make(tmp_path)
+    outdir = tmp_path / "out"
+    outdir.mkdir()
+    argv = [
+        "analyze",
+        str(path),
+        *extra,
+        "-o",
+        str(outdir / "r.json"),
+        "--plot",
+        str(outdir / "r.png"),
+    ]
+    code, out, err = _run(argv, capsys)
+    assert code == 2
+    assert out == ""
+    lines = err.strip().splitlines()
+    assert len(lines) == 1, err
+    assert lines[0].startswith("allanite analyze: error: ")
+    for needle in needles:
+        assert needle in lines[0], (needle, lines[0])
+    assert list(outdir.iterdir()) == []
+
+
+def test_failure_after_plot_leaves_no_file(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path, extra = _npy(tmp_path)
+    plot = tmp_path / "ok.png"
+    code, _, err = _run(
+        ["analyze", str(path), *extra, "--plot", str(plot), "-o", str(tmp_path / "table.xlsx")],
+        capsys,
+    )
+    assert code == 2 and "use a .csv or .json" in err
+    assert not (tmp_path / "table.xlsx").exists()
+    assert sorted(p.name for p in tmp_path.iterdir() if p.name.startswith(".")) == []
+
+
+def test_help_has_examples(capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit) as info:
+        main(["analyze", "--help"])
+    assert info.value.code == 0
+    out = capsys.readouterr().out
+    assert "examples:" in out and "--example" in out and "--points" in out
+
+
+def test_example_record(capsys: pytest.CaptureFixture[str]) -> None:
+    pytest.importorskip("allanite.examples", reason="the example record (issue 4) is not built")
+    code, out, err = _run(["analyze", "--example", "--points", "10", "--json"], capsys)
+    assert code == 0, err
+    data = json.loads(out)
+    assert data["record"]["fs"] == 100.0
+    assert data["record"]["input"] == "angle"
+    assert data["record"]["duration_s"] == pytest.approx(1800.0)
+    assert np.all(np.isfinite(data["allan"]["dev"]))
+
+
+def test_console_script_runs(tmp_path: Path) -> None:
+    path, extra = _npy(tmp_path)
+    proc = subprocess.run(
+        [sys.executable, "-m", "allanite", "analyze", str(path), *extra, "--points", "5"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert "tau [s]" in proc.stdout
+    bad = subprocess.run(
+        [sys.executable, "-m", "allanite", "analyze", str(tmp_path / "nope.npy"), "--fs", "1"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
+    )
+    assert bad.returncode == 2
+    assert bad.stderr.count("\n") == 1 and "nope.npy" in bad.stderr

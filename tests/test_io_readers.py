@@ -1,0 +1,166 @@
+"""Readers: every format round-trips, columns/time/scale/units are honoured, bad files are named."""
+
+from __future__ import annotations
+
+import gzip
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from allanite.errors import InputError
+from allanite.io import Record, read_record
+from allanite.io.readers import from_frame
+
+RNG = np.random.default_rng(20260121)
+DATA = RNG.normal(size=(500, 3))
+NAMES = ("gx", "gy", "gz")
+
+
+def _write_text(path: Path, data: np.ndarray, delimiter: str, header: str | None) -> Path:
+    lines = [] if header is None else [header]
+    lines += [delimiter.join(f"{v:.17g}" for v in row) for row in data]
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+@pytest.mark.parametrize(
+    ("delimiter", "header"),
+    [(",", "gx,gy,gz"), (" ", None), ("\t", "gx\tgy\tgz"), (";", "gx;gy;gz"), ("  ", None)],
+)
+def test_text_round_trip(tmp_path: Path, delimiter: str, header: str | None) -> None:
+    path = _write_text(tmp_path / "rec.txt", DATA, delimiter, header)
+    record = read_record(path, fs=100.0, units="deg/s")
+    np.testing.assert_array_equal(record.samples, DATA)
+    assert record.fs == 100.0
+    assert record.units == "deg/s"
+    assert record.channels == (NAMES if header else ("col0", "col1", "col2"))
+
+
+def test_text_comments_blank_lines_and_gzip(tmp_path: Path) -> None:
+    body = "% MATLAB comment\n# another\n\n" + "\n".join(f"{v:.17g}" for v in DATA[:, 0]) + "\n"
+    path = tmp_path / "angles.txt.gz"
+    with gzip.open(path, "wt") as handle:
+        handle.write(body)
+    record = read_record(path, fs=10.0, input="angle", units="deg")
+    np.testing.assert_array_equal(record.samples[:, 0], DATA[:, 0])
+    assert record.input == "angle"
+
+
+def test_columns_by_name_and_index(tmp_path: Path) -> None:
+    path = _write_text(tmp_path / "rec.csv", DATA, ",", "gx,gy,gz")
+    by_name = read_record(path, fs=1.0, columns=["gz", "gx"])
+    by_index = read_record(path, fs=1.0, columns="2,0")
+    np.testing.assert_array_equal(by_name.samples, DATA[:, [2, 0]])
+    np.testing.assert_array_equal(by_index.samples, DATA[:, [2, 0]])
+    assert by_name.channels == ("gz", "gx")
+    with pytest.raises(InputError, match=r"no column named 'gq'; available: gx, gy, gz"):
+        read_record(path, fs=1.0, columns="gq")
+    with pytest.raises(InputError, match="column 5 does not exist"):
+        read_record(path, fs=1.0, columns=[5])
+
+
+def test_scale_from_counts(tmp_path: Path) -> None:
+    counts = RNG.integers(-300, 300, size=(400, 2)).astype(np.int16)
+    path = tmp_path / "counts.npy"
+    np.save(path, counts)
+    record = read_record(path, fs=100.0, scale=0.05, units="deg/s")
+    np.testing.assert_allclose(record.samples, counts * 0.05, rtol=0, atol=0)
+    assert record.scale == 0.05
+    with pytest.raises(ValueError, match="scale must be a finite, non-zero"):
+        read_record(path, fs=100.0, scale=0.0)
+
+
+def test_npy_npz(tmp_path: Path) -> None:
+    np.save(tmp_path / "a.npy", DATA)
+    np.testing.assert_array_equal(read_record(tmp_path / "a.npy", fs=1.0).samples, DATA)
+    np.savez(tmp_path / "b.npz", gyro=DATA, accel=DATA[:, :2] * 2)
+    record = read_record(tmp_path / "b.npz", fs=1.0, key="accel")
+    np.testing.assert_array_equal(record.samples, DATA[:, :2] * 2)
+    with pytest.raises(InputError, match=r"several arrays \(gyro, accel\).*--key"):
+        read_record(tmp_path / "b.npz", fs=1.0)
+    with pytest.raises(InputError, match="no array 'mag'"):
+        read_record(tmp_path / "b.npz", fs=1.0, key="mag")
+
+
+@pytest.mark.parametrize("byteorder", ["little", "big"])
+def test_raw_binary(tmp_path: Path, byteorder: str) -> None:
+    counts = RNG.integers(-3000, 3000, size=(256, 3)).astype(np.int16)
+    code = "<" if byteorder == "little" else ">"
+    path = tmp_path / "imu.bin"
+    path.write_bytes(b"HEADER16" + counts.astype(f"{code}i2").tobytes())
+    record = read_record(
+        path, fs=2000.0, dtype="int16", n_channels=3, byteorder=byteorder, offset=8
+    )
+    np.testing.assert_array_equal(record.samples, counts)
+    wrong = read_record(
+        path,
+        fs=2000.0,
+        dtype="int16",
+        n_channels=3,
+        byteorder="big" if byteorder == "little" else "little",
+        offset=8,
+    )
+    assert not np.array_equal(wrong.samples, counts)
+
+
+def test_raw_binary_layout_errors(tmp_path: Path) -> None:
+    path = tmp_path / "imu.raw"
+    path.write_bytes(np.arange(7, dtype="<i2").tobytes())
+    with pytest.raises(InputError, match=r"not a whole number of 3-channel int16 frames"):
+        read_record(path, fs=1.0, dtype="int16", n_channels=3)
+    with pytest.raises(InputError, match=r"needs the sample type.*--dtype"):
+        read_record(path, fs=1.0)
+
+
+def test_hdf5(tmp_path: Path) -> None:
+    h5py = pytest.importorskip("h5py")
+    path = tmp_path / "rec.h5"
+    with h5py.File(path, "w") as handle:
+        ds = handle.create_dataset("imu/gyro", data=DATA)
+        ds.attrs["columns"] = list(NAMES)
+        handle.create_dataset("imu/temp", data=DATA[:, 0])
+    record = read_record(path, fs=100.0, key="imu/gyro", columns=["gy"])
+    np.testing.assert_array_equal(record.samples[:, 0], DATA[:, 1])
+    with pytest.raises(InputError, match=r"holds 2 datasets \(imu/gyro, imu/temp\)"):
+        read_record(path, fs=100.0)
+
+
+def test_parquet_and_dataframe(tmp_path: Path) -> None:
+    pd = pytest.importorskip("pandas")
+    pytest.importorskip("pyarrow")
+    t = np.arange(DATA.shape[0]) * 0.005
+    frame = pd.DataFrame({"time": t, "gx": DATA[:, 0], "gy": DATA[:, 1], "label": "static"})
+    path = tmp_path / "rec.parquet"
+    frame.to_parquet(path)
+    record = read_record(path, columns=["gx", "gy"], time_column="time", units="rad/s")
+    np.testing.assert_array_equal(record.samples, DATA[:, :2])
+    assert record.fs == pytest.approx(200.0, rel=1e-9)
+    with pytest.raises(InputError, match=r"column 'label' is not numeric"):
+        read_record(path, time_column="time")
+    indexed = frame.set_index(pd.to_datetime(t, unit="s"))
+    record = from_frame(indexed, columns=["gx"], time_column="index")
+    np.testing.assert_array_equal(record.samples[:, 0], DATA[:, 0])
+    assert record.fs == pytest.approx(200.0, rel=1e-6)
+    direct = read_record(frame[["gx", "gy"]], fs=50.0)
+    assert direct.channels == ("gx", "gy")
+
+
+def test_record_select_and_segments() -> None:
+    record = Record(samples=DATA, fs=10.0, channels=NAMES)
+    assert record.select(["gz", 0]).channels == ("gz", "gx")
+    with pytest.raises(ValueError, match="no channel named 'q'"):
+        record.select(["q"])
+    with pytest.raises(ValueError, match="--fs HZ"):
+        Record(samples=DATA, fs=None).require_fs()
+
+
+def test_adis16405_counts(shared_data: Path) -> None:
+    path = shared_data / "imu" / "adis16405" / "run2.npz"
+    if not path.exists():
+        pytest.skip(f"{path} not in the reference data")
+    record = read_record(path, key="gyro_counts", fs=100.0, scale=0.05, units="deg/s")
+    assert record.samples.shape == (1_000_000, 3)
+    # values lie exactly on the 0.05 deg/s grid of the sensor's LSB
+    lsb = record.samples[:1000] / 0.05
+    np.testing.assert_allclose(lsb, np.rint(lsb), atol=1e-9)
