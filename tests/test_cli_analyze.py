@@ -148,7 +148,8 @@ def test_analyze_text_table_channels_kind_and_outputs(
     code, out, err = _run(argv, capsys)
     assert code == 0, err
     expected = allanite.avar(RATE[:, 1], FS, kind="modified", taus="octave")
-    assert "modified Allan deviation" in out and "channel gy:" in out
+    assert "modified Allan deviation" in out
+    assert "channel gy:" in out
     table = np.loadtxt(csv_out, delimiter=",", skiprows=1)
     np.testing.assert_allclose(table[:, 0], expected.tau)
     header = csv_out.read_text().splitlines()[0].split(",")
@@ -290,7 +291,8 @@ def test_failure_after_plot_leaves_no_file(
         ["analyze", str(path), *extra, "--plot", str(plot), "-o", str(tmp_path / "table.xlsx")],
         capsys,
     )
-    assert code == 2 and "use a .csv or .json" in err
+    assert code == 2
+    assert "use a .csv or .json" in err
     assert not (tmp_path / "table.xlsx").exists()
     assert sorted(p.name for p in tmp_path.iterdir() if p.name.startswith(".")) == []
 
@@ -300,7 +302,9 @@ def test_help_has_examples(capsys: pytest.CaptureFixture[str]) -> None:
         main(["analyze", "--help"])
     assert info.value.code == 0
     out = capsys.readouterr().out
-    assert "examples:" in out and "--example" in out and "--points" in out
+    assert "examples:" in out
+    assert "--example" in out
+    assert "--points" in out
 
 
 def test_example_record(capsys: pytest.CaptureFixture[str]) -> None:
@@ -333,4 +337,5 @@ def test_console_script_runs(tmp_path: Path) -> None:
         check=False,
     )
     assert bad.returncode == 2
-    assert bad.stderr.count("\n") == 1 and "nope.npy" in bad.stderr
+    assert bad.stderr.count("\n") == 1
+    assert "nope.npy" in bad.stderr

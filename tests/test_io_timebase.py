@@ -69,8 +69,11 @@ def test_gap_policy_error(tmp_path: Path) -> None:
     message = str(info.value)
     assert "g.csv" in message
     # the first gap is between data rows 100 and 101: file line 102 (header is line 1)
-    assert "2 gap(s)" in message and "line 102" in message and "4 missing" in message
-    assert "--gaps split" in message and "--gaps fill" in message
+    assert "2 gap(s)" in message
+    assert "line 102" in message
+    assert "4 missing" in message
+    assert "--gaps split" in message
+    assert "--gaps fill" in message
 
 
 def test_gap_policy_split(tmp_path: Path) -> None:
@@ -82,14 +85,16 @@ def test_gap_policy_split(tmp_path: Path) -> None:
     np.testing.assert_array_equal(longest.samples[:, 0], x[:100])
     np.testing.assert_array_equal(record.segment(2).samples[:, 0], x[196:295])
     assert record.fs == pytest.approx(100.0)
-    assert record.timing is not None and len(record.timing.gaps) == 2
+    assert record.timing is not None
+    assert len(record.timing.gaps) == 2
 
 
 def test_gap_policy_fill(tmp_path: Path) -> None:
     t, x, t_full = _gapped()
     record = read_record(_write(tmp_path / "g.csv", t, x), time_column="t", gaps="fill")
     assert record.n_samples == 300
-    assert record.timing is not None and record.timing.filled == 5
+    assert record.timing is not None
+    assert record.timing.filled == 5
     expected = np.interp(t_full, t, x)
     np.testing.assert_allclose(record.samples[:, 0], expected, rtol=0, atol=1e-12)
     assert any("filled 5 sample(s)" in w for w in record.warnings)
