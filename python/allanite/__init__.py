@@ -6,6 +6,17 @@ honest uncertainty, noise simulation from a model, and a diagnosis of the sim-to
 
 from __future__ import annotations
 
+from allanite.model import NoiseModel
+from allanite.terms import (
+    Flicker,
+    GaussMarkov,
+    Quantization,
+    RateRamp,
+    RateRandomWalk,
+    Sine,
+    Term,
+    White,
+)
 from allanite.variance import (
     KINDS,
     AllanResult,
@@ -24,6 +35,15 @@ __version__ = "0.1.0"
 __all__ = [
     "KINDS",
     "AllanResult",
+    "Flicker",
+    "GaussMarkov",
+    "NoiseModel",
+    "Quantization",
+    "RateRamp",
+    "RateRandomWalk",
+    "Sine",
+    "Term",
+    "White",
     "__version__",
     "adev",
     "avar",

@@ -62,6 +62,8 @@ class Term(ABC):
     symbol: ClassVar[str]
     params: ClassVar[tuple[ParamSpec, ...]]
     stationary: ClassVar[bool] = True
+    #: parameters that may be omitted from JSON (then None, meaning "use the default")
+    optional: ClassVar[tuple[ParamSpec, ...]] = ()
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)
@@ -76,7 +78,12 @@ class Term(ABC):
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dictionary ``{"type": ..., <param>: value, ...}``."""
-        return {"type": self.type, **self.values()}
+        extra = {
+            p.name: float(getattr(self, p.name))
+            for p in self.optional
+            if getattr(self, p.name) is not None
+        }
+        return {"type": self.type, **self.values(), **extra}
 
     def with_values(self, **values: float) -> Term:
         """A copy with some parameters replaced."""
@@ -104,6 +111,17 @@ class Term(ABC):
         """One-sided power spectral density of the rate in rate^2/Hz (stationary terms only)."""
         raise NotImplementedError(f"{type(self).__name__} is not stationary and has no PSD")
 
+    def psd_sampled(self, f: ArrayLike, dt: float) -> NDArray[np.float64]:
+        """One-sided PSD of the sampled rate on ``0 < f <= 1/(2 dt)`` (aliasing included).
+
+        Consistent with :meth:`avar`: ``avar(m dt) = integral_0^{1/(2dt)} |H_m(f)|^2 S(f) df``
+        with ``|H_m(f)|^2 = 2 sin^4(pi f m dt) / (m sin(pi f dt))^2``. The default treats each
+        sample as the average of the continuous rate over its period (``psd(f) sinc^2(f dt)``),
+        which is exact for band-limited terms.
+        """
+        f = np.asarray(f, dtype=np.float64)
+        return self.psd(f) * np.sinc(f * dt) ** 2
+
     # --- simulation -------------------------------------------------------------------------
     def stream(self, fs: float, n_channels: int, seed: Any) -> TermStream:
         """A streaming generator of this effect's rate samples (see allanite.simulation)."""
@@ -125,11 +143,21 @@ def term_from_dict(data: dict[str, Any]) -> Term:
         raise ValueError(f"unknown term type {kind!r}; known types: {', '.join(sorted(TERM_TYPES))}")
     cls = TERM_TYPES[kind]
     names = [p.name for p in cls.params]
+    optional = [p.name for p in cls.optional]
     missing = [n for n in names if n not in data]
-    extra = [k for k in data if k != "type" and k not in names]
+    extra = [k for k in data if k != "type" and k not in names and k not in optional]
     if missing or extra:
         raise ValueError(
             f"term {kind!r} needs fields {names}; missing {missing or 'none'}, unexpected "
             f"{extra or 'none'}"
         )
-    return cls(**{n: float(data[n]) for n in names})
+    values: dict[str, float | None] = {}
+    for n in names + [o for o in optional if o in data]:
+        value = data[n]
+        if value is None and n in optional:
+            values[n] = None
+            continue
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise TypeError(f"field {n!r} of term {kind!r} must be a number, got {value!r}")
+        values[n] = float(value)
+    return cls(**values)

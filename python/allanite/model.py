@@ -1,0 +1,229 @@
+"""NoiseModel: a sum of noise Terms with units and a JSON round trip.
+
+The JSON schema is part of the public contract::
+
+    {"units": {"rate": "deg/s", "time": "s"},
+     "terms": [{"type": "white", "N": 0.006}, {"type": "flicker", "B": 6.6e-5}, ...]}
+
+Coefficients are in the model's rate unit and seconds (N in rate*sqrt(s), K in rate/sqrt(s),
+Q in rate*s, R in rate/s, B and Gauss-Markov sigma in rate, tau_c in s, frequency in Hz).
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from allanite.terms import TERM_TYPES, Term, term_from_dict
+from allanite.units import convert, rate_unit
+
+__all__ = ["NoiseModel"]
+
+
+def _check_units(units: dict[str, str]) -> dict[str, str]:
+    if not isinstance(units, dict):
+        raise TypeError(
+            f"units must be a dict like {{'rate': 'deg/s', 'time': 's'}}, got {units!r}"
+        )
+    missing = [k for k in ("rate", "time") if k not in units]
+    extra = [k for k in units if k not in ("rate", "time")]
+    if missing or extra:
+        raise ValueError(
+            f"units needs the fields 'rate' and 'time'; missing {missing or 'none'}, unexpected "
+            f"{extra or 'none'}"
+        )
+    if units["time"] != "s":
+        raise ValueError(
+            f"units.time must be 's' (coefficients are per second), got {units['time']!r}"
+        )
+    rate_unit(units["rate"])  # raises with a clear message
+    return {"rate": units["rate"], "time": "s"}
+
+
+@dataclass(frozen=True)
+class NoiseModel:
+    """A sensor noise model: the sum of independent :class:`~allanite.terms.base.Term` s.
+
+    Parameters
+    ----------
+    terms : sequence of Term
+        The effects; their Allan variances and PSDs add.
+    units : dict
+        ``{"rate": <rate unit>, "time": "s"}``; the rate unit of every coefficient.
+    """
+
+    terms: tuple[Term, ...]
+    units: dict[str, str] = field(default_factory=lambda: {"rate": "deg/s", "time": "s"})
+
+    def __post_init__(self) -> None:
+        terms = tuple(self.terms)
+        for term in terms:
+            if not isinstance(term, Term):
+                raise TypeError(f"NoiseModel terms must be Term instances, got {term!r}")
+        object.__setattr__(self, "terms", terms)
+        object.__setattr__(self, "units", _check_units(dict(self.units)))
+
+    # --- statistics -------------------------------------------------------------------------
+    def avar(self, tau: ArrayLike, dt: float) -> NDArray[np.float64]:
+        """Exact Allan variance of the sampled model: the sum of the terms' variances."""
+        t = np.asarray(tau, dtype=np.float64)
+        total = np.zeros(t.shape)
+        for term in self.terms:
+            total = total + term.avar(t, dt)
+        return total
+
+    def adev(self, tau: ArrayLike, dt: float) -> NDArray[np.float64]:
+        """Allan deviation, the square root of :meth:`avar`."""
+        return np.sqrt(self.avar(tau, dt))
+
+    def psd(self, f: ArrayLike) -> NDArray[np.float64]:
+        """One-sided PSD of the rate in rate^2/Hz (needs every term to be stationary)."""
+        f = np.asarray(f, dtype=np.float64)
+        total = np.zeros(f.shape)
+        for term in self.terms:
+            if not term.stationary:
+                raise ValueError(
+                    f"term {term.type!r} is not stationary and has no PSD; drop it from the model "
+                    f"(model.without({term.type!r})) before asking for a PSD"
+                )
+            try:
+                total = total + term.psd(f)
+            except NotImplementedError as exc:
+                raise ValueError(f"{exc}; use NoiseModel.psd_sampled(f, dt)") from None
+        return total
+
+    def psd_sampled(
+        self, f: ArrayLike, dt: float, *, skip_nonstationary: bool = False
+    ) -> NDArray[np.float64]:
+        """One-sided PSD of the sampled rate on ``(0, 1/(2 dt)]`` (aliasing included)."""
+        f = np.asarray(f, dtype=np.float64)
+        total = np.zeros(f.shape)
+        for term in self.terms:
+            if not term.stationary:
+                if skip_nonstationary:
+                    continue
+                raise ValueError(f"term {term.type!r} is not stationary and has no PSD")
+            total = total + term.psd_sampled(f, dt)
+        return total
+
+    # --- access -----------------------------------------------------------------------------
+    def terms_of_type(self, kind: str | type[Term]) -> tuple[Term, ...]:
+        """The terms of one JSON ``type`` (e.g. ``"markov"``) or one Term class."""
+        if isinstance(kind, str):
+            if kind not in TERM_TYPES:
+                raise ValueError(
+                    f"unknown term type {kind!r}; known: {', '.join(sorted(TERM_TYPES))}"
+                )
+            return tuple(t for t in self.terms if t.type == kind)
+        return tuple(t for t in self.terms if isinstance(t, kind))
+
+    def without(self, *kinds: str) -> NoiseModel:
+        """A copy without the terms of the given types."""
+        return NoiseModel(tuple(t for t in self.terms if t.type not in kinds), self.units)
+
+    def plus(self, *terms: Term) -> NoiseModel:
+        """A copy with more terms."""
+        return NoiseModel(self.terms + tuple(terms), self.units)
+
+    def coefficients(self) -> dict[str, float]:
+        """Parameter values by symbol (``N``, ``B``, ...; ``sigma_1``, ``tau_c_1``, ... for
+        repeated terms), in the model's units.
+        """
+        out: dict[str, float] = {}
+        for label, term, spec in self.labelled_parameters():
+            out[label] = float(getattr(term, spec.name))
+        return out
+
+    def labelled_parameters(self) -> list[tuple[str, Term, Any]]:
+        """``(label, term, ParamSpec)`` for every parameter; labels are unique.
+
+        A parameter is labelled by its name (``N``, ``sigma``, ``tau_c``); when a type occurs
+        more than once its parameters get a suffix ``_1``, ``_2`` in model order.
+        """
+        counts: dict[str, int] = {}
+        for term in self.terms:
+            counts[term.type] = counts.get(term.type, 0) + 1
+        seen: dict[str, int] = {}
+        out = []
+        for term in self.terms:
+            seen[term.type] = seen.get(term.type, 0) + 1
+            suffix = f"_{seen[term.type]}" if counts[term.type] > 1 else ""
+            for spec in term.params:
+                out.append((spec.name + suffix, term, spec))
+        return out
+
+    def in_units(self, rate: str) -> NoiseModel:
+        """The same model with coefficients expressed in another rate unit."""
+        target = rate_unit(rate)
+        factor = convert(1.0, self.units["rate"], target)
+        terms = []
+        for term in self.terms:
+            values = {p.name: getattr(term, p.name) * factor**p.rate for p in term.params}
+            terms.append(term.with_values(**values))
+        return NoiseModel(tuple(terms), {"rate": rate, "time": "s"})
+
+    # --- JSON -------------------------------------------------------------------------------
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON-ready dictionary of the public schema."""
+        return {"units": dict(self.units), "terms": [t.to_dict() for t in self.terms]}
+
+    def to_json(self, **kwargs: Any) -> str:
+        """JSON text of :meth:`to_dict` (keyword arguments go to :func:`json.dumps`)."""
+        kwargs.setdefault("indent", 2)
+        return json.dumps(self.to_dict(), **kwargs)
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> NoiseModel:
+        """Build a model from the JSON schema, with a clear error for any deviation."""
+        if not isinstance(data, dict):
+            raise ValueError(f"a noise model must be a JSON object, got {type(data).__name__}")
+        missing = [k for k in ("units", "terms") if k not in data]
+        extra = [k for k in data if k not in ("units", "terms")]
+        if missing or extra:
+            raise ValueError(
+                "a noise model needs the fields 'units' and 'terms'; missing "
+                f"{missing or 'none'}, unexpected {extra or 'none'}"
+            )
+        terms = data["terms"]
+        if not isinstance(terms, list):
+            raise ValueError(f"'terms' must be a list of term objects, got {terms!r}")
+        built = []
+        for i, item in enumerate(terms):
+            try:
+                built.append(term_from_dict(item))
+            except (ValueError, TypeError) as exc:
+                raise type(exc)(f"terms[{i}]: {exc}") from None
+        return cls(tuple(built), data["units"])
+
+    @classmethod
+    def from_json(cls, text: str) -> NoiseModel:
+        """Parse JSON text (see :meth:`from_dict`)."""
+        try:
+            data = json.loads(text)
+        except json.JSONDecodeError as exc:
+            raise ValueError(f"the noise model is not valid JSON: {exc}") from None
+        return cls.from_dict(data)
+
+    def save(self, path: str | Path) -> None:
+        """Write the JSON model to ``path`` atomically."""
+        from allanite.io.atomic import atomic_output
+
+        with atomic_output(path) as tmp:
+            Path(tmp).write_text(self.to_json() + "\n", encoding="utf-8")
+
+    @classmethod
+    def load(cls, path: str | Path) -> NoiseModel:
+        """Read a JSON model written by :meth:`save` (or by hand)."""
+        return cls.from_json(Path(path).read_text(encoding="utf-8"))
+
+    def __iter__(self) -> Iterator[Term]:
+        return iter(self.terms)
+
+    def __len__(self) -> int:
+        return len(self.terms)

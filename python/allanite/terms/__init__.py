@@ -1,0 +1,30 @@
+"""Noise terms: one class per effect (see :mod:`allanite.terms.base`)."""
+
+from __future__ import annotations
+
+from allanite.terms.base import TERM_TYPES, ParamSpec, Term, term_from_dict
+from allanite.terms.flicker import Flicker
+from allanite.terms.markov import GaussMarkov
+from allanite.terms.quantization import Quantization
+from allanite.terms.ramp import RateRamp
+from allanite.terms.rrw import RateRandomWalk
+from allanite.terms.sine import Sine
+from allanite.terms.white import White
+
+#: the stationary IEEE power-law terms in order of increasing tau slope
+POWER_LAW_TERMS: tuple[type[Term], ...] = (Quantization, White, Flicker, RateRandomWalk, RateRamp)
+
+__all__ = [
+    "POWER_LAW_TERMS",
+    "TERM_TYPES",
+    "Flicker",
+    "GaussMarkov",
+    "ParamSpec",
+    "Quantization",
+    "RateRamp",
+    "RateRandomWalk",
+    "Sine",
+    "Term",
+    "White",
+    "term_from_dict",
+]
