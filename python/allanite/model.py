@@ -114,7 +114,7 @@ class NoiseModel:
 
     # --- access -----------------------------------------------------------------------------
     def terms_of_type(self, kind: str | type[Term]) -> tuple[Term, ...]:
-        """The terms of one JSON ``type`` (e.g. ``"markov"``) or one Term class."""
+        """Return the terms of one JSON ``type`` (e.g. ``"markov"``) or one Term class."""
         if isinstance(kind, str):
             if kind not in TERM_TYPES:
                 raise ValueError(
@@ -124,16 +124,18 @@ class NoiseModel:
         return tuple(t for t in self.terms if isinstance(t, kind))
 
     def without(self, *kinds: str) -> NoiseModel:
-        """A copy without the terms of the given types."""
+        """Return a copy without the terms of the given types."""
         return NoiseModel(tuple(t for t in self.terms if t.type not in kinds), self.units)
 
     def plus(self, *terms: Term) -> NoiseModel:
-        """A copy with more terms."""
+        """Return a copy with more terms."""
         return NoiseModel(self.terms + tuple(terms), self.units)
 
     def coefficients(self) -> dict[str, float]:
-        """Parameter values by symbol (``N``, ``B``, ...; ``sigma_1``, ``tau_c_1``, ... for
-        repeated terms), in the model's units.
+        """Return the parameter values by label, in the model's units.
+
+        Labels are the symbols (``N``, ``B``, ...) with ``_1``, ``_2`` suffixes for repeated
+        types (``sigma_1``, ``tau_c_1``, ...).
         """
         out: dict[str, float] = {}
         for label, term, spec in self.labelled_parameters():
@@ -159,7 +161,7 @@ class NoiseModel:
         return out
 
     def in_units(self, rate: str) -> NoiseModel:
-        """The same model with coefficients expressed in another rate unit."""
+        """Return the same model with coefficients expressed in another rate unit."""
         target = rate_unit(rate)
         factor = convert(1.0, self.units["rate"], target)
         terms = []
@@ -170,7 +172,7 @@ class NoiseModel:
 
     # --- JSON -------------------------------------------------------------------------------
     def to_dict(self) -> dict[str, Any]:
-        """The JSON-ready dictionary of the public schema."""
+        """Return the JSON-ready dictionary of the public schema."""
         return {"units": dict(self.units), "terms": [t.to_dict() for t in self.terms]}
 
     def to_json(self, **kwargs: Any) -> str:

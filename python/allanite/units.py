@@ -197,7 +197,7 @@ def rate_unit(text: str) -> Unit:
 
 
 def coefficient_unit(rate: str, rate_power: float, time_power: float) -> Unit:
-    """The unit ``rate^rate_power * s^time_power`` of a coefficient in a model of rate ``rate``."""
+    """Return the unit ``rate^rate_power * s^time_power`` of a coefficient (model rate ``rate``)."""
     base = rate_unit(rate)
     return Unit(
         text=f"({rate})^{rate_power:g}*s^{time_power:g}",

@@ -71,7 +71,7 @@ class Flicker(Term):
             )
 
     def cutoff(self, dt: float) -> float:
-        """The cutoff in Hz for sample period ``dt`` (``f0``, or ``1/(2 dt)`` when unset)."""
+        """Return the cutoff in Hz for sample period ``dt`` (``f0``, or ``1/(2 dt)`` when unset)."""
         return 0.5 / dt if self.f0 is None else float(self.f0)
 
     def avar(self, tau: ArrayLike, dt: float) -> NDArray[np.float64]:
@@ -101,7 +101,7 @@ class Flicker(Term):
 
 
 def flicker_shape(x: NDArray[np.float64]) -> NDArray[np.float64]:
-    """The bracket of IEEE 952 eq. (C.16) times ``2/pi`` as a function of ``x = pi f0 tau``."""
+    """Return the bracket of IEEE 952 eq. (C.16) times ``2/pi``, with ``x = pi f0 tau``."""
     x = np.asarray(x, dtype=np.float64)
     _, ci2 = special.sici(2.0 * x)
     _, ci4 = special.sici(4.0 * x)

@@ -66,7 +66,7 @@ class GaussMarkov(Term):
 
     @classmethod
     def from_ar1(cls, phi: float, innovation_variance: float, dt: float) -> GaussMarkov:
-        """The term of a discrete AR(1) ``x[k] = phi x[k-1] + e[k]``, ``Var(e) = s2``."""
+        """Build the term of a discrete AR(1) ``x[k] = phi x[k-1] + e[k]``, ``Var(e) = s2``."""
         if not 0.0 < phi < 1.0:
             raise ValueError(f"phi must lie in (0, 1) for a Gauss-Markov process, got {phi}")
         return cls(sigma=math.sqrt(innovation_variance / (1.0 - phi**2)), tau_c=-dt / math.log(phi))

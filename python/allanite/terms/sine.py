@@ -72,7 +72,7 @@ class Sine(Term):
         return np.zeros(np.shape(f))
 
     def line(self) -> tuple[float, float]:
-        """The spectral line ``(frequency in Hz, power A^2/2 in rate^2)``."""
+        """Return the spectral line ``(frequency in Hz, power A^2/2 in rate^2)``."""
         return self.frequency, 0.5 * self.amplitude**2
 
     @classmethod
