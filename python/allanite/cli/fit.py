@@ -1,0 +1,128 @@
+"""``allanite fit``: fit a noise model (IEEE terms) to the Allan variance of a record."""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+from allanite.cli.record_options import (
+    add_grid_arguments,
+    add_record_arguments,
+    avar_from_args,
+    dump_json,
+    read_from_args,
+)
+from allanite.io.atomic import atomic_output
+from allanite.variance import AllanResult
+
+__all__ = ["fit_result", "register", "run"]
+
+EXAMPLES = """examples:
+  allanite fit --example
+  allanite fit rec.npy --fs 2000 --units deg/s -o model.json
+  allanite fit run1.npz --key gyro_counts --fs 100 --scale 0.05 --units deg/s --channels 0 \\
+      --plot fit.png --json
+"""
+
+
+def register(subparsers: Any) -> None:
+    """Add the ``fit`` subcommand."""
+    parser = subparsers.add_parser(
+        "fit",
+        help="fit IEEE noise terms to the Allan variance and save the noise model",
+        description="Compute the Allan variance of a record, fit a noise model (quantization, "
+        "angle random walk, bias instability, rate random walk, rate ramp, ...) with "
+        "uncertainties, print the coefficients in customary units and save the model as JSON.",
+        epilog=EXAMPLES,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    parser.add_argument("file", nargs="?", help="record file")
+    parser.add_argument("--example", action="store_true", help="fit the example record")
+    parser.add_argument("-o", "--output", help="write the noise model (JSON) of the first channel")
+    parser.add_argument("--plot", help="save the data, model and terms to FILE.png/.svg/.pdf")
+    parser.add_argument("--json", action="store_true", help="print machine-readable JSON")
+    add_record_arguments(parser)
+    add_grid_arguments(parser)
+    parser.set_defaults(func=run)
+
+
+def _fit_function() -> Any:
+    try:
+        from allanite.fit import fit  # type: ignore[attr-defined]
+    except ImportError:
+        return None
+    return fit
+
+
+def fit_result(result: AllanResult) -> Any:
+    """Fit a noise model to one channel, or None when this installation has no fitter."""
+    fit = _fit_function()
+    if fit is None:
+        return None
+    return fit(result)
+
+
+def _model_of(fit: Any) -> Any:
+    return getattr(fit, "model", fit)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run ``allanite fit``."""
+    from allanite.report.coefficients import coefficient_table
+
+    if _fit_function() is None:
+        raise ValueError("fitting is not available in this installation (allanite.fit.fit)")
+    record = read_from_args(args.file, args)
+    result = avar_from_args(record, args)
+    channels = []
+    fits = []
+    for c, name in enumerate(record.channels):
+        fit = fit_result(result.channel(c))
+        fits.append(fit)
+        rows = coefficient_table(fit, result.units)
+        channels.append(
+            {
+                "channel": name,
+                "model": _model_of(fit).to_dict(),
+                "coefficients": [
+                    {
+                        "term": r.term,
+                        "symbol": r.symbol,
+                        "value": r.value,
+                        "low": r.low,
+                        "high": r.high,
+                        "unit": r.unit,
+                    }
+                    for r in rows
+                ],
+            }
+        )
+    if args.plot:
+        from allanite.plot import model_figure, save_figure
+
+        fig = model_figure(
+            result,
+            fits[0],
+            channel=0,
+            labels=list(record.channels),
+            level=args.level,
+            title=f"{record.source} — {record.channels[0]}",
+        )
+        save_figure(fig, args.plot)
+    if args.output:
+        with atomic_output(args.output) as tmp:
+            tmp.write_text(_model_of(fits[0]).to_json(), encoding="utf-8")
+    if args.json:
+        print(dump_json({"record": record.summary(), "channels": channels}))
+    else:
+        for item in channels:
+            print(f"channel {item['channel']}:")
+            for row in item["coefficients"]:
+                interval = (
+                    "" if row["low"] != row["low"] else f"  [{row['low']:.4g}, {row['high']:.4g}]"
+                )
+                print(
+                    f"  {row['term']:>14} {row['symbol']:>8} = {row['value']:.4g} "
+                    f"{row['unit']}{interval}"
+                )
+    return 0

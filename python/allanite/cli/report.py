@@ -1,0 +1,133 @@
+"""``allanite report``: one self-contained HTML file with plots, tables, pass/fail and diagnosis."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import Any
+
+from allanite.cli.record_options import (
+    add_grid_arguments,
+    add_record_arguments,
+    avar_from_args,
+    dump_json,
+    progress,
+    read_from_args,
+)
+from allanite.report import Datasheet, DeviceAnalysis, build_report
+
+__all__ = ["register", "run"]
+
+EXAMPLES = """examples:
+  allanite report --example -o report.html
+  allanite report run1.npz --key gyro_counts --fs 100 --scale 0.05 --units deg/s -o run1.html
+  allanite report dut.csv --time-column t --units deg/s --reference ref.csv \\
+      --datasheet limits.json -o dut.html --png
+  allanite report real.npy --fs 400 --units rad/s --sim-model model.json -o gap.html
+
+exit codes: 0 report written (datasheet passed or not given), 1 report written but a datasheet
+limit failed, 2 bad input (nothing written).
+
+limits.json: {"device": "...", "limits": [{"quantity": "N", "max": 0.3, "unit": "deg/sqrt(h)"},
+              {"quantity": "adev", "tau": 1, "max": 0.01, "unit": "deg/s"}]}
+"""
+
+
+def register(subparsers: Any) -> None:
+    """Add the ``report`` subcommand."""
+    parser = subparsers.add_parser(
+        "report",
+        help="self-contained HTML report (plots, coefficients, pass/fail, diagnosis)",
+        description="Analyse one or more records and write one self-contained HTML report: "
+        "record summary, Allan deviation plot, fitted noise coefficients in customary units "
+        "with intervals, slope table, comparison with a reference device or datasheet limits, "
+        "and (with --sim-model) the sim-to-real diagnosis.",
+        epilog=EXAMPLES,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    parser.add_argument("files", nargs="*", metavar="FILE", help="record files")
+    parser.add_argument("--example", action="store_true", help="report on the example record")
+    parser.add_argument("-o", "--output", required=True, help="HTML file to write")
+    parser.add_argument("--title", help="page title")
+    parser.add_argument(
+        "--reference", metavar="FILE", help="reference device record (same options)"
+    )
+    parser.add_argument("--datasheet", metavar="LIMITS.json", help="datasheet limits to check")
+    parser.add_argument("--sim-model", metavar="MODEL.json", help="noise model to diagnose against")
+    parser.add_argument("--no-fit", action="store_true", help="skip the noise-model fit")
+    parser.add_argument("--png", action="store_true", help="also export the figures as PNG")
+    parser.add_argument("--pdf", action="store_true", help="also export the figures as PDF")
+    parser.add_argument("--json", action="store_true", help="print the verdict and checks as JSON")
+    add_record_arguments(parser)
+    add_grid_arguments(parser)
+    parser.set_defaults(func=run)
+
+
+def fit_channels(device: DeviceAnalysis) -> tuple[Any, ...]:
+    """Fit a noise model to every channel (None per channel when fitting is unavailable)."""
+    from allanite.cli.fit import fit_result
+
+    return tuple(fit_result(device.result.channel(c)) for c in range(device.result.n_channels))
+
+
+def diagnosis_parts(device: DeviceAnalysis, model_path: str) -> tuple[str, dict[str, Any]]:
+    """HTML and figures of the sim-to-real diagnosis of ``device`` against a model file."""
+    from allanite.report.diagnosis import diagnosis_section
+
+    return diagnosis_section(device.record, model_path)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run ``allanite report``."""
+    if Path(args.output).suffix.lower() not in (".html", ".htm"):
+        raise ValueError(f"output {args.output}: give an .html file name")
+    if not args.files and not args.example:
+        raise ValueError("give at least one record FILE, or --example")
+    sheet = Datasheet.load(args.datasheet) if args.datasheet else None
+    sources: list[str | None] = list(args.files) or [None]
+    devices = []
+    for path in progress(sources, desc="analysing", total=len(sources)):
+        record = read_from_args(path, args)
+        device = DeviceAnalysis(record, avar_from_args(record, args))
+        if not args.no_fit:
+            device = DeviceAnalysis(device.record, device.result, fit_channels(device))
+        devices.append(device)
+    reference = None
+    if args.reference:
+        ref_record = read_from_args(args.reference, args)
+        reference = DeviceAnalysis(ref_record, avar_from_args(ref_record, args))
+    diag_html = None
+    diag_figures = None
+    if args.sim_model:
+        diag_html, diag_figures = diagnosis_parts(devices[0], args.sim_model)
+    report = build_report(
+        devices,
+        reference=reference,
+        datasheet=sheet,
+        diagnosis_html=diag_html,
+        diagnosis_figures=diag_figures,
+        level=args.level,
+        title=args.title,
+    )
+    report.write(args.output)
+    exported: list[Path] = []
+    stem = Path(args.output).with_suffix("")
+    for fmt, wanted in (("png", args.png), ("pdf", args.pdf)):
+        if wanted:
+            exported += report.export_figures(stem, fmt)
+    if args.json:
+        data = report.to_dict()
+        data.update({"output": args.output, "figures": [str(p) for p in exported]})
+        print(dump_json(data))
+    else:
+        print(f"wrote {args.output}")
+        for figure_path in exported:
+            print(f"wrote {figure_path}")
+        if sheet is not None:
+            failed = [c for c in report.checks if c.status == "fail"]
+            verdict = "FAIL" if failed else "PASS"
+            print(
+                f"datasheet {sheet.device}: {verdict}"
+                + (f" ({len(failed)} limit(s) failed)" if failed else "")
+            )
+    return 0 if report.passed else 1

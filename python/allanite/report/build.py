@@ -1,0 +1,491 @@
+"""Assemble the HTML report of one or more analysed records.
+
+Sections: record summary, Allan deviation plot (all channels, reference overlaid), fitted
+model plots with each term's slope, coefficient table in customary units with intervals,
+slope table, Allan deviation table, comparison against a reference device and datasheet limits
+with pass/fail, and the sim-to-real diagnosis when one is given.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import datetime as _dt
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from allanite.io.atomic import atomic_output
+from allanite.io.record import Record
+from allanite.report import html as h
+from allanite.report.coefficients import Coefficient, coefficient_table
+from allanite.report.datasheet import Check, Datasheet, adev_at, check_limits
+from allanite.report.slopes import slope_table
+from allanite.variance import AllanResult
+
+__all__ = ["DeviceAnalysis", "Report", "build_report"]
+
+_TABLE_ROWS = 14
+
+
+@dataclass(frozen=True)
+class DeviceAnalysis:
+    """What the report shows of one record: the record, its Allan result, optional fits.
+
+    ``fits`` holds one fit result (or None) per channel of ``result``.
+    """
+
+    record: Record
+    result: AllanResult
+    fits: tuple[Any, ...] = ()
+    name: str = ""
+
+    @property
+    def label(self) -> str:
+        """Display name: ``name`` or the file name."""
+        return self.name or Path(self.record.source).name
+
+    def fit(self, channel: int) -> Any:
+        """Fit result of ``channel`` or None."""
+        return self.fits[channel] if channel < len(self.fits) else None
+
+
+@dataclass(frozen=True)
+class Report:
+    """A rendered report: the HTML, the datasheet checks and the figures."""
+
+    html: str
+    checks: tuple[Check, ...] = ()
+    figures: dict[str, Any] = field(default_factory=dict, compare=False)
+
+    @property
+    def passed(self) -> bool:
+        """False when any datasheet check failed outright."""
+        return all(c.passed for c in self.checks)
+
+    def write(self, path: str | os.PathLike[str]) -> None:
+        """Write the HTML atomically."""
+        with atomic_output(path) as tmp:
+            tmp.write_text(self.html, encoding="utf-8")
+
+    def export_figures(self, stem: str | os.PathLike[str], fmt: str) -> list[Path]:
+        """Save every figure as ``<stem>-<name>.<fmt>`` (png or pdf); return the paths."""
+        from allanite.plot import save_figure
+
+        paths = []
+        base = Path(stem)
+        for name, fig in self.figures.items():
+            path = base.with_name(f"{base.name}-{name}.{fmt}")
+            save_figure(fig, path)
+            paths.append(path)
+        return paths
+
+    def to_dict(self) -> dict[str, Any]:
+        """Verdict and checks as JSON-ready data."""
+        return {"passed": self.passed, "checks": [c.to_dict() for c in self.checks]}
+
+
+def _summary_rows(device: DeviceAnalysis) -> list[list[str]]:
+    r = device.record
+    rows = [
+        ["file", r.source],
+        ["channels", ", ".join(r.channels)],
+        ["samples", f"{r.n_samples:,}"],
+        ["sampling frequency", f"{r.fs:g} Hz" if r.fs else "unknown"],
+        ["duration", _duration(r.duration)],
+        ["input", r.input],
+        ["units", r.units or "not given"],
+    ]
+    if r.scale is not None:
+        rows.append(["scale (counts → units)", f"{r.scale:g}"])
+    if r.timing is not None:
+        t = r.timing
+        rows.append(
+            [
+                "time stamps",
+                f"jitter {100 * t.jitter_relative:.3g} % rms, {len(t.gaps)} gap(s)"
+                + (f", {t.filled} sample(s) filled" if t.filled else ""),
+            ]
+        )
+    if len(r.segments) > 1:
+        longest = max(r.segments, key=lambda s: s.n_samples)
+        rows.append(
+            [
+                "segments",
+                f"{len(r.segments)}; the longest ({longest.n_samples:,} samples) is analysed",
+            ]
+        )
+    res = device.result
+    rows.append(
+        [
+            "estimator",
+            f"{res.kind} ({res.tau.size} averaging times, {res.tau[0]:.3g} … {res.tau[-1]:.4g} s)",
+        ]
+    )
+    return rows
+
+
+def _duration(seconds: float | None) -> str:
+    if seconds is None:
+        return "unknown"
+    if seconds >= 3600:
+        return f"{seconds / 3600:.3g} h ({seconds:,.0f} s)"
+    if seconds >= 60:
+        return f"{seconds / 60:.3g} min ({seconds:,.0f} s)"
+    return f"{seconds:.3g} s"
+
+
+def _curve_labels(device: DeviceAnalysis, multi: bool) -> list[str]:
+    prefix = f"{device.label}: " if multi else ""
+    return [f"{prefix}{c}" for c in device.record.channels]
+
+
+def _allan_figure(
+    devices: Sequence[DeviceAnalysis], reference: DeviceAnalysis | None, level: float
+) -> Any:
+    from allanite.plot import allan_figure
+
+    items = list(devices) + ([reference] if reference is not None else [])
+    labels: list[str] = []
+    for k, d in enumerate(items):
+        names = _curve_labels(d, len(items) > 1)
+        if reference is not None and k == len(items) - 1:
+            names = [f"reference {d.label}: {c}" for c in d.record.channels]
+        labels += names
+    title = f"Allan deviation with {100 * level:.3g} % confidence intervals"
+    return allan_figure([d.result for d in items], labels=labels, level=level, title=title)
+
+
+def _pick_rows(n: int) -> np.ndarray:
+    if n <= _TABLE_ROWS:
+        return np.arange(n)
+    return np.unique(np.rint(np.linspace(0, n - 1, _TABLE_ROWS)).astype(int))
+
+
+def _adev_table(device: DeviceAnalysis, level: float) -> str:
+    res = device.result
+    dev = res.dev.reshape(res.tau.size, -1)
+    lo, hi = (a.reshape(dev.shape) for a in res.ci(level))
+    unit = res.units or "rate units"
+    header = ["τ [s]"]
+    for name in device.record.channels:
+        header += [f"{name} [{unit}]", f"{name} interval"]
+    rows = []
+    for k in _pick_rows(res.tau.size):
+        row = [h.fmt(res.tau[k])]
+        for c in range(dev.shape[1]):
+            row += [h.fmt(dev[k, c]), f"{h.fmt(lo[k, c], 3)} … {h.fmt(hi[k, c], 3)}"]
+        rows.append(row)
+    return h.table(header, rows, text_columns=0)
+
+
+def _slope_section(device: DeviceAnalysis) -> str:
+    res = device.result
+    dev = res.dev.reshape(res.tau.size, -1)
+    parts = []
+    for c, name in enumerate(device.record.channels):
+        rows = [
+            [
+                f"{r.tau_min:.3g} … {r.tau_max:.4g}",
+                r.term,
+                r.symbol,
+                r.label,
+                f"{r.slope:+.2f}",
+                str(r.n_points),
+            ]
+            for r in slope_table(res.tau, dev[:, c])
+        ]
+        parts.append(f"<h3>{h.escape(device.label)} — {h.escape(name)}</h3>")
+        parts.append(
+            h.table(
+                ["τ range [s]", "dominant term", "symbol", "slope", "measured slope", "points"],
+                rows,
+                text_columns=3,
+            )
+        )
+    return "".join(parts)
+
+
+def _coefficient_section(
+    devices: Sequence[DeviceAnalysis], coefficients: dict[tuple[int, int], list[Coefficient]]
+) -> str:
+    if not coefficients:
+        return (
+            '<p class="note">No noise model was fitted (run with the fit enabled to see the '
+            "coefficients).</p>"
+        )
+    parts = []
+    for (d, c), coefs in coefficients.items():
+        device = devices[d]
+        parts.append(f"<h3>{h.escape(device.label)} — {h.escape(device.record.channels[c])}</h3>")
+        rows = [
+            [
+                k.term,
+                k.symbol,
+                h.fmt(k.value),
+                f"{h.fmt(k.low, 3)} … {h.fmt(k.high, 3)}",
+                k.unit,
+                k.slope or "–",
+            ]
+            for k in coefs
+        ]
+        parts.append(
+            h.table(
+                ["term", "symbol", "value", "interval", "unit", "ADEV slope"], rows, text_columns=2
+            )
+        )
+    return "".join(parts)
+
+
+def _rate_adev(device: DeviceAnalysis, channel: int, level: float) -> tuple[Any, ...]:
+    res = device.result.channel(min(channel, device.result.n_channels - 1))
+    lo, hi = res.ci(level)
+    return res.tau, res.dev, lo, hi, res.units
+
+
+def _datasheet_section(
+    sheet: Datasheet,
+    devices: Sequence[DeviceAnalysis],
+    coefficients: dict[tuple[int, int], list[Coefficient]],
+    level: float,
+) -> tuple[str, list[Check]]:
+    checks: list[Check] = []
+    for d, device in enumerate(devices):
+        for c, name in enumerate(device.record.channels):
+            measured = {k.symbol: k.measured() for k in coefficients.get((d, c), [])}
+            label = f"{device.label}: {name}" if len(devices) > 1 else name
+            checks += check_limits(sheet, label, measured, _rate_adev(device, c, level))
+    verdict = "fail" if any(c.status == "fail" for c in checks) else "pass"
+    rows = [
+        [
+            c.channel,
+            c.limit.label,
+            c.limit.bounds_text(),
+            h.fmt(c.value),
+            "–" if c.low is None else f"{h.fmt(c.low, 3)} … {h.fmt(c.high, 3)}",
+            h.badge(c.status),
+        ]
+        for c in checks
+    ]
+    body = (
+        f'<p class="verdict">Against <b>{h.escape(sheet.device)}</b>: {h.badge(verdict)}</p>'
+        + h.table(
+            ["channel", "quantity", "limit", "measured", "interval", "result"],
+            [[h.escape(v) if k < 5 else v for k, v in enumerate(r)] for r in rows],
+            text_columns=3,
+            raw=True,
+        )
+        + '<p class="note">PASS: the whole confidence interval meets the limit; MARGINAL: the '
+        "estimate meets it but the interval crosses it; FAIL: the estimate violates it; "
+        "MISSING: the quantity was not measured (no such fitted term or τ outside the "
+        "measured range).</p>"
+    )
+    return body, checks
+
+
+def _reference_section(
+    devices: Sequence[DeviceAnalysis], reference: DeviceAnalysis, level: float
+) -> str:
+    ref = reference.result
+    parts = []
+    for device in devices:
+        for c, name in enumerate(device.record.channels):
+            tau, dev, lo, hi, unit = _rate_adev(device, c, level)
+            rtau, rdev, rlo, rhi, _ = _rate_adev(reference, c, level)
+            lo_tau, hi_tau = max(tau[0], rtau[0]), min(tau[-1], rtau[-1])
+            decades = 10.0 ** np.arange(np.ceil(np.log10(lo_tau)), np.floor(np.log10(hi_tau)) + 1)
+            rows = []
+            for t in decades:
+                a = adev_at(tau, dev, lo, hi, float(t))
+                b = adev_at(rtau, rdev, rlo, rhi, float(t))
+                if a is None or b is None:
+                    continue
+                verdict = "higher" if a[1] > b[2] else "lower" if a[2] < b[1] else "consistent"
+                rows.append([h.fmt(t), h.fmt(a[0]), h.fmt(b[0]), f"{a[0] / b[0]:.3g}", verdict])
+            ref_name = reference.record.channels[min(c, ref.n_channels - 1)]
+            parts.append(
+                f"<h3>{h.escape(device.label)} — {h.escape(name)} vs reference "
+                f"{h.escape(reference.label)} — {h.escape(ref_name)}</h3>"
+            )
+            parts.append(
+                h.table(
+                    ["τ [s]", f"device [{unit}]", f"reference [{unit}]", "ratio", "intervals"],
+                    rows,
+                    text_columns=0,
+                )
+            )
+    parts.append(
+        '<p class="note">"higher"/"lower": the confidence intervals do not overlap; '
+        '"consistent": they do.</p>'
+    )
+    return "".join(parts)
+
+
+def _fit_figures(devices: Sequence[DeviceAnalysis], level: float) -> dict[str, Any]:
+    from allanite.plot import model_figure
+
+    figures = {}
+    for d, device in enumerate(devices):
+        for c, name in enumerate(device.record.channels):
+            fit = device.fit(c)
+            if fit is None:
+                continue
+            key = f"fit-{d}-{c}" if len(devices) > 1 else f"fit-{c}"
+            figures[key] = model_figure(
+                device.result,
+                fit,
+                channel=c,
+                labels=list(device.record.channels),
+                level=level,
+                title=f"{device.label} — {name}: fitted noise model and its terms",
+            )
+    return figures
+
+
+def build_report(
+    devices: Sequence[DeviceAnalysis],
+    *,
+    reference: DeviceAnalysis | None = None,
+    datasheet: Datasheet | None = None,
+    diagnosis_html: str | None = None,
+    diagnosis_figures: dict[str, Any] | None = None,
+    level: float = 0.683,
+    title: str | None = None,
+) -> Report:
+    """Render the report.
+
+    Parameters
+    ----------
+    devices : sequence of DeviceAnalysis
+        The analysed records (their channels are overlaid in one plot).
+    reference : DeviceAnalysis, optional
+        A reference device, overlaid and compared point by point.
+    datasheet : Datasheet, optional
+        Limits to check every channel against (pass / marginal / fail / missing).
+    diagnosis_html : str, optional
+        Ready HTML of the sim-to-real diagnosis section.
+    diagnosis_figures : dict, optional
+        Figures of the diagnosis (embedded after its text).
+    level : float
+        Confidence level of every interval.
+    title : str, optional
+        Page title.
+
+    Returns
+    -------
+    Report
+    """
+    from allanite import __version__
+    from allanite.plot import figure_bytes
+
+    if not devices:
+        raise ValueError("a report needs at least one analysed record")
+    figures: dict[str, Any] = {"adev": _allan_figure(devices, reference, level)}
+    figures.update(_fit_figures(devices, level))
+    coefficients = {
+        (d, c): coefficient_table(device.fit(c), device.result.units)
+        for d, device in enumerate(devices)
+        for c in range(device.result.n_channels)
+        if device.fit(c) is not None
+    }
+    body: list[str] = []
+    checks: list[Check] = []
+    sheet_html = ""
+    if datasheet is not None:
+        sheet_html, checks = _datasheet_section(datasheet, devices, coefficients, level)
+        verdict = "fail" if any(c.status == "fail" for c in checks) else "pass"
+        body.append(
+            f'<p class="verdict">Datasheet check ({h.escape(datasheet.device)}): '
+            f"{h.badge(verdict)}</p>"
+        )
+    summary = "".join(
+        (f"<h3>{h.escape(d.label)}</h3>" if len(devices) > 1 else "")
+        + h.table(None, _summary_rows(d), text_columns=2, css_class="summary")
+        + "".join(f'<div class="warn">{h.escape(w)}</div>' for w in d.record.warnings)
+        for d in devices
+    )
+    body.append(h.section("Record summary", summary, anchor="summary"))
+    adev_png = figure_bytes(figures["adev"])
+    body.append(
+        h.section(
+            "Allan deviation",
+            h.figure(
+                adev_png,
+                f"Error bars: {100 * level:.3g} % chi-square confidence intervals "
+                "from the equivalent degrees of freedom.",
+                "Allan deviation plot",
+            )
+            + "".join(
+                h.figure(
+                    figure_bytes(fig),
+                    "Dashed: each term's exact Allan deviation with its "
+                    "log-log slope; black: their sum.",
+                    f"fitted model {key}",
+                )
+                for key, fig in figures.items()
+                if key.startswith("fit")
+            ),
+            anchor="adev",
+        )
+    )
+    body.append(
+        h.section(
+            "Noise coefficients", _coefficient_section(devices, coefficients), anchor="coefficients"
+        )
+    )
+    body.append(
+        h.section(
+            "Slope table",
+            "".join(_slope_section(d) for d in devices)
+            + '<p class="note">Least-squares log-log slope in a half-decade window, '
+            "assigned to the nearest canonical slope (IEEE Std 952-1997, Annex C).</p>",
+            anchor="slopes",
+        )
+    )
+    body.append(
+        h.section(
+            "Allan deviation table",
+            "".join(
+                (f"<h3>{h.escape(d.label)}</h3>" if len(devices) > 1 else "")
+                + _adev_table(d, level)
+                for d in devices
+            ),
+            anchor="table",
+        )
+    )
+    if datasheet is not None:
+        body.append(h.section("Datasheet comparison", sheet_html, anchor="datasheet"))
+    if reference is not None:
+        body.append(
+            h.section(
+                "Comparison with the reference device",
+                _reference_section(devices, reference, level),
+                anchor="reference",
+            )
+        )
+    if diagnosis_html is not None:
+        extra = "".join(
+            h.figure(
+                figure_bytes(fig),
+                f"Sim-vs-real {name}: real record against the Monte Carlo "
+                "band of the simulated sensor.",
+                f"diagnosis {name}",
+            )
+            for name, fig in (diagnosis_figures or {}).items()
+        )
+        body.append(h.section("Sim-to-real diagnosis", diagnosis_html + extra, anchor="diagnosis"))
+        figures.update({f"diagnosis-{k}": v for k, v in (diagnosis_figures or {}).items()})
+    stamp = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+    page_title = title or "Noise report: " + ", ".join(d.label for d in devices)
+    subtitle = f"allanite {__version__} · {stamp} · confidence level {100 * level:.3g} %"
+    return Report(
+        html=h.document(page_title, subtitle, "".join(body)), checks=tuple(checks), figures=figures
+    )
+
+
+def with_fits(device: DeviceAnalysis, fits: Sequence[Any]) -> DeviceAnalysis:
+    """Return a copy of ``device`` with per-channel fit results attached."""
+    return dataclasses.replace(device, fits=tuple(fits))

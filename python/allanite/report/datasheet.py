@@ -1,0 +1,237 @@
+"""Datasheet limits and the pass/fail check of a measured device against them.
+
+A limits file is JSON::
+
+    {"device": "Gyro XYZ datasheet, grade A",
+     "limits": [
+        {"quantity": "N", "max": 0.3, "unit": "deg/sqrt(h)"},
+        {"quantity": "B", "max": 10, "unit": "deg/h"},
+        {"quantity": "adev", "tau": 1.0, "max": 0.01, "unit": "deg/s"}
+     ]}
+
+``quantity`` is an IEEE coefficient symbol of a fitted term (N, B, K, Q, R, ...) or ``adev``
+(the measured Allan deviation at ``tau`` seconds, interpolated log-log). Each limit has ``max``
+and/or ``min``. A check *passes* when the whole confidence interval lies within the limits,
+*fails* when the estimate itself lies outside, and is *marginal* when only the interval
+crosses a limit (the data cannot decide at that confidence level).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from allanite.errors import InputError
+from allanite.units import convert
+
+__all__ = ["Check", "Datasheet", "Limit", "Measured", "check_limits"]
+
+STATUSES: tuple[str, ...] = ("pass", "marginal", "fail", "missing")
+
+
+@dataclass(frozen=True)
+class Limit:
+    """One datasheet line: a quantity, its unit and a lower and/or upper bound."""
+
+    quantity: str
+    unit: str
+    max: float | None = None
+    min: float | None = None
+    tau: float | None = None
+
+    @property
+    def label(self) -> str:
+        """Human-readable name, e.g. ``adev(1 s)`` or ``N``."""
+        return f"adev(τ = {self.tau:g} s)" if self.quantity == "adev" else self.quantity
+
+    def bounds_text(self) -> str:
+        """``≤ 0.3 deg/sqrt(h)``, ``≥ 1 s`` or ``0.1 … 0.3 unit``."""
+        if self.min is not None and self.max is not None:
+            return f"{self.min:g} … {self.max:g} {self.unit}"
+        if self.max is not None:
+            return f"≤ {self.max:g} {self.unit}"
+        return f"≥ {self.min:g} {self.unit}"
+
+
+@dataclass(frozen=True)
+class Datasheet:
+    """A named set of limits."""
+
+    device: str
+    limits: tuple[Limit, ...]
+
+    @classmethod
+    def from_dict(cls, data: Any, *, source: str = "datasheet") -> Datasheet:
+        """Validate and build from the JSON structure described in the module docstring."""
+        if not isinstance(data, dict) or not isinstance(data.get("limits"), list):
+            raise InputError(
+                'expected an object with a \'limits\' list, e.g. {"device": "...", "limits": '
+                '[{"quantity": "N", "max": 0.3, "unit": "deg/sqrt(h)"}]}',
+                path=source,
+            )
+        limits = []
+        for k, item in enumerate(data["limits"]):
+            where = f"limits[{k}]"
+            if not isinstance(item, dict) or "quantity" not in item or "unit" not in item:
+                raise InputError(f"{where} needs 'quantity' and 'unit' fields", path=source)
+            unknown = set(item) - {"quantity", "unit", "max", "min", "tau"}
+            if unknown:
+                raise InputError(
+                    f"{where} has unknown field(s) {sorted(unknown)}; use quantity, unit, max, "
+                    "min, tau",
+                    path=source,
+                )
+            if item.get("max") is None and item.get("min") is None:
+                raise InputError(f"{where} needs a 'max' and/or a 'min'", path=source)
+            if item["quantity"] == "adev" and not isinstance(item.get("tau"), (int, float)):
+                raise InputError(f"{where}: an 'adev' limit needs 'tau' in seconds", path=source)
+            try:
+                limits.append(
+                    Limit(
+                        quantity=str(item["quantity"]),
+                        unit=str(item["unit"]),
+                        max=None if item.get("max") is None else float(item["max"]),
+                        min=None if item.get("min") is None else float(item["min"]),
+                        tau=None if item.get("tau") is None else float(item["tau"]),
+                    )
+                )
+            except (TypeError, ValueError) as exc:
+                raise InputError(f"{where}: {exc}", path=source) from exc
+        return cls(device=str(data.get("device", Path(source).stem)), limits=tuple(limits))
+
+    @classmethod
+    def load(cls, path: str | Path) -> Datasheet:
+        """Read a limits JSON file."""
+        path = Path(path)
+        try:
+            data = json.loads(path.read_text(encoding="utf-8"))
+        except FileNotFoundError as exc:
+            raise InputError("no such file; check the path", path=str(path)) from exc
+        except json.JSONDecodeError as exc:
+            raise InputError(
+                f"not valid JSON ({exc.msg}, column {exc.colno}); fix the syntax",
+                path=str(path),
+                line=exc.lineno,
+            ) from exc
+        return cls.from_dict(data, source=str(path))
+
+
+@dataclass(frozen=True)
+class Measured:
+    """A measured value with its confidence interval, in ``unit``."""
+
+    value: float
+    low: float
+    high: float
+    unit: str
+
+
+@dataclass(frozen=True)
+class Check:
+    """The outcome of one limit for one channel."""
+
+    limit: Limit
+    channel: str
+    value: float | None
+    low: float | None
+    high: float | None
+    status: str
+
+    @property
+    def passed(self) -> bool:
+        """True unless the check failed outright."""
+        return self.status != "fail"
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary."""
+        return {
+            "quantity": self.limit.quantity,
+            "tau": self.limit.tau,
+            "unit": self.limit.unit,
+            "min": self.limit.min,
+            "max": self.limit.max,
+            "channel": self.channel,
+            "value": self.value,
+            "low": self.low,
+            "high": self.high,
+            "status": self.status,
+        }
+
+
+def _status(limit: Limit, m: Measured) -> str:
+    lo, mid, hi = m.low, m.value, m.high
+    if (limit.max is not None and mid > limit.max) or (limit.min is not None and mid < limit.min):
+        return "fail"
+    if (limit.max is not None and hi > limit.max) or (limit.min is not None and lo < limit.min):
+        return "marginal"
+    return "pass"
+
+
+def adev_at(
+    tau: np.ndarray, dev: np.ndarray, low: np.ndarray, high: np.ndarray, at: float
+) -> tuple[float, float, float] | None:
+    """Log-log interpolation of a deviation and its limits at ``at`` seconds (None outside)."""
+    if not tau[0] <= at <= tau[-1]:
+        return None
+    lt = np.log(tau)
+    x = math.log(at)
+    return tuple(float(np.exp(np.interp(x, lt, np.log(v)))) for v in (dev, low, high))  # type: ignore[return-value]
+
+
+def check_limits(
+    sheet: Datasheet,
+    channel: str,
+    coefficients: dict[str, Measured],
+    adev: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, str | None],
+) -> list[Check]:
+    """Check one channel against every limit of ``sheet``.
+
+    Parameters
+    ----------
+    sheet : Datasheet
+        The limits.
+    channel : str
+        Channel name (for the table).
+    coefficients : dict
+        Fitted coefficients by symbol (``N``, ``B``, ...), with intervals and units.
+    adev : tuple
+        ``(tau, dev, low, high, rate_unit)`` of the measured deviation.
+
+    Returns
+    -------
+    list of Check
+        One per limit; ``missing`` when the quantity was not measured (no such fitted term, or
+        ``tau`` outside the measured range).
+    """
+    checks = []
+    tau, dev, low, high, rate = adev
+    for limit in sheet.limits:
+        measured: Measured | None = None
+        if limit.quantity == "adev":
+            at = adev_at(tau, dev, low, high, float(limit.tau or 0.0))
+            if at is not None and rate is not None:
+                value, lo, hi = (convert(v, rate, limit.unit) for v in at)
+                measured = Measured(value, lo, hi, limit.unit)
+        elif limit.quantity in coefficients:
+            c = coefficients[limit.quantity]
+            value, lo, hi = (convert(v, c.unit, limit.unit) for v in (c.value, c.low, c.high))
+            measured = Measured(value, lo, hi, limit.unit)
+        if measured is None:
+            checks.append(Check(limit, channel, None, None, None, "missing"))
+        else:
+            checks.append(
+                Check(
+                    limit,
+                    channel,
+                    measured.value,
+                    measured.low,
+                    measured.high,
+                    _status(limit, measured),
+                )
+            )
+    return checks

@@ -1,0 +1,127 @@
+"""The sim-to-real diagnosis section of the report (from :class:`allanite.diagnosis.Diagnosis`)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from allanite.io.record import Record
+from allanite.report import html as h
+
+__all__ = ["diagnosis_html", "diagnosis_section", "run_diagnosis"]
+
+
+def run_diagnosis(record: Record, model: Any, channel: int = 0, **options: Any) -> Any:
+    """Diagnose one channel of a record (its longest segment) against a noise model."""
+    from allanite.cli.record_options import rate_unit
+    from allanite.diagnosis import diagnose
+
+    part = record.longest_segment()
+    return diagnose(
+        part.samples[:, channel],
+        model,
+        part.require_fs(),
+        input=part.input,
+        units=rate_unit(part),
+        **options,
+    )
+
+
+def _params(params: dict[str, float], sigma: dict[str, float]) -> str:
+    return ", ".join(
+        f"{k} = {h.fmt(v)}" + (f" ± {h.fmt(sigma[k], 2)}" if sigma.get(k) else "")
+        for k, v in params.items()
+    )
+
+
+def _ranges(items: list[Any], unit: str) -> str:
+    if not items:
+        return "none"
+    out = []
+    for item in items:
+        if isinstance(item, (list, tuple)) and len(item) == 2:
+            out.append(f"{h.fmt(item[0], 3)} … {h.fmt(item[1], 3)} {unit}")
+        else:
+            out.append(f"{h.fmt(item, 4)} {unit}")
+    return "; ".join(out)
+
+
+def diagnosis_html(diagnosis: Any, *, channel: str, model_name: str) -> str:
+    """HTML of a diagnosis: verdict, per-view p-values, where the gap is and what explains it."""
+    verdict = "fail" if diagnosis.significant else "pass"
+    text = (
+        "the real record differs significantly from the simulated sensor"
+        if diagnosis.significant
+        else "the real record is consistent with the simulated sensor"
+    )
+    where = diagnosis.where
+    views = [
+        [
+            "averaging time (Allan variance)",
+            h.fmt(diagnosis.tau.p_value, 3),
+            _ranges(where["tau_bands_s"], "s"),
+        ],
+        [
+            "frequency (PSD, lines)",
+            h.fmt(diagnosis.frequency.p_value, 3),
+            _ranges(where["frequency_bands_hz"], "Hz")
+            + " · lines: "
+            + _ranges(where["frequency_lines_hz"], "Hz"),
+        ],
+        [
+            "time (jumps, bursts, warm-up)",
+            h.fmt(diagnosis.time.p_value, 3),
+            _ranges(where["time_segments_s"], "s"),
+        ],
+    ]
+    parts = [
+        f'<p class="verdict">Channel <b>{h.escape(channel)}</b> against model '
+        f"<b>{h.escape(model_name)}</b>: {h.badge(verdict)} — {h.escape(text)} "
+        f"(combined p = {h.fmt(diagnosis.p_value, 3)}, "
+        f"gap G = {h.fmt(diagnosis.statistic, 3)}).</p>",
+        h.table(["view", "p-value", "where the gap is"], views, text_columns=1),
+    ]
+    if diagnosis.attribution:
+        rows = [
+            [
+                a.effect,
+                _params(a.params, a.params_sigma),
+                f"{100 * a.shrinkage:.0f} %",
+                "yes" if a.consistent_after else "no",
+            ]
+            for a in diagnosis.attribution[:6]
+        ]
+        parts.append("<h3>What explains the gap (best first)</h3>")
+        parts.append(
+            h.table(
+                ["effect", "fitted parameters", "gap explained", "consistent after"],
+                rows,
+                text_columns=2,
+            )
+        )
+    if diagnosis.holdout is not None:
+        hold = diagnosis.holdout
+        share = "–" if hold.shrinkage is None else f"{100 * hold.shrinkage:.0f} %"
+        parts.append(
+            f"<p>Held-out check ({h.escape(hold.source)}, {hold.n_samples:,} samples): "
+            f"{h.escape(hold.effect)} explains {share} of the gap there.</p>"
+        )
+    return "".join(parts)
+
+
+def diagnosis_section(
+    record: Record, model_path: str, channel: int = 0
+) -> tuple[str, dict[str, Any]]:
+    """Run the diagnosis of ``record`` against the model file and render it with its figure."""
+    from pathlib import Path
+
+    diagnosis = run_diagnosis(record, model_path, channel)
+    html = diagnosis_html(
+        diagnosis, channel=record.channels[channel], model_name=Path(model_path).name
+    )
+    figures: dict[str, Any] = {}
+    try:
+        from allanite.plot.diagnosis import diagnosis_figure
+    except ImportError:
+        return html, figures
+    figures["views"] = diagnosis_figure(diagnosis)
+    return html, figures

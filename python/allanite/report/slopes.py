@@ -1,0 +1,109 @@
+r"""The slope table: which noise term the measured Allan deviation shows over which tau range.
+
+The local log-log slope :math:`\mu = d\ln\sigma/d\ln\tau` of a deviation curve names the
+dominant noise term (IEEE Std 952-1997, Annex C): -1 quantization (or white angle noise),
+-1/2 angle random walk, 0 bias instability, +1/2 rate random walk, +1 rate ramp. Here the
+slope is the least-squares slope over a sliding half-decade window (so that the scatter of the
+long-tau points does not flip the classification point by point), each point is assigned the
+nearest canonical slope, and runs of equal slopes become rows of the table.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ["SLOPE_TERMS", "SlopeRow", "slope_table"]
+
+#: canonical Allan-deviation slope -> (label, term that produces it, IEEE symbol)
+SLOPE_TERMS: dict[float, tuple[str, str, str]] = {
+    -1.0: ("−1", "quantization / white angle noise", "Q"),
+    -0.5: ("−1/2", "angle random walk (white rate noise)", "N"),
+    0.0: ("0", "bias instability (flicker rate noise)", "B"),
+    0.5: ("+1/2", "rate random walk", "K"),
+    1.0: ("+1", "rate ramp", "R"),
+}
+_WINDOW_DECADES = 0.5
+
+
+@dataclass(frozen=True)
+class SlopeRow:
+    """A tau range over which the measured slope is near one canonical value."""
+
+    tau_min: float
+    tau_max: float
+    slope: float
+    canonical: float
+    label: str
+    term: str
+    symbol: str
+    n_points: int
+
+
+def local_slopes(tau: NDArray[np.float64], dev: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Least-squares log-log slope in a half-decade window around each point."""
+    lt, ld = np.log10(tau), np.log10(dev)
+    out = np.empty(tau.size)
+    for k in range(tau.size):
+        sel = np.abs(lt - lt[k]) <= _WINDOW_DECADES / 2
+        if sel.sum() < 3:  # widen to the three nearest points
+            sel = np.zeros(tau.size, dtype=bool)
+            sel[np.argsort(np.abs(lt - lt[k]))[:3]] = True
+        x, y = lt[sel], ld[sel]
+        out[k] = np.polyfit(x, y, 1)[0]
+    return out
+
+
+def slope_table(tau: NDArray[np.float64], dev: NDArray[np.float64]) -> list[SlopeRow]:
+    """Group the measured curve into tau ranges of one canonical slope.
+
+    Parameters
+    ----------
+    tau, dev : numpy.ndarray
+        Averaging times and Allan deviation of one channel (at least 3 points).
+
+    Returns
+    -------
+    list of SlopeRow
+        In increasing tau; runs of a single point are merged into their neighbours.
+    """
+    tau = np.asarray(tau, dtype=np.float64)
+    dev = np.asarray(dev, dtype=np.float64)
+    good = np.isfinite(dev) & (dev > 0)
+    tau, dev = tau[good], dev[good]
+    if tau.size < 3:
+        return []
+    slopes = local_slopes(tau, dev)
+    canon = np.array(sorted(SLOPE_TERMS))
+    nearest = canon[np.argmin(np.abs(slopes[:, None] - canon[None, :]), axis=1)]
+    # merge isolated single points into the previous run
+    for k in range(1, nearest.size - 1):
+        if nearest[k] != nearest[k - 1] and nearest[k] != nearest[k + 1]:
+            nearest[k] = nearest[k - 1]
+    rows: list[SlopeRow] = []
+    start = 0
+    for k in range(1, nearest.size + 1):
+        if k == nearest.size or nearest[k] != nearest[start]:
+            sel = slice(start, k)
+            c = float(nearest[start])
+            label, term, symbol = SLOPE_TERMS[c]
+            if k - start >= 2:
+                fit = float(np.polyfit(np.log10(tau[sel]), np.log10(dev[sel]), 1)[0])
+            else:
+                fit = float(slopes[start])
+            rows.append(
+                SlopeRow(
+                    tau_min=float(tau[start]),
+                    tau_max=float(tau[k - 1]),
+                    slope=fit,
+                    canonical=c,
+                    label=label,
+                    term=term,
+                    symbol=symbol,
+                    n_points=k - start,
+                )
+            )
+            start = k
+    return rows
