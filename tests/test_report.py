@@ -1,0 +1,240 @@
+"""HTML report: datasheet checks, slope table, coefficients, self-containment, CLI, Chromium."""
+
+from __future__ import annotations
+
+import json
+import re
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import allanite
+from allanite.cli import main
+from allanite.errors import InputError
+from allanite.io import Record
+from allanite.report import (
+    Datasheet,
+    DeviceAnalysis,
+    build_report,
+    check_limits,
+    coefficient_table,
+    customary_unit,
+    slope_table,
+)
+from allanite.report.datasheet import Measured
+
+FS = 100.0
+RNG = np.random.default_rng(3)
+N = 6000
+# white rate noise (ARW) plus a slow random walk: slopes -1/2 then +1/2
+SAMPLES = RNG.normal(size=(N, 2)) * 0.5 + np.cumsum(RNG.normal(size=(N, 2)) * 0.002, axis=0)
+
+
+def _device(samples: np.ndarray = SAMPLES, name: str = "dut.npy") -> DeviceAnalysis:
+    record = Record(samples=samples, fs=FS, units="deg/s", channels=("gx", "gy"), source=name)
+    return DeviceAnalysis(record, allanite.avar(samples, FS, points=30, units="deg/s"))
+
+
+# --- datasheet ------------------------------------------------------------------------------
+SHEET = {
+    "device": "Demo gyro",
+    "limits": [
+        {"quantity": "adev", "tau": 1.0, "max": 0.2, "unit": "deg/s"},
+        {"quantity": "adev", "tau": 1.0, "max": 0.05 * 3600, "unit": "deg/h"},
+        {"quantity": "N", "max": 1.0, "unit": "deg/sqrt(h)"},
+    ],
+}
+
+
+def test_datasheet_parse_errors(tmp_path: Path) -> None:
+    bad = tmp_path / "limits.json"
+    bad.write_text('{"limits": [\n  {"quantity": "N", "max": 1,}\n]}')
+    with pytest.raises(InputError, match=r"limits.json, line 2: not valid JSON"):
+        Datasheet.load(bad)
+    with pytest.raises(InputError, match=r"limits\[0\] needs a 'max' and/or a 'min'"):
+        Datasheet.from_dict({"limits": [{"quantity": "N", "unit": "deg/sqrt(h)"}]})
+    with pytest.raises(InputError, match=r"'adev' limit needs 'tau'"):
+        Datasheet.from_dict({"limits": [{"quantity": "adev", "unit": "deg/s", "max": 1}]})
+    with pytest.raises(InputError, match=r"unknown field\(s\) \['maxx'\]"):
+        Datasheet.from_dict({"limits": [{"quantity": "N", "unit": "deg/s", "maxx": 1}]})
+
+
+def test_check_statuses_and_unit_conversion() -> None:
+    sheet = Datasheet.from_dict(
+        {
+            "limits": [
+                {"quantity": "N", "max": 0.5, "unit": "deg/sqrt(h)"},
+                {"quantity": "B", "max": 10.0, "unit": "deg/h"},
+                {"quantity": "K", "max": 1.0, "unit": "deg/h/sqrt(h)"},
+                {"quantity": "R", "max": 1.0, "unit": "deg/h^2"},
+                {"quantity": "adev", "tau": 2.0, "min": 0.5, "unit": "deg/h"},
+            ]
+        }
+    )
+    coefficients = {
+        # N = 0.005 deg/sqrt(s) = 0.3 deg/sqrt(h), interval 0.27 ... 0.33 -> pass
+        "N": Measured(0.005, 0.0045, 0.0055, "deg/sqrt(s)"),
+        # B = 9 deg/h, interval up to 11 -> marginal
+        "B": Measured(9.0 / 3600, 8.0 / 3600, 11.0 / 3600, "deg/s"),
+        # K = 2 deg/h/sqrt(h) -> fail
+        "K": Measured(2.0, 1.5, 2.5, "deg/h/sqrt(h)"),
+    }
+    tau = np.array([1.0, 4.0])
+    dev = np.array([1e-3, 1e-4])  # deg/s; at tau = 2 (log-log): 10^-3.5 deg/s = 1.138 deg/h
+    checks = check_limits(sheet, "gx", coefficients, (tau, dev, dev * 0.9, dev * 1.1, "deg/s"))
+    assert [c.status for c in checks] == ["pass", "marginal", "fail", "missing", "pass"]
+    assert checks[0].value == pytest.approx(0.3)
+    assert checks[4].value == pytest.approx(10**-3.5 * 3600)
+
+
+def test_slope_table_of_exact_power_laws() -> None:
+    tau = np.geomspace(0.01, 1e7, 80)
+    # sum of asymptotes: ARW N = 1e-3 dominates below ~2 s, the bias-instability plateau
+    # 0.664 B (B = 1e-3) up to ~1e4 s, rate random walk K = 1e-5 above
+    dev = np.sqrt((1e-3) ** 2 / tau + (0.664 * 1e-3) ** 2 + (1e-5) ** 2 * tau / 3)
+    rows = slope_table(tau, dev)
+    assert [r.symbol for r in rows] == ["N", "B", "K"]
+    assert rows[0].tau_min == tau[0]
+    assert rows[-1].tau_max == tau[-1]
+    assert rows[0].slope == pytest.approx(-0.5, abs=0.1)
+
+
+def test_customary_units_and_coefficients() -> None:
+    from allanite.model import NoiseModel
+    from allanite.terms import TERM_TYPES
+
+    assert customary_unit("deg/s", 1, 0.5) == "deg/sqrt(h)"
+    assert customary_unit("deg/s", 1, 0) == "deg/h"
+    assert customary_unit("rad/s", 1, -0.5) == "rad/h/sqrt(h)"
+    assert customary_unit("deg/s", 1, 1) == "deg"
+    assert customary_unit("deg/s", 1, -1) == "deg/h^2"
+    assert customary_unit("deg/s", 0, 1) == "s"
+    white = TERM_TYPES["white"](N=0.01)
+    rows = coefficient_table(NoiseModel(terms=(white,), units={"rate": "deg/s", "time": "s"}), None)
+    assert len(rows) == 1
+    assert rows[0].unit == "deg/sqrt(h)"
+    assert rows[0].value == pytest.approx(0.6)  # 0.01 deg/sqrt(s) * 60
+    assert rows[0].slope == "−1/2"
+
+
+def test_report_is_self_contained_and_complete() -> None:
+    reference = _device(RNG.normal(size=(N, 2)) * 0.3, name="ref.npy")
+    report = build_report(
+        [_device()], reference=reference, datasheet=Datasheet.from_dict(SHEET), title="Test"
+    )
+    html = report.html
+    assert html.startswith("<!DOCTYPE html>")
+    for forbidden in ("http://", "https://", "<script", "<link", "@import", "url("):
+        assert forbidden not in html, forbidden
+    images = re.findall(r'<img src="data:image/png;base64,([A-Za-z0-9+/=]+)"', html)
+    assert len(images) == 1
+    for section in (
+        "Record summary",
+        "Allan deviation",
+        "Noise coefficients",
+        "Slope table",
+        "Datasheet comparison",
+        "Comparison with the reference device",
+    ):
+        assert f"<h2>{section}</h2>" in html
+    # white noise 0.5 deg/s at 100 Hz: adev(1 s) = 0.05 deg/s -> the 0.2 limit passes and the
+    # 180 deg/h = 0.05 deg/s limit is decided by the interval (marginal or fail), N is missing
+    statuses = [c.status for c in report.checks]
+    assert statuses[0::3] == ["pass", "pass"]
+    assert set(statuses[1::3]) <= {"marginal", "fail"}
+    assert statuses[2::3] == ["missing", "missing"]
+    assert "ref.npy" in html
+
+
+def test_cli_report_exit_codes_and_exports(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    data = tmp_path / "dut.npy"
+    np.save(data, SAMPLES)
+    passing = tmp_path / "pass.json"
+    passing.write_text(json.dumps({"device": "loose", "limits": [SHEET["limits"][0]]}))
+    failing = tmp_path / "fail.json"
+    failing.write_text(
+        json.dumps(
+            {
+                "device": "tight",
+                "limits": [{"quantity": "adev", "tau": 1.0, "max": 0.001, "unit": "deg/s"}],
+            }
+        )
+    )
+    common = [str(data), "--fs", "100", "--units", "deg/s", "--points", "20", "--no-fit"]
+    out = tmp_path / "ok.html"
+    assert (
+        main(["report", *common, "--datasheet", str(passing), "-o", str(out), "--png", "--json"])
+        == 0
+    )
+    verdict = json.loads(capsys.readouterr().out)
+    assert verdict["passed"] is True
+    assert out.read_text().count("<h2>") >= 5
+    assert (tmp_path / "ok-adev.png").read_bytes()[:4] == b"\x89PNG"
+    bad = tmp_path / "bad.html"
+    assert main(["report", *common, "--datasheet", str(failing), "-o", str(bad)]) == 1
+    assert "datasheet tight: FAIL" in capsys.readouterr().out
+    assert bad.exists()
+    # bad input: nothing written, one line, exit 2
+    broken = tmp_path / "broken.json"
+    broken.write_text("{")
+    never = tmp_path / "never.html"
+    assert main(["report", *common, "--datasheet", str(broken), "-o", str(never)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1
+    assert "broken.json" in err[0]
+    assert not never.exists()
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".never")]
+
+
+def _chromium() -> str | None:
+    for name in ("chromium", "chromium-browser", "google-chrome", "google-chrome-stable"):
+        path = shutil.which(name)
+        if path:
+            return path
+    return None
+
+
+def test_report_renders_in_headless_chromium(tmp_path: Path) -> None:
+    browser = _chromium()
+    if browser is None:
+        pytest.skip("Chromium is not installed (CI installs it: apt-get install chromium)")
+    image = pytest.importorskip("PIL.Image")
+    report = build_report([_device()], datasheet=Datasheet.from_dict(SHEET))
+    page = tmp_path / "report.html"
+    report.write(page)
+    shot = tmp_path / "shot.png"
+    proc = subprocess.run(
+        [
+            browser,
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--hide-scrollbars",
+            "--window-size=1200,2600",
+            f"--screenshot={shot}",
+            page.as_uri(),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=90,
+        check=False,
+    )
+    assert shot.exists(), proc.stderr[-2000:]
+    pixels = np.asarray(image.open(shot).convert("RGB")).astype(int)
+
+    def count(rgb: tuple[int, int, int], tol: int = 12) -> int:
+        return int(np.all(np.abs(pixels - np.array(rgb)) <= tol, axis=-1).sum())
+
+    # the plot: matplotlib's first two curve colours (blue #1f77b4, orange #ff7f0e)
+    assert count((0x1F, 0x77, 0xB4)) > 500
+    assert count((0xFF, 0x7F, 0x0E)) > 500
+    # the tables: header cells (#e8eef5) and the pass badge (#2e8b57)
+    assert count((0xE8, 0xEE, 0xF5), tol=3) > 5000
+    assert count((0x2E, 0x8B, 0x57), tol=6) > 200
+    # the page is not blank: the main column is white, the margins grey (#f4f6f8)
+    assert count((0xF4, 0xF6, 0xF8), tol=2) > 10000
