@@ -255,7 +255,9 @@ def synchronous_error(
         phase = 2.0 * np.pi * k * f0 * t
         columns += [np.cos(phase), np.sin(phase)]
     design = np.column_stack(columns)
-    coef, *_ = np.linalg.lstsq(design, x, rcond=None)
+    # normal equations: the columns are nearly orthogonal (>= 4 periods), so the Gram matrix
+    # is well conditioned, and this avoids an SVD of an N x P matrix
+    coef = np.linalg.solve(design.T @ design, design.T @ x)
     residual = x - design @ coef
     psd = _noise_psd(residual, fs, [k * f0 for k in orders], band=f0 / 2.0)
 
