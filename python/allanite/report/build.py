@@ -23,7 +23,7 @@ from allanite.io.record import Record
 from allanite.report import html as h
 from allanite.report.coefficients import Coefficient, coefficient_table
 from allanite.report.datasheet import Check, Datasheet, adev_at, check_limits
-from allanite.report.slopes import slope_table
+from allanite.report.slopes import MIN_EDF, slope_table
 from allanite.variance import AllanResult
 
 __all__ = ["DeviceAnalysis", "Report", "build_report"]
@@ -185,6 +185,7 @@ def _adev_table(device: DeviceAnalysis, level: float) -> str:
 def _slope_section(device: DeviceAnalysis) -> str:
     res = device.result
     dev = res.dev.reshape(res.tau.size, -1)
+    edf = res.edf.reshape(dev.shape)
     parts = []
     for c, name in enumerate(device.record.channels):
         rows = [
@@ -196,7 +197,7 @@ def _slope_section(device: DeviceAnalysis) -> str:
                 f"{r.slope:+.2f}",
                 str(r.n_points),
             ]
-            for r in slope_table(res.tau, dev[:, c])
+            for r in slope_table(res.tau, dev[:, c], edf[:, c])
         ]
         parts.append(f"<h3>{h.escape(device.label)} — {h.escape(name)}</h3>")
         parts.append(
@@ -441,7 +442,8 @@ def build_report(
             "Slope table",
             "".join(_slope_section(d) for d in devices)
             + '<p class="note">Least-squares log-log slope in a half-decade window, '
-            "assigned to the nearest canonical slope (IEEE Std 952-1997, Annex C).</p>",
+            "assigned to the nearest canonical slope (IEEE Std 952-1997, Annex C); points "
+            f"with fewer than {MIN_EDF:g} equivalent degrees of freedom are left out.</p>",
             anchor="slopes",
         )
     )

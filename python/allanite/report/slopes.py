@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["SLOPE_TERMS", "SlopeRow", "slope_table"]
+__all__ = ["MIN_EDF", "SLOPE_TERMS", "SlopeRow", "local_slopes", "slope_table"]
 
 #: canonical Allan-deviation slope -> (label, term that produces it, IEEE symbol)
 SLOPE_TERMS: dict[float, tuple[str, str, str]] = {
@@ -26,6 +26,8 @@ SLOPE_TERMS: dict[float, tuple[str, str, str]] = {
     1.0: ("+1", "rate ramp", "R"),
 }
 _WINDOW_DECADES = 0.5
+#: points with fewer equivalent degrees of freedom are not classified (about 16 % scatter)
+MIN_EDF = 20.0
 
 
 @dataclass(frozen=True)
@@ -56,13 +58,25 @@ def local_slopes(tau: NDArray[np.float64], dev: NDArray[np.float64]) -> NDArray[
     return out
 
 
-def slope_table(tau: NDArray[np.float64], dev: NDArray[np.float64]) -> list[SlopeRow]:
+def slope_table(
+    tau: NDArray[np.float64],
+    dev: NDArray[np.float64],
+    edf: NDArray[np.float64] | None = None,
+    *,
+    min_edf: float = MIN_EDF,
+) -> list[SlopeRow]:
     """Group the measured curve into tau ranges of one canonical slope.
 
     Parameters
     ----------
     tau, dev : numpy.ndarray
         Averaging times and Allan deviation of one channel (at least 3 points).
+    edf : numpy.ndarray, optional
+        Equivalent degrees of freedom of each point; points with fewer than ``min_edf`` are
+        left out (their relative standard error exceeds ``1/sqrt(2 min_edf)``, so their scatter
+        would invent slopes).
+    min_edf : float
+        Smallest EDF of a point that is classified.
 
     Returns
     -------
@@ -72,6 +86,8 @@ def slope_table(tau: NDArray[np.float64], dev: NDArray[np.float64]) -> list[Slop
     tau = np.asarray(tau, dtype=np.float64)
     dev = np.asarray(dev, dtype=np.float64)
     good = np.isfinite(dev) & (dev > 0)
+    if edf is not None:
+        good &= np.asarray(edf, dtype=np.float64) >= min_edf
     tau, dev = tau[good], dev[good]
     if tau.size < 3:
         return []
