@@ -1,0 +1,209 @@
+"""The library of candidate effects: which Term each effect is, and what evidence it explains.
+
+Every candidate is an existing :class:`allanite.terms.Term` class (looked up by its JSON
+``type`` in :data:`allanite.terms.TERM_TYPES`), fitted on top of the simulated sensor; there is
+no second copy of any term's Allan variance here. ``rescale:<type>`` multiplies the principal
+coefficient of a term already in the model by a factor ``s`` (adds ``(s^2 - 1)`` times its
+Allan variance), the most common real-world gap (e.g. the sim's N is 2x too small).
+
+Besides the tau view, an effect may explain significant evidence of the other views:
+
+=============  ==============================================  ==========================
+effect         explains                                        requires (signature)
+=============  ==============================================  ==========================
+sine           spectral line                                   a spectral line
+step           level jump, level                               a level jump
+warmup         level, level jump                               level or jump
+spikes         spike statistic, kurtosis of differences, hf    the spike statistic
+telegraph      kurtosis of block means, dyn, jump, level       kurtosis of block means
+=============  ==============================================  ==========================
+
+An effect whose signature is absent is not proposed (a telegraph without a non-Gaussian
+amplitude distribution is a Gauss-Markov process; the simpler term is the answer).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+from allanite.terms import TERM_TYPES, Term
+
+__all__ = ["EFFECTS", "EXPLAINS", "SIGNATURE", "Candidate", "candidate_library"]
+
+#: effect name -> Term ``type``
+EFFECTS: dict[str, str] = {
+    "white": "white",
+    "quantization": "quantization",
+    "flicker": "flicker",
+    "rrw": "rrw",
+    "ramp": "ramp",
+    "markov": "markov",
+    "sine": "sine",
+    "warmup": "warmup",
+    "step": "bias_steps",
+    "spikes": "spikes",
+    "telegraph": "telegraph",
+    "lowpass": "lowpass_white",
+}
+
+#: evidence (non-tau statistics) each effect can explain
+EXPLAINS: dict[str, frozenset[str]] = {
+    "sine": frozenset({"line"}),
+    "step": frozenset({"jump", "level"}),
+    "warmup": frozenset({"level", "jump"}),
+    "spikes": frozenset({"spike", "kurt_hf", "hf"}),
+    "telegraph": frozenset({"kurt_lf", "dyn", "jump", "level"}),
+}
+
+#: evidence an effect needs before it is proposed (any of)
+SIGNATURE: dict[str, frozenset[str]] = {
+    "sine": frozenset({"line"}),
+    "step": frozenset({"jump"}),
+    "warmup": frozenset({"level", "jump"}),
+    "spikes": frozenset({"spike"}),
+    "telegraph": frozenset({"kurt_lf"}),
+}
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """One candidate effect to fit on top of the simulated sensor.
+
+    Attributes
+    ----------
+    effect : str
+        Effect name (``white`` ... ``lowpass`` or ``rescale:<type>``).
+    term_cls : type of Term
+        The Term class of the effect (of the rescaled term for ``rescale:``).
+    free : tuple of str
+        Parameters fitted on the tau view (all positive, fitted in log space).
+    fixed : dict
+        Parameters fixed from the other views (e.g. the frequency of a detected line).
+    start : dict
+        Starting values of some free parameters from the other views.
+    base : Term or None
+        The model's term that ``rescale:`` scales.
+    replaces : Term or None
+        A model term the effect replaces (``lowpass``: the model's white noise becomes
+        low-passed white noise of the same N); its Allan variance is subtracted.
+    """
+
+    effect: str
+    term_cls: type[Term]
+    free: tuple[str, ...]
+    fixed: dict[str, float] = field(default_factory=dict)
+    start: dict[str, float] = field(default_factory=dict)
+    base: Term | None = None
+    replaces: Term | None = None
+
+    @property
+    def explains(self) -> frozenset[str]:
+        """Evidence this candidate explains."""
+        return EXPLAINS.get(self.effect, frozenset())
+
+    def term(self, values: dict[str, float]) -> Term:
+        """Build the fitted Term from free-parameter ``values`` (``rescale:``: key ``scale``)."""
+        if self.base is not None:
+            coef = self.term_cls.params[0].name
+            return self.base.with_values(**{coef: values["scale"] * self.base.values()[coef]})
+        return self.term_cls(**{**self.fixed, **values})
+
+    def extra_avar(self, values: dict[str, float], tau: Any, dt: float) -> Any:
+        """Allan variance this candidate adds to the simulated sensor."""
+        if self.base is not None:
+            return (values["scale"] ** 2 - 1.0) * self.base.avar(tau, dt)
+        extra = self.term(values).avar(tau, dt)
+        if self.replaces is not None:
+            extra = extra - self.replaces.avar(tau, dt)
+        return extra
+
+
+def _model_terms(model: Any) -> list[Term]:
+    terms = getattr(model, "terms", None)
+    return list(terms) if terms is not None else []
+
+
+def candidate_library(
+    evidence: dict[str, bool],
+    *,
+    duration: float,
+    model: Any = None,
+    lines: list[tuple[float, float]] | None = None,
+    spikes: tuple[float, float] | None = None,
+    n_changes: int = 0,
+    effects: list[str] | None = None,
+) -> tuple[list[Candidate], list[str]]:
+    """Candidates to fit, and the effects that cannot be tried (no Term class, no model term).
+
+    Parameters
+    ----------
+    evidence : dict
+        Which non-tau statistics are significant (``line``, ``jump``, ``level``, ``spike``,
+        ``kurt_hf``, ``kurt_lf``, ``hf``, ``dyn``).
+    duration : float
+        Length of the analysed record in seconds (a warm-up's Allan variance depends on it; one
+        bias step per record is ``interval = duration``).
+    model : NoiseModel, optional
+        The simulated sensor's model (enables ``rescale:<type>`` and ``lowpass``).
+    lines : list of (frequency, amplitude), optional
+        Detected spectral lines, strongest first (the sine takes the strongest's frequency).
+    spikes : (rate per second, median absolute height), optional
+        Detected spikes (the spike height is fixed, the rate fitted).
+    n_changes : int
+        Number of detected level jumps (bias steps: ``interval = duration / n_changes``).
+    effects : list of str, optional
+        Restrict the library to these effects (``rescale`` selects every rescale).
+    """
+    wanted = effects if effects is not None else list(EFFECTS)
+    terms = _model_terms(model)
+    whites = [t for t in terms if t.type == "white"]
+    out: list[Candidate] = []
+    unavailable: list[str] = []
+    for effect, term_type in EFFECTS.items():
+        if effect not in wanted:
+            continue
+        cls = TERM_TYPES.get(term_type)
+        if cls is None or (effect == "lowpass" and not whites):
+            unavailable.append(effect)
+            continue
+        signature = SIGNATURE.get(effect)
+        if signature is not None and not any(evidence.get(s, False) for s in signature):
+            continue
+        fixed: dict[str, float] = {}
+        start: dict[str, float] = {}
+        replaces: Term | None = None
+        if effect == "sine" and lines:
+            freq, amp = lines[0]
+            fixed["frequency"] = freq
+            start["amplitude"] = max(amp, 1e-300)
+        elif effect == "spikes" and spikes is not None and spikes[1] > 0:
+            fixed["amplitude"] = spikes[1]
+            start["rate"] = max(spikes[0], 1e-300)
+        elif effect == "step":
+            fixed["interval"] = duration / max(n_changes, 1)
+        elif effect == "warmup":
+            fixed["duration"] = duration
+        elif effect == "lowpass":
+            replaces = whites[0]
+            fixed["N"] = float(replaces.values()["N"])
+        names = tuple(p.name for p in cls.params)
+        free = tuple(n for n in names if n not in fixed)
+        out.append(
+            Candidate(
+                effect=effect,
+                term_cls=cls,
+                free=free,
+                fixed=fixed,
+                start=start,
+                replaces=replaces,
+            )
+        )
+    for term in terms:
+        effect = f"rescale:{term.type}"
+        if effects is not None and effect not in effects and "rescale" not in effects:
+            continue
+        if term.type == "turn_on_bias":
+            continue  # a constant has no Allan variance: nothing to rescale in the tau view
+        out.append(Candidate(effect=effect, term_cls=type(term), free=("scale",), base=term))
+    return out, unavailable

@@ -1,0 +1,60 @@
+r"""Time-domain shape check of the level effects (bias step, warm-up) on the window means.
+
+A bias step and a warm-up transient both explain level jumps; their shapes differ. The window
+means ``l_w`` of the real record (record mean removed) with their null spread ``s_w`` are fitted
+by each shape by weighted least squares and the misfit
+
+.. math:: \chi^2 = \sum_w \left(\frac{l_w - \hat l_w}{s_w}\right)^2
+
+is compared with its expectation ``W - p`` (``W`` windows, ``p`` fitted parameters): the excess
+``max(0, chi^2 - (W - p))`` enters the ranking of the two candidates.
+
+* step(s) at the detected change points ``t_c``: ``l_w = sum_c b_c (f_w(t_c) - (T - t_c)/T)``
+  with ``f_w`` the fraction of window ``w`` after ``t_c``;
+* warm-up: window means of ``A e^{-t/T_w}`` minus the record mean, ``A`` by least squares and
+  ``T_w`` on a logarithmic grid from a quarter window to the record length.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from allanite.diagnosis.time_view import TimeView
+
+__all__ = ["level_misfit"]
+
+
+def _wls_chi2(
+    design: NDArray[np.float64], level: NDArray[np.float64], sd: NDArray[np.float64]
+) -> float:
+    a = design / sd[:, None]
+    b = level / sd
+    coef, *_ = np.linalg.lstsq(a, b, rcond=None)
+    r = b - a @ coef
+    return float(r @ r)
+
+
+def level_misfit(effect: str, view: TimeView, duration: float) -> float:
+    """Excess misfit of the level shape of ``effect`` (``step`` or ``warmup``); 0 otherwise."""
+    if effect not in ("step", "warmup"):
+        return 0.0
+    sd = np.where(view.level_sd > 0, view.level_sd, np.inf)
+    w = view.level.size
+    t0 = view.t_s - view.window_s / 2
+    t1 = view.t_s + view.window_s / 2
+    if effect == "step":
+        if not view.change_points_s:
+            return 0.0
+        cols = []
+        for tc in view.change_points_s:
+            after = np.clip((t1 - tc) / view.window_s, 0.0, 1.0)
+            cols.append(after - (duration - tc) / duration)
+        chi2 = _wls_chi2(np.stack(cols, axis=1), view.level, sd)
+        return max(0.0, chi2 - (w - len(cols)))
+    best = np.inf
+    for tw in np.geomspace(view.window_s / 4, duration, 48):
+        shape = tw * (np.exp(-t0 / tw) - np.exp(-t1 / tw)) / view.window_s
+        shape = shape - tw * (1.0 - np.exp(-duration / tw)) / duration
+        best = min(best, _wls_chi2(shape[:, None], view.level, sd))
+    return max(0.0, float(best) - (w - 2))

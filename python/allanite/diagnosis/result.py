@@ -1,0 +1,150 @@
+"""The :class:`Diagnosis` result: the gap, where it lies, which effect explains it."""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+from allanite.diagnosis.attribution import Attribution
+from allanite.diagnosis.frequency_view import FrequencyView
+from allanite.diagnosis.tau_view import TauView
+from allanite.diagnosis.time_view import TimeView
+
+__all__ = ["Diagnosis", "Holdout"]
+
+
+def _clean(value: Any) -> Any:
+    """Replace non-finite floats by None so the JSON is strict."""
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, dict):
+        return {k: _clean(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_clean(v) for v in value]
+    return value
+
+
+@dataclass(frozen=True)
+class Holdout:
+    """Shrinkage of the best effect on data it was not fitted on.
+
+    Attributes
+    ----------
+    effect : str
+        The effect (the best attribution) whose fitted parameters were carried over.
+    shrinkage : float or None
+        ``1 - G_after / G_before`` on the held-out data (None when the held-out data shows no
+        tau-view gap to shrink).
+    gap_before, gap_after : float
+        ``G`` on the held-out data without and with the effect.
+    consistent_after : bool
+        Whether the held-out remaining gap is consistent with chance.
+    n_samples : int
+        Length of the held-out record.
+    source : str
+        ``"fraction"`` (the end of the record) or ``"record"`` (a second real record).
+    """
+
+    effect: str
+    shrinkage: float | None
+    gap_before: float
+    gap_after: float
+    consistent_after: bool
+    n_samples: int
+    source: str
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary."""
+        return {
+            "shrinkage": self.shrinkage,
+            "effect": self.effect,
+            "gap_before": self.gap_before,
+            "gap_after": self.gap_after,
+            "consistent_after": self.consistent_after,
+            "n_samples": self.n_samples,
+            "source": self.source,
+        }
+
+
+@dataclass(frozen=True)
+class Diagnosis:
+    """Where and why a simulated sensor differs from a real record.
+
+    Attributes
+    ----------
+    statistic : float
+        The gap ``G = max(0, T - T0)`` of the tau view (see docs/diagnosis.md).
+    p_value : float
+        Calibrated p-value of the combined test over the three views.
+    significant : bool
+        ``p_value < alpha``.
+    tau, frequency, time : TauView, FrequencyView, TimeView
+        The three views with their plotting-ready arrays.
+    attribution : list of Attribution
+        Effects that explain the gap, best first (empty when not significant).
+    holdout : Holdout or None
+        The held-out check, when requested and an effect was attributed.
+    meta : dict
+        fs, sample counts, units, kind of simulated input, Monte Carlo size, seed, alpha,
+        unavailable effects.
+    """
+
+    statistic: float
+    p_value: float
+    significant: bool
+    tau: TauView
+    frequency: FrequencyView
+    time: TimeView
+    attribution: list[Attribution]
+    holdout: Holdout | None
+    meta: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def where(self) -> dict[str, Any]:
+        """Tau bands, frequency lines and time segments of the gap."""
+        return {
+            "tau_bands_s": [list(b) for b in self.tau.bands_s],
+            "frequency_lines_hz": [line.frequency_hz for line in self.frequency.lines],
+            "time_segments_s": [list(s) for s in self.time.segments_s],
+            "frequency_bands_hz": [list(b) for b in self.frequency.bands_hz],
+        }
+
+    @property
+    def best(self) -> Attribution | None:
+        """The best attribution, if any."""
+        return self.attribution[0] if self.attribution else None
+
+    def to_dict(self, *, views: bool = True) -> dict[str, Any]:
+        """JSON-ready dictionary; ``views=False`` leaves out the plotting arrays."""
+        out: dict[str, Any] = {
+            "gap": {
+                "statistic": self.statistic,
+                "p_value": self.p_value,
+                "significant": self.significant,
+                "T": self.tau.statistic,
+                "T0": self.tau.t0,
+                "view_p_values": {
+                    "tau": self.tau.p_value,
+                    "frequency": self.frequency.p_value,
+                    "time": self.time.p_value,
+                },
+            },
+            "where": self.where,
+            "attribution": [a.to_dict() for a in self.attribution],
+            "holdout": self.holdout.to_dict() if self.holdout is not None else None,
+            "meta": dict(self.meta),
+        }
+        if views:
+            out["views"] = {
+                "tau": self.tau.to_dict(),
+                "frequency": self.frequency.to_dict(),
+                "time": self.time.to_dict(),
+            }
+        cleaned: dict[str, Any] = _clean(out)
+        return cleaned
+
+    def to_json(self, *, views: bool = True, **kwargs: Any) -> str:
+        """Strict JSON text of :meth:`to_dict`."""
+        return json.dumps(self.to_dict(views=views), allow_nan=False, **kwargs)

@@ -1,0 +1,291 @@
+r"""The time view: where in the record the real sensor departs from the model.
+
+The record is cut into ``W`` windows (32 when the record allows, at least 16) of ``L`` samples.
+Per window it computes, for the real record and for every Monte Carlo replicate:
+
+* ``level``: the window mean minus the record mean (warm-up transients, drifting bias);
+* ``jump``: the difference of consecutive window means (bias steps);
+* ``hf``: the log mean square of the first differences, ``log(2 AVAR(tau0))``, a dynamic Allan
+  variance at the shortest tau (bursts of white noise, spikes);
+* ``dyn``: the log non-overlapping Allan variance at ``m = max(2, L/16)`` (dynamic Allan
+  variance at a mid tau: bursts of correlated noise, telegraph episodes);
+
+(for ``hf`` and ``dyn`` the mean residual over the windows is removed: a uniform change of the
+noise level belongs to the tau view, the time view looks for changes in time)
+
+plus three record-wide statistics: the largest first difference in units of its robust spread
+(``max |d| / (1.4826 MAD(d))``, spikes), the excess kurtosis of the first differences and that of
+block means (8, ``L/16`` and ``L/4`` samples) around their window level (burst and telegraph
+noise change the amplitude distribution, not the Allan variance).
+
+Each per-window residual ``r_w`` is normalised by its null spread, ``z_w = r_w / s_w``; windows
+with ``|z_w|`` above the simultaneous threshold (the ``1 - alpha`` quantile of ``max_w |z_w|``
+under the null, Gumbel fit) form the time segments. A significant jump is refined to a change
+point with the CUSUM estimator ``argmax_k |sum_{i<k} (x_i - mean)|`` over the two windows
+around it; spikes are the samples whose differences exceed the spike threshold.
+
+References
+----------
+L. Galleani, P. Tavella, "The dynamic Allan variance", IEEE Trans. UFFC 56 (2009) 450-464.
+E. S. Page, "Continuous inspection schemes", Biometrika 41 (1954) 100-115 (CUSUM).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy import stats
+
+from allanite.diagnosis.null import NullEnsemble, gumbel_isf, gumbel_sf, runs
+
+__all__ = ["TimePlan", "TimeView", "time_features", "time_plan", "time_view"]
+
+WINDOW_FAMILIES = ("level", "jump", "hf", "dyn")
+#: at most this many spikes are listed individually
+MAX_SPIKES = 200
+
+
+@dataclass(frozen=True)
+class TimePlan:
+    """Window layout: ``n_windows`` windows of ``length`` samples, block size ``m``."""
+
+    n_windows: int
+    length: int
+    m: int
+
+
+def time_plan(n: int) -> TimePlan:
+    """Return the window layout for a record of ``n`` samples."""
+    n_win = int(min(32, n // 32))
+    length = n // n_win
+    return TimePlan(n_windows=n_win, length=length, m=max(2, length // 16))
+
+
+def _kurtosis(v: NDArray[np.float64]) -> float:
+    v = v - v.mean()
+    s2 = float(np.mean(v * v))
+    return float(np.mean(v**4) / (s2 * s2) - 3.0) if s2 > 0 else 0.0
+
+
+def time_features(x: NDArray[np.float64], plan: TimePlan) -> dict[str, NDArray[np.float64]]:
+    """Per-window and record-wide features of a rate record."""
+    w, length, m = plan.n_windows, plan.length, plan.m
+    used = x[: w * length].reshape(w, length)
+    means = used.mean(axis=1)
+    d = np.diff(used, axis=1)
+    hf = np.log(np.maximum(np.mean(d * d, axis=1), 1e-300))
+    nb = length // m
+    blocks = used[:, : nb * m].reshape(w, nb, m).mean(axis=2)
+    dyn = np.log(np.maximum(0.5 * np.mean(np.diff(blocks, axis=1) ** 2, axis=1), 1e-300))
+    dall = np.diff(x)
+    mad = float(np.median(np.abs(dall - np.median(dall)))) * 1.4826
+    spread = mad if mad > 0 else float(np.std(dall)) or 1.0
+    return {
+        "level": means - x.mean(),
+        "jump": np.diff(means),
+        "hf": hf,
+        "dyn": dyn,
+        "spike": np.array([float(np.max(np.abs(dall))) / spread]),
+        "kurt_hf": np.array([_kurtosis(dall)]),
+        "kurt_lf": np.array([_block_kurtosis(used, means, b) for b in _kurtosis_blocks(plan)]),
+    }
+
+
+def _kurtosis_blocks(plan: TimePlan) -> tuple[int, ...]:
+    """Block sizes of the low-frequency kurtosis: 8 samples, ``L/16`` and ``L/4``."""
+    return tuple(sorted({8, plan.m, max(plan.length // 4, 2)}))
+
+
+def _block_kurtosis(used: NDArray[np.float64], means: NDArray[np.float64], b: int) -> float:
+    nb = used.shape[1] // b
+    blocks = used[:, : nb * b].reshape(used.shape[0], nb, b).mean(axis=2)
+    return _kurtosis((blocks - means[:, None]).ravel())
+
+
+@dataclass(frozen=True)
+class TimeView:
+    """Result of the time view (plotting-ready arrays).
+
+    Attributes
+    ----------
+    t_s : numpy.ndarray
+        Window centres in seconds.
+    window_s : float
+        Window length in seconds.
+    level, level_sd : numpy.ndarray
+        Window mean minus record mean of the real record, and its spread under the null.
+    z : dict of numpy.ndarray
+        Normalised per-window residuals of ``level``, ``jump`` (at window boundaries), ``hf``
+        and ``dyn``.
+    thresholds : dict of float
+        Simultaneous thresholds of each family.
+    family_p : dict of float
+        p-value of each family and of the record-wide statistics.
+    kurtosis : dict
+        Excess kurtosis (``hf``: first differences, ``lf``: block means) of the real record
+        and of the simulated sensor.
+    spike_times_s, spike_amplitudes : list of float
+        Detected spikes (time and signed height above the local median).
+    change_points_s : list of float
+        Refined times of significant level jumps.
+    segments_s : list of (float, float)
+        Time segments where the record departs from the model.
+    """
+
+    t_s: NDArray[np.float64]
+    window_s: float
+    level: NDArray[np.float64]
+    level_sd: NDArray[np.float64]
+    z: dict[str, NDArray[np.float64]]
+    thresholds: dict[str, float]
+    family_p: dict[str, float]
+    kurtosis: dict[str, float]
+    spike_times_s: list[float]
+    spike_amplitudes: list[float]
+    change_points_s: list[float]
+    segments_s: list[tuple[float, float]]
+
+    @property
+    def p_value(self) -> float:
+        """Bonferroni combination over the statistics of the time view."""
+        return min(1.0, len(self.family_p) * min(self.family_p.values()))
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary."""
+        return {
+            "t_s": self.t_s.tolist(),
+            "window_s": self.window_s,
+            "level": self.level.tolist(),
+            "level_sd": self.level_sd.tolist(),
+            "z": {k: v.tolist() for k, v in self.z.items()},
+            "thresholds": dict(self.thresholds),
+            "family_p": dict(self.family_p),
+            "kurtosis": dict(self.kurtosis),
+            "spike_times_s": list(self.spike_times_s),
+            "spike_amplitudes": list(self.spike_amplitudes),
+            "change_points_s": list(self.change_points_s),
+            "segments_s": [list(s) for s in self.segments_s],
+            "p_value": self.p_value,
+        }
+
+
+def _merge(segments: list[tuple[float, float]]) -> list[tuple[float, float]]:
+    out: list[tuple[float, float]] = []
+    for a, b in sorted(segments):
+        if out and a <= out[-1][1]:
+            out[-1] = (out[-1][0], max(out[-1][1], b))
+        else:
+            out.append((a, b))
+    return out
+
+
+def _spikes(x: NDArray[np.float64], threshold: float) -> tuple[list[int], list[float]]:
+    d = np.diff(x)
+    mad = float(np.median(np.abs(d - np.median(d)))) * 1.4826
+    spread = mad if mad > 0 else float(np.std(d)) or 1.0
+    flagged = np.flatnonzero(np.abs(d) / spread > threshold)
+    found: list[int] = []
+    for i in flagged:
+        lo, hi = max(int(i) - 4, 0), min(int(i) + 6, x.size)
+        local = np.median(x[lo:hi])
+        k = int(i) if abs(x[i] - local) > abs(x[i + 1] - local) else int(i) + 1
+        if not found or k != found[-1]:
+            found.append(k)
+        if len(found) >= MAX_SPIKES:
+            break
+    amps = []
+    for k in found:
+        lo, hi = max(k - 5, 0), min(k + 6, x.size)
+        neigh = np.concatenate([x[lo:k], x[k + 1 : hi]])
+        amps.append(float(x[k] - np.median(neigh)))
+    return found, amps
+
+
+def _change_point(x: NDArray[np.float64], start: int, stop: int) -> int:
+    seg = x[start:stop]
+    cs = np.cumsum(seg - seg.mean())
+    return start + int(np.argmax(np.abs(cs[:-1]))) + 1
+
+
+def time_view(
+    x: NDArray[np.float64],
+    fs: float,
+    real: dict[str, NDArray[np.float64]],
+    ens: NullEnsemble,
+    plan: TimePlan,
+    alpha: float,
+) -> TimeView:
+    """Per-window scan, change points, spikes and kurtosis checks of the time view."""
+    length = plan.length
+    alpha = alpha / 7.0  # seven statistics share the view's level (Bonferroni)
+    z: dict[str, NDArray[np.float64]] = {}
+    thr: dict[str, float] = {}
+    fam_p: dict[str, float] = {}
+    flagged: dict[str, NDArray[np.bool_]] = {}
+    for fam in WINDOW_FAMILIES:
+        null = ens.null[fam]
+        sd = null.std(axis=0, ddof=1)
+        sd = np.where(sd > 0, sd, np.inf)
+        r = ens.residual(real, fam)
+        if fam in ("hf", "dyn"):
+            # a uniform change of the noise level is the tau view's business; the time view
+            # looks for changes *in time*, so the across-window mean residual is removed
+            r = r - r.mean()
+            null = null - null.mean(axis=1, keepdims=True)
+            sd = null.std(axis=0, ddof=1)
+        zf = r / sd
+        zmax_null = np.abs(null / sd).max(axis=1)
+        thr[fam] = gumbel_isf(alpha, zmax_null)
+        fam_p[fam] = gumbel_sf(float(np.abs(zf).max()), zmax_null)
+        z[fam] = zf
+        flagged[fam] = np.abs(zf) > thr[fam]
+    # record-wide statistics
+    spike_null = ens.null["spike"][:, 0]
+    spike_r = float(ens.residual(real, "spike")[0])
+    fam_p["spike"] = gumbel_sf(spike_r, spike_null)
+    for name in ("kurt_hf", "kurt_lf"):
+        sd = ens.null[name].std(axis=0, ddof=1)
+        zk = np.abs(ens.residual(real, name)) / np.where(sd > 0, sd, np.inf)
+        # two-sided normal tail, Bonferroni over the block sizes
+        fam_p[name] = float(min(1.0, 2.0 * zk.size * stats.norm.sf(float(zk.max()))))
+    # localisation
+    segments: list[tuple[float, float]] = []
+    change_points: list[float] = []
+    for a, b in runs(flagged["jump"]):
+        w = a + int(np.argmax(np.abs(z["jump"][a : b + 1])))
+        k = _change_point(x, w * length, (w + 2) * length)
+        t = k / fs
+        change_points.append(t)
+        segments.append((max(t - length / (4 * fs), 0.0), t + length / (4 * fs)))
+    for fam in ("hf", "dyn") + (() if change_points else ("level",)):
+        for a, b in runs(flagged[fam]):
+            segments.append((a * length / fs, (b + 1) * length / fs))
+    spike_idx: list[int] = []
+    spike_amp: list[float] = []
+    if fam_p["spike"] < alpha:
+        spike_thr = float(ens.ref["spike"][0]) + gumbel_isf(alpha, spike_null)
+        spike_idx, spike_amp = _spikes(x, spike_thr)
+        segments.extend(((k - 1) / fs, (k + 1) / fs) for k in spike_idx)
+    kurt = {
+        "hf_real": float(real["kurt_hf"][0]),
+        "hf_sim": float(ens.ref["kurt_hf"][0]),
+        "lf_real": float(real["kurt_lf"][0]),
+        "lf_sim": float(ens.ref["kurt_lf"][0]),
+    }
+    return TimeView(
+        t_s=np.asarray((np.arange(plan.n_windows) + 0.5) * length / fs, dtype=np.float64),
+        window_s=length / fs,
+        level=real["level"],
+        level_sd=ens.null["level"].std(axis=0, ddof=1),
+        z=z,
+        thresholds=thr,
+        family_p=fam_p,
+        kurtosis=kurt,
+        spike_times_s=[k / fs for k in spike_idx],
+        spike_amplitudes=spike_amp,
+        change_points_s=change_points,
+        segments_s=_merge(segments),
+    )
