@@ -36,7 +36,9 @@ __all__ = [
 ]
 
 InputKind = Literal["rate", "increment", "angle"]
-Kind = Literal["overlapping", "standard", "modified", "hadamard", "standard_hadamard", "total", "time"]
+Kind = Literal[
+    "overlapping", "standard", "modified", "hadamard", "standard_hadamard", "total", "time"
+]
 KINDS: tuple[str, ...] = tuple(KERNEL_KIND)
 INPUTS: tuple[str, ...] = ("rate", "increment", "angle")
 
@@ -125,7 +127,7 @@ class AllanResult:
         return np.sqrt(lo), np.sqrt(hi)
 
     def channel(self, index: int) -> AllanResult:
-        """The result of one channel as a single-channel result."""
+        """Return one channel as a single-channel result."""
         if self.var.ndim == 1:
             if index != 0:
                 raise IndexError(f"channel {index} out of range for a single-channel result")
@@ -177,7 +179,7 @@ class AllanResult:
         return cols
 
     def to_frame(self) -> Any:
-        """A :class:`pandas.DataFrame` with one row per tau (needs the ``pandas`` extra)."""
+        """Return a :class:`pandas.DataFrame` with one row per tau (needs the ``pandas`` extra)."""
         try:
             import pandas as pd
         except ImportError as exc:  # pragma: no cover - exercised without pandas only
@@ -218,14 +220,18 @@ def prepare_record(x: ArrayLike, *, name: str = "x") -> tuple[NDArray[Any], bool
         )
     if arr.dtype.type not in _ACCEPTED:
         if np.issubdtype(arr.dtype, np.unsignedinteger) and arr.dtype.itemsize == 8:
-            raise TypeError(f"{name} has dtype uint64, which may overflow; convert to int64 or float64")
+            raise TypeError(
+                f"{name} has dtype uint64, which may overflow; convert to int64 or float64"
+            )
         arr = arr.astype(np.float64 if arr.dtype.kind == "f" else np.int64)
     if not arr.dtype.isnative:
         arr = arr.astype(arr.dtype.newbyteorder("="))
     if arr.ndim == 1:
         return arr.reshape(-1, 1), True
     if arr.ndim != 2:
-        raise ValueError(f"{name} must be 1-D (samples) or 2-D (samples, channels), got shape {arr.shape}")
+        raise ValueError(
+            f"{name} must be 1-D (samples) or 2-D (samples, channels), got shape {arr.shape}"
+        )
     if arr.shape[0] < arr.shape[1]:
         raise ValueError(
             f"{name} has shape {arr.shape}: fewer samples than channels. Records are (samples, "
@@ -252,6 +258,28 @@ def _check_threads(threads: int | None) -> int:
     if isinstance(threads, bool) or not isinstance(threads, (int, np.integer)) or threads < 1:
         raise ValueError(f"threads must be a positive integer or None, got {threads!r}")
     return int(threads)
+
+
+def _given_alpha(alpha: int | ArrayLike, shape: tuple[int, ...]) -> NDArray[np.int64]:
+    """Caller's noise exponents broadcast to ``(T, C)``: a scalar, one per tau, or per channel."""
+    given = np.asarray(alpha)
+    if given.dtype.kind not in "iuf" or not np.all(np.isfinite(given)):
+        raise TypeError(f"alpha must be integers between -4 and 2, got {alpha!r}")
+    if np.any(given != np.round(given)) or np.any(given < -4) or np.any(given > 2):
+        raise ValueError(
+            f"alpha must hold integer power-law exponents in [-4, 2] (2 white PM ... -2 random "
+            f"walk FM), got {alpha!r}"
+        )
+    values = given.astype(np.int64)
+    if values.ndim == 1:
+        values = values.reshape(-1, 1)
+    try:
+        return np.broadcast_to(values, shape).copy()
+    except ValueError:
+        raise ValueError(
+            f"alpha has shape {given.shape}; give a scalar, one value per tau ({shape[0]}) or a "
+            f"(taus, channels) array {shape}"
+        ) from None
 
 
 def avar(
@@ -329,19 +357,20 @@ def avar(
     kernel_kind = KERNEL_KIND[kind]
     var = np.asarray(_core.variance(phase, factors, kernel_kind, nthreads))
     tau = factors / rate
-    if input == "rate":
-        scale = 1.0
-    else:
-        scale = rate * rate  # phase in angle units: divide by tau0^2
+    # rate: phase in rate * samples; angle/increment: phase in angle units, divide by tau0^2
+    scale = 1.0 if input == "rate" else rate * rate
     var = var * scale
     if kind == "time":
         var = var * (tau[:, None] ** 2) / 3.0
-    n_terms = np.array([_core.n_terms(kernel_kind, n_phase, int(f)) for f in factors], dtype=np.int64)
+    n_terms = np.array(
+        [_core.n_terms(kernel_kind, n_phase, int(f)) for f in factors], dtype=np.int64
+    )
     if alpha is None:
-        alphas = identify_alpha(phase, factors, kernel_kind)
+        alphas = identify_alpha(
+            phase, factors, kernel_kind, data="phase" if input == "angle" else "frequency"
+        )
     else:
-        alphas = np.broadcast_to(np.asarray(alpha, dtype=np.int64).reshape(-1, 1) if np.ndim(alpha) else
-                                 np.asarray(alpha, dtype=np.int64), var.shape).copy()
+        alphas = _given_alpha(alpha, var.shape)
     edf = equivalent_dof(kernel_kind, alphas, factors, n_phase)
     if was_1d:
         var, edf, alphas = var[:, 0], edf[:, 0], alphas[:, 0]

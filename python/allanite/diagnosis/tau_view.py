@@ -35,7 +35,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from allanite import _core  # type: ignore[attr-defined]
+from allanite import _core
 from allanite.diagnosis.null import NullEnsemble, chi2_like_sf, gumbel_isf, runs
 
 __all__ = ["TauModel", "TauView", "octave_factors", "tau_features"]

@@ -1,0 +1,92 @@
+"""Type stub of the private compiled module ``allanite._core`` (pybind11, cpp/src).
+
+Hand-written: keep in step with cpp/src/register_*.cpp. Every function raises ValueError
+(std::invalid_argument) or TypeError on bad arguments; the numeric work runs without the GIL.
+"""
+
+from collections.abc import Sequence
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+SUM_BLOCK: int
+
+# register_variances.cpp ---------------------------------------------------------------------
+
+def phase(x: NDArray[np.generic], input: str) -> NDArray[np.float64]:
+    """Detrended, compensated phase (prefix sums) of a 2-D ``(N, C)`` record.
+
+    ``input`` is ``"rate"``/``"increment"`` (mean removed, ``(N + 1, C)`` result) or ``"angle"``
+    (least-squares line removed, ``(N, C)``). ``x`` may be float64, float32, int16, int32 or
+    int64 and strided (no copy).
+    """
+
+def variance(
+    phase: NDArray[np.float64], m: Sequence[int] | NDArray[np.int64], kind: str, threads: int = 0
+) -> NDArray[np.float64]:
+    """Allan-family variance in sample units (tau0 = 1), shape ``(len(m), C)``.
+
+    ``kind``: overlapping, standard, modified, hadamard, standard_hadamard, total.
+    ``threads`` = 0 uses every core; results are bit-identical for any thread count.
+    """
+
+def n_terms(kind: str, n_phase: int, m: int) -> int:
+    """Return the number of difference terms the estimator averages for factor ``m``."""
+
+def max_m(kind: str, n_phase: int) -> int:
+    """Return the largest averaging factor the kernel supports for ``n_phase`` phase points."""
+
+# register_generators.cpp --------------------------------------------------------------------
+
+def ar1_bank(
+    state: NDArray[np.float64],
+    phi: ArrayLike,
+    q: ArrayLike,
+    a: ArrayLike,
+    b: ArrayLike,
+    z: ArrayLike,
+    threads: int = 1,
+) -> NDArray[np.float64]:
+    """Bank of first-order recursions; ``state`` ``(J, C)`` updated in place, returns ``(B, C)``."""
+
+# register_streaming.cpp ---------------------------------------------------------------------
+
+def stream_sums(
+    x: NDArray[np.generic], k0: int, state: NDArray[np.float64], a: ArrayLike, b: ArrayLike
+) -> None:
+    """Accumulate the per-channel sums of a chunk into ``state``."""
+
+def stream_moment(
+    x: NDArray[np.generic],
+    k0: int,
+    kbar: float,
+    mean1: ArrayLike,
+    corr: ArrayLike,
+    state: NDArray[np.float64],
+) -> None:
+    """Accumulate the centred first moment of a chunk into ``state``."""
+
+def stream_prefix(
+    x: NDArray[np.generic],
+    mean1: ArrayLike,
+    corr: ArrayLike,
+    state: NDArray[np.float64],
+    out: NDArray[np.float64],
+) -> None:
+    """Rate/increment phase rows of a chunk into ``out`` ``(L, C)``."""
+
+def stream_detrend(
+    x: NDArray[np.generic],
+    k0: int,
+    kbar: float,
+    mean1: ArrayLike,
+    corr: ArrayLike,
+    slope: ArrayLike,
+    out: NDArray[np.float64],
+) -> None:
+    """Angle phase rows (least-squares residual) into ``out``."""
+
+def diff_square_sums(
+    windows: Sequence[NDArray[np.float64]], term_stride: int, count: int, state: NDArray[np.float64]
+) -> None:
+    """Accumulate squared difference sums over phase windows into ``state``."""
