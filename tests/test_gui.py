@@ -59,7 +59,6 @@ def test_gui_load_switch_views_screenshot_export(
     # channel selection: only gy is drawn and listed
     window.channel_list.item(0).setCheckState(window.channel_list.item(0).checkState().Unchecked)
     assert window.selected_channels() == [1]
-    window.redraw()
     channels = {window.table.item(r, 0).text() for r in range(window.table.rowCount())}
     assert channels == {"gy"}
 

@@ -214,7 +214,7 @@ class MainWindow(QtWidgets.QMainWindow):
             self._canvas.deleteLater()
         self._canvas = canvas
         self.plot_layout.addWidget(canvas)
-        canvas.draw()
+        canvas.draw_idle()
 
     def _options_from_widgets(self) -> None:
         o = self.session.options
@@ -351,6 +351,7 @@ class MainWindow(QtWidgets.QMainWindow):
         parts = [result.channel(c) for c in chosen]
         fig = allan_figure(
             parts,
+            layout=None,
             labels=[names[c] for c in chosen],
             level=self.session.options.level,
             title=f"{self.file_label.text()} — Allan deviation",
@@ -396,7 +397,9 @@ class MainWindow(QtWidgets.QMainWindow):
                 rows.append([names[c], k.term, k.symbol, f"{k.value:.4g}", interval, k.unit])
         if first_fit is None:
             fig = allan_figure(
-                [result.channel(c) for c in chosen], labels=[names[c] for c in chosen]
+                [result.channel(c) for c in chosen],
+                labels=[names[c] for c in chosen],
+                layout=None,
             )
             self._show_figure(fig)
             self._fill_table(
@@ -407,6 +410,7 @@ class MainWindow(QtWidgets.QMainWindow):
         fig = model_figure(
             self.session.compute() if self.session.result is None else self.session.result,
             fit,
+            layout=None,
             channel=c,
             labels=list(names),
             level=self.session.options.level,

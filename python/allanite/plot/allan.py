@@ -223,6 +223,7 @@ def allan_figure(
     model: Any = None,
     channel: int = 0,
     figsize: tuple[float, float] = (7.5, 5.0),
+    layout: str | None = "constrained",
 ) -> Any:
     """Build a figure of Allan deviations with error bars, optionally with a fitted model.
 
@@ -243,13 +244,17 @@ def allan_figure(
         Channel the model belongs to.
     figsize : tuple of float
         Figure size in inches.
+    layout : str or None
+        Matplotlib layout engine; None uses fixed margins (much faster to redraw, for GUIs).
 
     Returns
     -------
     matplotlib.figure.Figure
     """
     figure_class = _matplotlib()
-    fig = figure_class(figsize=figsize, layout="constrained")
+    fig = figure_class(figsize=figsize, layout=layout)
+    if layout is None:
+        fig.subplots_adjust(left=0.1, right=0.98, top=0.93, bottom=0.1)
     ax = fig.add_subplot()
     if model is None:
         plot_allan(ax, results, labels=labels, level=level)
