@@ -83,6 +83,8 @@ class ErrorBudget:
         Gravity, radius and Earth rate used.
     markov_start : str
         Initial Gauss-Markov state (``zero`` as tabulated, or ``stationary``).
+    ignored : tuple of str
+        Model terms without an error law (``"gyro: quantization"``, ...).
     """
 
     t: NDArray[np.float64]
@@ -95,6 +97,7 @@ class ErrorBudget:
     table: NDArray[np.float64]
     earth: Earth
     markov_start: str
+    ignored: tuple[str, ...] = ()
 
     def _qi(self, quantity: str) -> int:
         return self.quantities.index(resolve_quantity(quantity))
@@ -159,7 +162,12 @@ class ErrorBudget:
 
     def to_json(self, **kwargs: Any) -> str:
         """Serialise the table (not the curves) as JSON."""
-        return json.dumps({"earth": self.earth.__dict__, "table": self.rows()}, **kwargs)
+        payload = {
+            "earth": self.earth.__dict__,
+            "ignored": list(self.ignored),
+            "table": self.rows(),
+        }
+        return json.dumps(payload, **kwargs)
 
 
 def _row(sensor: str, label: str, quantity: str, t: float, sigma: float) -> dict[str, Any]:
@@ -227,7 +235,7 @@ def error_budget(
     latitude: float | None = None,
     earth: Earth | None = None,
     markov_start: Literal["zero", "stationary"] = "zero",
-    rate_unit: str | None = None,
+    accel_scale: float = 1.0,
 ) -> ErrorBudget:
     """Navigation error budget of a gyro (and optionally an accelerometer) noise model.
 
@@ -242,7 +250,9 @@ def error_budget(
     Parameters
     ----------
     gyro : SensorNoise or NoiseModel
-        Gyro noise (SI: rad/s, rad/sqrt(s), ...); a NoiseModel is converted from its units.
+        Gyro noise (SI: rad/s, rad/sqrt(s), ...); a NoiseModel is converted from its units
+        (white, rrw, turn_on_bias, markov, telegraph, lowpass_white and flicker terms are used,
+        see :mod:`allanite.impact.model_adapter`; the others are listed in ``ignored``).
     accel : SensorNoise or NoiseModel, optional
         Accelerometer noise (SI: m/s^2, m/s/sqrt(s), ...).
     t : array_like, optional
@@ -256,8 +266,9 @@ def error_budget(
         Explicit constants instead of ``latitude``.
     markov_start : {"zero", "stationary"}
         Initial Gauss-Markov state; ``zero`` matches the tabulated laws.
-    rate_unit : str, optional
-        Rate unit of a NoiseModel without ``units``.
+    accel_scale : float
+        m/s^2 per unit of an accelerometer NoiseModel's coefficients (its angle-based units
+        cannot name an acceleration).
 
     Returns
     -------
@@ -268,9 +279,9 @@ def error_budget(
     Titterton & Weston, "Strapdown Inertial Navigation Technology", 2nd ed., ch. 12 (error
     propagation, Schuler loop); the source dissertation's error-budget tables (docs/impact.md).
     """
-    gyro_noise = as_sensor_noise(gyro, name="gyro", rate_unit=rate_unit)
+    gyro_noise = as_sensor_noise(gyro, name="gyro")
     accel_noise = (
-        as_sensor_noise(accel, name="accel", rate_unit=rate_unit) if accel is not None else None
+        as_sensor_noise(accel, name="accel", accel_scale=accel_scale) if accel is not None else None
     )
     grid = _check_grid(np.geomspace(1.0, 86400.0, 200) if t is None else t, "t")
     table_times = _check_grid(times, "times")
@@ -283,14 +294,27 @@ def error_budget(
         sensors.append(("accel", accel_noise))
     comps: list[BudgetComponent] = []
     exact, short, long_, table = [], [], [], []
+    ignored: list[str] = []
     for sensor, noise in sensors:
+        ignored.extend(f"{sensor}: {name}" for name in noise.ignored)
+        groups: dict[str, list[Component]] = {}
         for comp in noise.components():
-            e, s, lg = _sigma_all(sensor, comp, grid, the_earth, markov_start)
-            exact.append(e)
-            short.append(s)
-            long_.append(lg)
-            table.append(_sigma_all(sensor, comp, table_times, the_earth, markov_start)[0])
-            comps.append(BudgetComponent(sensor, comp.kind, comp.label, comp.value, comp.tau_c))
+            groups.setdefault(comp.label, []).append(comp)
+        for label, members in groups.items():
+            parts = [_sigma_all(sensor, c, grid, the_earth, markov_start) for c in members]
+            exact.append(_rss(np.stack([p[0] for p in parts])))
+            if len(members) == 1:
+                short.append(parts[0][1])
+                long_.append(parts[0][2])
+            else:  # a bank standing for one effect (flicker): no closed form
+                short.append(np.full_like(parts[0][1], np.nan))
+                long_.append(np.full_like(parts[0][2], np.nan))
+            at = [_sigma_all(sensor, c, table_times, the_earth, markov_start)[0] for c in members]
+            table.append(_rss(np.stack(at)))
+            first = members[0]
+            value = float(np.sqrt(sum(c.value**2 for c in members)))
+            tau_c = first.tau_c if len(members) == 1 else None
+            comps.append(BudgetComponent(sensor, first.kind, label, value, tau_c))
     if not comps:
         raise ValueError("the noise models have no non-zero component; nothing to budget")
     return ErrorBudget(
@@ -304,4 +328,5 @@ def error_budget(
         table=np.stack(table),
         earth=the_earth,
         markov_start=markov_start,
+        ignored=tuple(ignored),
     )

@@ -89,7 +89,7 @@ def error_change(
     latitude: float | None = None,
     earth: Earth | None = None,
     markov_start: Literal["zero", "stationary"] = "zero",
-    rate_unit: str | None = None,
+    accel_scale: float = 1.0,
 ) -> ErrorChange:
     """Sigma of one navigation error at time ``t`` for two noise models of the same sensor.
 
@@ -110,7 +110,7 @@ def error_change(
         Which sensor ``before``/``after`` describe.
     accel : SensorNoise or NoiseModel, optional
         Accelerometer noise held fixed when ``sensor="gyro"`` (adds to velocity/position).
-    latitude, earth, markov_start, rate_unit
+    latitude, earth, markov_start, accel_scale
         As in :func:`allanite.impact.error_budget`.
 
     Returns
@@ -131,7 +131,7 @@ def error_change(
             from allanite.impact.sensor import SensorNoise
 
             gyro = SensorNoise()
-        budget = _budget_or_zero(gyro, acc, t, latitude, earth, markov_start, rate_unit)
+        budget = _budget_or_zero(gyro, acc, t, latitude, earth, markov_start, accel_scale)
         if budget is None:
             return 0.0
         value = float(budget.total_at(name)[0])
@@ -151,12 +151,12 @@ def _budget_or_zero(
     latitude: float | None,
     earth: Earth | None,
     markov_start: Literal["zero", "stationary"],
-    rate_unit: str | None,
+    accel_scale: float,
 ) -> Any:
     from allanite.impact.sensor import as_sensor_noise
 
-    g = as_sensor_noise(gyro, name="gyro", rate_unit=rate_unit)
-    a = as_sensor_noise(accel, name="accel", rate_unit=rate_unit) if accel is not None else None
+    g = as_sensor_noise(gyro, name="gyro")
+    a = as_sensor_noise(accel, name="accel", accel_scale=accel_scale) if accel is not None else None
     if not g.components() and (a is None or not a.components()):
         return None
     return error_budget(

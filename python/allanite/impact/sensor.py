@@ -38,10 +38,14 @@ class MarkovNoise:
     tau_c : float
         Correlation time in seconds; ``mu = 1 / tau_c``. The driving white noise has intensity
         ``2 D mu`` (the "Wiener intensity" of the short-interval laws).
+    source : str, optional
+        Name of the effect this process stands for (e.g. ``flicker(B=...)`` for a member of a
+        flicker bank); processes with the same source form one row of a budget.
     """
 
     sigma: float
     tau_c: float
+    source: str | None = None
 
     def __post_init__(self) -> None:
         _check_nonneg("MarkovNoise.sigma", self.sigma)
@@ -61,10 +65,13 @@ class Component:
     kind: ComponentKind
     value: float
     tau_c: float | None = None
+    source: str | None = None
 
     @property
     def label(self) -> str:
-        """Short name such as ``white`` or ``markov(tau_c=300 s)``."""
+        """Short name such as ``white`` or ``markov(tau_c=300 s)`` (or the ``source``)."""
+        if self.source is not None:
+            return self.source
         if self.kind == "markov":
             return f"markov(tau_c={self.tau_c:.4g} s)"
         return self.kind
@@ -85,12 +92,15 @@ class SensorNoise:
         Wiener intensity of the tabulated laws is ``Q = K^2``.
     markov : tuple of MarkovNoise
         Gauss-Markov errors.
+    ignored : tuple of str
+        Effects of the source model that have no error law here (e.g. ``quantization``).
     """
 
     constant: float = 0.0
     white: float = 0.0
     random_walk: float = 0.0
     markov: tuple[MarkovNoise, ...] = field(default_factory=tuple)
+    ignored: tuple[str, ...] = field(default_factory=tuple)
 
     def __post_init__(self) -> None:
         for name in ("constant", "white", "random_walk"):
@@ -104,6 +114,7 @@ class SensorNoise:
                     f"{type(item).__name__}"
                 )
         object.__setattr__(self, "markov", markov)
+        object.__setattr__(self, "ignored", tuple(str(x) for x in self.ignored))
 
     def components(self) -> tuple[Component, ...]:
         """Return the non-zero error sources (constant, white, random walk, Gauss-Markov)."""
@@ -114,28 +125,30 @@ class SensorNoise:
             out.append(Component("white", self.white))
         if self.random_walk > 0:
             out.append(Component("random_walk", self.random_walk))
-        out.extend(Component("markov", m.sigma, m.tau_c) for m in self.markov if m.sigma > 0)
+        out.extend(
+            Component("markov", m.sigma, m.tau_c, m.source) for m in self.markov if m.sigma > 0
+        )
         return tuple(out)
 
 
-def as_sensor_noise(obj: Any, *, name: str, rate_unit: str | None = None) -> SensorNoise:
+def as_sensor_noise(obj: Any, *, name: str, accel_scale: float = 1.0) -> SensorNoise:
     """Accept a :class:`SensorNoise` or a NoiseModel (converted to SI); anything else is an error.
 
     Parameters
     ----------
     obj : SensorNoise or allanite.model.NoiseModel
         The sensor's noise.
-    name : str
-        Argument name for error messages (``gyro`` or ``accel``).
-    rate_unit : str, optional
-        Rate unit of a NoiseModel whose own ``units`` are not set (e.g. ``"deg/s"``).
+    name : {"gyro", "accel"}
+        Which sensor (selects the conversion; also used in error messages).
+    accel_scale : float
+        m/s^2 per unit of an accelerometer NoiseModel's coefficients.
     """
     if isinstance(obj, SensorNoise):
         return obj
     if hasattr(obj, "terms"):
         from allanite.impact.model_adapter import sensor_noise_from_model
 
-        return sensor_noise_from_model(obj, sensor=name, rate_unit=rate_unit)
+        return sensor_noise_from_model(obj, sensor=name, accel_scale=accel_scale)
     raise TypeError(
         f"{name} must be an allanite.impact.SensorNoise or an allanite NoiseModel, got "
         f"{type(obj).__name__}"
