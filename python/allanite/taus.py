@@ -2,16 +2,21 @@
 
 from __future__ import annotations
 
-from typing import Union
-
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from allanite import _core
 
-__all__ = ["TauSpec", "averaging_factors", "log_grid", "max_factor"]
+__all__ = [
+    "STOP_RATIO",
+    "TauSpec",
+    "averaging_factors",
+    "log_grid",
+    "max_factor",
+    "stable32_max_factor",
+]
 
-TauSpec = Union[str, ArrayLike, None]
+TauSpec = str | ArrayLike | None
 
 #: kinds accepted by the variance kernels (``time`` is derived from ``modified``)
 KERNEL_KIND = {
@@ -23,6 +28,38 @@ KERNEL_KIND = {
     "standard_hadamard": "standard_hadamard",
     "total": "total",
 }
+
+#: Stable32's stop ratios: its octave/decade/all grids end at ``m = N // ratio`` (N data points).
+#: W. J. Riley, "The evolution of frequency stability analysis", Table III.
+STOP_RATIO = {
+    "overlapping": 4,
+    "standard": 5,
+    "modified": 4,
+    "time": 4,
+    "hadamard": 4,
+    "standard_hadamard": 5,
+    "total": 2,
+}
+
+
+def stable32_max_factor(kind: str, n_samples: int, n_phase: int) -> int:
+    """Largest factor of the named grids: Stable32's ``N // stop_ratio``, within the kernel's limit.
+
+    Parameters
+    ----------
+    kind : str
+        Variance kind.
+    n_samples : int
+        Record length (data points as Stable32 counts them).
+    n_phase : int
+        Number of phase points (sets the kernel's own limit).
+
+    Returns
+    -------
+    int
+        ``max(1, min(n_samples // STOP_RATIO[kind], max_factor(kind, n_phase)))``.
+    """
+    return max(1, min(n_samples // STOP_RATIO[kind], max_factor(kind, n_phase)))
 
 
 def max_factor(kind: str, n_phase: int) -> int:
@@ -69,6 +106,9 @@ def averaging_factors(
     ----------
     spec : {"octave", "decade", "all", "log"} or array_like of float or None
         Named grid or explicit averaging times in seconds (rounded to whole samples).
+        ``octave`` (1, 2, 4, ...), ``decade`` (1, 2, 4, 10, 20, 40, ...) and ``all`` end where
+        Stable32 ends them (:func:`stable32_max_factor`); ``log`` (the original program's grid)
+        and explicit factors may go up to the kernel's limit :func:`max_factor`.
     fs : float
         Sampling frequency in Hz.
     n_samples, n_phase : int
@@ -100,9 +140,10 @@ def averaging_factors(
         factors = np.asarray(m)
         if factors.size == 0:
             raise ValueError("m is empty; give at least one averaging factor")
-        if not np.issubdtype(factors.dtype, np.integer):
-            if not np.all(np.isfinite(factors)) or np.any(factors != np.round(factors)):
-                raise ValueError("m must hold whole numbers of samples (averaging factors)")
+        if not np.issubdtype(factors.dtype, np.integer) and (
+            not np.all(np.isfinite(factors)) or np.any(factors != np.round(factors))
+        ):
+            raise ValueError("m must hold whole numbers of samples (averaging factors)")
         factors = np.unique(factors.astype(np.int64))
     elif spec is None or isinstance(spec, str):
         name = "log" if spec is None else spec
@@ -120,7 +161,8 @@ def averaging_factors(
                 f"unknown tau grid {name!r}; use 'octave', 'decade', 'all', 'log' or an array "
                 "of averaging times in seconds"
             )
-        factors = factors[factors <= top]
+        limit = top if name == "log" else stable32_max_factor(kind, n_samples, n_phase)
+        factors = factors[factors <= limit]
     else:
         taus = np.asarray(spec, dtype=np.float64).ravel()
         if taus.size == 0:
