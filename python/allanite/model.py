@@ -224,6 +224,38 @@ class NoiseModel:
         """Read a JSON model written by :meth:`save` (or by hand)."""
         return cls.from_json(Path(path).read_text(encoding="utf-8"))
 
+    # --- simulation -------------------------------------------------------------------------
+    def simulate(
+        self,
+        n: int | None = None,
+        fs: float = 1.0,
+        *,
+        duration: str | float | None = None,
+        output: str = "rate",
+        channels: int = 1,
+        seed: Any = None,
+        allow_aliasing: bool = False,
+    ) -> NDArray[np.float64]:
+        """Simulate ``n`` samples (or ``duration``, e.g. ``"30min"``) at ``fs`` Hz.
+
+        Rate samples in the model's rate unit, angle increments or angle
+        (``output="rate"|"increment"|"angle"``); shape ``(n,)`` or ``(n, channels)``. The same
+        seed gives the same samples. See :func:`allanite.simulation.simulate`, and
+        :func:`allanite.simulation.simulate_chunks` for records that do not fit in memory.
+        """
+        from allanite.simulation import simulate
+
+        return simulate(
+            self,
+            fs,
+            n,
+            duration=duration,
+            output=output,  # type: ignore[arg-type]
+            channels=channels,
+            seed=seed,
+            allow_aliasing=allow_aliasing,
+        )
+
     def __iter__(self) -> Iterator[Term]:
         return iter(self.terms)
 

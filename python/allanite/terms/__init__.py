@@ -9,6 +9,14 @@ from allanite.terms.quantization import Quantization
 from allanite.terms.ramp import RateRamp
 from allanite.terms.rrw import RateRandomWalk
 from allanite.terms.sine import Sine
+from allanite.terms.transients import (
+    BiasSteps,
+    LowPassWhite,
+    Spikes,
+    Telegraph,
+    TurnOnBias,
+    WarmUp,
+)
 from allanite.terms.white import White
 
 #: the stationary IEEE power-law terms in order of increasing tau slope
@@ -17,14 +25,20 @@ POWER_LAW_TERMS: tuple[type[Term], ...] = (Quantization, White, Flicker, RateRan
 __all__ = [
     "POWER_LAW_TERMS",
     "TERM_TYPES",
+    "BiasSteps",
     "Flicker",
     "GaussMarkov",
+    "LowPassWhite",
     "ParamSpec",
     "Quantization",
     "RateRamp",
     "RateRandomWalk",
     "Sine",
+    "Spikes",
+    "Telegraph",
     "Term",
+    "TurnOnBias",
+    "WarmUp",
     "White",
     "term_from_dict",
 ]

@@ -123,8 +123,22 @@ class Term(ABC):
         return self.psd(f) * np.sinc(f * dt) ** 2
 
     # --- simulation -------------------------------------------------------------------------
-    def stream(self, fs: float, n_channels: int, seed: Any) -> TermStream:
-        """A streaming generator of this effect's rate samples (see allanite.simulation)."""
+    def stream(
+        self, fs: float, n_channels: int, seed: Any, *, n_samples: int | None = None
+    ) -> TermStream:
+        """Return a streaming generator of this effect's rate samples (see allanite.simulation).
+
+        Parameters
+        ----------
+        fs : float
+            Sampling frequency in Hz.
+        n_channels : int
+            Independent channels generated side by side.
+        seed : None, int or numpy.random.SeedSequence
+            Seed of the stream (a model spawns one child per term).
+        n_samples : int, optional
+            Length of the record, when known (lets flicker use exact spectral synthesis).
+        """
         raise NotImplementedError(f"{type(self).__name__} cannot be simulated yet")
 
     # --- fitting ----------------------------------------------------------------------------

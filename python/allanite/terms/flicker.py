@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -15,6 +15,7 @@ from allanite.terms._guess import curve_bound
 from allanite.terms.base import ParamSpec, Term
 
 if TYPE_CHECKING:
+    from allanite.simulation.streams import TermStream
     from allanite.variance import AllanResult
 
 __all__ = ["PLATEAU", "Flicker"]
@@ -92,6 +93,18 @@ class Flicker(Term):
         f = np.asarray(f, dtype=np.float64)
         out = self.B**2 / (np.pi * f) * np.sinc(f * dt) ** 2
         return np.where(f <= self.cutoff(dt), out, 0.0)
+
+    def stream(
+        self, fs: float, n_channels: int, seed: Any, *, n_samples: int | None = None
+    ) -> TermStream:
+        """Stream flicker noise (see :mod:`allanite.simulation.flicker`).
+
+        Spectral synthesis of the exact sampled PSD for records of known length up to 2^22
+        samples, else a streaming Gauss-Markov bank.
+        """
+        from allanite.simulation.flicker import flicker_stream
+
+        return flicker_stream(self, fs, n_channels, seed, n_samples=n_samples)
 
     @classmethod
     def guess(cls, result: AllanResult) -> Flicker | None:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -14,6 +14,7 @@ from allanite.terms._guess import hump
 from allanite.terms.base import ParamSpec, Term
 
 if TYPE_CHECKING:
+    from allanite.simulation.streams import TermStream
     from allanite.variance import AllanResult
 
 __all__ = ["PEAK_ADEV", "PEAK_TAU", "GaussMarkov"]
@@ -91,6 +92,14 @@ class GaussMarkov(Term):
         phi = math.exp(-dt / self.tau_c)
         q2 = self.sigma**2 * (1.0 - phi**2)
         return 2.0 * dt * q2 / (1.0 - 2.0 * phi * np.cos(2.0 * np.pi * f * dt) + phi**2)
+
+    def stream(
+        self, fs: float, n_channels: int, seed: Any, *, n_samples: int | None = None
+    ) -> TermStream:
+        """Stream the exact stationary AR(1) of the class docstring (C++ recursion)."""
+        from allanite.simulation.gaussian import gauss_markov_stream
+
+        return gauss_markov_stream(self.sigma, self.tau_c, fs, n_channels, seed)
 
     @classmethod
     def guess(cls, result: AllanResult) -> GaussMarkov | None:

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -13,6 +13,7 @@ from allanite.terms._guess import curve_bound
 from allanite.terms.base import ParamSpec, Term
 
 if TYPE_CHECKING:
+    from allanite.simulation.streams import TermStream
     from allanite.variance import AllanResult
 
 __all__ = ["Quantization"]
@@ -65,6 +66,14 @@ class Quantization(Term):
         """One-sided PSD of the sampled rate, ``8 Q^2 sin^2(pi f dt) / dt``."""
         f = np.asarray(f, dtype=np.float64)
         return 8.0 * self.Q**2 * np.sin(np.pi * f * dt) ** 2 / dt
+
+    def stream(
+        self, fs: float, n_channels: int, seed: Any, *, n_samples: int | None = None
+    ) -> TermStream:
+        """Differenced uniform angle error ``(e[k] - e[k-1]) fs``, ``e`` on ``+-sqrt(3) Q``."""
+        from allanite.simulation.gaussian import QuantizationStream
+
+        return QuantizationStream(self.Q, fs, n_channels, seed)
 
     @classmethod
     def guess(cls, result: AllanResult) -> Quantization | None:

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -13,6 +13,7 @@ from allanite.terms._guess import curve_bound
 from allanite.terms.base import ParamSpec, Term
 
 if TYPE_CHECKING:
+    from allanite.simulation.streams import TermStream
     from allanite.variance import AllanResult
 
 __all__ = ["RateRamp"]
@@ -51,6 +52,14 @@ class RateRamp(Term):
         """Allan variance ``R^2 tau^2 / 2`` (exact)."""
         t, _, _ = averaging_factor(tau, dt)
         return 0.5 * self.R**2 * t**2
+
+    def stream(
+        self, fs: float, n_channels: int, seed: Any, *, n_samples: int | None = None
+    ) -> TermStream:
+        """Sample means of ``R t``: ``R (k + 1/2) dt``."""
+        from allanite.simulation.effects import RampStream
+
+        return RampStream(self.R, fs, n_channels, seed)
 
     @classmethod
     def guess(cls, result: AllanResult) -> RateRamp | None:

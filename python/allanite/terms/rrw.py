@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -13,6 +13,7 @@ from allanite.terms._guess import curve_bound
 from allanite.terms.base import ParamSpec, Term
 
 if TYPE_CHECKING:
+    from allanite.simulation.streams import TermStream
     from allanite.variance import AllanResult
 
 __all__ = ["RateRandomWalk"]
@@ -63,6 +64,14 @@ class RateRandomWalk(Term):
         """One-sided PSD of the sampled random walk, ``K^2 dt^2 / (2 sin^2(pi f dt))``."""
         f = np.asarray(f, dtype=np.float64)
         return self.K**2 * dt**2 / (2.0 * np.sin(np.pi * f * dt) ** 2)
+
+    def stream(
+        self, fs: float, n_channels: int, seed: Any, *, n_samples: int | None = None
+    ) -> TermStream:
+        """Stream the sampled random walk ``r[k] = r[k-1] + K sqrt(dt) w[k]`` (C++ recursion)."""
+        from allanite.simulation.gaussian import random_walk_stream
+
+        return random_walk_stream(self.K, fs, n_channels, seed)
 
     @classmethod
     def guess(cls, result: AllanResult) -> RateRandomWalk | None:

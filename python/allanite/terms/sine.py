@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -14,6 +14,7 @@ from allanite.terms._guess import hump
 from allanite.terms.base import ParamSpec, Term
 
 if TYPE_CHECKING:
+    from allanite.simulation.streams import TermStream
     from allanite.variance import AllanResult
 
 __all__ = ["PEAK_ADEV", "PEAK_FTAU", "Sine"]
@@ -74,6 +75,14 @@ class Sine(Term):
     def line(self) -> tuple[float, float]:
         """Return the spectral line ``(frequency in Hz, power A^2/2 in rate^2)``."""
         return self.frequency, 0.5 * self.amplitude**2
+
+    def stream(
+        self, fs: float, n_channels: int, seed: Any, *, n_samples: int | None = None
+    ) -> TermStream:
+        """Point samples with a random phase per channel and run."""
+        from allanite.simulation.effects import SineStream
+
+        return SineStream(self.amplitude, self.frequency, fs, n_channels, seed)
 
     @classmethod
     def guess(cls, result: AllanResult) -> Sine | None:

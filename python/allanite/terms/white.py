@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -13,6 +14,7 @@ from allanite.terms._guess import curve_bound
 from allanite.terms.base import ParamSpec, Term
 
 if TYPE_CHECKING:
+    from allanite.simulation.streams import TermStream
     from allanite.variance import AllanResult
 
 __all__ = ["White"]
@@ -57,6 +59,14 @@ class White(Term):
     def psd_sampled(self, f: ArrayLike, dt: float) -> NDArray[np.float64]:
         """White stays white after sampling: ``2 N^2``."""
         return self.psd(f)
+
+    def stream(
+        self, fs: float, n_channels: int, seed: Any, *, n_samples: int | None = None
+    ) -> TermStream:
+        """Independent Gaussian rate samples of standard deviation ``N sqrt(fs)``."""
+        from allanite.simulation.gaussian import WhiteStream
+
+        return WhiteStream(self.N * math.sqrt(fs), fs, n_channels, seed)
 
     @classmethod
     def guess(cls, result: AllanResult) -> White | None:

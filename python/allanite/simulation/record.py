@@ -1,0 +1,242 @@
+r"""Simulate records from a noise model: one-shot, chunked (bounded memory) or to a file.
+
+A model is a sum of :class:`~allanite.terms.base.Term` objects (a
+:class:`allanite.model.NoiseModel` or any sequence of terms). Each term gets its own child
+seed (``SeedSequence(seed).spawn(n_terms)``) and streams its rate samples; the sum is
+returned as rate, angle increments (:math:`\Delta\theta_k = \bar\omega_k \Delta t`) or angle
+(:math:`\theta_k = \Delta t\sum_{i \le k}\bar\omega_i`, the angle at the end of sample
+``k``). Every sample depends on the seed alone: :func:`simulate` and any chunking of
+:func:`simulate_chunks` agree bit for bit.
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+import re
+from collections.abc import Iterator, Sequence
+from typing import Any, Literal
+
+import numpy as np
+from numpy.typing import NDArray
+
+from allanite.simulation.streams import SumStream, check_fs, seed_sequence
+from allanite.terms.base import Term
+
+__all__ = [
+    "DEFAULT_CHUNK",
+    "OUTPUTS",
+    "model_terms",
+    "parse_duration",
+    "record_length",
+    "simulate",
+    "simulate_chunks",
+]
+
+Output = Literal["rate", "angle", "increment"]
+OUTPUTS: tuple[str, ...] = ("rate", "angle", "increment")
+#: samples per chunk of :func:`simulate_chunks` (the memory bound of streaming)
+DEFAULT_CHUNK = 1 << 20
+
+_UNITS = {"": 1.0, "s": 1.0, "sec": 1.0, "min": 60.0, "m": 60.0, "h": 3600.0, "d": 86400.0}
+
+
+def parse_duration(text: str | float) -> float:
+    """Seconds from ``"90"``, ``"90s"``, ``"30min"``, ``"1.5h"``, ``"2d"`` or a number.
+
+    Raises
+    ------
+    ValueError
+        For anything else, or a duration that is not positive and finite.
+    """
+    if isinstance(text, bool):
+        raise TypeError(
+            f"duration must be a number of seconds or a string like '24h', got {text!r}"
+        )
+    if isinstance(text, numbers.Real):
+        seconds = float(text)
+    else:
+        match = re.fullmatch(
+            r"\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*([a-zA-Z]*)\s*", str(text)
+        )
+        unit = match.group(2).lower() if match else None
+        if match is None or unit not in _UNITS:
+            raise ValueError(
+                f"cannot read the duration {text!r}; write a number with an optional unit s, min, "
+                "h or d (e.g. 90s, 30min, 24h)"
+            )
+        seconds = float(match.group(1)) * _UNITS[unit]
+    if not math.isfinite(seconds) or seconds <= 0:
+        raise ValueError(f"the duration must be positive and finite, got {text!r}")
+    return seconds
+
+
+def record_length(fs: float, n: int | None = None, duration: str | float | None = None) -> int:
+    """Return the number of samples from ``n`` or ``duration`` (one of them) at ``fs``."""
+    rate = check_fs(fs)
+    if (n is None) == (duration is None):
+        raise ValueError("give the record length as n (samples) or duration (seconds), not both")
+    if n is not None:
+        if isinstance(n, bool) or not isinstance(n, numbers.Integral):
+            raise TypeError(f"n must be a whole number of samples, got {n!r}")
+        samples = int(n)
+    else:
+        samples = round(parse_duration(duration) * rate)  # type: ignore[arg-type]
+    if samples < 1:
+        raise ValueError(
+            f"the record would have {samples} samples; give a positive length (n >= 1 or a "
+            "duration of at least one sample period)"
+        )
+    return samples
+
+
+def model_terms(model: Any) -> list[Term]:
+    """Return the terms of a NoiseModel (``.terms``), a single Term or a sequence of Terms."""
+    if isinstance(model, Term):
+        return [model]
+    terms = getattr(model, "terms", model)
+    if isinstance(terms, (str, bytes)) or not isinstance(terms, Sequence):
+        raise TypeError(
+            f"expected a NoiseModel, a Term or a list of Terms, got {type(model).__name__}"
+        )
+    out = list(terms)
+    for t in out:
+        if not isinstance(t, Term):
+            raise TypeError(f"a model holds Term objects, got {type(t).__name__}")
+    if not out:
+        raise ValueError("the model has no terms; add at least one noise term to simulate")
+    return out
+
+
+def _check_band(term: Term, fs: float, allow_aliasing: bool) -> None:
+    """Refuse tones and cutoffs above Nyquist unless aliasing is explicitly wanted."""
+    nyquist = 0.5 * fs
+    for name in ("frequency", "f0"):
+        value = getattr(term, name, None)
+        if value is not None and float(value) > nyquist and not allow_aliasing:
+            raise ValueError(
+                f"{type(term).__name__}.{name} = {value} Hz is above the Nyquist frequency "
+                f"{nyquist} Hz of fs = {fs} Hz; raise fs, lower {name}, or pass "
+                "allow_aliasing=True to simulate the aliased samples"
+            )
+
+
+def _open(
+    model: Any, fs: float, n: int, channels: int, seed: Any, allow_aliasing: bool
+) -> SumStream:
+    terms = model_terms(model)
+    if isinstance(channels, bool) or not isinstance(channels, numbers.Integral) or channels < 1:
+        raise ValueError(f"channels must be a positive integer, got {channels!r}")
+    for term in terms:
+        _check_band(term, fs, allow_aliasing)
+    children = seed_sequence(seed).spawn(len(terms))
+    streams = [
+        term.stream(fs, int(channels), child, n_samples=n)
+        for term, child in zip(terms, children, strict=True)
+    ]
+    return SumStream(streams, fs, int(channels))
+
+
+def simulate_chunks(
+    model: Any,
+    fs: float,
+    n: int | None = None,
+    *,
+    duration: str | float | None = None,
+    output: Output = "rate",
+    channels: int = 1,
+    seed: Any = None,
+    chunk: int = DEFAULT_CHUNK,
+    allow_aliasing: bool = False,
+) -> Iterator[NDArray[np.float64]]:
+    """Yield the simulated record in ``(chunk, channels)`` pieces (the last may be shorter).
+
+    Memory is bounded by the chunk and the terms' blocks, whatever the record length (the
+    flicker term of a record longer than ``SPECTRAL_MAX_SAMPLES`` streams through its
+    Gauss-Markov bank). Parameters as in :func:`simulate`; ``chunk`` only sets the piece size,
+    never the samples.
+    """
+    rate = check_fs(fs)
+    total = record_length(rate, n, duration)
+    if output not in OUTPUTS:
+        raise ValueError(f"unknown output {output!r}; use 'rate', 'angle' or 'increment'")
+    if isinstance(chunk, bool) or not isinstance(chunk, numbers.Integral) or chunk < 1:
+        raise ValueError(f"chunk must be a positive number of samples, got {chunk!r}")
+    stream = _open(model, rate, total, channels, seed, allow_aliasing)
+    dt = 1.0 / rate
+    angle_sum = np.zeros((1, stream.n_channels))
+    done = 0
+    while done < total:
+        size = min(int(chunk), total - done)
+        values = stream.next(size)
+        if output == "increment":
+            values = values * dt
+        elif output == "angle":
+            # sequential running sum carried across chunks: identical for any chunking
+            summed = np.add.accumulate(np.concatenate([angle_sum, values]), axis=0)[1:]
+            angle_sum = summed[-1:].copy()
+            values = summed * dt
+        done += size
+        yield values
+
+
+def simulate(
+    model: Any,
+    fs: float,
+    n: int | None = None,
+    *,
+    duration: str | float | None = None,
+    output: Output = "rate",
+    channels: int = 1,
+    seed: Any = None,
+    allow_aliasing: bool = False,
+) -> NDArray[np.float64]:
+    r"""Simulate a record of ``n`` samples (or ``duration``) at ``fs`` Hz from a noise model.
+
+    Parameters
+    ----------
+    model : NoiseModel, Term or sequence of Term
+        The effects to add up.
+    fs : float
+        Sampling frequency in Hz.
+    n : int, optional
+        Number of samples (or give ``duration``).
+    duration : float or str, optional
+        Record length in seconds or with a unit: ``"90s"``, ``"30min"``, ``"24h"``.
+    output : {"rate", "angle", "increment"}
+        Rate samples (means over each period, model units), angle increments
+        :math:`\bar\omega_k\Delta t` or accumulated angle :math:`\Delta t\sum_{i\le k}
+        \bar\omega_i`.
+    channels : int
+        Independent channels (axes or Monte Carlo runs) simulated at once.
+    seed : None, int or numpy.random.SeedSequence
+        Same seed, same samples (whatever the chunking).
+    allow_aliasing : bool
+        Allow tones (and flicker cutoffs) above the Nyquist frequency ``fs/2``.
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape ``(n,)`` for one channel, else ``(n, channels)``.
+
+    Raises
+    ------
+    ValueError
+        For ``fs <= 0``, a zero length, an unknown output, or a tone above Nyquist.
+    """
+    rate = check_fs(fs)
+    total = record_length(rate, n, duration)
+    pieces = list(
+        simulate_chunks(
+            model,
+            rate,
+            total,
+            output=output,
+            channels=channels,
+            seed=seed,
+            chunk=total,
+            allow_aliasing=allow_aliasing,
+        )
+    )
+    record = pieces[0]
+    return record[:, 0] if record.shape[1] == 1 else record
