@@ -238,3 +238,46 @@ def test_report_renders_in_headless_chromium(tmp_path: Path) -> None:
     assert count((0x2E, 0x8B, 0x57), tol=6) > 200
     # the page is not blank: the main column is white, the margins grey (#f4f6f8)
     assert count((0xF4, 0xF6, 0xF8), tol=2) > 10000
+
+
+def test_cli_report_with_sim_model_has_diagnosis(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    pytest.importorskip("allanite.diagnosis")
+    from allanite.model import NoiseModel
+    from allanite.terms import TERM_TYPES
+
+    rate = RNG.normal(size=4000) * 0.5  # white rate noise: N = 0.5 / sqrt(100) deg/sqrt(s)
+    rate[2000:] += 0.3  # a bias step the model does not have
+    data = tmp_path / "real.npy"
+    np.save(data, rate)
+    model = tmp_path / "model.json"
+    white = TERM_TYPES["white"](N=0.05)
+    model.write_text(NoiseModel(terms=(white,), units={"rate": "deg/s", "time": "s"}).to_json())
+    out = tmp_path / "diag.html"
+    code = main(
+        [
+            "report",
+            str(data),
+            "--fs",
+            "100",
+            "--units",
+            "deg/s",
+            "--points",
+            "20",
+            "--no-fit",
+            "--sim-model",
+            str(model),
+            "--n-mc",
+            "20",
+            "-o",
+            str(out),
+        ]
+    )
+    assert code == 0, capsys.readouterr().err
+    html = out.read_text()
+    assert "<h2>Sim-to-real diagnosis</h2>" in html
+    assert "model.json" in html
+    # the step is a significant gap: the verdict badge says so and the views are embedded
+    assert "differs significantly" in html
+    assert len(re.findall(r'<img src="data:image/png;base64,', html)) == 2

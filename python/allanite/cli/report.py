@@ -54,6 +54,12 @@ def register(subparsers: Any) -> None:
     )
     parser.add_argument("--datasheet", metavar="LIMITS.json", help="datasheet limits to check")
     parser.add_argument("--sim-model", metavar="MODEL.json", help="noise model to diagnose against")
+    parser.add_argument(
+        "--n-mc",
+        type=int,
+        default=200,
+        help="Monte Carlo replicates of the diagnosis null (default 200; at least 20)",
+    )
     parser.add_argument("--no-fit", action="store_true", help="skip the noise-model fit")
     parser.add_argument("--png", action="store_true", help="also export the figures as PNG")
     parser.add_argument("--pdf", action="store_true", help="also export the figures as PDF")
@@ -70,11 +76,13 @@ def fit_channels(device: DeviceAnalysis) -> tuple[Any, ...]:
     return tuple(fit_result(device.result.channel(c)) for c in range(device.result.n_channels))
 
 
-def diagnosis_parts(device: DeviceAnalysis, model_path: str) -> tuple[str, dict[str, Any]]:
+def diagnosis_parts(
+    device: DeviceAnalysis, model_path: str, n_mc: int = 200
+) -> tuple[str, dict[str, Any]]:
     """HTML and figures of the sim-to-real diagnosis of ``device`` against a model file."""
     from allanite.report.diagnosis import diagnosis_section
 
-    return diagnosis_section(device.record, model_path)
+    return diagnosis_section(device.record, model_path, n_mc=n_mc)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -99,7 +107,7 @@ def run(args: argparse.Namespace) -> int:
     diag_html = None
     diag_figures = None
     if args.sim_model:
-        diag_html, diag_figures = diagnosis_parts(devices[0], args.sim_model)
+        diag_html, diag_figures = diagnosis_parts(devices[0], args.sim_model, args.n_mc)
     report = build_report(
         devices,
         reference=reference,

@@ -26,6 +26,13 @@ def run_diagnosis(record: Record, model: Any, channel: int = 0, **options: Any) 
     )
 
 
+def _p(value: float, n_mc: int | None) -> str:
+    """Format a Monte Carlo p-value; 0 means below the resolution 1/(n_mc + 1)."""
+    if value <= 0 and n_mc:
+        return f"< {1.0 / (n_mc + 1):.2g}"
+    return h.fmt(value, 3)
+
+
 def _params(params: dict[str, float], sigma: dict[str, float]) -> str:
     return ", ".join(
         f"{k} = {h.fmt(v)}" + (f" ± {h.fmt(sigma[k], 2)}" if sigma.get(k) else "")
@@ -54,29 +61,30 @@ def diagnosis_html(diagnosis: Any, *, channel: str, model_name: str) -> str:
         else "the real record is consistent with the simulated sensor"
     )
     where = diagnosis.where
+    n_mc = diagnosis.meta.get("n_mc")
     views = [
         [
             "averaging time (Allan variance)",
-            h.fmt(diagnosis.tau.p_value, 3),
+            _p(diagnosis.tau.p_value, n_mc),
             _ranges(where["tau_bands_s"], "s"),
         ],
         [
             "frequency (PSD, lines)",
-            h.fmt(diagnosis.frequency.p_value, 3),
+            _p(diagnosis.frequency.p_value, n_mc),
             _ranges(where["frequency_bands_hz"], "Hz")
             + " · lines: "
             + _ranges(where["frequency_lines_hz"], "Hz"),
         ],
         [
             "time (jumps, bursts, warm-up)",
-            h.fmt(diagnosis.time.p_value, 3),
+            _p(diagnosis.time.p_value, n_mc),
             _ranges(where["time_segments_s"], "s"),
         ],
     ]
     parts = [
         f'<p class="verdict">Channel <b>{h.escape(channel)}</b> against model '
         f"<b>{h.escape(model_name)}</b>: {h.badge(verdict)} — {h.escape(text)} "
-        f"(combined p = {h.fmt(diagnosis.p_value, 3)}, "
+        f"(combined p = {_p(diagnosis.p_value, n_mc)}, "
         f"gap G = {h.fmt(diagnosis.statistic, 3)}).</p>",
         h.table(["view", "p-value", "where the gap is"], views, text_columns=1),
     ]
@@ -109,12 +117,12 @@ def diagnosis_html(diagnosis: Any, *, channel: str, model_name: str) -> str:
 
 
 def diagnosis_section(
-    record: Record, model_path: str, channel: int = 0
+    record: Record, model_path: str, channel: int = 0, **options: Any
 ) -> tuple[str, dict[str, Any]]:
     """Run the diagnosis of ``record`` against the model file and render it with its figure."""
     from pathlib import Path
 
-    diagnosis = run_diagnosis(record, model_path, channel)
+    diagnosis = run_diagnosis(record, model_path, channel, **options)
     html = diagnosis_html(
         diagnosis, channel=record.channels[channel], model_name=Path(model_path).name
     )
