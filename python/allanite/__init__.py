@@ -6,6 +6,7 @@ honest uncertainty, noise simulation from a model, and a diagnosis of the sim-to
 
 from __future__ import annotations
 
+from allanite.io import Record, read_record
 from allanite.model import NoiseModel
 from allanite.terms import (
     Flicker,
@@ -41,6 +42,7 @@ __all__ = [
     "Quantization",
     "RateRamp",
     "RateRandomWalk",
+    "Record",
     "Sine",
     "Term",
     "White",
@@ -51,6 +53,7 @@ __all__ = [
     "mdev",
     "oadev",
     "ohdev",
+    "read_record",
     "tdev",
     "totdev",
 ]
