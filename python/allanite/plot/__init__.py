@@ -8,13 +8,21 @@ from __future__ import annotations
 
 from allanite.plot.allan import SLOPE_LABELS, allan_figure, model_figure, plot_allan, plot_model
 from allanite.plot.export import figure_bytes, save_figure
+from allanite.plot.impact import (
+    complementary_filter_figure,
+    error_budget_figure,
+    plot_error_budget,
+)
 
 __all__ = [
     "SLOPE_LABELS",
     "allan_figure",
+    "complementary_filter_figure",
+    "error_budget_figure",
     "figure_bytes",
     "model_figure",
     "plot_allan",
+    "plot_error_budget",
     "plot_model",
     "save_figure",
 ]
