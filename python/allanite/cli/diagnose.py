@@ -50,6 +50,9 @@ def register(subparsers: Any) -> None:
         help="what the simulated record's samples are (default rate)",
     )
     sim.add_argument("--sim-units", help="rate unit of the simulated record, e.g. deg/s")
+    sim.add_argument(
+        "--sim-fs", type=float, help="sampling frequency of the simulated record (must equal --fs)"
+    )
     sim.add_argument("--sim-key", help="array name in an .npz simulated record")
     diag = parser.add_argument_group("diagnosis")
     diag.add_argument(
@@ -160,6 +163,7 @@ def run(args: argparse.Namespace) -> int:
         units=rate_unit(part),
         sim_units=args.sim_units,
         sim_input=args.sim_input,
+        sim_fs=args.sim_fs,
         holdout=_holdout(args),
         effects=effects,
         n_mc=args.n_mc,

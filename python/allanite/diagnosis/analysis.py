@@ -97,7 +97,7 @@ def analyze(
     ens = ensemble(source, plan, n_mc, seed)
     real = record_features(x, plan)
     tau = plan.m / plan.fs
-    tmodel = build_tau_model(real, ens, tau, 1.0 / plan.fs, ens.ref["avar_lin"])
+    tmodel = build_tau_model(real, ens, tau, 1.0 / plan.fs, ens.ref["avar_lin"], x.size / plan.fs)
     # localisation thresholds share the Bonferroni budget of the global test, so a reported
     # band, line or segment implies (approximately) a significant global gap
     view_alpha = alpha / 3.0

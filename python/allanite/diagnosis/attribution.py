@@ -146,7 +146,10 @@ def _values(cand: Candidate, logp: NDArray[np.float64]) -> dict[str, float]:
 
 def _extra(cand: Candidate, logp: NDArray[np.float64], tm: TauModel) -> NDArray[np.float64] | None:
     try:
-        extra = np.asarray(cand.extra_avar(_values(cand, logp), tm.tau, tm.dt), dtype=np.float64)
+        # the optimiser explores extreme parameters: overflow there just means "no fit"
+        with np.errstate(all="ignore"):
+            values = _values(cand, logp)
+            extra = np.asarray(cand.extra_avar(values, tm.tau, tm.dt), dtype=np.float64)
     except (ValueError, ZeroDivisionError, OverflowError, FloatingPointError):
         return None
     if extra.shape != tm.tau.shape or not np.all(np.isfinite(extra)):
@@ -154,9 +157,31 @@ def _extra(cand: Candidate, logp: NDArray[np.float64], tm: TauModel) -> NDArray[
     return extra
 
 
+def _bounds(cand: Candidate, tm: TauModel) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Return log bounds of the free parameters.
+
+    Times lie within ``[dt/4, 4T]`` and rates within ``[1/(4T), 2 fs]``: a correlation time
+    longer than the record is a drift, not a process.
+    """
+    specs = {p.name: p for p in cand.term_cls.params}
+    bounds = []
+    for name in cand.free:
+        spec = specs.get(name)
+        if spec is not None and spec.rate == 0 and spec.time == 1:
+            bounds.append((np.log(tm.dt / 4), np.log(4 * tm.duration)))
+        elif spec is not None and spec.rate == 0 and spec.time == -1:
+            bounds.append((np.log(1 / (4 * tm.duration)), np.log(2 / tm.dt)))
+        else:
+            bounds.append((-700.0, 700.0))
+    arr = np.array(bounds, dtype=np.float64).reshape(-1, 2)
+    return arr[:, 0], arr[:, 1]
+
+
 def _objective(cand: Candidate, tm: TauModel) -> Any:
+    lo, hi = _bounds(cand, tm)
+
     def f(logp: NDArray[np.float64]) -> float:
-        if not np.all(np.abs(logp) < 700):
+        if not (np.all(logp > lo) and np.all(logp < hi)):
             return 1e300
         extra = _extra(cand, logp, tm)
         return 1e300 if extra is None else tm.statistic(extra)
@@ -165,6 +190,8 @@ def _objective(cand: Candidate, tm: TauModel) -> Any:
 
 
 def _fisher_sigma(cand: Candidate, tm: TauModel, logp: NDArray[np.float64]) -> NDArray[np.float64]:
+    if logp.size == 0:
+        return np.zeros(0)
     h = 1e-4
     cols = []
     for k in range(logp.size):
@@ -193,7 +220,11 @@ def fit_candidate(
 ) -> Attribution | None:
     """Fit one candidate; None when it neither improves the tau view nor explains evidence."""
     f = _objective(cand, tm)
-    starts = sorted(_starts(cand, tm), key=f)[:3]
+    lo, hi = _bounds(cand, tm)
+    inside = [np.clip(x0, lo + 1e-6, hi - 1e-6) for x0 in _starts(cand, tm)]
+    starts = sorted(inside, key=f)[:3]
+    if not cand.free:  # every parameter fixed by the other views
+        starts = []
     best: Any = None
     for x0 in starts:
         res = optimize.minimize(
@@ -201,9 +232,9 @@ def fit_candidate(
         )
         if best is None or res.fun < best.fun:
             best = res
-    if best is None or best.fun >= 1e299:
+    if cand.free and (best is None or best.fun >= 1e299):
         return None
-    logp = np.asarray(best.x, dtype=np.float64)
+    logp = np.asarray(best.x if cand.free else [], dtype=np.float64)
     extra = _extra(cand, logp, tm)
     if extra is None:
         return None

@@ -148,8 +148,8 @@ def candidate_library(
         The simulated sensor's model (enables ``rescale:<type>`` and ``lowpass``).
     lines : list of (frequency, amplitude), optional
         Detected spectral lines, strongest first (the sine takes the strongest's frequency).
-    spikes : (rate per second, median absolute height), optional
-        Detected spikes (the spike height is fixed, the rate fitted).
+    spikes : (rate per second, rms height), optional
+        Detected spikes (both parameters are then fixed from the time view).
     n_changes : int
         Number of detected level jumps (bias steps: ``interval = duration / n_changes``).
     effects : list of str, optional
@@ -178,8 +178,9 @@ def candidate_library(
             fixed["frequency"] = freq
             start["amplitude"] = max(amp, 1e-300)
         elif effect == "spikes" and spikes is not None and spikes[1] > 0:
+            # the time view counts and measures them: nothing left to fit
             fixed["amplitude"] = spikes[1]
-            start["rate"] = max(spikes[0], 1e-300)
+            fixed["rate"] = spikes[0]
         elif effect == "step":
             fixed["interval"] = duration / max(n_changes, 1)
         elif effect == "warmup":

@@ -66,6 +66,7 @@ def diagnose(
     units: str | None = None,
     sim_units: str | None = None,
     sim_input: str = "rate",
+    sim_fs: float | None = None,
     holdout: float | ArrayLike | None = None,
     effects: list[str] | None = None,
     n_mc: int = 200,
@@ -102,6 +103,9 @@ def diagnose(
         Rate unit of a simulated record.
     sim_input : {"rate", "increment", "angle"}
         What the samples of a simulated record are.
+    sim_fs : float, optional
+        Sampling frequency of a simulated record, if known; it must equal ``fs`` (resample
+        the simulation otherwise).
     holdout : float or array_like, optional
         Fraction of the real record (its end) held out from the fit, or a second real record:
         the best effect's shrinkage is measured there.
@@ -130,6 +134,11 @@ def diagnose(
         raise ValueError(f"alpha must lie in (0, 0.5), got {alpha}")
     if isinstance(n_mc, bool) or not isinstance(n_mc, (int, np.integer)) or n_mc < 20:
         raise ValueError(f"n_mc must be an integer >= 20, got {n_mc!r}")
+    if sim_fs is not None and not np.isclose(_check_fs(sim_fs), rate, rtol=1e-9, atol=0.0):
+        raise ValueError(
+            f"sample-rate mismatch: the real record has fs = {rate} Hz but the simulated record "
+            f"fs = {sim_fs} Hz; simulate at the real rate (or resample one of them)"
+        )
     x = as_rate(real, rate, input, name="real")
     source = make_source(sim, rate, x.size, sim_units=sim_units, sim_input=sim_input)
     common_units = check_units(units, source.units)
@@ -145,7 +154,7 @@ def diagnose(
         spikes = None
         if analysis.time.spike_times_s:
             duration = x_fit.size / rate
-            height = float(np.median(np.abs(analysis.time.spike_amplitudes)))
+            height = float(np.sqrt(np.mean(np.square(analysis.time.spike_amplitudes))))
             spikes = (len(analysis.time.spike_times_s) / duration, height)
         cands, unavailable = candidate_library(
             sig,

@@ -37,7 +37,7 @@ def tau_model_for(x: NDArray[np.float64], source: SimSource, *, n_mc: int, seed:
         assert source.record is not None
         reps = [feats(r) for r in source.replicates(x.size, 2 * n_mc, seed)]
         ens = NullEnsemble.from_record(feats(source.record[: x.size]), reps)
-    return build_tau_model(feats(x), ens, m / fs, 1.0 / fs, ens.ref["avar_lin"])
+    return build_tau_model(feats(x), ens, m / fs, 1.0 / fs, ens.ref["avar_lin"], x.size / fs)
 
 
 def holdout_check(

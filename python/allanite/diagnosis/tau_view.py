@@ -79,6 +79,7 @@ class TauModel:
 
     tau: NDArray[np.float64]
     dt: float
+    duration: float
     real: NDArray[np.float64]
     ref: NDArray[np.float64]
     sim_avar: NDArray[np.float64]
@@ -195,6 +196,7 @@ def build_tau_model(
     tau: NDArray[np.float64],
     dt: float,
     sim_avar: NDArray[np.float64],
+    duration: float,
 ) -> TauModel:
     """Build the :class:`TauModel` of a real record against the null ensemble."""
     null = ens.null["log_avar"]
@@ -209,6 +211,7 @@ def build_tau_model(
     return TauModel(
         tau=tau,
         dt=dt,
+        duration=duration,
         real=real["log_avar"],
         ref=ens.ref["log_avar"],
         sim_avar=sim_avar,

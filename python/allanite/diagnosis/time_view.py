@@ -13,16 +13,19 @@ Per window it computes, for the real record and for every Monte Carlo replicate:
 (for ``hf`` and ``dyn`` the mean residual over the windows is removed: a uniform change of the
 noise level belongs to the tau view, the time view looks for changes in time)
 
-plus three record-wide statistics: the largest first difference in units of its robust spread
-(``max |d| / (1.4826 MAD(d))``, spikes), the excess kurtosis of the first differences and that of
-block means (8, ``L/16`` and ``L/4`` samples) around their window level (burst and telegraph
-noise change the amplitude distribution, not the Allan variance).
+plus three record-wide statistics: the largest deviation from a 9-sample running median in
+units of its robust spread (``max |h| / (1.4826 MAD(h))``, spikes), the excess kurtosis of the
+first differences (two-sided: bursts, outliers) and the excess kurtosis of block means (8,
+``L/16`` and ``L/4`` samples) around their window level, tested one-sided for a platykurtic,
+two-level amplitude distribution (random telegraph noise changes the amplitude distribution,
+not the Allan variance).
 
 Each per-window residual ``r_w`` is normalised by its null spread, ``z_w = r_w / s_w``; windows
 with ``|z_w|`` above the simultaneous threshold (the ``1 - alpha`` quantile of ``max_w |z_w|``
 under the null, Gumbel fit) form the time segments. A significant jump is refined to a change
 point with the CUSUM estimator ``argmax_k |sum_{i<k} (x_i - mean)|`` over the two windows
-around it; spikes are the samples whose differences exceed the spike threshold.
+around it; spikes are the samples whose deviation from the running median exceeds the spike
+threshold.
 
 References
 ----------
@@ -37,7 +40,7 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy import stats
+from scipy import ndimage, stats
 
 from allanite.diagnosis.null import NullEnsemble, gumbel_isf, gumbel_sf, runs
 
@@ -46,6 +49,8 @@ __all__ = ["TimePlan", "TimeView", "time_features", "time_plan", "time_view"]
 WINDOW_FAMILIES = ("level", "jump", "hf", "dyn")
 #: at most this many spikes are listed individually
 MAX_SPIKES = 200
+#: window of the running median that the spike finder removes
+SPIKE_MEDIAN = 9
 
 
 @dataclass(frozen=True)
@@ -62,6 +67,17 @@ def time_plan(n: int) -> TimePlan:
     n_win = int(min(32, n // 32))
     length = n // n_win
     return TimePlan(n_windows=n_win, length=length, m=max(2, length // 16))
+
+
+def highpass(x: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Subtract the running median over :data:`SPIKE_MEDIAN` samples (the spike finder)."""
+    return np.asarray(x - ndimage.median_filter(x, size=SPIKE_MEDIAN, mode="nearest"))
+
+
+def _robust_spread(v: NDArray[np.float64]) -> float:
+    """``1.4826 MAD``, the standard deviation of Gaussian data, robust to outliers."""
+    mad = float(np.median(np.abs(v - np.median(v)))) * 1.4826
+    return mad if mad > 0 else (float(np.std(v)) or 1.0)
 
 
 def _kurtosis(v: NDArray[np.float64]) -> float:
@@ -81,14 +97,13 @@ def time_features(x: NDArray[np.float64], plan: TimePlan) -> dict[str, NDArray[n
     blocks = used[:, : nb * m].reshape(w, nb, m).mean(axis=2)
     dyn = np.log(np.maximum(0.5 * np.mean(np.diff(blocks, axis=1) ** 2, axis=1), 1e-300))
     dall = np.diff(x)
-    mad = float(np.median(np.abs(dall - np.median(dall)))) * 1.4826
-    spread = mad if mad > 0 else float(np.std(dall)) or 1.0
+    hp = highpass(x)
     return {
         "level": means - x.mean(),
         "jump": np.diff(means),
         "hf": hf,
         "dyn": dyn,
-        "spike": np.array([float(np.max(np.abs(dall))) / spread]),
+        "spike": np.array([float(np.max(np.abs(hp))) / _robust_spread(hp)]),
         "kurt_hf": np.array([_kurtosis(dall)]),
         "kurt_lf": np.array([_block_kurtosis(used, means, b) for b in _kurtosis_blocks(plan)]),
     }
@@ -183,25 +198,20 @@ def _merge(segments: list[tuple[float, float]]) -> list[tuple[float, float]]:
 
 
 def _spikes(x: NDArray[np.float64], threshold: float) -> tuple[list[int], list[float]]:
-    d = np.diff(x)
-    mad = float(np.median(np.abs(d - np.median(d)))) * 1.4826
-    spread = mad if mad > 0 else float(np.std(d)) or 1.0
-    flagged = np.flatnonzero(np.abs(d) / spread > threshold)
+    hp = highpass(x)
+    score = np.abs(hp) / _robust_spread(hp)
+    flagged = np.flatnonzero(score > threshold)
     found: list[int] = []
     for i in flagged:
-        lo, hi = max(int(i) - 4, 0), min(int(i) + 6, x.size)
-        local = np.median(x[lo:hi])
-        k = int(i) if abs(x[i] - local) > abs(x[i + 1] - local) else int(i) + 1
-        if not found or k != found[-1]:
-            found.append(k)
+        k = int(i)
+        if found and k - found[-1] <= 1:
+            if score[k] > score[found[-1]]:
+                found[-1] = k
+            continue
+        found.append(k)
         if len(found) >= MAX_SPIKES:
             break
-    amps = []
-    for k in found:
-        lo, hi = max(k - 5, 0), min(k + 6, x.size)
-        neigh = np.concatenate([x[lo:k], x[k + 1 : hi]])
-        amps.append(float(x[k] - np.median(neigh)))
-    return found, amps
+    return found, [float(hp[k]) for k in found]
 
 
 def _change_point(x: NDArray[np.float64], start: int, stop: int) -> int:
@@ -246,11 +256,14 @@ def time_view(
     spike_null = ens.null["spike"][:, 0]
     spike_r = float(ens.residual(real, "spike")[0])
     fam_p["spike"] = gumbel_sf(spike_r, spike_null)
-    for name in ("kurt_hf", "kurt_lf"):
+    for name, sign in (("kurt_hf", 0), ("kurt_lf", -1)):
         sd = ens.null[name].std(axis=0, ddof=1)
-        zk = np.abs(ens.residual(real, name)) / np.where(sd > 0, sd, np.inf)
-        # two-sided normal tail, Bonferroni over the block sizes
-        fam_p[name] = float(min(1.0, 2.0 * zk.size * stats.norm.sf(float(zk.max()))))
+        zk = ens.residual(real, name) / np.where(sd > 0, sd, np.inf)
+        if sign == 0:  # two-sided: bursts and outliers (+), clipping (-)
+            tail = 2.0 * stats.norm.sf(float(np.abs(zk).max()))
+        else:  # one-sided: a two-level (telegraph) amplitude distribution is platykurtic
+            tail = stats.norm.sf(float((sign * zk).max()))
+        fam_p[name] = float(min(1.0, zk.size * tail))  # Bonferroni over the block sizes
     # localisation
     segments: list[tuple[float, float]] = []
     change_points: list[float] = []

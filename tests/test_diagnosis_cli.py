@@ -1,0 +1,106 @@
+"""``allanite diagnose``: the exact CLI contract (--json is one JSON object), errors, outputs."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from allanite.cli import main
+from allanite.model import NoiseModel
+from allanite.terms import TERM_TYPES
+
+FS = 100.0
+N = 2**14
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory) -> dict[str, Path]:
+    root = tmp_path_factory.mktemp("diagnose")
+    base = NoiseModel(
+        (TERM_TYPES["white"](N=0.05), TERM_TYPES["rrw"](K=0.001)), {"rate": "deg/s", "time": "s"}
+    )
+    real = base.plus(TERM_TYPES["sine"](amplitude=0.2, frequency=13.0)).simulate(N, FS, seed=3)
+    paths = {
+        "model": root / "model.json",
+        "real": root / "real.npy",
+        "sim": root / "sim.npy",
+        "short": root / "short.npy",
+        "nan": root / "nan.npy",
+    }
+    base.save(paths["model"])
+    np.save(paths["real"], real)
+    np.save(paths["sim"], base.simulate(N, FS, seed=4))
+    np.save(paths["short"], real[: N // 4])
+    bad = real.copy()
+    bad[10] = np.nan
+    np.save(paths["nan"], bad)
+    return paths
+
+
+def test_json_is_exactly_one_object(files, tmp_path):
+    cmd = [
+        sys.executable, "-m", "allanite", "diagnose", str(files["real"]), "--fs", "100",
+        "--units", "deg/s", "--sim-model", str(files["model"]), "--holdout", "0.5",
+        "--n-mc", "40", "--json", "--report", str(tmp_path / "gap.html"),
+    ]  # fmt: skip
+    out = subprocess.run(cmd, capture_output=True, text=True, check=True, timeout=600)
+    data = json.loads(out.stdout)  # fails on anything but exactly one JSON value
+    assert isinstance(data, dict)
+    assert data["gap"]["significant"] is True
+    assert isinstance(data["gap"]["statistic"], float)
+    assert isinstance(data["gap"]["p_value"], float)
+    assert data["where"]["frequency_lines_hz"][0] == pytest.approx(13.0, rel=0.02)
+    assert data["attribution"][0]["effect"] == "sine"
+    for entry in data["attribution"]:
+        assert isinstance(entry["shrinkage"], float)
+        assert isinstance(entry["consistent_after"], bool)
+    assert data["holdout"] is None or isinstance(data["holdout"]["shrinkage"], (float, type(None)))
+    html = (tmp_path / "gap.html").read_text()
+    assert "<img" in html
+    assert "sine" in html
+
+
+def test_sim_record_and_full_output(files, tmp_path, capsys):
+    out_file = tmp_path / "full.json"
+    code = main(
+        [
+            "diagnose", str(files["real"]), "--fs", "100", "--sim-record", str(files["sim"]),
+            "--n-mc", "20", "--effects", "sine,white", "-o", str(out_file),
+        ]
+    )  # fmt: skip
+    assert code == 0
+    text = capsys.readouterr().out
+    assert "SIGNIFICANT" in text
+    assert "sine" in text
+    full = json.loads(out_file.read_text())
+    assert set(full["views"]) == {"tau", "frequency", "time"}
+    assert full["meta"]["sim"] == "record"
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (["--units", "rad/s", "--sim-model", "{model}"], "unit mismatch"),
+        (["--sim-record", "{short}"], "shorter than the real"),
+        (["--sim-record", "{sim}", "--sim-fs", "200"], "sample-rate mismatch"),
+        (["--sim-record", "{nan}"], "NaN"),
+        (["--sim-model", "{model}", "--holdout", "2"], "holdout"),
+    ],
+)
+def test_bad_input_is_one_line_and_exit_2(files, capsys, extra, message):
+    args = [a.format(**{k: str(v) for k, v in files.items()}) for a in extra]
+    code = main(["diagnose", str(files["real"]), "--fs", "100", "--n-mc", "20", *args])
+    assert code == 2
+    err = capsys.readouterr().err
+    assert message.lower() in err.lower()
+    assert len(err.strip().splitlines()) == 1
+
+
+def test_sim_source_is_required(files):
+    with pytest.raises(SystemExit):
+        main(["diagnose", str(files["real"]), "--fs", "100"])
