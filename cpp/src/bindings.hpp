@@ -8,5 +8,6 @@ namespace allanite::bind {
 
 void register_variances(pybind11::module_& m);
 void register_generators(pybind11::module_& m);
+void register_streaming(pybind11::module_& m);
 
 }  // namespace allanite::bind

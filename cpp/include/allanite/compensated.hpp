@@ -12,6 +12,9 @@ namespace allanite {
 /// Neumaier's improved Kahan summation: value() is the sum correct to about one rounding.
 class NeumaierSum {
  public:
+  NeumaierSum() = default;
+  /// Resume a sum from its state (hi(), lo()), e.g. across the chunks of a file.
+  NeumaierSum(double hi, double lo) noexcept : sum_(hi), comp_(lo) {}
   void add(double x) noexcept {
     const double t = sum_ + x;
     if (std::fabs(sum_) >= std::fabs(x)) {

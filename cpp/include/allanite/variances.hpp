@@ -77,51 +77,94 @@ inline std::int64_t n_terms(VarianceKind kind, std::int64_t M, std::int64_t m) {
 
 namespace detail {
 
-/// Sum over j in [0, count) of value(j, c)^2 for every channel c, blocked + compensated.
+/// Terms per summation block. Every sum of squared differences is accumulated in blocks of
+/// kSumBlock consecutive terms (four interleaved partial sums by j mod 4, combined pairwise),
+/// and the block sums are folded into a Neumaier total. The block grid is anchored at term 0,
+/// so a sum split at multiples of kSumBlock (chunks of a file, see streaming.hpp) gives
+/// exactly the same bits as one pass.
+constexpr std::int64_t kSumBlock = 1024;
+static_assert(kSumBlock % 4 == 0, "block must hold whole groups of four terms");
+
+/// Add sum_{j<count} value(j, c)^2 to totals[c] for every channel c, blockwise (see kSumBlock).
+/// Term j = 0 must sit on a block boundary of the whole sum.
 template <class Fn>
-void square_sums(std::int64_t count, Eigen::Index nc, Fn&& value, double* out) {
-  constexpr std::int64_t kBlock = 512;
-  std::vector<NeumaierSum> total(static_cast<std::size_t>(nc));
-  std::vector<double> block(static_cast<std::size_t>(nc));
-  for (std::int64_t start = 0; start < count; start += kBlock) {
-    const std::int64_t end = std::min(count, start + kBlock);
-    std::fill(block.begin(), block.end(), 0.0);
+void add_squares(std::int64_t count, Eigen::Index nc, Fn&& value, NeumaierSum* totals) {
+  const auto unc = static_cast<std::size_t>(nc);
+  std::vector<double> acc(4 * unc);
+  for (std::int64_t start = 0; start < count; start += kSumBlock) {
+    const std::int64_t end = std::min(count, start + kSumBlock);
+    std::fill(acc.begin(), acc.end(), 0.0);
     for (std::int64_t j = start; j < end; ++j) {
+      double* a = acc.data() + static_cast<std::size_t>((j - start) & 3) * unc;
       for (Eigen::Index c = 0; c < nc; ++c) {
         const double d = value(j, c);
-        block[static_cast<std::size_t>(c)] += d * d;
+        a[c] += d * d;
       }
     }
-    for (Eigen::Index c = 0; c < nc; ++c) total[static_cast<std::size_t>(c)].add(block[static_cast<std::size_t>(c)]);
+    for (std::size_t c = 0; c < unc; ++c)
+      totals[c].add((acc[c] + acc[unc + c]) + (acc[2 * unc + c] + acc[3 * unc + c]));
   }
-  for (Eigen::Index c = 0; c < nc; ++c) out[c] = total[static_cast<std::size_t>(c)].value();
 }
 
-/// Specialised single-channel sum of squared second differences (the hot path).
-inline double overlapping_1ch(const double* x, std::int64_t count, std::int64_t m) {
-  constexpr std::int64_t kBlock = 1024;
-  NeumaierSum total;
-  for (std::int64_t start = 0; start < count; start += kBlock) {
-    const std::int64_t end = std::min(count, start + kBlock);
-    double a0 = 0.0, a1 = 0.0, a2 = 0.0, a3 = 0.0;
-    std::int64_t k = start;
-    for (; k + 4 <= end; k += 4) {
-      const double d0 = x[k + 2 * m] - 2.0 * x[k + m] + x[k];
-      const double d1 = x[k + 1 + 2 * m] - 2.0 * x[k + 1 + m] + x[k + 1];
-      const double d2 = x[k + 2 + 2 * m] - 2.0 * x[k + 2 + m] + x[k + 2];
-      const double d3 = x[k + 3 + 2 * m] - 2.0 * x[k + 3 + m] + x[k + 3];
-      a0 += d0 * d0;
-      a1 += d1 * d1;
-      a2 += d2 * d2;
-      a3 += d3 * d3;
-    }
-    for (; k < end; ++k) {
-      const double d = x[k + 2 * m] - 2.0 * x[k + m] + x[k];
-      a0 += d * d;
-    }
-    total.add((a0 + a1) + (a2 + a3));
+/// Second difference (x2 - 2 x1) + x0 and third difference ((x3 - 3 x2) + 3 x1) - x0: the
+/// one place where the arithmetic of the Allan and Hadamard terms is written down.
+inline double diff2(double x0, double x1, double x2) noexcept { return (x2 - 2.0 * x1) + x0; }
+inline double diff3(double x0, double x1, double x2, double x3) noexcept {
+  return ((x3 - 3.0 * x2) + 3.0 * x1) - x0;
+}
+
+/// Taps of a difference estimator: term j of channel c reads p[i][j * step + c] for tap i
+/// (i = 0..order). In memory p[i] = x + i m * row_stride; out of core each tap is a window.
+template <int Order>
+struct Taps {
+  const double* p[Order + 1];
+  std::int64_t step;  // elements between consecutive terms (row stride x term stride)
+};
+
+template <int Order>
+inline double tap_diff(const Taps<Order>& t, std::int64_t i) noexcept {
+  if constexpr (Order == 2) {
+    return diff2(t.p[0][i], t.p[1][i], t.p[2][i]);
+  } else {
+    return diff3(t.p[0][i], t.p[1][i], t.p[2][i], t.p[3][i]);
   }
-  return total.value();
+}
+
+/// Single-channel, unit-step hot path of add_squares (same arithmetic and order, unrolled).
+template <int Order>
+inline void add_diff_squares_1ch(const Taps<Order>& t, std::int64_t count, NeumaierSum& total) {
+  for (std::int64_t start = 0; start < count; start += kSumBlock) {
+    const std::int64_t end = std::min(count, start + kSumBlock);
+    double a[4] = {0.0, 0.0, 0.0, 0.0};
+    std::int64_t j = start;
+    for (; j + 4 <= end; j += 4) {
+      const double d0 = tap_diff(t, j);
+      const double d1 = tap_diff(t, j + 1);
+      const double d2 = tap_diff(t, j + 2);
+      const double d3 = tap_diff(t, j + 3);
+      a[0] += d0 * d0;
+      a[1] += d1 * d1;
+      a[2] += d2 * d2;
+      a[3] += d3 * d3;
+    }
+    for (; j < end; ++j) {
+      const double d = tap_diff(t, j);
+      a[(j - start) & 3] += d * d;
+    }
+    total.add((a[0] + a[1]) + (a[2] + a[3]));
+  }
+}
+
+/// Add the squared differences of `count` terms to totals[0..nc).
+template <int Order>
+inline void add_diff_squares(const Taps<Order>& t, std::int64_t count, Eigen::Index nc,
+                             NeumaierSum* totals) {
+  if (nc == 1 && t.step == 1) {
+    add_diff_squares_1ch(t, count, totals[0]);
+    return;
+  }
+  add_squares(count, nc, [&t](std::int64_t j, Eigen::Index c) { return tap_diff(t, j * t.step + c); },
+              totals);
 }
 
 }  // namespace detail
@@ -144,31 +187,28 @@ inline void variance_one(const PhaseRef& phase, VarianceKind kind, std::int64_t 
     case VarianceKind::Overlapping:
     case VarianceKind::Standard: {
       const std::int64_t stride = kind == VarianceKind::Overlapping ? 1 : m;
-      if (nc == 1 && stride == 1 && row_stride == 1) {
-        out[0] = detail::overlapping_1ch(x, n, m);
-      } else {
-        detail::square_sums(n, nc, [&](std::int64_t j, Eigen::Index c) {
-          const std::int64_t k = j * stride;
-          return at(k + 2 * m, c) - 2.0 * at(k + m, c) + at(k, c);
-        }, out);
-      }
-      for (Eigen::Index c = 0; c < nc; ++c) out[c] /= 2.0 * md * md * nd;
+      const detail::Taps<2> taps{{x, x + m * row_stride, x + 2 * m * row_stride}, stride * row_stride};
+      std::vector<NeumaierSum> totals(static_cast<std::size_t>(nc));
+      detail::add_diff_squares(taps, n, nc, totals.data());
+      for (Eigen::Index c = 0; c < nc; ++c)
+        out[c] = totals[static_cast<std::size_t>(c)].value() / (2.0 * md * md * nd);
       return;
     }
     case VarianceKind::Hadamard:
     case VarianceKind::StandardHadamard: {
       const std::int64_t stride = kind == VarianceKind::Hadamard ? 1 : m;
-      detail::square_sums(n, nc, [&](std::int64_t j, Eigen::Index c) {
-        const std::int64_t k = j * stride;
-        return at(k + 3 * m, c) - 3.0 * at(k + 2 * m, c) + 3.0 * at(k + m, c) - at(k, c);
-      }, out);
-      for (Eigen::Index c = 0; c < nc; ++c) out[c] /= 6.0 * md * md * nd;
+      const detail::Taps<3> taps{
+          {x, x + m * row_stride, x + 2 * m * row_stride, x + 3 * m * row_stride}, stride * row_stride};
+      std::vector<NeumaierSum> totals(static_cast<std::size_t>(nc));
+      detail::add_diff_squares(taps, n, nc, totals.data());
+      for (Eigen::Index c = 0; c < nc; ++c)
+        out[c] = totals[static_cast<std::size_t>(c)].value() / (6.0 * md * md * nd);
       return;
     }
     case VarianceKind::Modified: {
       // sliding window of m second differences, kept compensated so that it does not drift
       const auto d2 = [&](std::int64_t i, Eigen::Index c) {
-        return at(i + 2 * m, c) - 2.0 * at(i + m, c) + at(i, c);
+        return detail::diff2(at(i, c), at(i + m, c), at(i + 2 * m, c));
       };
       for (Eigen::Index c = 0; c < nc; ++c) {
         NeumaierSum window;
@@ -193,11 +233,13 @@ inline void variance_one(const PhaseRef& phase, VarianceKind kind, std::int64_t 
         if (j > last) return 2.0 * at(last, c) - at(2 * last - j, c);
         return at(j, c);
       };
-      detail::square_sums(n, nc, [&](std::int64_t j, Eigen::Index c) {
+      std::vector<NeumaierSum> totals(static_cast<std::size_t>(nc));
+      detail::add_squares(n, nc, [&](std::int64_t j, Eigen::Index c) {
         const std::int64_t i = j + 1;
-        return ext(i - m, c) - 2.0 * at(i, c) + ext(i + m, c);
-      }, out);
-      for (Eigen::Index c = 0; c < nc; ++c) out[c] /= 2.0 * md * md * nd;
+        return detail::diff2(ext(i - m, c), at(i, c), ext(i + m, c));
+      }, totals.data());
+      for (Eigen::Index c = 0; c < nc; ++c)
+        out[c] = totals[static_cast<std::size_t>(c)].value() / (2.0 * md * md * nd);
       return;
     }
   }
