@@ -74,6 +74,9 @@ class MainWindow(QtWidgets.QMainWindow):
         self.time_edit = QtWidgets.QLineEdit()
         self.time_edit.setPlaceholderText("none (index or name)")
         rec.addRow("Time column", self.time_edit)
+        self.key_edit = QtWidgets.QLineEdit()
+        self.key_edit.setPlaceholderText("only for .npz / HDF5 with several")
+        rec.addRow("Array (key)", self.key_edit)
         self.points_spin = QtWidgets.QSpinBox()
         self.points_spin.setRange(2, 100000)
         self.points_spin.setValue(100)
@@ -228,6 +231,7 @@ class MainWindow(QtWidgets.QMainWindow):
         except ValueError as exc:
             raise ValueError(f"scale {text!r} is not a number") from exc
         o.time_column = self.time_edit.text().strip() or None
+        o.key = self.key_edit.text().strip() or None
 
     def _fill_channels(self, names: tuple[str, ...]) -> None:
         self.channel_list.blockSignals(True)

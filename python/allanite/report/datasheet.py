@@ -52,10 +52,10 @@ class Limit:
     def bounds_text(self) -> str:
         """``≤ 0.3 deg/sqrt(h)``, ``≥ 1 s`` or ``0.1 … 0.3 unit``."""
         if self.min is not None and self.max is not None:
-            return f"{self.min:g} … {self.max:g} {self.unit}"
+            return f"{self.min:.4g} … {self.max:.4g} {self.unit}"
         if self.max is not None:
-            return f"≤ {self.max:g} {self.unit}"
-        return f"≥ {self.min:g} {self.unit}"
+            return f"≤ {self.max:.4g} {self.unit}"
+        return f"≥ {self.min:.4g} {self.unit}"
 
 
 @dataclass(frozen=True)
