@@ -29,12 +29,18 @@ def atomic_output(path: str | os.PathLike[str], suffix: str | None = None) -> It
     final = Path(path)
     directory = final.parent if str(final.parent) else Path(".")
     if not directory.is_dir():
-        raise OSError(f"cannot write {final}: directory {directory} does not exist; create it first")
+        raise OSError(
+            f"cannot write {final}: directory {directory} does not exist; create it first"
+        )
     fd, tmp_name = tempfile.mkstemp(
-        prefix=f".{final.name}.", suffix=suffix if suffix is not None else final.suffix, dir=directory
+        prefix=f".{final.name}.",
+        suffix=suffix if suffix is not None else final.suffix,
+        dir=directory,
     )
     os.close(fd)
     tmp = Path(tmp_name)
+    # mkstemp creates 0600; give the output the mode an ordinary file (or the one it replaces) has
+    os.chmod(tmp, final.stat().st_mode & 0o777 if final.exists() else 0o644)
     try:
         yield tmp
         os.replace(tmp, final)
