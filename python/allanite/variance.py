@@ -232,13 +232,13 @@ def prepare_record(x: ArrayLike, *, name: str = "x") -> tuple[NDArray[Any], bool
         raise ValueError(
             f"{name} must be 1-D (samples) or 2-D (samples, channels), got shape {arr.shape}"
         )
+    if arr.shape[0] < 3:
+        raise ValueError(f"{name} is too short: {arr.shape[0]} samples; need at least 3")
     if arr.shape[0] < arr.shape[1]:
         raise ValueError(
             f"{name} has shape {arr.shape}: fewer samples than channels. Records are (samples, "
             "channels); pass x.T if your channels are rows"
         )
-    if arr.shape[0] < 3:
-        raise ValueError(f"{name} is too short: {arr.shape[0]} samples; need at least 3")
     return arr, False
 
 
