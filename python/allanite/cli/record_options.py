@@ -146,15 +146,13 @@ def example_record(args: argparse.Namespace | None = None) -> Record:
         raise ValueError(
             "the example record is not available in this installation; give a FILE"
         ) from exc
-    example = make_example()
-    if isinstance(example, Record):
-        return example
-    samples = getattr(example, "samples", example)
+    samples, fs = make_example()
     return Record(
         samples=samples,
-        fs=float(getattr(example, "fs", 100.0)),
-        input=str(getattr(example, "input", "angle")),
-        units=getattr(example, "units", "deg"),
+        fs=float(fs),
+        input="angle",
+        units="deg",
+        channels=("example",) if samples.ndim == 1 else (),
         source="example record (simulated, 30 min at 100 Hz)",
     )
 
