@@ -38,6 +38,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.signal import lfilter
 
+from allanite.impact._checks import positive as _positive
 from allanite.impact.earth import STANDARD_GRAVITY
 from allanite.terms.markov import PEAK_TAU, GaussMarkov
 
@@ -46,14 +47,6 @@ __all__ = [
     "complementary_filter_sigma",
     "optimal_complementary_filter",
 ]
-
-
-def _positive(name: str, value: object) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise TypeError(f"{name} must be a number, got {type(value).__name__}")
-    if not (math.isfinite(value) and value > 0):
-        raise ValueError(f"{name} must be positive and finite, got {value}")
-    return float(value)
 
 
 def complementary_filter_sigma(

@@ -9,22 +9,15 @@ also accepts a :class:`allanite.model.NoiseModel` (see :mod:`allanite.impact.mod
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from typing import Any, Literal
+
+from allanite.impact._checks import nonnegative as _check_nonneg
 
 __all__ = ["Component", "MarkovNoise", "SensorNoise", "as_sensor_noise"]
 
 ComponentKind = Literal["constant", "white", "random_walk", "markov"]
 COMPONENT_KINDS: tuple[str, ...] = ("constant", "white", "random_walk", "markov")
-
-
-def _check_nonneg(name: str, value: Any) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise TypeError(f"{name} must be a number, got {type(value).__name__}")
-    if not math.isfinite(value) or value < 0:
-        raise ValueError(f"{name} must be finite and >= 0, got {value}")
-    return float(value)
 
 
 @dataclass(frozen=True)

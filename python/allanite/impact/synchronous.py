@@ -36,6 +36,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from allanite.impact._checks import positive as _check_positive
+
 __all__ = ["HarmonicAmplitude", "SynchronousError", "synchronous_error"]
 
 _MIN_PERIODS = 4
@@ -150,14 +152,6 @@ class SynchronousError:
         """Amplitude of each odd harmonic relative to ``a1``."""
         a1 = self.fundamental.amplitude
         return {h.order: (h.amplitude / a1 if a1 > 0 else math.inf) for h in self.harmonics}
-
-
-def _check_positive(name: str, value: object) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise TypeError(f"{name} must be a number, got {type(value).__name__}")
-    if not (math.isfinite(value) and value > 0):
-        raise ValueError(f"{name} must be positive and finite, got {value}")
-    return float(value)
 
 
 def _noise_psd(
