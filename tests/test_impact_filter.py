@@ -17,6 +17,8 @@ from allanite.impact import (
     complementary_filter_sigma,
     optimal_complementary_filter,
 )
+from allanite.model import NoiseModel
+from allanite.terms import White
 
 G = 9.80665
 ARW = 2e-3  # rad/sqrt(s)
@@ -31,9 +33,11 @@ Z = 4.0  # acceptance in Monte Carlo standard errors
 @pytest.fixture(scope="module")
 def simulated():
     filt = optimal_complementary_filter(ARW, VRW, dt=DT, g=G)
-    rng = np.random.default_rng(20261121)
-    rate = rng.standard_normal((N, K)) * ARW / math.sqrt(DT)  # static stand: true rate 0
-    accel = rng.standard_normal((N, K)) * VRW / math.sqrt(DT)  # true tilt 0
+    # static stand (true rate and tilt 0): white gyro and accelerometer noise from the
+    # simulation package (the accelerometer model's "rad/s" stands for m/s^2: only numbers)
+    si = {"rate": "rad/s", "time": "s"}
+    rate = NoiseModel((White(N=ARW),), si).simulate(N, FS, channels=K, seed=20261121)
+    accel = NoiseModel((White(N=VRW),), si).simulate(N, FS, channels=K, seed=20261122)
     return filt, filt.apply(rate, accel)
 
 
