@@ -120,3 +120,20 @@ def test_given_fs_wins_with_warning() -> None:
     assert any("differs" in w for w in base.warnings)
     with pytest.raises(ValueError, match="unknown gap policy 'skip'"):
         resolve_time(t, np.ones((100, 1)), source="x", policy="skip")
+
+
+def test_iso_datetime_time_column(tmp_path: Path) -> None:
+    start = np.datetime64("2024-05-01T23:59:59")
+    stamps = start + np.arange(400) * np.timedelta64(20, "ms")  # crosses midnight, 50 Hz
+    x = RNG.normal(size=400)
+    lines = [f"{str(s).replace('T', ' ')},{v:.17g}" for s, v in zip(stamps, x, strict=True)]
+    path = tmp_path / "iso.csv"
+    path.write_text("time,gx\n" + "\n".join(lines) + "\n")
+    record = read_record(path, time_column="time")
+    assert record.fs == pytest.approx(50.0, rel=1e-9)
+    assert record.channels == ("gx",)
+    np.testing.assert_array_equal(record.samples[:, 0], x)
+    lines[6] = "2024-05-01 25:00:00,1.0"
+    path.write_text("time,gx\n" + "\n".join(lines) + "\n")
+    with pytest.raises(InputError, match=r"iso.csv, line 8: field 1 .* not an ISO date-time"):
+        read_record(path, time_column="time")

@@ -13,7 +13,7 @@ import re
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import IO
+from typing import IO, Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -34,13 +34,15 @@ class TextTable:
     """Numbers of a text file: ``data`` is ``(rows, columns)`` float64.
 
     ``names`` holds the header fields (None without a header); ``line_of(row)`` gives the
-    1-based file line of a data row, for messages.
+    1-based file line of a data row, for messages. Columns of ISO 8601 date-times are read as
+    seconds since their first value (``datetime_columns``), so they can be time columns.
     """
 
     data: NDArray[np.float64]
     names: tuple[str, ...] | None
     delimiter: str | None
     line_of: Callable[[int], int]
+    datetime_columns: frozenset[int] = frozenset()
 
 
 def _open(path: Path) -> IO[str]:
@@ -81,7 +83,7 @@ def _sniff(lines: list[str]) -> str | None:
     """
     for cand in _CANDIDATES:
         first = _split(lines[0], cand)
-        if len(first) > 1 and all(_is_number(f) for f in first):
+        if len(first) > 1 and all(_is_number(f) or _as_datetime(f) is not None for f in first):
             return cand
     return None
 
@@ -95,7 +97,34 @@ def _looks_like(field: str) -> str | None:
     return None
 
 
-def _diagnose(path: Path, delimiter: str | None, n_cols: int, first_data: int) -> InputError:
+def _as_datetime(field: str) -> np.datetime64 | None:
+    """Parse an ISO 8601 date-time (``2024-05-01T12:00:00.010`` or with a space), else None."""
+    text = field.strip().strip("\"'")
+    if not re.fullmatch(r"\d{4}-\d{2}-\d{2}[T ]\d{2}:\d{2}(:\d{2}(\.\d*)?)?Z?", text):
+        return None
+    try:
+        return np.datetime64(text.replace(" ", "T").rstrip("Z"), "ns")
+    except ValueError:
+        return None
+
+
+def _seconds_since(origin: np.datetime64) -> Callable[[str], float]:
+    def convert(field: str) -> float:
+        stamp = _as_datetime(field)
+        if stamp is None:
+            raise ValueError(f"not an ISO date-time: {field!r}")
+        return float((stamp - origin) / np.timedelta64(1, "ns")) * 1e-9
+
+    return convert
+
+
+def _diagnose(
+    path: Path,
+    delimiter: str | None,
+    n_cols: int,
+    first_data: int,
+    datetime_columns: frozenset[int] = frozenset(),
+) -> InputError:
     """Scan the file for the first line that numpy could not read and explain it."""
     shown = _NAMES.get(delimiter, repr(delimiter))
     with _open(path) as handle:
@@ -104,6 +133,15 @@ def _diagnose(path: Path, delimiter: str | None, n_cols: int, first_data: int) -
                 continue
             fields = _split(line, delimiter)
             for k, field in enumerate(fields, start=1):
+                if k - 1 in datetime_columns:
+                    if _as_datetime(field) is None:
+                        return InputError(
+                            f"field {k} is {field!r}, not an ISO date-time like the rows above; "
+                            "correct or remove the row",
+                            path=str(path),
+                            line=number,
+                        )
+                    continue
                 if _is_number(field):
                     continue
                 other = _looks_like(field)
@@ -198,7 +236,13 @@ def read_text_table(
         header_line = head[0][1]
         names = tuple(f.strip().strip("\"'") for f in _split(header_line, delimiter))
     first_data = body[0][0]
-    n_cols = len(_split(body[0][1], delimiter))
+    first_row = _split(body[0][1], delimiter)
+    n_cols = len(first_row)
+    converters: dict[int | str, Callable[[str], Any]] = {}
+    for k, field in enumerate(first_row):
+        stamp = None if _is_number(field) else _as_datetime(field)
+        if stamp is not None:
+            converters[k] = _seconds_since(stamp)
     try:
         with _open(path) as handle:
             data = np.loadtxt(
@@ -208,9 +252,12 @@ def read_text_table(
                 comments=COMMENT_CHARS,
                 skiprows=first_data - 1,
                 ndmin=2,
+                converters=converters or None,
             )
     except ValueError as exc:
-        raise _diagnose(path, delimiter, n_cols, first_data) from exc
+        raise _diagnose(
+            path, delimiter, n_cols, first_data, frozenset(int(k) for k in converters)
+        ) from exc
     if data.shape[0] == 0:
         raise InputError("no data rows; check that the right file was given", path=source)
     if names is not None and len(names) != data.shape[1]:
@@ -227,4 +274,10 @@ def read_text_table(
             cache["lines"] = _row_lines(path, first_data)
         return int(cache["lines"][row])
 
-    return TextTable(data=data, names=names, delimiter=delimiter, line_of=line_of)
+    return TextTable(
+        data=data,
+        names=names,
+        delimiter=delimiter,
+        line_of=line_of,
+        datetime_columns=frozenset(int(k) for k in converters),
+    )
