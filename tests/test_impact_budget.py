@@ -179,6 +179,21 @@ def test_noise_model_adapter_converts_to_si_and_maps_terms():
     np.testing.assert_allclose(tele.exact, gm.exact, rtol=1e-12)
 
 
+def test_accelerometer_noise_model_with_a_scale():
+    # an accelerometer model in units of g: VRW 0.01 g/sqrt(s), bias 1 mg
+    g0 = 9.80665
+    accel = NoiseModel((White(N=0.01), TurnOnBias(sigma=1e-3)))
+    budget = error_budget(SensorNoise(white=1e-6), accel, accel_scale=g0, t=[1.0], times=[1.0])
+    rows = {c.label: c.value for c in budget.components if c.sensor == "accel"}
+    assert rows["white"] == pytest.approx(0.01 * g0)
+    assert rows["constant"] == pytest.approx(1e-3 * g0)
+
+
+def test_only_ignored_terms_is_an_error_naming_them():
+    with pytest.raises(ValueError, match="quantization"):
+        error_budget(NoiseModel((Quantization(Q=1e-4),)))
+
+
 def test_flicker_becomes_one_budget_row():
     # flicker B: the ADEV plateau 0.664 B; the heading error of a bias of about B grows like
     # B t over times where the bank's correlation times exceed t

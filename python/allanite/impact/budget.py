@@ -316,7 +316,11 @@ def error_budget(
             tau_c = first.tau_c if len(members) == 1 else None
             comps.append(BudgetComponent(sensor, first.kind, label, value, tau_c))
     if not comps:
-        raise ValueError("the noise models have no non-zero component; nothing to budget")
+        why = f" (terms without an error law: {', '.join(ignored)})" if ignored else ""
+        raise ValueError(
+            "the noise models have no white, random-walk, Gauss-Markov or random-constant "
+            f"component{why}; nothing to budget"
+        )
     return ErrorBudget(
         t=grid,
         components=tuple(comps),
