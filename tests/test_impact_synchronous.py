@@ -129,3 +129,16 @@ def test_bad_input():
         synchronous_error(x, FS, amplitude=1.0, frequency=F0, harmonics=(1,))
     with pytest.raises(TypeError, match="fs"):
         synchronous_error(x, "200", amplitude=1.0, frequency=F0)
+
+
+def test_chunked_fit_equals_one_block(monkeypatch):
+    import allanite.impact.synchronous as sync
+
+    rng = np.random.default_rng(7)
+    x = _record(rng, 20_071, {1: (0.3, 0.4), 5: (0.02, 0.0)}, drift=0.05)
+    whole = synchronous_error(x, FS, amplitude=A_STAND, frequency=F0)
+    monkeypatch.setattr(sync, "_CHUNK", 997)
+    chunked = synchronous_error(x, FS, amplitude=A_STAND, frequency=F0)
+    assert chunked.a1 == pytest.approx(whole.a1, rel=1e-10)
+    assert chunked.harmonics[1].amplitude == pytest.approx(whole.harmonics[1].amplitude, rel=1e-9)
+    assert chunked.peak_reading == pytest.approx(whole.peak_reading, rel=1e-12)

@@ -42,6 +42,23 @@ __all__ = ["HarmonicAmplitude", "SynchronousError", "synchronous_error"]
 
 _MIN_PERIODS = 4
 _EXCLUDE_BINS = 3
+_CHUNK = 1 << 18
+
+
+def _design(
+    start: int, stop: int, n: int, fs: float, freqs: Sequence[float]
+) -> NDArray[np.float64]:
+    """Columns ``1, t', cos, sin, ...`` of the harmonic fit for samples ``start:stop``.
+
+    ``t'`` is the time centred on the record and scaled to [-1, 1].
+    """
+    idx = np.arange(start, stop, dtype=np.float64)
+    t = idx / fs
+    cols = [np.ones(stop - start), (idx - (n - 1) / 2.0) / (n / 2.0)]
+    for f in freqs:
+        phase = 2.0 * np.pi * f * t
+        cols += [np.cos(phase), np.sin(phase)]
+    return np.column_stack(cols)
 
 
 @dataclass(frozen=True)
@@ -242,17 +259,24 @@ def synchronous_error(
             f"{_MIN_PERIODS} (better 20 or more)"
         )
 
-    t = np.arange(n) / fs
-    tc = (t - t.mean()) / (duration / 2.0)
-    columns = [np.ones(n), tc]
-    for k in orders:
-        phase = 2.0 * np.pi * k * f0 * t
-        columns += [np.cos(phase), np.sin(phase)]
-    design = np.column_stack(columns)
-    # normal equations: the columns are nearly orthogonal (>= 4 periods), so the Gram matrix
-    # is well conditioned, and this avoids an SVD of an N x P matrix
-    coef = np.linalg.solve(design.T @ design, design.T @ x)
-    residual = x - design @ coef
+    freqs = [k * f0 for k in orders]
+    # normal equations accumulated in chunks (bounded memory for long records): the columns
+    # are nearly orthogonal (>= 4 periods), so the Gram matrix is well conditioned
+    n_col = 2 + 2 * len(orders)
+    gram = np.zeros((n_col, n_col))
+    rhs = np.zeros(n_col)
+    for start in range(0, n, _CHUNK):
+        block = _design(start, min(n, start + _CHUNK), n, fs, freqs)
+        gram += block.T @ block
+        rhs += block.T @ x[start : start + _CHUNK]
+    coef = np.linalg.solve(gram, rhs)
+    residual = np.empty(n)
+    detrended = np.empty(n)
+    for start in range(0, n, _CHUNK):
+        stop = min(n, start + _CHUNK)
+        block = _design(start, stop, n, fs, freqs)
+        residual[start:stop] = x[start:stop] - block @ coef
+        detrended[start:stop] = x[start:stop] - block[:, :2] @ coef[:2]
     psd = _noise_psd(residual, fs, [k * f0 for k in orders], band=f0 / 2.0)
 
     fitted = []
@@ -273,7 +297,6 @@ def synchronous_error(
                 detected=p < significance,
             )
         )
-    detrended = x - design[:, :2] @ coef[:2]
     peak = float((detrended.max() - detrended.min()) / 2.0)
     return SynchronousError(
         stand_amplitude=a_stand,
