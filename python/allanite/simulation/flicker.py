@@ -44,6 +44,8 @@ __all__ = [
 SPECTRAL_MAX_SAMPLES = 1 << 22
 #: Gauss-Markov components per decade of correlation time in the streaming bank
 PER_DECADE = 3
+#: components up to this correlation time (in samples) are fitted, slower ones analytic
+FITTED_TC = 300.0
 #: record length assumed by the streaming bank when the caller does not say
 DEFAULT_BANK_SAMPLES = 10**9
 
@@ -56,20 +58,43 @@ def _unit_psd(u: NDArray[np.float64], cutoff: float) -> NDArray[np.float64]:
 def _ar1_psd(u: NDArray[np.float64], tc: float) -> NDArray[np.float64]:
     """One-sided PSD of a unit-variance point-sampled AR(1) with Tc in samples (dt = 1)."""
     phi = math.exp(-1.0 / tc)
-    return 2.0 * (1.0 - phi**2) / (1.0 - 2.0 * phi * np.cos(2.0 * np.pi * u) + phi**2)
+    one_minus = -math.expm1(-1.0 / tc)
+    # |1 - phi e^{-2 pi i u}|^2 written without cancellation for phi -> 1 and u -> 0
+    denominator = one_minus**2 + 4.0 * phi * np.sin(np.pi * u) ** 2
+    return 2.0 * one_minus * (1.0 + phi) / denominator
 
 
 @functools.lru_cache(maxsize=32)
 def _unit_bank(decades: int, cutoff: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Correlation times (in samples) and variances (per B^2) of the bank; last = white."""
+    r"""Return the correlation times (samples) and variances (per B^2); last = white.
+
+    Components slower than :data:`FITTED_TC` samples get the analytic weight of a
+    log-spaced relaxation sum, :math:`s^2 = B^2\ln(r)/\pi` (ratio ``r`` of neighbouring
+    correlation times), which makes :math:`\sum 4 s^2 T_c/(1 + (2\pi f T_c)^2) = B^2/(\pi f)`
+    between them; the fast ones and a white part are fitted (non-negative least squares,
+    relative error) to the rest of the sampled PSD over the top four decades of frequency.
+    """
     ratio = 10.0 ** (1.0 / PER_DECADE)
     tcs = 0.25 * ratio ** np.arange(decades * PER_DECADE + 1)
-    u = np.logspace(math.log10(1.0 / (2.0 * np.pi * tcs[-1])), math.log10(0.5), 2000)
+    slow = tcs > FITTED_TC
+    weights = np.zeros(tcs.size + 1)
+    weights[:-1][slow] = math.log(ratio) / math.pi
+    u = np.logspace(-4.0, math.log10(0.5), 1500)
     target = _unit_psd(u, cutoff)
     keep = target > 0
     u, target = u[keep], target[keep]
-    columns = [_ar1_psd(u, tc) for tc in tcs] + [np.full_like(u, 2.0)]
-    weights, _ = nnls(np.array(columns).T / target[:, None], np.ones_like(u), maxiter=10000)
+    analytic = sum(
+        (w * _ar1_psd(u, tc) for tc, w in zip(tcs, weights[:-1], strict=False) if w),
+        np.zeros_like(u),
+    )
+    columns = [_ar1_psd(u, tc) for tc in tcs[~slow]] + [np.full_like(u, 2.0)]
+    fitted, _ = nnls(
+        np.array(columns).T / target[:, None],
+        np.clip(1.0 - analytic / target, 0.0, None),
+        maxiter=100 * len(columns),
+    )
+    weights[:-1][~slow] = fitted[:-1]
+    weights[-1] = fitted[-1]
     return tcs, weights
 
 
@@ -102,13 +127,25 @@ def bank_avar(
     cutoff_hz: float | None = None,
     n_samples: int | None = None,
 ) -> NDArray[np.float64]:
-    """Exact Allan variance of the streaming bank (sum of its AR(1) and white parts)."""
-    from allanite.terms import GaussMarkov, White
+    r"""Return the exact Allan variance of the streaming bank (its AR(1) and white parts).
 
+    Components with :math:`\theta = \Delta t/T_c \ge 10^{-4}` use the sampled AR(1) form of
+    :class:`~allanite.terms.GaussMarkov`; slower ones, where that form cancels
+    catastrophically, the continuous form plus the sampled random walk's
+    :math:`s^2\theta/(3m)` (relative error :math:`O(\theta)`).
+    """
+    from allanite.terms import GaussMarkov, White
+    from allanite.terms.transients import markov_avar_continuous
+
+    t = np.asarray(tau, dtype=np.float64)
     tcs, sigma, white_n = flicker_bank(B, dt, cutoff_hz=cutoff_hz, n_samples=n_samples)
-    total = White(N=white_n).avar(tau, dt)
+    total = White(N=white_n).avar(t, dt)
     for tc, s in zip(tcs, sigma, strict=True):
-        total = total + GaussMarkov(sigma=float(s), tau_c=float(tc)).avar(tau, dt)
+        if dt / tc >= 1e-4:
+            total = total + GaussMarkov(sigma=float(s), tau_c=float(tc)).avar(t, dt)
+        else:
+            theta = dt / tc
+            total = total + markov_avar_continuous(s**2, tc, t) + s**2 * theta * dt / (3.0 * t)
     return np.asarray(total)
 
 

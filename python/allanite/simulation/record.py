@@ -117,7 +117,7 @@ def _check_band(term: Term, fs: float, allow_aliasing: bool) -> None:
             raise ValueError(
                 f"{type(term).__name__}.{name} = {value} Hz is above the Nyquist frequency "
                 f"{nyquist} Hz of fs = {fs} Hz; raise fs, lower {name}, or pass "
-                "allow_aliasing=True to simulate the aliased samples"
+                "allow_aliasing=True (CLI: --allow-aliasing) to simulate the aliased samples"
             )
 
 

@@ -1,0 +1,87 @@
+"""Write a simulated record to .npy, .csv or raw binary chunk by chunk (bounded memory).
+
+The file is written through :func:`allanite.io.atomic.atomic_output`: a failed or interrupted
+run never leaves a partial file. ``.npy`` gets its header first (the shape is known in
+advance) and then the raw little-endian float64 rows; ``.csv`` one row per sample with
+``%.17g``; ``.bin``/``.raw``/``.f64`` bare little-endian float64 rows (samples x channels).
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Iterable
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from allanite.io.atomic import atomic_output
+
+__all__ = ["FORMATS", "format_of", "write_chunks"]
+
+#: file suffix -> format name
+FORMATS = {".npy": "npy", ".csv": "csv", ".bin": "raw", ".raw": "raw", ".f64": "raw"}
+
+
+def format_of(path: str | os.PathLike[str]) -> str:
+    """Return the output format (npy, csv, raw) chosen by the file suffix."""
+    suffix = Path(path).suffix.lower()
+    if suffix not in FORMATS:
+        raise ValueError(
+            f"cannot tell the output format of {os.fspath(path)!r}; use a .npy, .csv or "
+            ".bin/.raw/.f64 (raw float64) file name"
+        )
+    return FORMATS[suffix]
+
+
+def write_chunks(
+    path: str | os.PathLike[str],
+    chunks: Iterable[NDArray[np.float64]],
+    n_samples: int,
+    n_channels: int,
+    *,
+    header: str | None = None,
+    progress: Callable[[int], None] | None = None,
+) -> Path:
+    """Write ``chunks`` (arrays of shape ``(k, n_channels)``) as one record of ``n_samples``.
+
+    Parameters
+    ----------
+    path : path-like
+        Output file; the suffix picks the format (see :data:`FORMATS`).
+    chunks : iterable of numpy.ndarray
+        The record in pieces, in order.
+    n_samples, n_channels : int
+        Final shape (written into the .npy header before the data).
+    header : str, optional
+        Column header line for CSV.
+    progress : callable, optional
+        Called with the number of samples of each chunk after it is written.
+
+    Returns
+    -------
+    pathlib.Path
+        The written file.
+    """
+    kind = format_of(path)
+    shape = (n_samples,) if n_channels == 1 else (n_samples, n_channels)
+    written = 0
+    with atomic_output(path) as tmp, open(tmp, "wb") as handle:
+        if kind == "npy":
+            np.lib.format.write_array_header_1_0(
+                handle, {"descr": "<f8", "fortran_order": False, "shape": shape}
+            )
+        elif kind == "csv" and header:
+            handle.write((header + "\n").encode())
+        for chunk in chunks:
+            block = np.ascontiguousarray(chunk, dtype="<f8")
+            if kind == "csv":
+                np.savetxt(handle, block, delimiter=",", fmt="%.17g")
+            else:
+                handle.write(block.tobytes())
+            written += block.shape[0]
+            if progress is not None:
+                progress(block.shape[0])
+        if written != n_samples:
+            raise ValueError(f"expected {n_samples} samples, got {written}")
+    return Path(path)
