@@ -161,6 +161,8 @@ class MainWindow(QtWidgets.QMainWindow):
         self.status_label = QtWidgets.QLabel()
         self.statusBar().addWidget(self.status_label, 1)
         menu = self.menuBar().addMenu("&File")
+        example = menu.addAction("Open the &example record")
+        example.triggered.connect(self._open_example)
         for text, slot, key in (
             ("&Open…", self._ask_open, QtGui.QKeySequence.StandardKey.Open),
             ("&Export report…", self._ask_export, QtGui.QKeySequence.StandardKey.Save),
@@ -479,6 +481,11 @@ class MainWindow(QtWidgets.QMainWindow):
         path, _ = QtWidgets.QFileDialog.getOpenFileName(self, "Open record", "", _FILE_FILTER)
         if path:
             self._guard(lambda: self.open_file(path))()
+
+    def _open_example(self) -> None:
+        from allanite.cli.record_options import example_record
+
+        self._guard(lambda: self.use_record(example_record()))()
 
     def _ask_model(self) -> None:
         path, _ = QtWidgets.QFileDialog.getOpenFileName(

@@ -5,7 +5,8 @@ dominant noise term (IEEE Std 952-1997, Annex C): -1 quantization (or white angl
 -1/2 angle random walk, 0 bias instability, +1/2 rate random walk, +1 rate ramp. Here the
 slope is the least-squares slope over a sliding half-decade window (so that the scatter of the
 long-tau points does not flip the classification point by point), each point is assigned the
-nearest canonical slope, and runs of equal slopes become rows of the table.
+nearest canonical slope, runs of equal slopes become rows of the table, and each row is named
+after the canonical slope nearest to its own least-squares slope.
 """
 
 from __future__ import annotations
@@ -103,12 +104,13 @@ def slope_table(
     for k in range(1, nearest.size + 1):
         if k == nearest.size or nearest[k] != nearest[start]:
             sel = slice(start, k)
-            c = float(nearest[start])
-            label, term, symbol = SLOPE_TERMS[c]
             if k - start >= 2:
                 fit = float(np.polyfit(np.log10(tau[sel]), np.log10(dev[sel]), 1)[0])
             else:
                 fit = float(slopes[start])
+            # the row is named after its own least-squares slope, so label and value agree
+            c = float(canon[np.argmin(np.abs(canon - fit))])
+            label, term, symbol = SLOPE_TERMS[c]
             rows.append(
                 SlopeRow(
                     tau_min=float(tau[start]),
