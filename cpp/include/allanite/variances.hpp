@@ -130,9 +130,18 @@ inline double tap_diff(const Taps<Order>& t, std::int64_t i) noexcept {
   }
 }
 
+// The hot loops are compiled twice, for AVX2 and for the baseline ISA, and picked at load time
+// (GCC function multi-versioning). Each lane performs the same IEEE operations in the same
+// order either way (no FMA contraction: -ffp-contract=off), so the clones agree bit for bit.
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__)
+#define ALLANITE_TARGET_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define ALLANITE_TARGET_CLONES
+#endif
+
 /// Single-channel, unit-step hot path of add_squares (same arithmetic and order, unrolled).
 template <int Order>
-inline void add_diff_squares_1ch(const Taps<Order>& t, std::int64_t count, NeumaierSum& total) {
+inline void add_diff_squares_1ch_impl(const Taps<Order>& t, std::int64_t count, NeumaierSum& total) {
   for (std::int64_t start = 0; start < count; start += kSumBlock) {
     const std::int64_t end = std::min(count, start + kSumBlock);
     double a[4] = {0.0, 0.0, 0.0, 0.0};
@@ -153,6 +162,15 @@ inline void add_diff_squares_1ch(const Taps<Order>& t, std::int64_t count, Neuma
     }
     total.add((a[0] + a[1]) + (a[2] + a[3]));
   }
+}
+
+ALLANITE_TARGET_CLONES static void add_diff_squares_1ch(const Taps<2>& t, std::int64_t count,
+                                                        NeumaierSum& total) {
+  add_diff_squares_1ch_impl(t, count, total);
+}
+ALLANITE_TARGET_CLONES static void add_diff_squares_1ch(const Taps<3>& t, std::int64_t count,
+                                                        NeumaierSum& total) {
+  add_diff_squares_1ch_impl(t, count, total);
 }
 
 /// Add the squared differences of `count` terms to totals[0..nc).
