@@ -243,9 +243,22 @@ def fit_candidate(
     delta = t_before - t_after
     lr_p = float(stats.chi2.sf(max(delta, 0.0), k))
     explained = sorted(e for e in cand.explains if significant.get(e, False))
+    # slow stationary noise explains level wander too: re-test jump/level with the candidate
+    level_p: dict[str, float] = {}
+    if time_view is not None and any(significant.get(e, False) for e in ("jump", "level")):
+        window = np.array([time_view.window_s])
+        with np.errstate(all="ignore"):
+            a_w = np.asarray(cand.extra_avar(_values(cand, logp), window, tm.dt), dtype=float)
+        if a_w.size and np.isfinite(a_w[0]) and a_w[0] > 0:
+            level_p = time_view.level_p_values(float(a_w[0]))
+            n_ev = max(len(evidence_p), 1)
+            for e, p in level_p.items():
+                if significant.get(e, False) and p >= alpha / n_ev and e not in explained:
+                    explained.append(e)
+            explained.sort()
     if lr_p >= alpha and not explained:
         return None
-    unexplained = sorted(e for e, s in significant.items() if s and e not in cand.explains)
+    unexplained = sorted(e for e, s in significant.items() if s and e not in explained)
     penalty = sum(min(-2.0 * np.log(max(evidence_p[e], 1e-300)), EVIDENCE_CAP) for e in unexplained)
     penalty += k * float(stats.chi2.isf(alpha, 1))
     shape = level_misfit(cand.effect, time_view, duration) if time_view is not None else 0.0
@@ -281,6 +294,7 @@ def fit_candidate(
             "explained": explained,
             "unexplained": unexplained,
             "level_shape_misfit": shape,
+            "level_p_with_effect": level_p,
         },
         sim_avar_after=np.asarray(tm.sim_avar + extra, dtype=np.float64),
     )

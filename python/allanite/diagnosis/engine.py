@@ -16,6 +16,9 @@ from allanite.diagnosis.result import Diagnosis, Holdout
 
 __all__ = ["diagnose"]
 
+#: effects tied to the start of a record: a held-out end of the record cannot show them
+START_EFFECTS = ("warmup",)
+
 #: statistics of the frequency and time views that count as evidence for an effect
 EVIDENCE = ("line", "jump", "level", "spike", "kurt_hf", "kurt_lf", "hf", "dyn")
 
@@ -108,7 +111,8 @@ def diagnose(
         the simulation otherwise).
     holdout : float or array_like, optional
         Fraction of the real record (its end) held out from the fit, or a second real record:
-        the best effect's shrinkage is measured there.
+        the best effect's shrinkage is measured there (not for a warm-up, which lives at the
+        start of a record; then ``Diagnosis.holdout`` is None).
     effects : list of str, optional
         Restrict the candidate effects (default: all, see
         :data:`allanite.diagnosis.candidates.EFFECTS`).
@@ -176,7 +180,7 @@ def diagnose(
         )
         by_effect = {c.effect: c for c in cands}
     held: Holdout | None = None
-    if x_hold is not None and attribution:
+    if x_hold is not None and attribution and attribution[0].effect not in START_EFFECTS:
         best = attribution[0]
         held = holdout_check(
             best,

@@ -35,7 +35,7 @@ E. S. Page, "Continuous inspection schemes", Biometrika 41 (1954) 100-115 (CUSUM
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -162,6 +162,33 @@ class TimeView:
     spike_amplitudes: list[float]
     change_points_s: list[float]
     segments_s: list[tuple[float, float]]
+    residual: dict[str, NDArray[np.float64]] = field(default_factory=dict, repr=False)
+    spread: dict[str, NDArray[np.float64]] = field(default_factory=dict, repr=False)
+    null_max: dict[str, NDArray[np.float64]] = field(default_factory=dict, repr=False)
+
+    def level_p_values(self, extra_avar_window: float) -> dict[str, float]:
+        """p-values of ``jump`` and ``level`` if the sensor had an extra stationary process.
+
+        A stationary process with Allan variance ``A`` at the window length adds ``2 A`` to
+        the variance of the difference of consecutive window means (the definition of the
+        Allan variance), so the jump spreads become ``sqrt(s_w^2 + 2 A)``; the level spreads
+        are inflated by the same average factor. A candidate that adds enough slow noise
+        explains the level evidence without being a step or a warm-up.
+        """
+        out: dict[str, float] = {}
+        if "jump" not in self.residual:
+            return out
+        sd_j = self.spread["jump"]
+        new_j = np.sqrt(sd_j**2 + 2.0 * max(extra_avar_window, 0.0))
+        out["jump"] = gumbel_sf(
+            float(np.abs(self.residual["jump"] / new_j).max()), self.null_max["jump"]
+        )
+        factor = float(np.mean(new_j / sd_j))
+        out["level"] = gumbel_sf(
+            float(np.abs(self.residual["level"] / (self.spread["level"] * factor)).max()),
+            self.null_max["level"],
+        )
+        return out
 
     @property
     def p_value(self) -> float:
@@ -235,6 +262,9 @@ def time_view(
     thr: dict[str, float] = {}
     fam_p: dict[str, float] = {}
     flagged: dict[str, NDArray[np.bool_]] = {}
+    residual: dict[str, NDArray[np.float64]] = {}
+    spread: dict[str, NDArray[np.float64]] = {}
+    null_max: dict[str, NDArray[np.float64]] = {}
     for fam in WINDOW_FAMILIES:
         null = ens.null[fam]
         sd = null.std(axis=0, ddof=1)
@@ -252,6 +282,7 @@ def time_view(
         fam_p[fam] = gumbel_sf(float(np.abs(zf).max()), zmax_null)
         z[fam] = zf
         flagged[fam] = np.abs(zf) > thr[fam]
+        residual[fam], spread[fam], null_max[fam] = r, sd, zmax_null
     # record-wide statistics
     spike_null = ens.null["spike"][:, 0]
     spike_r = float(ens.residual(real, "spike")[0])
@@ -301,4 +332,7 @@ def time_view(
         spike_amplitudes=spike_amp,
         change_points_s=change_points,
         segments_s=_merge(segments),
+        residual=residual,
+        spread=spread,
+        null_max=null_max,
     )
