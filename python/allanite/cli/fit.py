@@ -10,6 +10,7 @@ from allanite.cli.record_options import (
     add_record_arguments,
     avar_from_args,
     dump_json,
+    progress,
     read_from_args,
 )
 from allanite.io.atomic import atomic_output
@@ -76,7 +77,9 @@ def run(args: argparse.Namespace) -> int:
     result = avar_from_args(record, args)
     channels = []
     fits = []
-    for c, name in enumerate(record.channels):
+    for c, name in progress(
+        list(enumerate(record.channels)), desc="fitting", total=record.n_channels
+    ):
         fit = fit_result(result.channel(c))
         fits.append(fit)
         rows = coefficient_table(fit, result.units)

@@ -73,7 +73,11 @@ def fit_channels(device: DeviceAnalysis) -> tuple[Any, ...]:
     """Fit a noise model to every channel (None per channel when fitting is unavailable)."""
     from allanite.cli.fit import fit_result
 
-    return tuple(fit_result(device.result.channel(c)) for c in range(device.result.n_channels))
+    channels = range(device.result.n_channels)
+    return tuple(
+        fit_result(device.result.channel(c))
+        for c in progress(channels, desc="fitting", total=len(channels))
+    )
 
 
 def diagnosis_parts(
