@@ -366,9 +366,12 @@ def avar(
         [_core.n_terms(kernel_kind, n_phase, int(f)) for f in factors], dtype=np.int64
     )
     if alpha is None:
-        alphas = identify_alpha(
-            phase, factors, kernel_kind, data="phase" if input == "angle" else "frequency"
-        )
+        # Stable32 identifies phase data on the phase as recorded (its frequency offset makes
+        # the lag-1 method difference at least once); frequency data on the averaged rates
+        if input == "angle":
+            alphas = identify_alpha(arr.astype(np.float64), factors, kernel_kind, data="phase")
+        else:
+            alphas = identify_alpha(phase, factors, kernel_kind, data="frequency")
     else:
         alphas = _given_alpha(alpha, var.shape)
     edf = equivalent_dof(kernel_kind, alphas, factors, n_phase)
