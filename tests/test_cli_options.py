@@ -1,0 +1,45 @@
+"""Shared CLI helpers: progress bar only on a terminal, strict JSON, rate units."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from allanite.cli.record_options import dump_json, progress, rate_unit
+from allanite.io import Record
+
+
+def test_progress_bar_on_a_terminal_only(
+    capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    pytest.importorskip("tqdm")
+    assert list(progress(range(3), desc="fitting")) == [0, 1, 2]
+    assert capsys.readouterr().err == ""
+    import sys
+
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
+    assert list(progress(range(3), desc="fitting", total=3)) == [0, 1, 2]
+    err = capsys.readouterr().err
+    assert "fitting" in err
+    assert "0/3" in err  # the bar was drawn (and cleared: leave=False)
+
+
+def test_dump_json_is_strict() -> None:
+    text = dump_json({"a": [1.0, float("nan"), float("inf")], "b": {"c": float("-inf")}})
+    assert json.loads(text) == {"a": [1.0, None, None], "b": {"c": None}}
+
+
+@pytest.mark.parametrize(
+    ("input", "units", "expected"),
+    [
+        ("rate", "deg/s", "deg/s"),
+        ("angle", "deg", "deg/s"),
+        ("increment", "rad", "rad/s"),
+        ("rate", None, None),
+    ],
+)
+def test_rate_unit(input: str, units: str | None, expected: str | None) -> None:
+    record = Record(samples=np.zeros((4, 1)), fs=1.0, input=input, units=units)
+    assert rate_unit(record) == expected
