@@ -281,3 +281,29 @@ def test_cli_report_with_sim_model_has_diagnosis(
     # the step is a significant gap: the verdict badge says so and the views are embedded
     assert "differs significantly" in html
     assert len(re.findall(r'<img src="data:image/png;base64,', html)) == 2
+
+
+def test_report_with_models_shows_coefficients_and_reference_ratios() -> None:
+    from allanite.model import NoiseModel
+    from allanite.terms import TERM_TYPES
+
+    units = {"rate": "deg/s", "time": "s"}
+    mine = NoiseModel(terms=(TERM_TYPES["white"](N=0.05),), units=units)
+    theirs = NoiseModel(terms=(TERM_TYPES["white"](N=0.025),), units=units)
+    device = _device()
+    device = DeviceAnalysis(device.record, device.result, (mine, mine))
+    reference = _device(RNG.normal(size=(N, 2)) * 0.25, name="ref.npy")
+    reference = DeviceAnalysis(reference.record, reference.result, (theirs, theirs))
+    sheet = Datasheet.from_dict({"limits": [{"quantity": "N", "max": 2.5, "unit": "deg/sqrt(h)"}]})
+    report = build_report([device], reference=reference, datasheet=sheet)
+    html = report.html
+    # N = 0.05 deg/sqrt(s) = 3 deg/sqrt(h): shown in customary units, fails the 2.5 limit
+    assert "deg/sqrt(h)" in html
+    assert [c.status for c in report.checks] == ["fail", "fail"]
+    assert report.checks[0].value == pytest.approx(3.0)
+    assert report.passed is False
+    # the reference comparison lists the coefficient ratio 0.05 / 0.025 = 2
+    assert re.search(r"<td>3</td><td>1\.5</td><td>deg/sqrt\(h\)</td><td>2</td>", html)
+    # one Allan plot plus one model plot per channel
+    assert len(re.findall(r'<img src="data:image/png;base64,', html)) == 3
+    assert set(report.figures) == {"adev", "fit-0", "fit-1"}

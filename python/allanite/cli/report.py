@@ -108,6 +108,8 @@ def run(args: argparse.Namespace) -> int:
     if args.reference:
         ref_record = read_from_args(args.reference, args)
         reference = DeviceAnalysis(ref_record, avar_from_args(ref_record, args))
+        if not args.no_fit:
+            reference = DeviceAnalysis(reference.record, reference.result, fit_channels(reference))
     diag_html = None
     diag_figures = None
     if args.sim_model:

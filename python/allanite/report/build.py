@@ -318,11 +318,32 @@ def _reference_section(
                     text_columns=0,
                 )
             )
+            parts.append(_coefficient_comparison(device, reference, c))
     parts.append(
         '<p class="note">"higher"/"lower": the confidence intervals do not overlap; '
         '"consistent": they do.</p>'
     )
     return "".join(parts)
+
+
+def _coefficient_comparison(device: DeviceAnalysis, reference: DeviceAnalysis, channel: int) -> str:
+    """Fitted coefficients of the device next to the reference's (when both were fitted)."""
+    fit = device.fit(channel)
+    ref_fit = reference.fit(min(channel, reference.result.n_channels - 1))
+    if fit is None or ref_fit is None:
+        return ""
+    mine = {(k.term, k.symbol): k for k in coefficient_table(fit, device.result.units)}
+    theirs = {(k.term, k.symbol): k for k in coefficient_table(ref_fit, reference.result.units)}
+    rows = []
+    for key in [k for k in mine if k in theirs]:
+        a, b = mine[key], theirs[key]
+        if a.unit != b.unit:
+            continue
+        ratio = f"{a.value / b.value:.3g}" if b.value else "–"
+        rows.append([a.term, a.symbol, h.fmt(a.value), h.fmt(b.value), a.unit, ratio])
+    if not rows:
+        return '<p class="note">The fitted models share no coefficient to compare.</p>'
+    return h.table(["term", "symbol", "device", "reference", "unit", "ratio"], rows, text_columns=2)
 
 
 def _fit_figures(devices: Sequence[DeviceAnalysis], level: float) -> dict[str, Any]:
