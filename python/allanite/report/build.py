@@ -227,7 +227,7 @@ def _coefficient_section(
                 k.term,
                 k.symbol,
                 h.fmt(k.value),
-                f"{h.fmt(k.low, 3)} … {h.fmt(k.high, 3)}",
+                "–" if k.low != k.low else f"{h.fmt(k.low, 3)} … {h.fmt(k.high, 3)}",
                 k.unit,
                 k.slope or "–",
             ]
