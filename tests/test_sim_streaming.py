@@ -8,9 +8,10 @@ from scipy import stats
 
 import allanite
 from allanite.model import NoiseModel
-from allanite.simulation import BLOCK, simulate, simulate_chunks
+from allanite.simulation import simulate, simulate_chunks
 from allanite.simulation.flicker import bank_avar, flicker_stream
 from allanite.simulation.spectral import expected_avar
+from allanite.simulation.streams import block_length
 from allanite.terms import (
     BiasSteps,
     Flicker,
@@ -45,15 +46,19 @@ EVERY_TERM = NoiseModel(
         LowPassWhite(N=0.01, bandwidth=5.0),
     )
 )
+CHANNELS = 64
+BLOCK = block_length(CHANNELS)
 N = BLOCK + 123
 
 
 @pytest.mark.parametrize("output", ["rate", "angle", "increment"])
 @pytest.mark.parametrize("chunk", [1000, BLOCK + 1])
 def test_chunked_equals_one_shot(output, chunk):
-    whole = EVERY_TERM.simulate(N, 100.0, output=output, channels=2, seed=11)
+    whole = EVERY_TERM.simulate(N, 100.0, output=output, channels=CHANNELS, seed=11)
     pieces = list(
-        simulate_chunks(EVERY_TERM, 100.0, N, output=output, channels=2, seed=11, chunk=chunk)
+        simulate_chunks(
+            EVERY_TERM, 100.0, N, output=output, channels=CHANNELS, seed=11, chunk=chunk
+        )
     )
     assert all(p.shape[0] <= chunk for p in pieces)
     assert np.array_equal(np.concatenate(pieces), whole)

@@ -32,16 +32,21 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from allanite.simulation.streams import BLOCK, TermStream
+from allanite.simulation.streams import TermStream, block_length
 
 __all__ = ["SpectralStream", "expected_avar", "synthesis_length"]
 
 PsdFunction = Callable[[NDArray[np.float64]], NDArray[np.float64]]
 
 
-def synthesis_length(n_samples: int) -> int:
+def _padded(n_samples: int, n_channels: int) -> int:
+    block = block_length(n_channels)
+    return -(-n_samples // block) * block
+
+
+def synthesis_length(n_samples: int, n_channels: int = 1) -> int:
     """Circulant length ``L``: the smallest power of two >= 4 x the padded record length."""
-    padded = -(-n_samples // BLOCK) * BLOCK
+    padded = _padded(n_samples, n_channels)
     return 1 << int(np.ceil(np.log2(4 * padded)))
 
 
@@ -53,13 +58,15 @@ def _line_powers(psd: PsdFunction, length: int, dt: float) -> NDArray[np.float64
     return power
 
 
-def expected_avar(psd: PsdFunction, m: ArrayLike, dt: float, n_samples: int) -> NDArray[np.float64]:
+def expected_avar(
+    psd: PsdFunction, m: ArrayLike, dt: float, n_samples: int, n_channels: int = 1
+) -> NDArray[np.float64]:
     r"""Return the expected Allan variance of :class:`SpectralStream` samples.
 
     It is the line sum
     :math:`\sum_k S(f_k)\Delta f\,2\sin^4(\pi f_k m\Delta t)/(m\sin(\pi f_k\Delta t))^2`.
     """
-    length = synthesis_length(n_samples)
+    length = synthesis_length(n_samples, n_channels)
     power = _line_powers(psd, length, dt)
     f = np.arange(1, length // 2 + 1) / (length * dt)
     out = []
@@ -84,12 +91,12 @@ class SpectralStream(TermStream):
         if n_samples < 1:
             raise ValueError(f"n_samples must be positive, got {n_samples}")
         self.n_samples = int(n_samples)
-        self.length = synthesis_length(self.n_samples)
+        self.length = synthesis_length(self.n_samples, self.n_channels)
         self._amplitude = np.sqrt(_line_powers(psd, self.length, self.dt))
         self._record: NDArray[np.float64] | None = None
 
     def _synthesise(self) -> NDArray[np.float64]:
-        padded = -(-self.n_samples // BLOCK) * BLOCK
+        padded = _padded(self.n_samples, self.n_channels)
         record = np.empty((padded, self.n_channels))
         half = self.length // 2
         for c in range(self.n_channels):

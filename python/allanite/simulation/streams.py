@@ -6,13 +6,13 @@ as a ``(n, C)`` float64 array. Long records are generated chunk by chunk in boun
 
 Reproducibility whatever the chunk size
 ---------------------------------------
-Every stream generates its samples internally in blocks of a fixed size (:data:`BLOCK`
-samples), drawing its random numbers for one whole block at a time, in a fixed order, from its
-own generator; ``next(n)`` only cuts the concatenated blocks. The samples therefore depend on
-the seed alone, never on how the caller slices the record: one-shot and chunked generation
-agree bit for bit. A model gives each term its own child :class:`numpy.random.SeedSequence`
-(``SeedSequence(seed).spawn(n_terms)``), so adding a term does not change the samples of the
-others.
+Every stream generates its samples internally in blocks of a fixed size
+(:func:`block_length`, set by the channel count alone), drawing its random numbers for one
+whole block at a time, in a fixed order, from its own generator; ``next(n)`` only cuts the
+concatenated blocks. The samples therefore depend on the seed alone, never on how the caller
+slices the record: one-shot and chunked generation agree bit for bit. A model gives each
+term its own child :class:`numpy.random.SeedSequence` (``SeedSequence(seed).spawn(n_terms)``),
+so adding a term does not change the samples of the others.
 
 What a rate sample is
 ---------------------
@@ -33,10 +33,26 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["BLOCK", "SumStream", "TermStream", "check_fs", "make_generator", "seed_sequence"]
+__all__ = [
+    "BLOCK",
+    "SumStream",
+    "TermStream",
+    "block_length",
+    "check_fs",
+    "make_generator",
+    "seed_sequence",
+]
 
-#: samples per internal block (fixed: the samples must not depend on the caller's chunk size)
-BLOCK = 1 << 15
+#: values (samples x channels) per internal block; the block length in samples,
+#: :func:`block_length`, depends only on the channel count, never on the caller's chunks
+BLOCK_VALUES = 1 << 16
+#: block length of a single-channel stream
+BLOCK = BLOCK_VALUES
+
+
+def block_length(n_channels: int) -> int:
+    """Return the internal block length in samples for ``n_channels`` channels (>= 1024)."""
+    return max(1024, BLOCK_VALUES // max(1, n_channels))
 
 
 def seed_sequence(seed: Any) -> np.random.SeedSequence:
@@ -106,6 +122,7 @@ class TermStream(ABC):
         self.dt = 1.0 / self.fs
         self.n_channels = _check_count("n_channels", n_channels, 1)
         self.rng = make_generator(seed)
+        self.block = block_length(self.n_channels)
         self.position = 0  #: samples delivered so far
         self._generated = 0  # samples generated so far (a multiple of BLOCK)
         self._buffer: NDArray[np.float64] = np.empty((0, self.n_channels))
@@ -113,7 +130,7 @@ class TermStream(ABC):
 
     @abstractmethod
     def _generate(self, start: int, n: int) -> NDArray[np.float64]:
-        """Generate the samples ``start .. start + n - 1`` (``n == BLOCK``), shape ``(n, C)``."""
+        """Generate samples ``start .. start + n - 1`` (``n == self.block``), shape ``(n, C)``."""
 
     def next(self, n: int) -> NDArray[np.float64]:
         """Return the next ``n`` rate samples, shape ``(n, C)``, float64."""
@@ -122,8 +139,9 @@ class TermStream(ABC):
         filled = 0
         while filled < n:
             if self._offset == self._buffer.shape[0]:
-                self._buffer = np.asarray(self._generate(self._generated, BLOCK), dtype=np.float64)
-                self._generated += BLOCK
+                block = self._generate(self._generated, self.block)
+                self._buffer = np.asarray(block, dtype=np.float64)
+                self._generated += self.block
                 self._offset = 0
             take = min(n - filled, self._buffer.shape[0] - self._offset)
             out[filled : filled + take] = self._buffer[self._offset : self._offset + take]
