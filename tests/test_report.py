@@ -307,3 +307,23 @@ def test_report_with_models_shows_coefficients_and_reference_ratios() -> None:
     # one Allan plot plus one model plot per channel
     assert len(re.findall(r'<img src="data:image/png;base64,', html)) == 3
     assert set(report.figures) == {"adev", "fit-0", "fit-1"}
+
+
+def test_compact_batch_datasheet_in_record_units() -> None:
+    from allanite.model import NoiseModel
+    from allanite.terms import TERM_TYPES
+
+    model = NoiseModel(terms=(TERM_TYPES["white"](N=0.05),), units={"rate": "deg/s", "time": "s"})
+    device = _device()
+    device = DeviceAnalysis(device.record, device.result, (model, model))
+    # N in the record's own unit deg/s*sqrt(s): 0.05 fails a 0.04 limit and passes 0.06
+    sheet = Datasheet.from_dict({"device": "lot 7", "N": 0.04, "B": {"min": 0.0, "max": 1.0}})
+    statuses = [c.status for c in build_report([device], datasheet=sheet).checks]
+    assert statuses == ["fail", "missing", "fail", "missing"]
+    sheet = Datasheet.from_dict({"N": {"max": 0.06}})
+    report = build_report([device], datasheet=sheet)
+    assert [c.status for c in report.checks] == ["pass", "pass"]
+    assert report.checks[0].value == pytest.approx(0.05)
+    assert "≤ 0.06 (record units)" in report.html
+    with pytest.raises(InputError, match=r"entry 'N' must be a number"):
+        Datasheet.from_dict({"N": "small"})

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from allanite.report.datasheet import Measured
-from allanite.units import ANGLE_UNITS, coefficient_unit, convert
+from allanite.units import ANGLE_UNITS, Unit, coefficient_unit, convert
 
 __all__ = ["Coefficient", "coefficient_table", "customary_unit"]
 
@@ -33,10 +33,11 @@ class Coefficient:
     high: float
     unit: str
     slope: str | None = None
+    model_unit: Unit | None = None
 
     def measured(self) -> Measured:
         """As a :class:`~allanite.report.datasheet.Measured` for limit checks."""
-        return Measured(self.value, self.low, self.high, self.unit)
+        return Measured(self.value, self.low, self.high, self.unit, self.model_unit)
 
 
 def _angle_of(rate: str) -> str | None:
@@ -98,6 +99,9 @@ def coefficient_table(fit: Any, rate: str | None) -> list[Coefficient]:
             value = float(getattr(term, spec.name))
             low, high = intervals.get(f"{term.type}.{spec.name}", (math.nan, math.nan))
             target = customary_unit(model_rate, spec.rate, spec.time)
+            base = (
+                None if model_rate is None else coefficient_unit(model_rate, spec.rate, spec.time)
+            )
             if model_rate is not None and target:
                 source = coefficient_unit(model_rate, spec.rate, spec.time)
                 value, low, high = (convert(v, source, target) for v in (value, low, high))
@@ -117,6 +121,7 @@ def coefficient_table(fit: Any, rate: str | None) -> list[Coefficient]:
                     high=high,
                     unit=unit,
                     slope=_SLOPES.get(spec.name) if spec.name == term.symbol else None,
+                    model_unit=base,
                 )
             )
     return rows

@@ -11,7 +11,10 @@ A limits file is JSON::
 
 ``quantity`` is an IEEE coefficient symbol of a fitted term (N, B, K, Q, R, ...) or ``adev``
 (the measured Allan deviation at ``tau`` seconds, interpolated log-log). Each limit has ``max``
-and/or ``min``. A check *passes* when the whole confidence interval lies within the limits,
+and/or ``min``. The compact form of :mod:`allanite.batch`, ``{"N": 0.01, "B": {"max": 0.003}}``
+(a number is an upper limit; values in the record's rate unit times seconds to the term's
+power), is accepted too, so one limits file serves ``allanite report`` and ``allanite batch``.
+A check *passes* when the whole confidence interval lies within the limits,
 *fails* when the estimate itself lies outside, and is *marginal* when only the interval
 crosses a limit (the data cannot decide at that confidence level).
 """
@@ -51,11 +54,16 @@ class Limit:
 
     def bounds_text(self) -> str:
         """``≤ 0.3 deg/sqrt(h)``, ``≥ 1 s`` or ``0.1 … 0.3 unit``."""
+        if not self.unit:
+            return f"{self._bounds()} (record units)"
+        return f"{self._bounds()} {self.unit}"
+
+    def _bounds(self) -> str:
         if self.min is not None and self.max is not None:
-            return f"{self.min:.4g} … {self.max:.4g} {self.unit}"
+            return f"{self.min:.4g} … {self.max:.4g}"
         if self.max is not None:
-            return f"≤ {self.max:.4g} {self.unit}"
-        return f"≥ {self.min:.4g} {self.unit}"
+            return f"≤ {self.max:.4g}"
+        return f"≥ {self.min:.4g}"
 
 
 @dataclass(frozen=True)
@@ -66,8 +74,41 @@ class Datasheet:
     limits: tuple[Limit, ...]
 
     @classmethod
+    def from_compact(cls, data: dict[str, Any], *, source: str = "datasheet") -> Datasheet:
+        """Build from the compact ``{"N": 0.01, "B": {"max": 0.003}}`` form (record units)."""
+        limits = []
+        for name, spec in data.items():
+            if name == "device":
+                continue
+            if isinstance(spec, (int, float)) and not isinstance(spec, bool):
+                limits.append(Limit(quantity=str(name), unit="", max=float(spec)))
+                continue
+            if not isinstance(spec, dict) or not spec or set(spec) - {"min", "max"}:
+                raise InputError(
+                    f'entry {name!r} must be a number (upper limit) or {{"min": ..., '
+                    '"max": ...}}',
+                    path=source,
+                )
+            try:
+                limits.append(
+                    Limit(
+                        quantity=str(name),
+                        unit="",
+                        max=None if spec.get("max") is None else float(spec["max"]),
+                        min=None if spec.get("min") is None else float(spec["min"]),
+                    )
+                )
+            except (TypeError, ValueError) as exc:
+                raise InputError(f"entry {name!r}: {exc}", path=source) from exc
+        if not limits:
+            raise InputError("no limits given", path=source)
+        return cls(device=str(data.get("device", Path(source).stem)), limits=tuple(limits))
+
+    @classmethod
     def from_dict(cls, data: Any, *, source: str = "datasheet") -> Datasheet:
         """Validate and build from the JSON structure described in the module docstring."""
+        if isinstance(data, dict) and "limits" not in data:
+            return cls.from_compact(data, source=source)
         if not isinstance(data, dict) or not isinstance(data.get("limits"), list):
             raise InputError(
                 'expected an object with a \'limits\' list, e.g. {"device": "...", "limits": '
@@ -129,6 +170,7 @@ class Measured:
     low: float
     high: float
     unit: str
+    model_unit: Any = None
 
 
 @dataclass(frozen=True)
@@ -214,12 +256,20 @@ def check_limits(
         measured: Measured | None = None
         if limit.quantity == "adev":
             at = adev_at(tau, dev, low, high, float(limit.tau or 0.0))
-            if at is not None and rate is not None:
-                value, lo, hi = (convert(v, rate, limit.unit) for v in at)
+            if at is not None and (rate is not None or not limit.unit):
+                value, lo, hi = (
+                    v if not limit.unit else convert(v, str(rate), limit.unit) for v in at
+                )
                 measured = Measured(value, lo, hi, limit.unit)
         elif limit.quantity in coefficients:
             c = coefficients[limit.quantity]
-            value, lo, hi = (convert(v, c.unit, limit.unit) for v in (c.value, c.low, c.high))
+            target = limit.unit or c.model_unit
+            if target is None:
+                raise ValueError(
+                    f"limit on {limit.quantity} has no unit and the record's units are unknown; "
+                    "give the limit's unit or the record's (--units)"
+                )
+            value, lo, hi = (convert(v, c.unit, target) for v in (c.value, c.low, c.high))
             measured = Measured(value, lo, hi, limit.unit)
         if measured is None:
             checks.append(Check(limit, channel, None, None, None, "missing"))
