@@ -257,3 +257,18 @@ def test_non_finite_sample_is_named(tmp_path):
     with pytest.raises(ValueError, match="sample 4321"):
         avar_large(x, 1.0, alpha=0, memory_limit="64kB", chunk_rows=1000, tmpdir=tmp_path)
     assert list(tmp_path.iterdir()) == []
+
+
+def test_avar_delegates_memory_limit_progress_and_fast(tmp_path, monkeypatch):
+    monkeypatch.setattr("tempfile.tempdir", str(tmp_path))
+    x = _record(30_000, c=1)[:, 0]
+    plain = allanite.avar(x, 10.0, alpha=0)
+    stages = set()
+    big = allanite.avar(
+        x, 10.0, alpha=0, memory_limit="100kB", progress=lambda s, d, t: stages.add(s)
+    )
+    assert big.meta["phase_in_memory"] is False
+    assert np.array_equal(big.var, plain.var)
+    assert stages == {"phase", "variance"}
+    assert allanite.avar(x, 10.0, alpha=0, fast=True).meta["fast_q"] == 16
+    assert list(tmp_path.iterdir()) == []

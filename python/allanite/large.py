@@ -34,11 +34,19 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from allanite import _core
-from allanite.edf import equivalent_dof, identify_alpha
+from allanite.edf import identify_alpha
 from allanite.io.large import ChunkedRecord, as_chunked
 from allanite.phase_store import PhaseStore, ProgressCallback, build_phase_store
 from allanite.taus import KERNEL_KIND, TauSpec, averaging_factors
-from allanite.variance import INPUTS, KINDS, AllanResult, _check_fs, _check_threads
+from allanite.variance import (
+    INPUTS,
+    KINDS,
+    AllanResult,
+    _check_fs,
+    _check_threads,
+    _given_alpha,
+    assemble_result,
+)
 
 __all__ = ["avar_large", "parse_memory", "variance_from_store"]
 
@@ -407,32 +415,21 @@ def avar_large(
                 identify=identify,
                 progress=progress,
             )
-    tau = factors / rate
-    if input != "rate":
-        var = var * (rate * rate)  # phase in angle units: divide by tau0^2
-    if kind == "time":
-        var = var * (tau[:, None] ** 2) / 3.0
-    n_terms = np.array(
-        [_core.n_terms(kernel_kind, n_phase, int(f)) for f in factors], dtype=np.int64
-    )
     if alphas is None:
-        a = np.asarray(alpha, dtype=np.int64)
-        alphas = np.broadcast_to(a.reshape(-1, 1) if a.ndim else a, var.shape).copy()
-    edf = equivalent_dof(kernel_kind, alphas, factors, n_phase)
-    if nc == 1 and _was_1d(source, record):
-        var, edf, alphas = var[:, 0], np.asarray(edf)[:, 0], alphas[:, 0]
-    return AllanResult(
-        tau=tau,
-        m=factors,
-        var=var,
-        kind=kind,
-        n_terms=n_terms,
-        edf=np.asarray(edf, dtype=np.float64),
-        alpha=np.asarray(alphas, dtype=np.int64),
-        fs=rate,
+        if alpha is None:  # pragma: no cover - identify was requested above
+            raise RuntimeError("noise identification returned nothing")
+        alphas = _given_alpha(alpha, var.shape)
+    return assemble_result(
+        var,
+        factors,
+        alphas,
+        rate=rate,
         input=input,
+        kind=kind,
+        n_phase=n_phase,
         n_samples=n_samples,
         units=units,
+        was_1d=nc == 1 and _was_1d(source, record),
         meta=meta,
     )
 

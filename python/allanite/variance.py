@@ -294,6 +294,9 @@ def avar(
     alpha: int | ArrayLike | None = None,
     threads: int | None = None,
     units: str | None = None,
+    memory_limit: int | float | str | None = None,
+    progress: Any = None,
+    fast: bool | int = False,
 ) -> AllanResult:
     r"""Allan-family variance of a record for a grid of averaging times.
 
@@ -332,6 +335,11 @@ def avar(
         Worker threads (default: all cores). Results are identical for any thread count.
     units : str, optional
         Rate unit of the record, carried into the result.
+    memory_limit, progress, fast
+        Large records (:func:`allanite.large.avar_large`, which also reads files in chunks):
+        a working-memory budget like ``"1GB"`` beyond which the phase array goes to a
+        temporary file; a ``progress(stage, done, total)`` callback; fast mode (strided sums
+        at large m with a stated error bound, :mod:`allanite.fast`). Same results otherwise.
 
     Returns
     -------
@@ -342,6 +350,24 @@ def avar(
     ----------
     W. J. Riley, *Handbook of Frequency Stability Analysis*, NIST SP1065 (2008).
     """
+    if memory_limit is not None or progress is not None or (fast is not False and fast is not None):
+        from allanite.large import avar_large
+
+        return avar_large(
+            x,
+            fs,
+            input=input,
+            kind=kind,
+            taus=taus,
+            m=m,
+            points=points,
+            alpha=alpha,
+            threads=threads,
+            units=units,
+            memory_limit=memory_limit,
+            progress=progress,
+            fast=fast,
+        )
     if kind not in KERNEL_KIND:
         raise ValueError(f"unknown kind {kind!r}; use one of {', '.join(KINDS)}")
     if input not in INPUTS:
@@ -356,15 +382,6 @@ def avar(
     )
     kernel_kind = KERNEL_KIND[kind]
     var = np.asarray(_core.variance(phase, factors, kernel_kind, nthreads))
-    tau = factors / rate
-    # rate: phase in rate * samples; angle/increment: phase in angle units, divide by tau0^2
-    scale = 1.0 if input == "rate" else rate * rate
-    var = var * scale
-    if kind == "time":
-        var = var * (tau[:, None] ** 2) / 3.0
-    n_terms = np.array(
-        [_core.n_terms(kernel_kind, n_phase, int(f)) for f in factors], dtype=np.int64
-    )
     if alpha is None:
         # Stable32 identifies phase data on the phase as recorded (its frequency offset makes
         # the lag-1 method difference at least once); frequency data on the averaged rates
@@ -374,6 +391,49 @@ def avar(
             alphas = identify_alpha(phase, factors, kernel_kind, data="frequency")
     else:
         alphas = _given_alpha(alpha, var.shape)
+    return assemble_result(
+        var,
+        factors,
+        alphas,
+        rate=rate,
+        input=input,
+        kind=kind,
+        n_phase=n_phase,
+        n_samples=int(arr.shape[0]),
+        units=units,
+        was_1d=was_1d,
+    )
+
+
+def assemble_result(
+    var: NDArray[np.float64],
+    factors: NDArray[np.int64],
+    alphas: NDArray[np.int64],
+    *,
+    rate: float,
+    input: str,
+    kind: str,
+    n_phase: int,
+    n_samples: int,
+    units: str | None,
+    was_1d: bool,
+    meta: dict[str, Any] | None = None,
+) -> AllanResult:
+    """Scale kernel variances (tau0 = 1, phase units) to rate units and attach the EDF.
+
+    Shared by :func:`avar` and the large-record path (:func:`allanite.large.avar_large`).
+    ``var`` and ``alphas`` are ``(T, C)``; the result is 1-D per field when ``was_1d``.
+    """
+    kernel_kind = KERNEL_KIND[kind]
+    tau = factors / rate
+    # rate: phase in rate * samples; angle/increment: phase in angle units, divide by tau0^2
+    scale = 1.0 if input == "rate" else rate * rate
+    var = var * scale
+    if kind == "time":
+        var = var * (tau[:, None] ** 2) / 3.0
+    n_terms = np.array(
+        [_core.n_terms(kernel_kind, n_phase, int(f)) for f in factors], dtype=np.int64
+    )
     edf = equivalent_dof(kernel_kind, alphas, factors, n_phase)
     if was_1d:
         var, edf, alphas = var[:, 0], edf[:, 0], alphas[:, 0]
@@ -387,8 +447,9 @@ def avar(
         alpha=np.asarray(alphas, dtype=np.int64),
         fs=rate,
         input=input,
-        n_samples=int(arr.shape[0]),
+        n_samples=n_samples,
         units=units,
+        meta=dict(meta or {}),
     )
 
 
