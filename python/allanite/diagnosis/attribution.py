@@ -27,11 +27,12 @@ criterion
 
 a penalised tau-view fit (each parameter must earn its keep at level ``alpha``, so a simpler
 effect wins a tie) plus the evidence the candidate leaves unexplained (Fisher's ``-2 ln p``
-scale); a bias step and a warm-up also pay the excess misfit of their shape on the window means
-(:mod:`allanite.diagnosis.level_shape`). ``consistent_after`` is true when the p-value of
-``T_after`` (null law with ``k`` fewer degrees of freedom) exceeds ``alpha``. The gap is
-``G = max(0, T - T0)`` and the shrinkage ``1 - G_after / G_before`` (0 when the tau view
-shows no gap to shrink).
+scale); a bias step, a warm-up and a ramp also pay the excess misfit of their shape on the
+window means (:mod:`allanite.diagnosis.level_shape`); a slow stationary candidate explains
+level evidence when the jump/level test, with its own slow noise added to the null spreads,
+is no longer significant. ``consistent_after`` is true when the p-value of ``T_after`` (null
+law with ``k`` fewer degrees of freedom) exceeds ``alpha``. The gap is ``G = max(0, T - T0)``
+and the shrinkage ``1 - G_after / G_before`` (0 when the tau view shows no gap to shrink).
 """
 
 from __future__ import annotations

@@ -12,6 +12,7 @@ Besides the tau view, an effect may explain significant evidence of the other vi
 effect         explains                                        requires (signature)
 =============  ==============================================  ==========================
 sine           spectral line                                   a spectral line
+ramp           level, level jump (a linear level)              --
 step           level jump, level                               a level jump
 warmup         level, level jump                               level or jump
 spikes         spike statistic, kurtosis of differences, hf    the spike statistic
@@ -50,6 +51,7 @@ EFFECTS: dict[str, str] = {
 #: evidence (non-tau statistics) each effect can explain
 EXPLAINS: dict[str, frozenset[str]] = {
     "sine": frozenset({"line"}),
+    "ramp": frozenset({"level", "jump"}),
     "step": frozenset({"jump", "level"}),
     "warmup": frozenset({"level", "jump"}),
     "spikes": frozenset({"spike", "kurt_hf", "hf"}),

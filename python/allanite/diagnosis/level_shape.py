@@ -1,8 +1,8 @@
-r"""Time-domain shape check of the level effects (bias step, warm-up) on the window means.
+r"""Time-domain shape check of the level effects (step, warm-up, ramp) on the window means.
 
-A bias step and a warm-up transient both explain level jumps; their shapes differ. The window
-means ``l_w`` of the real record (record mean removed) with their null spread ``s_w`` are fitted
-by each shape by weighted least squares and the misfit
+A bias step, a warm-up transient and a rate ramp all explain level jumps; their shapes differ.
+The window means ``l_w`` of the real record (record mean removed) with their null spread
+``s_w`` are fitted by each shape by weighted least squares and the misfit
 
 .. math:: \chi^2 = \sum_w \left(\frac{l_w - \hat l_w}{s_w}\right)^2
 
@@ -12,7 +12,8 @@ is compared with its expectation ``W - p`` (``W`` windows, ``p`` fitted paramete
 * step(s) at the detected change points ``t_c``: ``l_w = sum_c b_c (f_w(t_c) - (T - t_c)/T)``
   with ``f_w`` the fraction of window ``w`` after ``t_c``;
 * warm-up: window means of ``A e^{-t/T_w}`` minus the record mean, ``A`` by least squares and
-  ``T_w`` on a logarithmic grid from a quarter window to the record length.
+  ``T_w`` on a logarithmic grid from a quarter window to the record length;
+* ramp: a straight line ``R (t_w - T/2)``.
 """
 
 from __future__ import annotations
@@ -36,13 +37,16 @@ def _wls_chi2(
 
 
 def level_misfit(effect: str, view: TimeView, duration: float) -> float:
-    """Excess misfit of the level shape of ``effect`` (``step`` or ``warmup``); 0 otherwise."""
-    if effect not in ("step", "warmup"):
+    """Excess misfit of the level shape of ``effect`` (step, warmup, ramp); 0 otherwise."""
+    if effect not in ("step", "warmup", "ramp"):
         return 0.0
     sd = np.where(view.level_sd > 0, view.level_sd, np.inf)
     w = view.level.size
     t0 = view.t_s - view.window_s / 2
     t1 = view.t_s + view.window_s / 2
+    if effect == "ramp":
+        line = view.t_s - duration / 2
+        return max(0.0, _wls_chi2(line[:, None], view.level, sd) - (w - 1))
     if effect == "step":
         if not view.change_points_s:
             return 0.0

@@ -16,7 +16,8 @@ noise level belongs to the tau view, the time view looks for changes in time)
 plus three record-wide statistics: the largest deviation from a 9-sample running median in
 units of its robust spread (``max |h| / (1.4826 MAD(h))``, spikes), the excess kurtosis of the
 first differences (two-sided: bursts, outliers) and the excess kurtosis of block means (8,
-``L/16`` and ``L/4`` samples) around their window level, tested one-sided for a platykurtic,
+``L/16`` and ``L/4`` samples; Gaussian slow wander only dilutes it), tested one-sided for a
+platykurtic,
 two-level amplitude distribution (random telegraph noise changes the amplitude distribution,
 not the Allan variance).
 
@@ -105,7 +106,7 @@ def time_features(x: NDArray[np.float64], plan: TimePlan) -> dict[str, NDArray[n
         "dyn": dyn,
         "spike": np.array([float(np.max(np.abs(hp))) / _robust_spread(hp)]),
         "kurt_hf": np.array([_kurtosis(dall)]),
-        "kurt_lf": np.array([_block_kurtosis(used, means, b) for b in _kurtosis_blocks(plan)]),
+        "kurt_lf": np.array([_block_kurtosis(used, b) for b in _kurtosis_blocks(plan)]),
     }
 
 
@@ -114,10 +115,10 @@ def _kurtosis_blocks(plan: TimePlan) -> tuple[int, ...]:
     return tuple(sorted({8, plan.m, max(plan.length // 4, 2)}))
 
 
-def _block_kurtosis(used: NDArray[np.float64], means: NDArray[np.float64], b: int) -> float:
+def _block_kurtosis(used: NDArray[np.float64], b: int) -> float:
     nb = used.shape[1] // b
     blocks = used[:, : nb * b].reshape(used.shape[0], nb, b).mean(axis=2)
-    return _kurtosis((blocks - means[:, None]).ravel())
+    return _kurtosis(blocks.ravel())
 
 
 @dataclass(frozen=True)
