@@ -38,6 +38,7 @@ __all__ = [
     "TurnOnBias",
     "WarmUp",
     "markov_avar_continuous",
+    "markov_psd_sampled",
 ]
 
 
@@ -51,15 +52,42 @@ def markov_avar_continuous(variance: float, tau_c: float, tau: ArrayLike) -> NDA
     with ``expm1`` so that it stays accurate for :math:`\tau \ll T_c`.
     """
     x = np.asarray(tau, dtype=np.float64) / tau_c
-    # 2x - 3 + 4e^{-x} - e^{-2x}; below x = 0.1 its Taylor series (terms x^3 .. x^9, the
+    # 2x - 3 + 4e^{-x} - e^{-2x}; below x = 0.1 its Taylor series (terms x^3 .. x^11, the
     # coefficients (4(-1)^k - (-2)^k)/k!) avoids the cancellation of the direct form
     direct = 2.0 * x - 3.0 + 4.0 * np.exp(-x) - np.exp(-2.0 * x)
-    coefficients = (2 / 3, -1 / 2, 7 / 30, -1 / 12, 31 / 1260, -1 / 160, 127 / 90720)
+    coefficients = (
+        2 / 3, -1 / 2, 7 / 30, -1 / 12, 31 / 1260, -1 / 160, 127 / 90720, -17 / 60480,
+        511 / 9979200,
+    )  # fmt: skip
     series = np.zeros_like(x)
     for c in reversed(coefficients):
         series = series * x + c
     bracket = np.where(x < 0.1, series * x**3, direct)
     return variance * bracket / x**2
+
+
+def markov_psd_sampled(
+    variance: float, tau_c: float, f: ArrayLike, dt: float
+) -> NDArray[np.float64]:
+    r"""One-sided PSD of the sample means of a continuous Gauss-Markov process (aliasing in).
+
+    The means over consecutive periods have the autocovariance
+    :math:`r_0 = 2s^2(\theta - 1 + \phi)/\theta^2` and
+    :math:`r_k = s^2 (1-\phi)^2\phi^{k-1}/\theta^2` (:math:`k \ge 1`), with
+    :math:`\theta = \Delta t/T_c`, :math:`\phi = e^{-\theta}` (an ARMA(1,1) sequence), so with
+    :math:`\omega = 2\pi f\Delta t`
+
+    .. math:: S(f) = 2\Delta t\left[r_0 + \frac{2 s^2(1-\phi)^2}{\theta^2}
+              \frac{\cos\omega - \phi}{1 - 2\phi\cos\omega + \phi^2}\right].
+    """
+    w = 2.0 * np.pi * np.asarray(f, dtype=np.float64) * dt
+    theta = dt / tau_c
+    phi = math.exp(-theta)
+    one_minus = -math.expm1(-theta)
+    r0 = variance * 2.0 * (theta - one_minus) / theta**2
+    tail = 2.0 * variance * one_minus**2 / theta**2
+    denominator = one_minus**2 + 4.0 * phi * np.sin(0.5 * w) ** 2
+    return 2.0 * dt * (r0 + tail * (np.cos(w) - phi) / denominator)
 
 
 @dataclass(frozen=True)
@@ -277,6 +305,10 @@ class Telegraph(Term):
         f = np.asarray(f, dtype=np.float64)
         return 4.0 * self.amplitude**2 * self.tau_c / (1.0 + (2.0 * np.pi * f * self.tau_c) ** 2)
 
+    def psd_sampled(self, f: ArrayLike, dt: float) -> NDArray[np.float64]:
+        """Exact PSD of the sample means (:func:`markov_psd_sampled`, aliasing included)."""
+        return markov_psd_sampled(self.amplitude**2, self.tau_c, f, dt)
+
     def stream(self, fs: float, n_channels: int, seed: Any, *, n_samples: int | None = None) -> Any:
         """Exact sample means of the switching signal."""
         from allanite.simulation.effects import TelegraphStream
@@ -326,6 +358,10 @@ class LowPassWhite(Term):
         """One-sided PSD ``2 N^2 / (1 + (f / bandwidth)^2)``."""
         f = np.asarray(f, dtype=np.float64)
         return 2.0 * self.N**2 / (1.0 + (f / self.bandwidth) ** 2)
+
+    def psd_sampled(self, f: ArrayLike, dt: float) -> NDArray[np.float64]:
+        """Exact PSD of the sample means (:func:`markov_psd_sampled`, aliasing included)."""
+        return markov_psd_sampled(self.N**2 / (2.0 * self.tau_f), self.tau_f, f, dt)
 
     def stream(self, fs: float, n_channels: int, seed: Any, *, n_samples: int | None = None) -> Any:
         """Exact sample means of the filtered process (C++ recursion)."""
