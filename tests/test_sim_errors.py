@@ -38,6 +38,30 @@ def test_tone_above_nyquist_needs_the_aliasing_flag():
     assert np.fft.rfftfreq(100, 0.01)[np.argmax(spectrum)] == pytest.approx(20.0)
 
 
+def test_flicker_cutoff_above_nyquist_is_refused():
+    from allanite.terms import Flicker
+
+    with pytest.raises(ValueError, match="Nyquist"):
+        simulate([Flicker(B=1.0, f0=80.0)], 100.0, 100, seed=1)
+    with pytest.raises(ValueError, match="aliased part is not simulated"):
+        simulate([Flicker(B=1.0, f0=80.0)], 100.0, 100, seed=1, allow_aliasing=True)
+    assert simulate([Flicker(B=1.0, f0=20.0)], 100.0, 100, seed=1).shape == (100,)
+
+
+def test_progress_bar_counts_every_sample():
+    from allanite.cli.simulate import _progress
+
+    seen = []
+    with _progress(10, False) as update:
+        assert update is None
+    with _progress(10, True) as update:
+        assert update is not None  # tqdm is part of the dev environment
+        for _ in range(5):
+            update(2)
+            seen.append(2)
+    assert sum(seen) == 10
+
+
 @pytest.mark.parametrize(
     ("kwargs", "error", "match"),
     [

@@ -175,6 +175,11 @@ def flicker_stream(
     if method not in ("auto", "spectral", "bank"):
         raise ValueError(f"unknown flicker method {method!r}; use 'auto', 'spectral' or 'bank'")
     dt = 1.0 / fs
+    if term.f0 is not None and term.f0 > 0.5 * fs:
+        raise ValueError(
+            f"flicker cutoff f0 = {term.f0} Hz lies above the Nyquist frequency {0.5 * fs} Hz; "
+            "its aliased part is not simulated: omit f0 (cutoff at Nyquist) or set f0 <= fs/2"
+        )
     spectral = method == "spectral" or (
         method == "auto" and n_samples is not None and n_samples <= SPECTRAL_MAX_SAMPLES
     )
