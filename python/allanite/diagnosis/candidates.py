@@ -12,9 +12,9 @@ Besides the tau view, an effect may explain significant evidence of the other vi
 effect         explains                                        requires (signature)
 =============  ==============================================  ==========================
 sine           spectral line                                   a spectral line
-ramp           level, level jump (a linear level)              --
-step           level jump, level                               a level jump
-warmup         level, level jump                               level or jump
+ramp           level, level jump, kurtosis of block means      --
+step           level jump, level, kurtosis of block means      a level jump
+warmup         level, level jump, kurtosis of block means      level or jump
 spikes         spike statistic, kurtosis of differences, hf    the spike statistic
 telegraph      kurtosis of block means, dyn, jump, level       kurtosis of block means
 =============  ==============================================  ==========================
@@ -51,9 +51,11 @@ EFFECTS: dict[str, str] = {
 #: evidence (non-tau statistics) each effect can explain
 EXPLAINS: dict[str, frozenset[str]] = {
     "sine": frozenset({"line"}),
-    "ramp": frozenset({"level", "jump"}),
-    "step": frozenset({"jump", "level"}),
-    "warmup": frozenset({"level", "jump"}),
+    # a level that moves once (step), drifts (ramp) or settles (warm-up) has a platykurtic,
+    # bimodal or uniform, distribution of block means too
+    "ramp": frozenset({"level", "jump", "kurt_lf"}),
+    "step": frozenset({"jump", "level", "kurt_lf"}),
+    "warmup": frozenset({"level", "jump", "kurt_lf"}),
     "spikes": frozenset({"spike", "kurt_hf", "hf"}),
     "telegraph": frozenset({"kurt_lf", "dyn", "jump", "level"}),
 }
