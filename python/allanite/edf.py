@@ -136,22 +136,21 @@ def _alpha_range(d: int) -> tuple[int, int]:
 def _sw(t: NDArray[np.float64], alpha: int) -> NDArray[np.float64]:
     """Generalised autocovariance of the continuous power-law process, G&R eq. (7)."""
     a = np.abs(t)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        log_a = np.where(a > 0, np.log(np.where(a > 0, a, 1.0)), 0.0)
     if alpha == 2:
         return -a
-    if alpha == 1:
-        return a**2 * log_a
     if alpha == 0:
         return a**3
-    if alpha == -1:
-        return -(a**4) * log_a
     if alpha == -2:
         return -(a**5)
-    if alpha == -3:
-        return a**6 * log_a
     if alpha == -4:
         return a**7
+    log_a = np.log(a, out=np.zeros_like(a), where=a > 0)  # t^k log|t| -> 0 at t = 0
+    if alpha == 1:
+        return a**2 * log_a
+    if alpha == -1:
+        return -(a**4) * log_a
+    if alpha == -3:
+        return a**6 * log_a
     raise ValueError(f"alpha must be an integer in [-4, 2], got {alpha}")
 
 
@@ -187,6 +186,7 @@ def _sz0_squared(f: float, alpha: int, d: int) -> float:
     return float(_sz(np.array([0.0]), f, alpha, d)[0]) ** 2
 
 
+@functools.lru_cache(maxsize=4096)
 def greenhall_edf(
     alpha: int, d: int, m: int, n_phase: int, *, overlapping: bool, modified: bool
 ) -> float:

@@ -87,7 +87,9 @@ def log_grid(n_samples: int, points: int) -> NDArray[np.int64]:
     if points < 2:
         raise ValueError(f"points must be at least 2, got {points}")
     top = 2.0 ** np.floor(np.log2(n_samples / 2))
-    return np.unique(np.ceil(np.logspace(0, np.log10(top), points))).astype(np.int64)
+    # clip: logspace's last value can round a hair above top, and ceil would then exceed it
+    grid = np.minimum(np.ceil(np.logspace(0, np.log10(top), points)), top)
+    return np.unique(grid).astype(np.int64)
 
 
 def averaging_factors(
