@@ -6,6 +6,7 @@ honest uncertainty, noise simulation from a model, and a diagnosis of the sim-to
 
 from __future__ import annotations
 
+from allanite.diagnosis import Diagnosis, diagnose
 from allanite.io import Record, read_record
 from allanite.model import NoiseModel
 from allanite.terms import (
@@ -36,6 +37,7 @@ __version__ = "0.1.0"
 __all__ = [
     "KINDS",
     "AllanResult",
+    "Diagnosis",
     "Flicker",
     "GaussMarkov",
     "NoiseModel",
@@ -49,6 +51,7 @@ __all__ = [
     "__version__",
     "adev",
     "avar",
+    "diagnose",
     "hdev",
     "mdev",
     "oadev",
