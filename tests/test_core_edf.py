@@ -227,3 +227,17 @@ def test_ci_limits_follow_chi_square() -> None:
     np.testing.assert_allclose(hi, res.var * res.edf / stats.chi2.ppf(0.05, res.edf))
     assert np.all(lo < res.var)
     assert np.all(res.var < hi)
+
+
+@pytest.mark.parametrize(
+    "kind", ["overlapping", "standard", "modified", "hadamard", "standard_hadamard", "total"]
+)
+@pytest.mark.parametrize("n_phase", [10, 57, 1001])
+def test_edf_is_finite_and_positive_at_every_admissible_factor(kind: str, n_phase: int) -> None:
+    top = _core.max_m(kind, n_phase)
+    m = np.unique(np.r_[np.arange(1, top + 1, 1 if n_phase < 100 else 13), top])
+    lo = -2 if kind in ("overlapping", "standard", "modified", "total") else -4
+    for alpha in range(lo, 3):
+        out = edf.equivalent_dof(kind, np.full((m.size, 1), alpha), m, n_phase)
+        assert np.all(np.isfinite(out)), (kind, alpha)
+        assert np.all(out > 0), (kind, alpha)
