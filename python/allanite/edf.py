@@ -546,7 +546,10 @@ def identify_alpha(
     Parameters
     ----------
     phase : numpy.ndarray
-        Phase array ``(M, C)`` in sample units (from :func:`allanite._core.phase`).
+        Phase array ``(M, C)`` in sample units: for frequency-like records the prefix sums of
+        :func:`allanite._core.phase`; for phase data (angle input) the phase as recorded, trend
+        included, which is what Stable32 analyses (a frequency offset makes the lag-1 method
+        difference at least once).
     m : numpy.ndarray
         Averaging factors, shape ``(T,)``.
     kind : str

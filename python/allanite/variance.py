@@ -329,8 +329,12 @@ def avar(
     points : int
         Number of points of the ``"log"`` grid.
     alpha : int or array_like, optional
-        Power-law noise exponent (2 white PM ... -2 random walk FM) for the EDF; identified from
-        the data (lag-1 autocorrelation) when omitted.
+        Power-law noise exponent (2 white PM ... -2 random walk FM, down to -4 for the Hadamard
+        kinds) for the EDF: a scalar, one per tau, or ``(taus, channels)``. When omitted it is
+        identified from the data at every tau as Stable32 does (lag-1 autocorrelation with at
+        least 30 decimated points, else the B1 ratio and R(n); :func:`allanite.edf.identify_alpha`).
+        The EDF follows Greenhall & Riley (2003) for every kind but ``total``, which uses the
+        SP1065 formulas (:mod:`allanite.edf`).
     threads : int, optional
         Worker threads (default: all cores). Results are identical for any thread count.
     units : str, optional
