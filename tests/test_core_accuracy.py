@@ -68,6 +68,52 @@ def test_angle_with_large_drift_matches_exact_value(drift: float) -> None:
     assert rel.max() < 1e-12, f"drift {drift:g}: worst relative error {rel.max():.2e}"
 
 
+def _exact_variance(x: np.ndarray, m: int, kind: str) -> float:
+    """Variance of every kind from an int64 phase, differences exact, squares summed by fsum."""
+    big_m = x.size
+    if kind in ("overlapping", "standard"):
+        d = x[2 * m :] - 2 * x[m : big_m - m] + x[: big_m - 2 * m]
+        if kind == "standard":
+            d = d[::m][: (big_m - 1) // m - 1]
+        den = 2.0 * m * m * d.size
+    elif kind in ("hadamard", "standard_hadamard"):
+        d = x[3 * m :] - 3 * x[2 * m : big_m - m] + 3 * x[m : big_m - 2 * m] - x[: big_m - 3 * m]
+        if kind == "standard_hadamard":
+            d = d[::m][: (big_m - 1) // m - 2]
+        den = 6.0 * m * m * d.size
+    elif kind == "modified":
+        d2 = x[2 * m :] - 2 * x[m : big_m - m] + x[: big_m - 2 * m]
+        prefix = np.concatenate(([0], np.cumsum(d2)))
+        n = big_m - 3 * m + 1
+        d = prefix[m : m + n] - prefix[:n]  # window sums of m second differences
+        den = 2.0 * m**4 * n
+    else:  # total: point reflection at both ends
+        left = 2 * x[0] - x[big_m - 2 : 0 : -1]
+        right = 2 * x[-1] - x[big_m - 2 : 0 : -1]
+        ext = np.concatenate((left, x, right))
+        i = np.arange(1, big_m - 1) + big_m - 2
+        d = ext[i - m] - 2 * ext[i] + ext[i + m]
+        den = 2.0 * m * m * (big_m - 2)
+    assert np.max(np.abs(d)) < 2**53
+    return math.fsum((d.astype(np.float64) ** 2).tolist()) / den
+
+
+@pytest.mark.parametrize(
+    "kind", ["overlapping", "standard", "modified", "hadamard", "standard_hadamard", "total"]
+)
+def test_every_kind_with_bias_matches_exact_value(white_ints: np.ndarray, kind: str) -> None:
+    n, bias = 100_000, 1e10
+    y = bias + white_ints[:n] / GRID
+    w = np.round((y - bias) * GRID).astype(np.int64)
+    phase = np.concatenate(([0], np.cumsum(w)))
+    top = allanite.taus.max_factor(kind, n + 1)
+    factors = np.unique([1, 2, 7, 100, 1000, top // 3, top])
+    exact = np.array([_exact_variance(phase, int(m), kind) for m in factors]) / GRID**2
+    res = allanite.avar(y, 1.0, kind=kind, m=factors)  # type: ignore[arg-type]
+    rel = np.abs(res.var / exact - 1.0)
+    assert rel.max() < 1e-12, f"{kind}: worst relative error {rel.max():.2e}"
+
+
 def test_plain_cumsum_would_fail_at_large_bias(white_ints: np.ndarray) -> None:
     """The test above is not vacuous: the naive estimator is far off at b = 1e10."""
     y = 1e10 + white_ints / GRID
