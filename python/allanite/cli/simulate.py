@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import math
 from collections.abc import Callable, Iterator
 from typing import Any
 
@@ -67,25 +66,26 @@ def _progress(total: int, enabled: bool) -> Iterator[Callable[[int], None] | Non
 def run(args: argparse.Namespace) -> int:
     """Load the model, simulate and write the record; returns the exit code."""
     from allanite.model import NoiseModel
-    from allanite.simulation import record_length, simulate_chunks
-    from allanite.simulation.writers import format_of, write_chunks
+    from allanite.simulation import record_length
+    from allanite.simulation.writers import format_of, write_record
 
     format_of(args.out)  # fail on a bad suffix before any work
     model = NoiseModel.load(args.model)
     n = record_length(args.fs, args.samples, args.duration)
-    chunks = simulate_chunks(
-        model,
-        args.fs,
-        n,
-        output=args.output,
-        channels=args.channels,
-        seed=args.seed,
-        allow_aliasing=args.allow_aliasing,
-    )
     unit = model.units["rate"]
-    what = {"rate": unit, "increment": f"{unit}*s", "angle": f"{unit}*s"}[args.output]
-    names = [f"{args.output}_{c}[{what}]" for c in range(args.channels)]
-    big = n * args.channels >= 10_000_000 and not math.isnan(args.fs)
+    what = unit if args.output == "rate" else f"{unit}*s"
+    big = n * args.channels >= 10_000_000
     with _progress(n, big and not args.quiet) as update:
-        write_chunks(args.out, chunks, n, args.channels, header=",".join(names), progress=update)
+        write_record(
+            args.out,
+            model,
+            args.fs,
+            n,
+            output=args.output,
+            channels=args.channels,
+            seed=args.seed,
+            allow_aliasing=args.allow_aliasing,
+            units=what,
+            progress=update,
+        )
     return 0

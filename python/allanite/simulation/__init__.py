@@ -15,6 +15,7 @@ from allanite.simulation.record import (
     simulate_chunks,
 )
 from allanite.simulation.streams import BLOCK, SumStream, TermStream
+from allanite.simulation.writers import write_record
 
 __all__ = [
     "BLOCK",
@@ -25,4 +26,5 @@ __all__ = [
     "record_length",
     "simulate",
     "simulate_chunks",
+    "write_record",
 ]

@@ -11,13 +11,15 @@ from __future__ import annotations
 import os
 from collections.abc import Callable, Iterable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from allanite.io.atomic import atomic_output
+from allanite.simulation.record import record_length, simulate_chunks
 
-__all__ = ["FORMATS", "format_of", "write_chunks"]
+__all__ = ["FORMATS", "format_of", "write_chunks", "write_record"]
 
 #: file suffix -> format name
 FORMATS = {".npy": "npy", ".csv": "csv", ".bin": "raw", ".raw": "raw", ".f64": "raw"}
@@ -85,3 +87,38 @@ def write_chunks(
         if written != n_samples:
             raise ValueError(f"expected {n_samples} samples, got {written}")
     return Path(path)
+
+
+def write_record(
+    path: str | os.PathLike[str],
+    model: Any,
+    fs: float,
+    n: int | None = None,
+    *,
+    duration: str | float | None = None,
+    output: str = "rate",
+    channels: int = 1,
+    seed: Any = None,
+    allow_aliasing: bool = False,
+    units: str = "rate",
+    progress: Callable[[int], None] | None = None,
+) -> Path:
+    """Simulate a record from ``model`` straight into a file, in bounded memory.
+
+    Parameters as in :func:`allanite.simulation.simulate`; ``path`` picks the format
+    (:data:`FORMATS`), ``units`` labels the CSV columns, ``progress`` is called with the
+    samples of each written chunk. The file appears only when complete.
+    """
+    format_of(path)  # fail on a bad suffix before any work
+    total = record_length(fs, n, duration)
+    chunks = simulate_chunks(
+        model,
+        fs,
+        total,
+        output=output,  # type: ignore[arg-type]
+        channels=channels,
+        seed=seed,
+        allow_aliasing=allow_aliasing,
+    )
+    names = ",".join(f"{output}_{c}[{units}]" for c in range(channels))
+    return write_chunks(path, chunks, total, channels, header=names, progress=progress)
