@@ -241,3 +241,21 @@ def test_diagnosis_figure(base, null_record):
     d = run(null_record, base, n_mc=20)
     fig = diagnosis_figure(d)
     assert len(fig.axes) == 3
+
+
+@pytest.mark.slow
+def test_false_alarm_rate_is_calibrated(base):
+    """30 null records: false alarms ~ Binomial(30, <= 0.05); 6 or more has probability 0.2 %."""
+    from scipy import stats
+
+    n_trials = 30
+    alarms = 0
+    tau_p = []
+    for i in range(n_trials):
+        real = base.simulate(2**13, FS, seed=1000 + i)
+        d = diagnose(real, base, FS, n_mc=40, seed=2000 + i)
+        alarms += d.significant
+        tau_p.append(d.tau.p_value)
+    assert alarms <= 5
+    # the tau-view p-values are not piled up at small values (KS against uniform, 1 % level)
+    assert stats.kstest(tau_p, "uniform").pvalue > 0.01
