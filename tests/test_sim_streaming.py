@@ -90,6 +90,18 @@ def test_output_kinds_are_consistent():
     np.testing.assert_allclose(angle, np.cumsum(rate, axis=0) / 50.0, rtol=1e-9, atol=1e-12)
 
 
+def test_angle_is_summed_without_rounding_drift():
+    # a large turn-on bias under small white noise: the naive running sum drifts, the
+    # compensated one stays within one rounding of the exact (math.fsum) sum
+    import math
+
+    model = NoiseModel((TurnOnBias(sigma=1e3), White(N=1e-4)))
+    rate = model.simulate(20_000, 100.0, seed=4)
+    angle = model.simulate(20_000, 100.0, seed=4, output="angle")
+    exact = np.array([math.fsum(rate[: k + 1]) for k in range(0, 20_000, 997)]) / 100.0
+    np.testing.assert_allclose(angle[::997], exact, rtol=2.3e-16, atol=0)
+
+
 def test_duration_and_single_channel_shape():
     x = simulate([White(N=1.0)], 10.0, duration="1.5min", seed=1)
     assert x.shape == (900,)

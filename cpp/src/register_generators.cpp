@@ -48,6 +48,28 @@ CArray ar1_bank(py::array_t<double> state, const CArray& phi, const CArray& q, c
   return out;
 }
 
+CArray running_sum(py::array_t<double> hi, py::array_t<double> lo, const CArray& x) {
+  if (x.ndim() != 2)
+    throw py::value_error("running_sum: x must be a 2-D (samples, channels) float64 array");
+  const py::ssize_t B = x.shape(0), C = x.shape(1);
+  for (const auto* state : {&hi, &lo}) {
+    if (state->ndim() != 1 || state->shape(0) != C || !(state->flags() & py::array::c_style) ||
+        !state->writeable())
+      throw py::value_error("running_sum: hi and lo must be writeable float64 arrays of length " +
+                            std::to_string(C));
+  }
+  CArray out({B, C});
+  double* phi = hi.mutable_data();
+  double* plo = lo.mutable_data();
+  const double* px = x.data();
+  double* po = out.mutable_data();
+  {
+    py::gil_scoped_release release;
+    allanite::running_sum(phi, plo, px, po, static_cast<std::size_t>(B), static_cast<std::size_t>(C));
+  }
+  return out;
+}
+
 }  // namespace
 
 void register_generators(py::module_& m) {
@@ -56,6 +78,10 @@ void register_generators(py::module_& m) {
         "Bank of first-order recursions: for each sample k, component j, channel c, with "
         "e = q[j] z[k, j, c]: out[k, c] += a[j] state[j, c] + b[j] e; state[j, c] = phi[j] "
         "state[j, c] + e. state (J, C) is updated in place; z is (B, J, C); returns (B, C).");
+  m.def("running_sum", &running_sum, py::arg("hi").noconvert(), py::arg("lo").noconvert(),
+        py::arg("x"),
+        "Compensated (Neumaier) running sum of x (B, C) down the samples, continuing from the "
+        "state (hi, lo) of length C, which is updated in place; returns (B, C).");
 }
 
 }  // namespace allanite::bind

@@ -49,6 +49,11 @@ def ar1_bank(
 ) -> NDArray[np.float64]:
     """Bank of first-order recursions; ``state`` ``(J, C)`` updated in place, returns ``(B, C)``."""
 
+def running_sum(
+    hi: NDArray[np.float64], lo: NDArray[np.float64], x: ArrayLike
+) -> NDArray[np.float64]:
+    """Compensated running sum of ``x`` ``(B, C)`` continuing from the state ``(hi, lo)``."""
+
 # register_streaming.cpp ---------------------------------------------------------------------
 
 def stream_sums(

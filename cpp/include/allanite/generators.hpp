@@ -21,10 +21,12 @@
 // bit-for-bit independent of the thread count.
 #pragma once
 
+#include <cmath>
 #include <cstddef>
 #include <stdexcept>
 #include <string>
 
+#include "allanite/compensated.hpp"
 #include "allanite/parallel.hpp"
 
 namespace allanite {
@@ -62,6 +64,31 @@ inline void ar1_bank(double* state, const double* phi, const double* q, const do
       out[k * C + c] = acc;
     }
   });
+}
+
+/// Compensated running sum over B samples of C channels, carried across calls.
+///
+/// hi, lo: length-C state (the Neumaier sum and its compensation), updated in place.
+/// x: B x C row-major increments. out: B x C row-major, out[k, c] = sum of x[0..k, c] plus
+/// the carried total, rounded once. Chunked calls give the same result as one call.
+inline void running_sum(double* hi, double* lo, const double* x, double* out, std::size_t B,
+                        std::size_t C) {
+  for (std::size_t c = 0; c < C; ++c) {
+    double sum = hi[c], comp = lo[c];
+    for (std::size_t k = 0; k < B; ++k) {
+      const double v = x[k * C + c];
+      const double t = sum + v;
+      if (std::fabs(sum) >= std::fabs(v)) {
+        comp += (sum - t) + v;
+      } else {
+        comp += (v - t) + sum;
+      }
+      sum = t;
+      out[k * C + c] = sum + comp;
+    }
+    hi[c] = sum;
+    lo[c] = comp;
+  }
 }
 
 }  // namespace allanite

@@ -5,7 +5,8 @@ A model is a sum of :class:`~allanite.terms.base.Term` objects (a
 seed (``SeedSequence(seed).spawn(n_terms)``) and streams its rate samples; the sum is
 returned as rate, angle increments (:math:`\Delta\theta_k = \bar\omega_k \Delta t`) or angle
 (:math:`\theta_k = \Delta t\sum_{i \le k}\bar\omega_i`, the angle at the end of sample
-``k``). Every sample depends on the seed alone: :func:`simulate` and any chunking of
+``k``, summed with Neumaier compensation in the C++ core so that day-long records keep full
+precision). Every sample depends on the seed alone: :func:`simulate` and any chunking of
 :func:`simulate_chunks` agree bit for bit.
 """
 
@@ -20,6 +21,7 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import NDArray
 
+from allanite import _core
 from allanite.simulation.streams import SumStream, check_fs, seed_sequence
 from allanite.terms.base import Term
 
@@ -164,7 +166,8 @@ def simulate_chunks(
         raise ValueError(f"chunk must be a positive number of samples, got {chunk!r}")
     stream = _open(model, rate, total, channels, seed, allow_aliasing)
     dt = 1.0 / rate
-    angle_sum = np.zeros((1, stream.n_channels))
+    # compensated running sum carried across chunks (C++): identical for any chunking
+    angle_hi, angle_lo = np.zeros(stream.n_channels), np.zeros(stream.n_channels)
     done = 0
     while done < total:
         size = min(int(chunk), total - done)
@@ -172,10 +175,7 @@ def simulate_chunks(
         if output == "increment":
             values = values * dt
         elif output == "angle":
-            # sequential running sum carried across chunks: identical for any chunking
-            summed = np.add.accumulate(np.concatenate([angle_sum, values]), axis=0)[1:]
-            angle_sum = summed[-1:].copy()
-            values = summed * dt
+            values = _core.running_sum(angle_hi, angle_lo, values) * dt
         done += size
         yield values
 
