@@ -78,7 +78,7 @@ def standard_variance(x: NDArray[np.float64], m: int) -> float:
 
 
 def modified_variance(x: NDArray[np.float64], m: int) -> float:
-    """Modified Allan variance, SP1065 eq. (14): windows of m second differences."""
+    """Return the modified Allan variance, SP1065 eq. (14): windows of m second differences."""
     d = _d2(x, m)
     n = x.size - 3 * m + 1
     windows = np.array([np.sum(d[j : j + m]) for j in range(n)])
@@ -124,7 +124,7 @@ _KERNELS = {
 
 
 def variance(x: ArrayLike, m: ArrayLike, kind: str, input: str = "rate") -> NDArray[np.float64]:
-    """Reference variance of a record for each averaging factor, every channel.
+    """Return the reference variance of a record for each averaging factor, every channel.
 
     Parameters
     ----------
