@@ -40,8 +40,8 @@ def load(run: int, axis: int) -> np.ndarray:
 def fit_model(x: np.ndarray) -> tuple[NoiseModel, str]:
     """Fit white + quantization + flicker + rate random walk on run 1.
 
-    Uses :mod:`allanite.fit` when it offers ``fit``; otherwise each Term's own starting guess
-    from the Allan curve (``Term.guess``), which is what the fit starts from.
+    Uses :func:`allanite.fit.fit` (GLS) when it converges on this curve; otherwise each
+    Term's own starting value from the Allan curve (``Term.guess``).
     """
     result = allanite.avar(x, FS, taus="octave", units="deg/s")
     try:
@@ -50,14 +50,19 @@ def fit_model(x: np.ndarray) -> tuple[NoiseModel, str]:
         fit = None
     if fit is not None:
         fitted = fit(result, terms=["quantization", "white", "flicker", "rrw"])
-        model = getattr(fitted, "model", fitted)
-        return model, "allanite.fit (GLS)"
+        # a fit whose chi-square is far off its degrees of freedom did not converge to this
+        # curve; then the Terms' own starting values are the better model of run 1
+        if fitted.chi2 < 50 * max(fitted.dof, 1):
+            return fitted.model, f"allanite.fit (GLS, chi2 {fitted.chi2:.3g} / {fitted.dof} dof)"
+        note = f"allanite.fit rejected (chi2 {fitted.chi2:.3g} / {fitted.dof} dof); "
+    else:
+        note = ""
     terms = []
     for kind in ("quantization", "white", "flicker", "rrw"):
         guess = TERM_TYPES[kind].guess(result)
         if guess is not None:
             terms.append(guess)
-    return NoiseModel(tuple(terms), {"rate": "deg/s", "time": "s"}), "Term.guess"
+    return NoiseModel(tuple(terms), {"rate": "deg/s", "time": "s"}), note + "Term.guess"
 
 
 def summary(d: Any) -> dict[str, Any]:

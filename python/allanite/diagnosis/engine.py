@@ -13,6 +13,7 @@ from allanite.diagnosis.candidates import candidate_library
 from allanite.diagnosis.holdout import holdout_check
 from allanite.diagnosis.inputs import MIN_SAMPLES, as_rate, check_units, make_source
 from allanite.diagnosis.result import Diagnosis, Holdout
+from allanite.variance import _check_fs
 
 __all__ = ["diagnose"]
 
@@ -21,16 +22,6 @@ START_EFFECTS = ("warmup",)
 
 #: statistics of the frequency and time views that count as evidence for an effect
 EVIDENCE = ("line", "jump", "level", "spike", "kurt_hf", "kurt_lf", "hf", "dyn")
-
-
-def _check_fs(fs: Any) -> float:
-    try:
-        value = float(fs)
-    except (TypeError, ValueError) as exc:
-        raise TypeError(f"fs must be a number in Hz, got {fs!r}") from exc
-    if not np.isfinite(value) or value <= 0:
-        raise ValueError(f"fs must be a positive, finite sampling frequency in Hz, got {fs!r}")
-    return value
 
 
 def _split(
