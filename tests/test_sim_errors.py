@@ -38,6 +38,15 @@ def test_tone_above_nyquist_needs_the_aliasing_flag():
     assert np.fft.rfftfreq(100, 0.01)[np.argmax(spectrum)] == pytest.approx(20.0)
 
 
+def test_events_far_faster_than_the_sampling_are_refused():
+    from allanite.terms import BiasSteps
+
+    with pytest.raises(ValueError, match="events per sample"):
+        simulate([Telegraph(amplitude=1.0, tau_c=1e-6)], 100.0, 100, seed=1)
+    with pytest.raises(ValueError, match="events per sample"):
+        simulate([BiasSteps(size=1.0, interval=1e-5)], 100.0, 100, seed=1)
+
+
 def test_flicker_cutoff_above_nyquist_is_refused():
     from allanite.terms import Flicker
 

@@ -31,6 +31,10 @@ from numpy.typing import NDArray
 from allanite import _core
 from allanite.simulation.streams import TermStream
 
+#: most events (steps, switches) expected per sample: beyond it a sample averages so many that
+#: the effect is Gaussian noise (use GaussMarkov / RateRandomWalk terms instead)
+MAX_EVENTS_PER_SAMPLE = 100.0
+
 __all__ = [
     "ConstantStream",
     "RampStream",
@@ -40,6 +44,16 @@ __all__ = [
     "TelegraphStream",
     "WarmUpStream",
 ]
+
+
+def _events_per_sample(mean: float, what: str, parameter: str) -> float:
+    if mean > MAX_EVENTS_PER_SAMPLE:
+        raise ValueError(
+            f"{what}: {mean:.3g} events per sample period; with so many the samples are "
+            f"Gaussian noise: raise {parameter} or the sampling rate, or model the effect as "
+            "a Gauss-Markov or rate random walk term"
+        )
+    return mean
 
 
 class SineStream(TermStream):
@@ -115,7 +129,7 @@ class StepStream(TermStream):
     ) -> None:
         super().__init__(fs, n_channels, seed)
         self.size = float(size)
-        self.mean_events = self.dt / float(interval)
+        self.mean_events = _events_per_sample(self.dt / float(interval), "bias steps", "interval")
         self.level = np.zeros((1, self.n_channels))
 
     def _generate(self, start: int, n: int) -> NDArray[np.float64]:
@@ -161,7 +175,9 @@ class TelegraphStream(TermStream):
     ) -> None:
         super().__init__(fs, n_channels, seed)
         self.amplitude = float(amplitude)
-        self.mean_switches = self.dt / (2.0 * float(tau_c))
+        self.mean_switches = _events_per_sample(
+            self.dt / (2.0 * float(tau_c)), "telegraph", "tau_c"
+        )
         self.state = np.where(self.rng.random(self.n_channels) < 0.5, -1.0, 1.0)
 
     def _generate(self, start: int, n: int) -> NDArray[np.float64]:

@@ -1,6 +1,7 @@
 r"""Flicker (1/f) rate noise: exact spectral synthesis, or a streaming Gauss-Markov bank.
 
-* Records up to :data:`SPECTRAL_MAX_SAMPLES` samples: :class:`~allanite.simulation.spectral.
+* Records up to :data:`SPECTRAL_MAX_SAMPLES` samples (and :data:`SPECTRAL_MAX_VALUES` values
+  over all channels): :class:`~allanite.simulation.spectral.
   SpectralStream` with the term's exact sampled PSD :math:`B^2/(\pi f)\,\mathrm{sinc}^2(f
   \Delta t)` (interval averages of band-limited 1/f noise), so the samples have the exact
   Allan variance of :class:`allanite.terms.Flicker` down to :math:`\tau = \Delta t`.
@@ -40,8 +41,11 @@ __all__ = [
     "flicker_stream",
 ]
 
-#: longest record synthesised spectrally in one piece (longer ones use the streaming bank)
-SPECTRAL_MAX_SAMPLES = 1 << 22
+#: longest record synthesised spectrally in one piece (longer ones use the streaming bank);
+#: one channel's synthesis needs about 24 x 4 x 8 bytes per sample transiently (200 MB here)
+SPECTRAL_MAX_SAMPLES = 1 << 21
+#: and at most this many values (samples x channels) held for all channels (128 MB)
+SPECTRAL_MAX_VALUES = 1 << 24
 #: Gauss-Markov components per decade of correlation time in the streaming bank
 PER_DECADE = 3
 #: components up to this correlation time (in samples) are fitted, slower ones analytic
@@ -169,8 +173,9 @@ def flicker_stream(
     n_samples : int, optional
         Record length, if known (needed by the spectral method).
     method : {"auto", "spectral", "bank"}
-        ``auto`` = spectral when ``n_samples`` is known and at most
-        :data:`SPECTRAL_MAX_SAMPLES`, else the streaming bank.
+        ``auto`` = spectral when ``n_samples`` is known, at most
+        :data:`SPECTRAL_MAX_SAMPLES` and ``n_samples * n_channels`` at most
+        :data:`SPECTRAL_MAX_VALUES`, else the streaming bank.
     """
     if method not in ("auto", "spectral", "bank"):
         raise ValueError(f"unknown flicker method {method!r}; use 'auto', 'spectral' or 'bank'")
@@ -181,7 +186,10 @@ def flicker_stream(
             "its aliased part is not simulated: omit f0 (cutoff at Nyquist) or set f0 <= fs/2"
         )
     spectral = method == "spectral" or (
-        method == "auto" and n_samples is not None and n_samples <= SPECTRAL_MAX_SAMPLES
+        method == "auto"
+        and n_samples is not None
+        and n_samples <= SPECTRAL_MAX_SAMPLES
+        and n_samples * n_channels <= SPECTRAL_MAX_VALUES
     )
     if spectral:
         if n_samples is None:

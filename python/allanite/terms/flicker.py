@@ -99,7 +99,7 @@ class Flicker(Term):
     ) -> TermStream:
         """Stream flicker noise (see :mod:`allanite.simulation.flicker`).
 
-        Spectral synthesis of the exact sampled PSD for records of known length up to 2^22
+        Spectral synthesis of the exact sampled PSD for records of known length up to 2^21
         samples, else a streaming Gauss-Markov bank.
         """
         from allanite.simulation.flicker import flicker_stream
