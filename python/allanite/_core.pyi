@@ -54,14 +54,6 @@ def running_sum(
 ) -> NDArray[np.float64]:
     """Compensated running sum of ``x`` ``(B, C)`` continuing from the state ``(hi, lo)``."""
 
-def running_sum(
-    hi: NDArray[np.float64], lo: NDArray[np.float64], x: ArrayLike
-) -> NDArray[np.float64]:
-    """Compensated running sum of ``x`` ``(B, C)`` down the samples from the state ``(hi, lo)``.
-
-    ``hi`` and ``lo`` (length C, float64, writeable) are updated in place; returns ``(B, C)``.
-    """
-
 # register_streaming.cpp ---------------------------------------------------------------------
 
 def stream_sums(
