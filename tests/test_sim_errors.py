@@ -92,6 +92,11 @@ def test_bad_arguments(kwargs, error, match):
         simulate([White(N=1.0)], **kwargs)
 
 
+def test_model_simulate_needs_fs():
+    with pytest.raises(TypeError, match="sampling frequency"):
+        example_model().simulate(100)
+
+
 def test_empty_model():
     with pytest.raises(ValueError, match="no terms"):
         simulate(NoiseModel(()), 10.0, 10)

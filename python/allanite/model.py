@@ -228,7 +228,7 @@ class NoiseModel:
     def simulate(
         self,
         n: int | None = None,
-        fs: float = 1.0,
+        fs: float | None = None,
         *,
         duration: str | float | None = None,
         output: str = "rate",
@@ -245,6 +245,8 @@ class NoiseModel:
         """
         from allanite.simulation import simulate
 
+        if fs is None:
+            raise TypeError("simulate() needs the sampling frequency fs in Hz, e.g. fs=100.0")
         return simulate(
             self,
             fs,
