@@ -21,7 +21,7 @@ from allanite.report import (
     build_report,
     check_limits,
     coefficient_table,
-    customary_unit,
+    customary_rate,
     slope_table,
 )
 from allanite.report.datasheet import Measured
@@ -106,12 +106,10 @@ def test_customary_units_and_coefficients() -> None:
     from allanite.model import NoiseModel
     from allanite.terms import TERM_TYPES
 
-    assert customary_unit("deg/s", 1, 0.5) == "deg/sqrt(h)"
-    assert customary_unit("deg/s", 1, 0) == "deg/h"
-    assert customary_unit("rad/s", 1, -0.5) == "rad/h/sqrt(h)"
-    assert customary_unit("deg/s", 1, 1) == "deg"
-    assert customary_unit("deg/s", 1, -1) == "deg/h^2"
-    assert customary_unit("deg/s", 0, 1) == "s"
+    assert customary_rate("deg/s") == "deg/h"
+    assert customary_rate("rad/s") == "rad/h"
+    assert customary_rate("furlong/s") is None
+    assert customary_rate(None) is None
     white = TERM_TYPES["white"](N=0.01)
     rows = coefficient_table(NoiseModel(terms=(white,), units={"rate": "deg/s", "time": "s"}), None)
     assert len(rows) == 1

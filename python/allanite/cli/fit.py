@@ -49,16 +49,20 @@ def register(subparsers: Any) -> None:
 
 def _fit_function() -> Any:
     try:
-        from allanite.fit import fit  # type: ignore[attr-defined]
+        from allanite.fit import fit
     except ImportError:
         return None
     return fit
 
 
 def fit_result(result: AllanResult) -> Any:
-    """Fit a noise model to one channel, or None when this installation has no fitter."""
+    """Fit a noise model (terms chosen automatically) to one channel of an overlapping AVAR.
+
+    Returns None when this installation has no fitter or the estimator is not the overlapping
+    Allan variance (the fit models that estimator's covariance).
+    """
     fit = _fit_function()
-    if fit is None:
+    if fit is None or result.kind != "overlapping":
         return None
     return fit(result)
 
@@ -73,6 +77,10 @@ def run(args: argparse.Namespace) -> int:
 
     if _fit_function() is None:
         raise ValueError("fitting is not available in this installation (allanite.fit.fit)")
+    if args.kind != "overlapping":
+        raise ValueError(
+            f"--kind {args.kind}: the fit models the overlapping Allan variance; leave --kind out"
+        )
     record = read_from_args(args.file, args)
     result = avar_from_args(record, args)
     channels = []
@@ -82,7 +90,7 @@ def run(args: argparse.Namespace) -> int:
     ):
         fit = fit_result(result.channel(c))
         fits.append(fit)
-        rows = coefficient_table(fit, result.units)
+        rows = coefficient_table(fit, result.units, args.level)
         channels.append(
             {
                 "channel": name,

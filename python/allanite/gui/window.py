@@ -396,9 +396,7 @@ class MainWindow(QtWidgets.QMainWindow):
             if fit is None:
                 continue
             first_fit = first_fit if first_fit is not None else (c, fit)
-            for k in coefficient_table(
-                fit, self.session.result.units if self.session.result else None
-            ):
+            for k in coefficient_table(fit, result.units, self.session.options.level):
                 interval = "–" if k.low != k.low else f"{k.low:.4g} … {k.high:.4g}"
                 rows.append([names[c], k.term, k.symbol, f"{k.value:.4g}", interval, k.unit])
         if first_fit is None:

@@ -195,11 +195,13 @@ def plot_model(
             continue
         share = np.where(visible, var / np.where(total > 0, total, 1.0), -1.0)
         k = int(np.argmax(share))
+        right = k > 0.8 * (tau.size - 1)  # keep labels near the right edge inside the axes
         ax.annotate(
             f"slope {slope}",
             (tau[k], dev[k]),
-            xytext=(4, 6),
+            xytext=(-6 if right else 4, 6),
             textcoords="offset points",
+            ha="right" if right else "left",
             fontsize="small",
             color=line.get_color(),
             bbox={

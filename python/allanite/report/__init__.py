@@ -7,7 +7,7 @@
 from __future__ import annotations
 
 from allanite.report.build import DeviceAnalysis, Report, build_report
-from allanite.report.coefficients import Coefficient, coefficient_table, customary_unit
+from allanite.report.coefficients import Coefficient, coefficient_table, customary_rate
 from allanite.report.datasheet import Check, Datasheet, Limit, check_limits
 from allanite.report.slopes import SlopeRow, slope_table
 
@@ -22,6 +22,6 @@ __all__ = [
     "build_report",
     "check_limits",
     "coefficient_table",
-    "customary_unit",
+    "customary_rate",
     "slope_table",
 ]

@@ -408,7 +408,7 @@ def build_report(
     figures: dict[str, Any] = {"adev": _allan_figure(devices, reference, level)}
     figures.update(_fit_figures(devices, level))
     coefficients = {
-        (d, c): coefficient_table(device.fit(c), device.result.units)
+        (d, c): coefficient_table(device.fit(c), device.result.units, level)
         for d, device in enumerate(devices)
         for c in range(device.result.n_channels)
         if device.fit(c) is not None

@@ -1,10 +1,10 @@
 """Noise coefficients of a fit in customary units, with their intervals, for tables.
 
 Gyro datasheets quote angle random walk in deg/√h, bias instability in deg/h, rate random
-walk in deg/h/√h, quantization in the angle unit and rate ramp in deg/h² (IEEE Std 952).
-A coefficient whose unit is ``rate^r * s^t`` (see :class:`allanite.terms.base.ParamSpec`) is
-therefore shown as ``angle^r * h^(t - r)``; parameters without a rate power (correlation
-times, frequencies) stay in seconds and hertz.
+walk in deg/h/√h, quantization in the angle unit and rate ramp in deg/h² (IEEE Std 952). The
+conversion is :func:`allanite.units.display_unit` with the rate unit ``<angle>/h``; the values
+and intervals come from :meth:`allanite.fit.FitResult.table` (or, for a bare
+:class:`~allanite.model.NoiseModel`, from its coefficients, without intervals).
 """
 
 from __future__ import annotations
@@ -14,11 +14,10 @@ from dataclasses import dataclass
 from typing import Any
 
 from allanite.report.datasheet import Measured
-from allanite.units import ANGLE_UNITS, Unit, coefficient_unit, convert
+from allanite.units import ANGLE_UNITS, Unit, coefficient_unit, convert, display_unit
 
-__all__ = ["Coefficient", "coefficient_table", "customary_unit"]
+__all__ = ["Coefficient", "coefficient_table", "customary_rate"]
 
-_HOUR_SUFFIX = {0.0: "", -0.5: "/sqrt(h)", -1.0: "/h", -1.5: "/h/sqrt(h)", -2.0: "/h^2"}
 _SLOPES = {"Q": "−1", "N": "−1/2", "B": "0", "K": "+1/2", "R": "+1"}
 
 
@@ -40,88 +39,98 @@ class Coefficient:
         return Measured(self.value, self.low, self.high, self.unit, self.model_unit)
 
 
-def _angle_of(rate: str) -> str | None:
-    head = rate.split("/")[0].strip()
-    return head if head in ANGLE_UNITS else None
+def customary_rate(rate: str | None) -> str | None:
+    """Rate unit whose :func:`~allanite.units.display_unit` s are the customary ones.
 
-
-def customary_unit(rate: str | None, rate_power: float, time_power: float) -> str | None:
-    """Customary display unit of a coefficient, or None to keep the model's unit.
-
-    Parameters
-    ----------
-    rate : str or None
-        Rate unit of the model (``deg/s``, ``rad/s``, ...).
-    rate_power, time_power : float
-        Powers of the rate and of seconds in the coefficient's unit.
+    ``deg/s`` gives ``deg/h`` (N in deg/√h, B in deg/h, K in deg/h/√h, R in deg/h²); None when
+    the angle unit of ``rate`` is not recognised (then the model's units are kept).
     """
-    if rate_power == 0:
-        return {1.0: "s", -1.0: "Hz", 0.0: ""}.get(time_power)
-    angle = None if rate is None else _angle_of(rate)
-    if angle is None or rate_power != 1:
+    if rate is None:
         return None
-    return angle + _HOUR_SUFFIX[time_power - 1.0] if time_power - 1.0 in _HOUR_SUFFIX else None
+    angle = rate.split("/")[0].strip()
+    return f"{angle}/h" if angle in ANGLE_UNITS else None
 
 
-def _fit_parts(fit: Any) -> tuple[Any, dict[str, tuple[float, float]]]:
-    """Split a fit result (or a bare model) into the model and {key: (low, high)}."""
-    model = getattr(fit, "model", fit)
-    intervals: dict[str, tuple[float, float]] = {}
-    interval = getattr(fit, "intervals", None)
-    if callable(interval):
-        intervals = dict(interval())
-    elif isinstance(interval, dict):
-        intervals = dict(interval)
-    return model, intervals
+def _unit(rate: str | None, label: str, fallback: str) -> str:
+    if rate is None:
+        return fallback
+    try:
+        return display_unit(rate, label)
+    except ValueError:
+        return fallback
 
 
-def coefficient_table(fit: Any, rate: str | None) -> list[Coefficient]:
-    """Rows of every parameter of a fitted model in customary units.
+def coefficient_table(fit: Any, rate: str | None, level: float = 0.683) -> list[Coefficient]:
+    """Rows of every coefficient of a fit (or model) in customary units.
 
     Parameters
     ----------
     fit : FitResult or NoiseModel
-        Anything with ``model.terms`` or ``terms``; intervals come from the fit's ``intervals``
-        (``{"<type>.<param>": (low, high)}`` in model units) when present.
+        A fit gives values with ``level`` intervals; a bare model gives values only.
     rate : str or None
         Rate unit of the data; the model's own ``units["rate"]`` wins when present.
+    level : float
+        Confidence level of the intervals.
 
     Returns
     -------
     list of Coefficient
     """
-    model, intervals = _fit_parts(fit)
+    model = getattr(fit, "model", fit)
     units = getattr(model, "units", None)
     model_rate = units.get("rate") if isinstance(units, dict) else rate
-    rows = []
-    for term in model.terms:
-        for spec in term.params:
-            value = float(getattr(term, spec.name))
-            low, high = intervals.get(f"{term.type}.{spec.name}", (math.nan, math.nan))
-            target = customary_unit(model_rate, spec.rate, spec.time)
-            base = (
-                None if model_rate is None else coefficient_unit(model_rate, spec.rate, spec.time)
-            )
-            if model_rate is not None and target:
-                source = coefficient_unit(model_rate, spec.rate, spec.time)
-                value, low, high = (convert(v, source, target) for v in (value, low, high))
-                unit = target
-            else:
-                unit = (
-                    target
-                    if target is not None
-                    else (f"({model_rate or 'rate'})^{spec.rate:g}·s^{spec.time:g}")
-                )
+    show = customary_rate(model_rate)
+    labelled = {label: (term, spec) for label, term, spec in model.labelled_parameters()}
+    rows: list[Coefficient] = []
+    if hasattr(fit, "table") and hasattr(fit, "coefficients"):
+        for row in fit.table(None, level):
+            label = row["name"]
+            term, spec = labelled.get(label, (None, None))
+            unit = _unit(show, label, row["unit"])
+            values = [convert(row[k], row["unit"], unit) for k in ("value", "low", "high")]
             rows.append(
                 Coefficient(
-                    term=term.type,
-                    symbol=spec.name,
-                    value=value,
-                    low=low,
-                    high=high,
+                    term=getattr(term, "type", label),
+                    symbol=label,
+                    value=values[0],
+                    low=values[1],
+                    high=values[2],
                     unit=unit,
-                    slope=_SLOPES.get(spec.name) if spec.name == term.symbol else None,
-                    model_unit=base,
+                    slope=_SLOPES.get(label),
+                    model_unit=_model_unit(model_rate, spec, row["unit"]),
                 )
             )
+        return rows
+    for label, (term, spec) in labelled.items():
+        base = _model_unit(model_rate, spec, None)
+        value = float(getattr(term, spec.name))
+        unit = _unit(show, label, str(base.text) if base is not None else "model units")
+        if base is not None and unit != "model units":
+            value = convert(value, base, unit)
+        rows.append(
+            Coefficient(
+                term=term.type,
+                symbol=label,
+                value=value,
+                low=math.nan,
+                high=math.nan,
+                unit=unit,
+                slope=_SLOPES.get(label) if spec.name == term.symbol else None,
+                model_unit=base,
+            )
+        )
     return rows
+
+
+def _model_unit(rate: str | None, spec: Any, text: str | None) -> Unit | None:
+    """Return the unit of a coefficient in the model: ``rate^r * s^t``."""
+    if text is not None:
+        from allanite.units import parse_unit
+
+        try:
+            return parse_unit(text)
+        except ValueError:
+            pass
+    if rate is None or spec is None:
+        return None
+    return coefficient_unit(rate, spec.rate, spec.time)

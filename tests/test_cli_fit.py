@@ -1,0 +1,78 @@
+"""``allanite fit``: coefficients in customary units from the library's fit, model JSON out."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import allanite
+from allanite.cli import main
+
+fit_module = pytest.importorskip("allanite.fit", reason="the fitter (issue 3) is not installed")
+if not hasattr(fit_module, "fit"):
+    pytest.skip("allanite.fit.fit is not available yet", allow_module_level=True)
+
+FS = 100.0
+RNG = np.random.default_rng(17)
+N_TRUE = 0.01  # deg/s/sqrt(Hz) = deg/sqrt(s)
+RATE = RNG.normal(size=40_000) * N_TRUE * np.sqrt(FS)
+
+
+def test_fit_cli_json_model_and_plot(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    data = tmp_path / "rate.npy"
+    np.save(data, RATE)
+    model_path = tmp_path / "model.json"
+    plot = tmp_path / "fit.png"
+    code = main(
+        [
+            "fit",
+            str(data),
+            "--fs",
+            "100",
+            "--units",
+            "deg/s",
+            "--points",
+            "40",
+            "--json",
+            "-o",
+            str(model_path),
+            "--plot",
+            str(plot),
+        ]
+    )
+    out, err = capsys.readouterr()
+    assert code == 0, err
+    data_out = json.loads(out)
+    (channel,) = data_out["channels"]
+    rows = {r["symbol"]: r for r in channel["coefficients"]}
+    expected = fit_module.fit(allanite.avar(RATE, FS, points=40, units="deg/s"))
+    n = expected["N"]
+    # customary unit: deg/sqrt(s) -> deg/sqrt(h) is a factor 60; intervals at the 68.3 % level
+    assert rows["N"]["unit"] == "deg/sqrt(h)"
+    assert rows["N"]["value"] == pytest.approx(60 * n.value, rel=1e-12)
+    lo, hi = n.ci(0.683)
+    assert rows["N"]["low"] == pytest.approx(60 * lo, rel=1e-12)
+    assert rows["N"]["high"] == pytest.approx(60 * hi, rel=1e-12)
+    # white noise: the fitted N agrees with the truth within 4 of its standard errors
+    assert abs(n.value - N_TRUE) < 4 * n.stderr
+    model = allanite.NoiseModel.from_json(model_path.read_text())
+    assert model.units["rate"] == "deg/s"
+    assert plot.read_bytes()[:4] == b"\x89PNG"
+
+
+def test_fit_cli_text_and_bad_kind(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    data = tmp_path / "rate.txt"
+    np.savetxt(data, RATE[:20_000])
+    assert main(["fit", str(data), "--fs", "100", "--units", "deg/s", "--points", "30"]) == 0
+    out = capsys.readouterr().out
+    assert "channel col0:" in out
+    assert "deg/sqrt(h)" in out
+    target = tmp_path / "m.json"
+    assert main(["fit", str(data), "--fs", "100", "--kind", "modified", "-o", str(target)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1
+    assert "overlapping" in err[0]
+    assert not target.exists()
