@@ -102,6 +102,7 @@ def main() -> None:
             "python": platform.python_version(),
             "platform": platform.platform(),
             "cpus": os.cpu_count(),
+            "load_average_1min_at_end": os.getloadavg()[0],
         },
     }
     RESULTS.parent.mkdir(parents=True, exist_ok=True)
