@@ -272,3 +272,20 @@ def test_avar_delegates_memory_limit_progress_and_fast(tmp_path, monkeypatch):
     assert stages == {"phase", "variance"}
     assert allanite.avar(x, 10.0, alpha=0, fast=True).meta["fast_q"] == 16
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("channels", [1, 2, 3, 5])
+@pytest.mark.parametrize("kind", ["overlapping", "standard_hadamard"])
+def test_kernel_paths_match_reference_at_large_m(channels, kind):
+    """Every channel-count specialisation (1-4 and the generic one) against the numpy oracle."""
+    from allanite import reference
+
+    x = _record(9000, c=channels, seed=channels)
+    phase = _core.phase(x, "rate")
+    top = int(_core.max_m(kind, phase.shape[0]))
+    factors = np.array([1, 3, 1000, 4097, top], dtype=np.int64)
+    got = _core.variance(phase, factors, kind, 2)
+    oracle = getattr(reference, f"{kind}_variance")
+    for c in range(channels):
+        ref = [oracle(phase[:, c], int(m)) for m in factors]
+        np.testing.assert_allclose(got[:, c], ref, rtol=1e-12)

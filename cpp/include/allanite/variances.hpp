@@ -173,6 +173,58 @@ ALLANITE_TARGET_CLONES static void add_diff_squares_1ch(const Taps<3>& t, std::i
   add_diff_squares_1ch_impl(t, count, total);
 }
 
+/// Few-channel path of add_squares with the channel count known at compile time: the
+/// 4 x NC partial sums live in registers (same arithmetic and order as add_squares).
+template <int Order, int NC>
+inline void add_diff_squares_nc_impl(const Taps<Order>& t, std::int64_t count, NeumaierSum* totals) {
+  const std::int64_t step = t.step;
+  for (std::int64_t start = 0; start < count; start += kSumBlock) {
+    const std::int64_t end = std::min(count, start + kSumBlock);
+    double a[4][NC] = {};
+    std::int64_t j = start;
+    if (step == NC) {
+      // consecutive rows: four terms of every channel are 4 NC adjacent values, and a[r][c]
+      // is laid out in the same order, so this loop vectorises
+      double flat[4 * NC] = {};
+      Taps<Order> local = t;  // pointers in registers: stores to flat cannot alias them
+      for (; j + 4 <= end; j += 4) {
+        for (int i = 0; i <= Order; ++i) local.p[i] = t.p[i] + j * NC;
+        for (int k = 0; k < 4 * NC; ++k) {
+          const double d = tap_diff(local, k);
+          flat[k] += d * d;
+        }
+      }
+      for (int k = 0; k < 4 * NC; ++k) a[k / NC][k % NC] = flat[k];
+    }
+    for (; j + 4 <= end; j += 4) {
+      for (int r = 0; r < 4; ++r) {
+        const std::int64_t i = (j + r) * step;
+        for (int c = 0; c < NC; ++c) {
+          const double d = tap_diff(t, i + c);
+          a[r][c] += d * d;
+        }
+      }
+    }
+    for (; j < end; ++j) {
+      const std::int64_t r = (j - start) & 3;
+      for (int c = 0; c < NC; ++c) {
+        const double d = tap_diff(t, j * step + c);
+        a[r][c] += d * d;
+      }
+    }
+    for (int c = 0; c < NC; ++c) totals[c].add((a[0][c] + a[1][c]) + (a[2][c] + a[3][c]));
+  }
+}
+
+ALLANITE_TARGET_CLONES static void add_diff_squares_3ch(const Taps<2>& t, std::int64_t count,
+                                                        NeumaierSum* totals) {
+  add_diff_squares_nc_impl<2, 3>(t, count, totals);
+}
+ALLANITE_TARGET_CLONES static void add_diff_squares_3ch(const Taps<3>& t, std::int64_t count,
+                                                        NeumaierSum* totals) {
+  add_diff_squares_nc_impl<3, 3>(t, count, totals);
+}
+
 /// Add the squared differences of `count` terms to totals[0..nc).
 template <int Order>
 inline void add_diff_squares(const Taps<Order>& t, std::int64_t count, Eigen::Index nc,
@@ -180,6 +232,13 @@ inline void add_diff_squares(const Taps<Order>& t, std::int64_t count, Eigen::In
   if (nc == 1 && t.step == 1) {
     add_diff_squares_1ch(t, count, totals[0]);
     return;
+  }
+  switch (nc) {
+    case 1: add_diff_squares_nc_impl<Order, 1>(t, count, totals); return;
+    case 2: add_diff_squares_nc_impl<Order, 2>(t, count, totals); return;
+    case 3: add_diff_squares_3ch(t, count, totals); return;
+    case 4: add_diff_squares_nc_impl<Order, 4>(t, count, totals); return;
+    default: break;
   }
   add_squares(count, nc, [&t](std::int64_t j, Eigen::Index c) { return tap_diff(t, j * t.step + c); },
               totals);
