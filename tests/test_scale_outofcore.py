@@ -283,7 +283,7 @@ def test_kernel_paths_match_reference_at_large_m(channels, kind):
     x = _record(9000, c=channels, seed=channels)
     phase = _core.phase(x, "rate")
     top = int(_core.max_m(kind, phase.shape[0]))
-    factors = np.array([1, 3, 1000, 4097, top], dtype=np.int64)
+    factors = np.array([1, 3, 1000, top - 1, top], dtype=np.int64)
     got = _core.variance(phase, factors, kind, 2)
     oracle = getattr(reference, f"{kind}_variance")
     for c in range(channels):
