@@ -14,5 +14,5 @@ SHARED_DATA = REPO.parent / "shared" / "data"
 def shared_data() -> Path:
     """Path of ../shared/data; tests that need it skip when it is not beside the repo."""
     if not SHARED_DATA.is_dir():
-        pytest.skip(f"reference data folder {SHARED_DATA} not found (it sits beside the repo in CI)")
+        pytest.skip(f"reference data folder {SHARED_DATA} not found (CI puts it beside the repo)")
     return SHARED_DATA

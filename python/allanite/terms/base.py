@@ -154,7 +154,8 @@ def term_from_dict(data: dict[str, Any]) -> Term:
         raise ValueError(f"a term must be an object with a 'type' field, got {data!r}")
     kind = data["type"]
     if kind not in TERM_TYPES:
-        raise ValueError(f"unknown term type {kind!r}; known types: {', '.join(sorted(TERM_TYPES))}")
+        known = ", ".join(sorted(TERM_TYPES))
+        raise ValueError(f"unknown term type {kind!r}; known types: {known}")
     cls = TERM_TYPES[kind]
     names = [p.name for p in cls.params]
     optional = [p.name for p in cls.optional]
