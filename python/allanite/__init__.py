@@ -6,8 +6,10 @@ honest uncertainty, noise simulation from a model, and a diagnosis of the sim-to
 
 from __future__ import annotations
 
+from allanite.batch import BatchResult, batch
 from allanite.diagnosis import Diagnosis, diagnose
 from allanite.io import Record, read_record
+from allanite.large import avar_large
 from allanite.model import NoiseModel
 from allanite.terms import (
     Flicker,
@@ -37,6 +39,7 @@ __version__ = "0.1.0"
 __all__ = [
     "KINDS",
     "AllanResult",
+    "BatchResult",
     "Diagnosis",
     "Flicker",
     "GaussMarkov",
@@ -51,6 +54,8 @@ __all__ = [
     "__version__",
     "adev",
     "avar",
+    "avar_large",
+    "batch",
     "diagnose",
     "hdev",
     "mdev",
