@@ -28,6 +28,12 @@ _FILE_FILTER = (
 _USER_ERRORS = (ValueError, TypeError, OSError, IndexError)
 
 
+def _numeric(text: str) -> bool:
+    """Whether a table cell holds a number or an interval (right-aligned)."""
+    head = text.split("…")[0].strip().lstrip("+-−")
+    return bool(head) and (head[0].isdigit() or head.startswith("."))
+
+
 class MainWindow(QtWidgets.QMainWindow):
     """allanite's desktop window."""
 
@@ -254,13 +260,13 @@ class MainWindow(QtWidgets.QMainWindow):
         for r, row in enumerate(rows):
             for c, value in enumerate(row):
                 item = QtWidgets.QTableWidgetItem(value)
-                if c >= 2:
+                if _numeric(value):
                     item.setTextAlignment(
                         QtCore.Qt.AlignmentFlag.AlignRight | QtCore.Qt.AlignmentFlag.AlignVCenter
                     )
                 self.table.setItem(r, c, item)
         self.table.resizeColumnsToContents()
-        self.table.horizontalHeader().setStretchLastSection(True)
+        self.table.horizontalHeader().setStretchLastSection(False)
 
     # --- actions (public: used by the menu, the buttons and tests) -----------------------------
     def selected_channels(self) -> list[int]:
@@ -289,6 +295,8 @@ class MainWindow(QtWidgets.QMainWindow):
     def use_record(self, record: Record) -> None:
         """Show an already built record (e.g. the example)."""
         self.session.use_record(record)
+        for field in (self.scale_edit, self.time_edit, self.key_edit):
+            field.clear()  # reader options do not apply to a record given directly
         if record.fs is not None:
             self.fs_spin.setValue(record.fs)
         self.input_combo.setCurrentText(record.input)
@@ -411,9 +419,12 @@ class MainWindow(QtWidgets.QMainWindow):
             )
             raise ValueError("fitting is not available in this installation (allanite.fit)")
         c, fit = first_fit
+        model = fit.model
+        if result.units is not None and result.units != model.units["rate"]:
+            model = model.in_units(result.units)  # the display unit of the data
         fig = model_figure(
-            self.session.compute() if self.session.result is None else self.session.result,
-            fit,
+            result,
+            model,
             layout=None,
             channel=c,
             labels=list(names),

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["MIN_EDF", "SLOPE_TERMS", "SlopeRow", "local_slopes", "slope_table"]
+__all__ = ["MIN_EDF", "MIN_POINTS", "SLOPE_TERMS", "SlopeRow", "local_slopes", "slope_table"]
 
 #: canonical Allan-deviation slope -> (label, term that produces it, IEEE symbol)
 SLOPE_TERMS: dict[float, tuple[str, str, str]] = {
@@ -29,6 +29,8 @@ SLOPE_TERMS: dict[float, tuple[str, str, str]] = {
 _WINDOW_DECADES = 0.5
 #: points with fewer equivalent degrees of freedom are not classified (about 16 % scatter)
 MIN_EDF = 20.0
+#: shortest run of points reported as a row
+MIN_POINTS = 3
 
 
 @dataclass(frozen=True)
@@ -82,7 +84,8 @@ def slope_table(
     Returns
     -------
     list of SlopeRow
-        In increasing tau; runs of a single point are merged into their neighbours.
+        In increasing tau; runs of a single point are merged into their neighbours and runs of
+        fewer than ``MIN_POINTS`` points are left out (two points do not make a slope).
     """
     tau = np.asarray(tau, dtype=np.float64)
     dev = np.asarray(dev, dtype=np.float64)
@@ -124,4 +127,4 @@ def slope_table(
                 )
             )
             start = k
-    return rows
+    return [r for r in rows if r.n_points >= MIN_POINTS]
