@@ -10,7 +10,9 @@ is compared with its expectation ``W - p`` (``W`` windows, ``p`` fitted paramete
 ``max(0, chi^2 - (W - p))`` enters the ranking of the two candidates.
 
 * step(s) at the detected change points ``t_c``: ``l_w = sum_c b_c (f_w(t_c) - (T - t_c)/T)``
-  with ``f_w`` the fraction of window ``w`` after ``t_c``;
+  with ``f_w`` the fraction of window ``w`` after ``t_c``, plus further steps at window
+  boundaries while each lowers ``chi^2`` by more than 10.8 (``chi2_1`` quantile 0.999): bias
+  steps come at random times with random sizes;
 * warm-up: window means of ``A e^{-t/T_w}`` minus the record mean, ``A`` by least squares and
   ``T_w`` on a logarithmic grid from a quarter window to the record length;
 * ramp: a straight line ``R (t_w - T/2)``.
@@ -25,6 +27,11 @@ from allanite.diagnosis.time_view import TimeView
 
 __all__ = ["level_misfit"]
 
+#: at most this many bias steps in the shape fit
+MAX_STEPS = 8
+#: chi-square drop that justifies one more step (chi2_1 quantile 0.999)
+STEP_GAIN = 10.83
+
 
 def _wls_chi2(
     design: NDArray[np.float64], level: NDArray[np.float64], sd: NDArray[np.float64]
@@ -34,6 +41,13 @@ def _wls_chi2(
     coef, *_ = np.linalg.lstsq(a, b, rcond=None)
     r = b - a @ coef
     return float(r @ r)
+
+
+def _step_column(
+    tc: float, t1: NDArray[np.float64], window: float, duration: float
+) -> NDArray[np.float64]:
+    after = np.clip((t1 - tc) / window, 0.0, 1.0)
+    return np.asarray(after - (duration - tc) / duration)
 
 
 def level_misfit(effect: str, view: TimeView, duration: float) -> float:
@@ -50,11 +64,21 @@ def level_misfit(effect: str, view: TimeView, duration: float) -> float:
     if effect == "step":
         if not view.change_points_s:
             return 0.0
-        cols = []
-        for tc in view.change_points_s:
-            after = np.clip((t1 - tc) / view.window_s, 0.0, 1.0)
-            cols.append(after - (duration - tc) / duration)
+        cols = [_step_column(tc, t1, view.window_s, duration) for tc in view.change_points_s]
         chi2 = _wls_chi2(np.stack(cols, axis=1), view.level, sd)
+        # bias steps come at random times with random sizes: add further steps at window
+        # boundaries while each lowers chi^2 by more than chi2_1(0.999) = 10.8
+        while len(cols) < MAX_STEPS:
+            trials = [
+                _wls_chi2(np.stack([*cols, _step_column(tb, t1, view.window_s, duration)], axis=1),
+                          view.level, sd)
+                for tb in t1[:-1]
+            ]  # fmt: skip
+            k = int(np.argmin(trials))
+            if chi2 - trials[k] <= STEP_GAIN:
+                break
+            cols.append(_step_column(float(t1[k]), t1, view.window_s, duration))
+            chi2 = trials[k]
         return max(0.0, chi2 - (w - len(cols)))
     best = np.inf
     for tw in np.geomspace(view.window_s / 4, duration, 48):
