@@ -23,7 +23,7 @@ import numpy as np
 import allanite
 from allanite.diagnosis import diagnose
 from allanite.model import NoiseModel
-from allanite.terms import TERM_TYPES
+from allanite.terms import TERM_TYPES, term_from_dict
 
 REPO = Path(__file__).resolve().parents[1]
 DATA = REPO.parent / "shared" / "data" / "imu" / "adis16405"
@@ -65,6 +65,36 @@ def fit_model(x: np.ndarray) -> tuple[NoiseModel, str]:
     return NoiseModel(tuple(terms), {"rate": "deg/s", "time": "s"}), note + "Term.guess"
 
 
+def apply(model: NoiseModel, best: Any) -> NoiseModel:
+    """The model with the best attribution added (or its rescaled / replaced term)."""
+    term = term_from_dict(best.term)
+    if best.effect.startswith("rescale:"):
+        kind = best.effect.split(":", 1)[1]
+        return NoiseModel(tuple(term if t.type == kind else t for t in model.terms), model.units)
+    if best.effect == "lowpass":
+        return model.without("white").plus(term)
+    return model.plus(term)
+
+
+def refine(model: NoiseModel, x: np.ndarray, rounds: int, n_mc: int) -> tuple[NoiseModel, list]:
+    """Add the best attribution on run 1 itself while its gap is significant."""
+    steps = []
+    for r in range(rounds):
+        d = diagnose(x, model, FS, units="deg/s", n_mc=n_mc, seed=100 + r)
+        steps.append(
+            {"G": d.statistic, "p_value": d.p_value, "best": d.best.to_dict() if d.best else None}
+        )
+        print(
+            f"refine round {r + 1}: G = {d.statistic:.4g}, p = {d.p_value:.3g}, "
+            f"best = {d.best.effect if d.best else None}",
+            flush=True,
+        )
+        if not d.significant or d.best is None:
+            break
+        model = apply(model, d.best)
+    return model, steps
+
+
 def summary(d: Any) -> dict[str, Any]:
     out = d.to_dict(views=False)
     out["gap"]["tau_bands_s"] = out["where"]["tau_bands_s"]
@@ -75,13 +105,32 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--axis", type=int, default=0, help="gyro axis 0, 1, 2 (X, Y, Z)")
     parser.add_argument("--n-mc", type=int, default=100)
+    parser.add_argument(
+        "--refine",
+        type=int,
+        default=0,
+        help="rounds of diagnosis-guided refinement of the run-1 model (add the best "
+        "attribution on run 1 while its gap is significant)",
+    )
     args = parser.parse_args()
     if not DATA.is_dir():
         raise SystemExit(f"reference data {DATA} not found (it sits beside the repository)")
     run1 = load(1, args.axis)
     model, how = fit_model(run1)
-    print(f"model fitted on run 1 ({how}): {model.to_json()}")
-    report: dict[str, Any] = {"axis": args.axis, "fit": how, "model": model.to_dict(), "runs": {}}
+    print(f"model fitted on run 1 ({how}): {model.to_json()}", flush=True)
+    start = model.to_dict()
+    steps: list = []
+    if args.refine:
+        model, steps = refine(model, run1, args.refine, args.n_mc)
+        print(f"refined on run 1: {model.to_json()}", flush=True)
+    report: dict[str, Any] = {
+        "axis": args.axis,
+        "fit": how,
+        "start_model": start,
+        "refine_steps": steps,
+        "model": model.to_dict(),
+        "runs": {},
+    }
     for run in (2, 3):
         x = load(run, args.axis)
         t0 = time.perf_counter()
