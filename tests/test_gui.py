@@ -80,6 +80,21 @@ def test_gui_load_switch_views_screenshot_export(
     window.set_view(VIEWS[0])
     assert window.table_title.text().startswith("Slopes of the measured curve")
 
+    # diagnosis against a model file: white noise of the wrong level is a significant gap
+    from allanite.model import NoiseModel
+    from allanite.terms import TERM_TYPES
+
+    model = tmp_path / "sim.json"
+    white = TERM_TYPES["white"](N=0.1 / np.sqrt(FS))  # half the real gy noise (0.4 deg/s)
+    model.write_text(NoiseModel(terms=(white,), units={"rate": "deg/s", "time": "s"}).to_json())
+    window.session.options.n_mc = 20
+    window.load_model(model)
+    assert window.current_view() == "Diagnosis"
+    assert window.model_label.text() == "sim.json"
+    assert window.table_title.text().startswith("Diagnosis: significant gap")
+    assert window.session.diagnosis_channel == 1
+    window.set_view(VIEWS[0])
+
     shot = window.grab_screenshot(tmp_path / "gui.png")
     from PySide6.QtGui import QImage
 

@@ -38,6 +38,7 @@ class Options:
     key: str | None = None
     kind: str = "overlapping"
     level: float = 0.683
+    n_mc: int = 200
 
 
 @dataclass
@@ -128,7 +129,7 @@ class Session:
 
         record = self._require_record()
         self.model_path = Path(model_path)
-        self.diagnosis = run_diagnosis(record, str(model_path), channel)
+        self.diagnosis = run_diagnosis(record, str(model_path), channel, n_mc=self.options.n_mc)
         self.diagnosis_channel = channel
         return self.diagnosis
 
