@@ -166,13 +166,27 @@ def test_cli_report_exit_codes_and_exports(
     common = [str(data), "--fs", "100", "--units", "deg/s", "--points", "20", "--no-fit"]
     out = tmp_path / "ok.html"
     assert (
-        main(["report", *common, "--datasheet", str(passing), "-o", str(out), "--png", "--json"])
+        main(
+            [
+                "report",
+                *common,
+                "--datasheet",
+                str(passing),
+                "-o",
+                str(out),
+                "--png",
+                "--pdf",
+                "--json",
+            ]
+        )
         == 0
     )
     verdict = json.loads(capsys.readouterr().out)
     assert verdict["passed"] is True
     assert out.read_text().count("<h2>") >= 5
     assert (tmp_path / "ok-adev.png").read_bytes()[:4] == b"\x89PNG"
+    assert (tmp_path / "ok-adev.pdf").read_bytes()[:4] == b"%PDF"
+    assert verdict["figures"] == [str(tmp_path / "ok-adev.png"), str(tmp_path / "ok-adev.pdf")]
     bad = tmp_path / "bad.html"
     assert main(["report", *common, "--datasheet", str(failing), "-o", str(bad)]) == 1
     assert "datasheet tight: FAIL" in capsys.readouterr().out
