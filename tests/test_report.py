@@ -339,3 +339,14 @@ def test_compact_batch_datasheet_in_record_units() -> None:
     assert "≤ 0.06 (record units)" in report.html
     with pytest.raises(InputError, match=r"entry 'N' must be a number"):
         Datasheet.from_dict({"N": "small"})
+
+
+def test_several_records_are_overlaid_and_summarised() -> None:
+    first = _device(name="unit_a.npy")
+    second = _device(RNG.normal(size=(N, 2)) * 0.2, name="unit_b.npy")
+    report = build_report([first, second])
+    legend = [t.get_text() for t in report.figures["adev"].axes[0].get_legend().get_texts()]
+    assert legend == ["unit_a.npy: gx", "unit_a.npy: gy", "unit_b.npy: gx", "unit_b.npy: gy"]
+    assert "<h3>unit_a.npy</h3>" in report.html
+    assert "<h3>unit_b.npy</h3>" in report.html
+    assert report.html.count("<h3>unit_b.npy — gy</h3>") == 1  # its slope table
