@@ -10,7 +10,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
-from allanite.cli.record_options import add_record_arguments
+from allanite.cli.record_options import add_record_arguments, read_options
 from allanite.io.atomic import atomic_output
 
 __all__ = ["progress_bars", "register", "run"]
@@ -80,29 +80,6 @@ def _expand(patterns: list[str]) -> list[str]:
     if not paths:
         raise ValueError(f"no files match {' '.join(patterns)}; check the pattern (quote it)")
     return paths
-
-
-def _read_options(args: argparse.Namespace) -> dict[str, Any]:
-    from allanite.cli.record_options import _columns, _time_column
-
-    options: dict[str, Any] = {
-        "input": args.input or "rate",
-        "units": args.units,
-        "columns": _columns(args.channels),
-        "time_column": _time_column(args.time_column),
-        "time_scale": args.time_scale,
-        "gaps": args.gaps,
-        "scale": args.scale,
-        "format": args.format,
-        "delimiter": args.delimiter,
-        "header": {"auto": None, "yes": True, "no": False}[args.header],
-        "key": args.key,
-        "dtype": args.dtype,
-        "n_channels": args.n_channels,
-        "byteorder": args.byte_order,
-        "offset": args.offset,
-    }
-    return options
 
 
 @contextmanager
@@ -189,7 +166,7 @@ def run(args: argparse.Namespace) -> int:
     paths = _expand(args.patterns)
     if args.output and Path(args.output).suffix.lower() not in (".csv", ".json"):
         raise ValueError(f"--output {args.output}: use a .csv or .json file name")
-    options = _read_options(args)
+    options = read_options(args)
     with _client(args.dask) as client, progress_bars(args.progress) as bar:
         result = batch(
             paths,

@@ -165,26 +165,28 @@ def read_from_args(path: str | None, args: argparse.Namespace) -> Record:
             chosen = _columns(args.channels)
             return record.select(chosen) if chosen else record
         raise ValueError("give a FILE to analyse, or --example for the built-in example record")
-    header = {"auto": None, "yes": True, "no": False}[args.header]
-    return read_record(
-        path,
-        fs=args.fs,
-        input=args.input or "rate",
-        units=args.units,
-        columns=_columns(args.channels),
-        time_column=_time_column(args.time_column),
-        time_scale=args.time_scale,
-        gaps=args.gaps,
-        scale=args.scale,
-        format=args.format,
-        delimiter=args.delimiter,
-        header=header,
-        key=args.key,
-        dtype=args.dtype,
-        n_channels=args.n_channels,
-        byteorder=args.byte_order,
-        offset=args.offset,
-    )
+    return read_record(path, fs=args.fs, **read_options(args))
+
+
+def read_options(args: argparse.Namespace) -> dict[str, Any]:
+    """Keyword arguments of :func:`allanite.io.readers.read_record` (except ``fs``) from args."""
+    return {
+        "input": args.input or "rate",
+        "units": args.units,
+        "columns": _columns(args.channels),
+        "time_column": _time_column(args.time_column),
+        "time_scale": args.time_scale,
+        "gaps": args.gaps,
+        "scale": args.scale,
+        "format": args.format,
+        "delimiter": args.delimiter,
+        "header": {"auto": None, "yes": True, "no": False}[args.header],
+        "key": args.key,
+        "dtype": args.dtype,
+        "n_channels": args.n_channels,
+        "byteorder": args.byte_order,
+        "offset": args.offset,
+    }
 
 
 def rate_unit(record: Record) -> str | None:
