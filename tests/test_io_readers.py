@@ -164,3 +164,32 @@ def test_adis16405_counts(shared_data: Path) -> None:
     # values lie exactly on the 0.05 deg/s grid of the sensor's LSB
     lsb = record.samples[:1000] / 0.05
     np.testing.assert_allclose(lsb, np.rint(lsb), atol=1e-9)
+
+
+@pytest.mark.parametrize(
+    ("module", "suffix", "extra"),
+    [("h5py", ".h5", "hdf5"), ("pyarrow.parquet", ".parquet", "parquet")],
+)
+def test_missing_optional_reader_names_the_extra(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, module: str, suffix: str, extra: str
+) -> None:
+    import sys
+
+    path = tmp_path / f"rec{suffix}"
+    path.write_bytes(b"not really")
+    monkeypatch.setitem(sys.modules, module, None)  # makes the import fail
+    with pytest.raises(ImportError, match=rf"pip install 'allanite\[{extra}\]'"):
+        read_record(path, fs=1.0)
+
+
+def test_corrupt_npz_and_hdf5_are_input_errors(tmp_path: Path) -> None:
+    npz = tmp_path / "cut.npz"
+    np.savez(npz, a=DATA)
+    npz.write_bytes(npz.read_bytes()[:200])
+    with pytest.raises(InputError, match=r"cut.npz: .*copy it again|cut.npz: .*truncated"):
+        read_record(npz, fs=1.0)
+    h5 = tmp_path / "bad.h5"
+    h5.write_bytes(b"\x89HDF-but-not-really" * 10)
+    pytest.importorskip("h5py")
+    with pytest.raises(InputError, match=r"bad.h5: not a readable HDF5 file"):
+        read_record(h5, fs=1.0)

@@ -266,13 +266,18 @@ def _load_npy(path: Path) -> Loaded:
 
 
 def _load_npz(path: Path, key: str | None) -> Loaded:
-    try:
-        archive = np.load(path, allow_pickle=False)
-    except (ValueError, zipfile.BadZipFile, EOFError) as exc:
-        raise InputError(
-            f"not a readable .npz archive ({exc}); the file may be truncated, copy it again",
-            path=str(path),
-        ) from exc
+    with open(path, "rb") as handle:  # closed even when numpy gives up on a broken archive
+        try:
+            archive = np.load(handle, allow_pickle=False)
+        except (ValueError, zipfile.BadZipFile, EOFError) as exc:
+            raise InputError(
+                f"not a readable .npz archive ({exc}); the file may be truncated, copy it again",
+                path=str(path),
+            ) from exc
+        return _from_archive(path, archive, key)
+
+
+def _from_archive(path: Path, archive: Any, key: str | None) -> Loaded:
     with archive:
         keys = list(archive.files)
         if not keys:
