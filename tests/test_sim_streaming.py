@@ -132,3 +132,13 @@ def test_streamed_flicker_holds_its_plateau_over_three_decades():
     lo = pooled * edf / stats.chi2.ppf(0.995, edf)
     hi = pooled * edf / stats.chi2.ppf(0.005, edf)
     assert np.all((lo <= exact) & (exact <= hi)), np.sqrt(pooled / PLATEAU) / B
+
+
+def test_streaming_flicker_bank_is_chunk_independent():
+    def make():
+        return flicker_stream(Flicker(B=1.0), 100.0, 3, seed=21, method="bank")
+
+    whole = make().next(3 * 70_001)
+    stream = make()
+    pieces = [stream.next(size) for size in (1, 65_535, 70_000, 3 * 70_001 - 135_536)]
+    assert np.array_equal(np.concatenate(pieces), whole)
