@@ -289,3 +289,20 @@ def test_kernel_paths_match_reference_at_large_m(channels, kind):
     for c in range(channels):
         ref = [oracle(phase[:, c], int(m)) for m in factors]
         np.testing.assert_allclose(got[:, c], ref, rtol=1e-12)
+
+
+def test_bounded_identification_in_memory_uses_the_decimated_head():
+    from allanite.edf import identify_alpha
+    from allanite.large import _identify
+
+    x = _record(6000, c=2)
+    phase = _core.phase(x, "rate")
+    factors = np.array([1, 4, 32, 512], dtype=np.int64)
+    got = _identify(phase, factors, "overlapping", "frequency", 700)
+    for i, m in enumerate(factors.tolist()):
+        head = np.ascontiguousarray(phase[::m][:700])
+        expected = identify_alpha(head, np.array([1]), "overlapping", data="frequency")[0]
+        assert np.array_equal(got[i], expected)
+    # unbounded: exactly avar's identification
+    full = _identify(phase, factors, "overlapping", "frequency", None)
+    assert np.array_equal(full, identify_alpha(phase, factors, "overlapping", data="frequency"))

@@ -184,6 +184,31 @@ class _WindowReader:
         return state, np.concatenate(decimated, axis=0)
 
 
+def _identify(
+    phase: NDArray[np.float64],
+    factors: NDArray[np.int64],
+    kernel_kind: str,
+    identify: str | None,
+    alpha_rows: int | None,
+) -> NDArray[np.int64] | None:
+    """Noise identification on an in-memory phase; bounded memory when alpha_rows is given.
+
+    Without a bound this is :func:`allanite.edf.identify_alpha` on the whole phase (as
+    :func:`allanite.avar`). With one, each factor's decimated phase ``x[::m]`` is cut to its
+    first ``alpha_rows`` points (the same rule as the out-of-core pass), so the temporary
+    arrays of the identification stay small.
+    """
+    if identify is None:
+        return None
+    if alpha_rows is None:
+        return identify_alpha(phase, factors, kernel_kind, data=identify)
+    out = np.empty((factors.size, phase.shape[1]), dtype=np.int64)
+    for i, m in enumerate(factors.tolist()):
+        decimated = np.ascontiguousarray(phase[: m * alpha_rows : m])
+        out[i] = identify_alpha(decimated, np.array([1]), kernel_kind, data=identify)[0]
+    return out
+
+
 def variance_from_store(
     store: PhaseStore,
     factors: NDArray[np.int64],
@@ -191,7 +216,7 @@ def variance_from_store(
     *,
     threads: int,
     window_bytes: int | None = None,
-    alpha_rows: int = 1 << 20,
+    alpha_rows: int | None = None,
     identify: str | None = None,
     progress: ProgressCallback | None = None,
 ) -> tuple[NDArray[np.float64], NDArray[np.int64] | None]:
@@ -212,8 +237,9 @@ def variance_from_store(
         Worker threads (0: all cores).
     window_bytes : int, optional
         Total window buffer memory over all workers (file store only); default 256 MiB.
-    alpha_rows : int
-        Largest decimated series kept per factor for noise identification (file store).
+    alpha_rows : int, optional
+        Largest decimated series kept per factor for noise identification (None: all of it,
+        only possible in memory).
     identify : {"frequency", "phase"} or None
         Identify alpha (the data argument of :func:`allanite.edf.identify_alpha`) or not.
     progress : callable, optional
@@ -237,10 +263,7 @@ def variance_from_store(
                 sl = slice(start, start + group)
                 var[sl] = _core.variance(phase, factors[sl], kernel_kind, threads)
                 progress("variance", min(start + group, nt), nt)
-        alphas = (
-            None if identify is None else identify_alpha(phase, factors, kernel_kind, data=identify)
-        )
-        return var, alphas
+        return var, _identify(phase, factors, kernel_kind, identify, alpha_rows)
     if kernel_kind not in _WINDOWED:
         raise ValueError(
             f"kind {kernel_kind!r} needs the whole phase array in memory "
@@ -267,7 +290,8 @@ def variance_from_store(
         if alphas is not None and identify is not None:
             alphas[i] = identify_alpha(decimated, np.array([1]), kernel_kind, data=identify)[0]
 
-    readers = [_WindowReader(store, order, chunk_terms, alpha_rows) for _ in range(workers)]
+    rows = alpha_rows if alpha_rows is not None else 1 << 22
+    readers = [_WindowReader(store, order, chunk_terms, rows) for _ in range(workers)]
     order_idx = list(range(nt))
     if workers == 1:
         for done, i in enumerate(order_idx, start=1):
@@ -400,10 +424,12 @@ def avar_large(
         )
         identify = None if alpha is not None else ("phase" if input == "angle" else "frequency")
         window_bytes = None if limit is None else limit // 2
-        alpha_rows = 1 << 22 if limit is None else max(1024, limit // (16 * 8 * workers * nc))
+        alpha_rows = None if limit is None else max(1024, limit // (16 * 8 * workers * nc))
         meta: dict[str, Any] = {"phase_in_memory": store.in_memory, "phase_bytes": store.nbytes}
         if fast is not False and fast is not None:
-            var, alphas = _fast(store, factors, kernel_kind, fast, nthreads, identify, meta)
+            var, alphas = _fast(
+                store, factors, kernel_kind, fast, nthreads, identify, alpha_rows, meta
+            )
         else:
             var, alphas = variance_from_store(
                 store,
@@ -441,6 +467,7 @@ def _fast(
     fast: bool | int,
     threads: int,
     identify: str | None,
+    alpha_rows: int | None,
     meta: dict[str, Any],
 ) -> tuple[NDArray[np.float64], NDArray[np.int64] | None]:
     from allanite.fast import DEFAULT_Q, fast_variance
@@ -458,10 +485,7 @@ def _fast(
     var, strides = fast_variance(store.array, factors, kernel_kind, q=q, threads=threads)
     meta["fast_q"] = q
     meta["fast_stride"] = strides
-    alphas = None
-    if identify is not None:
-        alphas = identify_alpha(store.array, factors, kernel_kind, data=identify)
-    return var, alphas
+    return var, _identify(store.array, factors, kernel_kind, identify, alpha_rows)
 
 
 def _was_1d(source: Any, record: ChunkedRecord) -> bool:
