@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -98,11 +99,18 @@ def scaled(term: Any, base: NoiseModel, fs: float, n_half: int, rho: float) -> A
     return term.with_values(**{name: float(term.values()[name] * np.sqrt(rho / ratio))})
 
 
-def make_cases(quick: bool) -> list[Case]:
-    configs = [(100.0, 2**16)] if quick else [(100.0, 2**16), (400.0, 2**17)]
-    strengths = (
-        {"medium": 2.0, "strong": 8.0} if quick else {"weak": 0.5, "medium": 2.0, "strong": 8.0}
-    )
+STRENGTHS = {"weak": 0.5, "medium": 2.0, "strong": 8.0}
+CONFIGS = {"100": (100.0, 2**16), "400": (400.0, 2**17)}
+
+
+def make_cases(
+    quick: bool, configs_sel: list[str] | None = None, strengths_sel: list[str] | None = None,
+    n_null: int | None = None,
+) -> list[Case]:  # fmt: skip
+    names = configs_sel or (["100"] if quick else ["100", "400"])
+    configs = [CONFIGS[c] for c in names]
+    labels = strengths_sel or (["medium", "strong"] if quick else list(STRENGTHS))
+    strengths = {k: STRENGTHS[k] for k in labels}
     spike_sigmas = {"weak": 5.0, "medium": 7.0, "strong": 10.0}
     cases: list[Case] = []
     for fs, n in configs:
@@ -155,7 +163,8 @@ def make_cases(quick: bool) -> list[Case]:
                 Case(f"rescale-flicker-{label}-fs{fs:g}", "rescale:flicker", label, fs, n, base,
                      real_fl, None, ("B", b_real))
             )  # fmt: skip
-    n_null = 20 if quick else 60
+    if n_null is None:
+        n_null = 20 if quick else 60
     for i in range(n_null):
         fs, n = configs[i % len(configs)]
         cases.append(Case(f"null-{i}", None, "null", fs, n, base_model(fs), None))
@@ -403,9 +412,18 @@ def main() -> None:
     parser.add_argument("--quick", action="store_true", help="one configuration, fewer cases")
     parser.add_argument("--n-mc", type=int, default=None, help="Monte Carlo replicates")
     parser.add_argument("--seed", type=int, default=1000)
+    parser.add_argument("--configs", help="comma-separated sample rates of the cases: 100,400")
+    parser.add_argument("--strengths", help="comma-separated: weak,medium,strong")
+    parser.add_argument("--nulls", type=int, help="number of null cases")
+    parser.add_argument("--tag", default="", help="suffix of the result files")
     args = parser.parse_args()
     n_mc = args.n_mc or (60 if args.quick else 100)
-    cases = make_cases(args.quick)
+    cases = make_cases(
+        args.quick,
+        args.configs.split(",") if args.configs else None,
+        args.strengths.split(",") if args.strengths else None,
+        args.nulls,
+    )
     rows = []
     t0 = time.perf_counter()
     for i, case in enumerate(cases):
@@ -425,13 +443,15 @@ def main() -> None:
     print()
     print(text)
     RESULTS.mkdir(parents=True, exist_ok=True)
-    stem = RESULTS / ("validate_diagnosis_quick" if args.quick else "validate_diagnosis")
+    stem = RESULTS / (
+        ("validate_diagnosis_quick" if args.quick else "validate_diagnosis") + args.tag
+    )
     stem.with_suffix(".json").write_text(
         json.dumps({"summary": summary, "cases": rows}, indent=1, default=float)
     )
     stem.with_suffix(".md").write_text(
         f"# Sim-to-real diagnosis validation{' (quick)' if args.quick else ''}\n\n"
-        f"`python benchmarks/validate_diagnosis.py{' --quick' if args.quick else ''}`, "
+        f"`python benchmarks/validate_diagnosis.py {' '.join(sys.argv[1:])}`, "
         f"n_mc = {n_mc}, {len(cases)} cases, {summary['seconds']:.0f} s.\n\n{text}\n"
     )
 
