@@ -76,3 +76,23 @@ def test_fit_cli_text_and_bad_kind(tmp_path: Path, capsys: pytest.CaptureFixture
     assert len(err) == 1
     assert "overlapping" in err[0]
     assert not target.exists()
+
+
+def test_fit_cli_datasheet_exit_codes(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    data = tmp_path / "rate.npy"
+    np.save(data, RATE[:20_000])
+    common = ["fit", str(data), "--fs", "100", "--units", "deg/s", "--points", "30", "--json"]
+    # N = 0.01 deg/sqrt(s) = 0.6 deg/sqrt(h)
+    loose = tmp_path / "loose.json"
+    loose.write_text(json.dumps({"limits": [{"quantity": "N", "max": 2, "unit": "deg/sqrt(h)"}]}))
+    tight = tmp_path / "tight.json"
+    tight.write_text(json.dumps({"limits": [{"quantity": "N", "max": 0.3, "unit": "deg/sqrt(h)"}]}))
+    assert main([*common, "--datasheet", str(loose)]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["passed"] is True
+    assert out["channels"][0]["checks"][0]["status"] == "pass"
+    assert main([*common, "--datasheet", str(tight)]) == 1
+    out = json.loads(capsys.readouterr().out)
+    assert out["passed"] is False
+    expected = fit_module.fit(allanite.avar(RATE[:20_000], FS, points=30, units="deg/s"))
+    assert out["channels"][0]["checks"][0]["value"] == pytest.approx(60 * expected["N"].value)

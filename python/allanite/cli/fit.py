@@ -23,6 +23,10 @@ EXAMPLES = """examples:
   allanite fit rec.npy --fs 2000 --units deg/s -o model.json
   allanite fit run1.npz --key gyro_counts --fs 100 --scale 0.05 --units deg/s --channels 0 \\
       --plot fit.png --json
+  allanite fit dut.csv --time-column t --units deg/s --datasheet limits.json
+
+exit codes: 0 fitted (and every datasheet limit met or undecided), 1 a datasheet limit failed,
+2 bad input (no output written).
 """
 
 
@@ -42,6 +46,11 @@ def register(subparsers: Any) -> None:
     parser.add_argument("-o", "--output", help="write the noise model (JSON) of the first channel")
     parser.add_argument("--plot", help="save the data, model and terms to FILE.png/.svg/.pdf")
     parser.add_argument("--json", action="store_true", help="print machine-readable JSON")
+    parser.add_argument(
+        "--datasheet",
+        metavar="LIMITS.json",
+        help="check the coefficients against datasheet limits (exit code 1 when one fails)",
+    )
     add_record_arguments(parser)
     add_grid_arguments(parser)
     parser.set_defaults(func=run)
@@ -74,7 +83,9 @@ def _model_of(fit: Any) -> Any:
 def run(args: argparse.Namespace) -> int:
     """Run ``allanite fit``."""
     from allanite.report.coefficients import coefficient_table
+    from allanite.report.datasheet import Datasheet, check_limits
 
+    sheet = Datasheet.load(args.datasheet) if args.datasheet else None
     if _fit_function() is None:
         raise ValueError("fitting is not available in this installation (allanite.fit.fit)")
     if args.kind != "overlapping":
@@ -91,9 +102,16 @@ def run(args: argparse.Namespace) -> int:
         fit = fit_result(result.channel(c))
         fits.append(fit)
         rows = coefficient_table(fit, result.units, args.level)
+        checks = []
+        if sheet is not None:
+            one = result.channel(c)
+            lo, hi = one.ci(args.level)
+            measured = {r.symbol: r.measured() for r in rows}
+            checks = check_limits(sheet, name, measured, (one.tau, one.dev, lo, hi, one.units))
         channels.append(
             {
                 "channel": name,
+                "checks": [k.to_dict() for k in checks],
                 "model": _model_of(fit).to_dict(),
                 "coefficients": [
                     {
@@ -123,8 +141,9 @@ def run(args: argparse.Namespace) -> int:
     if args.output:
         with atomic_output(args.output) as tmp:
             tmp.write_text(_model_of(fits[0]).to_json(), encoding="utf-8")
+    failed = [k for item in channels for k in item["checks"] if k["status"] == "fail"]
     if args.json:
-        print(dump_json({"record": record.summary(), "channels": channels}))
+        print(dump_json({"record": record.summary(), "channels": channels, "passed": not failed}))
     else:
         for item in channels:
             print(f"channel {item['channel']}:")
@@ -136,4 +155,7 @@ def run(args: argparse.Namespace) -> int:
                     f"  {row['term']:>14} {row['symbol']:>8} = {row['value']:.4g} "
                     f"{row['unit']}{interval}"
                 )
-    return 0
+            for check in item["checks"]:
+                value = "not measured" if check["value"] is None else f"{check['value']:.4g}"
+                print(f"  datasheet {check['quantity']}: {value} -> {check['status'].upper()}")
+    return 1 if failed else 0
