@@ -215,8 +215,9 @@ def _coefficient_section(
 ) -> str:
     if not coefficients:
         return (
-            '<p class="note">No noise model was fitted (run with the fit enabled to see the '
-            "coefficients).</p>"
+            '<p class="note">No noise model was fitted: the fit was switched off (--no-fit), '
+            "the estimator is not the overlapping Allan variance the fit models, or no fitter "
+            "is installed.</p>"
         )
     parts = []
     for (d, c), coefs in coefficients.items():
