@@ -10,6 +10,7 @@ from allanite.batch import BatchResult, batch
 from allanite.diagnosis import Diagnosis, diagnose
 from allanite.io import Record, read_record
 from allanite.large import avar_large
+from allanite.fit import Coefficient, FitResult, fit
 from allanite.model import NoiseModel
 from allanite.terms import (
     Flicker,
@@ -39,6 +40,8 @@ __version__ = "0.1.0"
 __all__ = [
     "KINDS",
     "AllanResult",
+    "Coefficient",
+    "FitResult",
     "BatchResult",
     "Diagnosis",
     "Flicker",
@@ -53,6 +56,7 @@ __all__ = [
     "White",
     "__version__",
     "adev",
+    "fit",
     "avar",
     "avar_large",
     "batch",

@@ -28,6 +28,7 @@ __all__ = [
     "Unit",
     "coefficient_unit",
     "convert",
+    "display_unit",
     "parse_unit",
     "rate_unit",
 ]
@@ -223,3 +224,39 @@ def convert(value: float, from_unit: str | Unit, to_unit: str | Unit) -> float:
             f"{dst.text!r} ({_dimension_text(dst.angle, dst.time)}); pick a unit of the same kind"
         )
     return float(value) * src.scale / dst.scale
+
+
+def display_unit(rate: str, name: str) -> str:
+    """Customary unit of coefficient ``name`` for a rate unit ``angle/time``.
+
+    ``deg/h`` gives N in ``deg/sqrt(h)``, B in ``deg/h``, K in ``deg/h/sqrt(h)``, Q in ``deg``,
+    R in ``deg/h^2``; Gauss-Markov sigma and sinusoid amplitude in the rate unit, ``tau_c`` in
+    ``s`` and ``frequency`` in ``Hz``.
+
+    Raises
+    ------
+    ValueError
+        If ``rate`` is not a rate unit of the form ``angle/time``.
+    """
+    rate_unit(rate)
+    base = name.split("_")[0] if name.startswith(("sigma_", "amplitude_")) else name
+    if base in ("tau",) or name.startswith("tau_c"):
+        return "s"
+    if name.startswith("frequency"):
+        return "Hz"
+    parts = rate.replace(" ", "").split("/")
+    if len(parts) != 2:
+        raise ValueError(f"give the rate unit as angle/time (e.g. deg/h), got {rate!r}")
+    angle, time = parts
+    table = {
+        "N": f"{angle}/sqrt({time})",
+        "B": rate,
+        "K": f"{angle}/{time}/sqrt({time})",
+        "Q": angle,
+        "R": f"{angle}/{time}^2",
+        "sigma": rate,
+        "amplitude": rate,
+    }
+    if base not in table:
+        raise ValueError(f"no customary unit for coefficient {name!r}")
+    return table[base]

@@ -1,0 +1,326 @@
+"""``allanite.fit``: noise coefficients from an Allan curve or a record, with uncertainty."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from typing import Any, Literal
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy import stats
+
+from allanite.fit.classic import classic_readout
+from allanite.fit.gls import GLSData, GLSSolution, score_interval, solve
+from allanite.fit.result import Coefficient, FitResult
+from allanite.fit.seed import SCALE, coefficient_bounds, seed_fit
+from allanite.fit.spec import TermSpec, resolve_terms
+from allanite.model import NoiseModel
+from allanite.terms import Flicker, Quantization, RateRamp, RateRandomWalk, White
+from allanite.units import display_unit, rate_unit
+from allanite.variance import AllanResult, avar
+
+__all__ = ["fit"]
+
+Method = Literal["gls", "seed"]
+
+
+def _curve(
+    source: AllanResult | ArrayLike, fs: float | None, input: str, units: str | None, method: str
+) -> AllanResult:
+    if isinstance(source, AllanResult):
+        if fs is not None and not math.isclose(float(fs), source.fs, rel_tol=1e-9):
+            raise ValueError(f"fs={fs} contradicts the AllanResult's fs={source.fs}; leave fs out")
+        if source.var.ndim != 1:
+            raise ValueError(
+                f"the AllanResult has {source.n_channels} channels; fit one at a time: "
+                "fit(result.channel(i))"
+            )
+        return source
+    if fs is None:
+        raise ValueError("fitting a record needs its sampling frequency: fit(x, fs=100.0)")
+    x = np.asarray(source)
+    if x.ndim != 1:
+        raise ValueError(f"fit one channel at a time; got a record of shape {x.shape}")
+    taus = "octave" if method == "gls" else "log"
+    return avar(x, fs, input=input, taus=taus, units=units)  # type: ignore[arg-type]
+
+
+def _points(result: AllanResult, method: str, max_fraction: float) -> NDArray[np.bool_]:
+    var = np.asarray(result.var, dtype=np.float64)
+    if not np.any(np.isfinite(var)):
+        raise ValueError("the Allan curve is all NaN/inf: nothing to fit; check the record")
+    finite = np.isfinite(var)
+    if np.any(var[finite] < 0):
+        raise ValueError(
+            "the Allan curve has negative variances; variances cannot be negative (pass the "
+            "variance, not a signed quantity)"
+        )
+    keep = finite & (var > 0)
+    if method == "gls":
+        n = result.n_samples
+        keep &= result.m <= max_fraction * n
+    return keep
+
+
+def _check_count(n_points: int, n_params: int, what: str) -> None:
+    if n_points < n_params + 1:
+        raise ValueError(
+            f"{what} has {n_params} parameters but only {n_points} usable taus; need at least "
+            f"{n_params + 1}: use a longer record, a denser tau grid (taus='log' or 'all') or "
+            "fewer terms"
+        )
+
+
+def _n_params(specs: Sequence[TermSpec]) -> int:
+    return sum(1 + (s.nonlinear_name is not None) for s in specs)
+
+
+def _select(
+    specs: list[TermSpec], data: GLSData, edf: NDArray[np.float64], penalty: float
+) -> tuple[GLSSolution, tuple[dict[str, Any], ...]]:
+    """Backward elimination: drop the term whose removal raises chi2 least, while < penalty."""
+    current = list(specs)
+    records: dict[str, dict[str, Any]] = {}
+    sol = solve(current, data, edf)
+    while len(current) > 1:
+        deltas = []
+        for j in range(len(current)):
+            rest = current[:j] + current[j + 1 :]
+            sub = solve(rest, data, edf, cov=sol.cov)
+            deltas.append(sub.chi2 - sol.chi2)
+        j = int(np.argmin(deltas))
+        for spec, d in zip(current, deltas, strict=True):
+            records[spec.cls.type] = {"term": spec.cls.type, "delta_chi2": float(d), "kept": True}
+        if deltas[j] >= penalty:
+            break
+        records[current[j].cls.type]["kept"] = False
+        current.pop(j)
+        sol = solve(current, data, edf)
+    order = [s.cls.type for s in specs]
+    return sol, tuple(records[t] for t in order if t in records)
+
+
+def _coefficients(sol: GLSSolution, model: NoiseModel) -> dict[str, Coefficient]:
+    rate = model.units["rate"]
+    out: dict[str, Coefficient] = {}
+    labels = model.labelled_parameters()
+    k = 0
+    index = 0
+    for j, spec in enumerate(sol.specs):
+        theta = max(float(sol.theta[j]), 0.0)
+        se_theta = math.sqrt(max(sol.param_cov[j, j], 0.0))
+        amp = math.sqrt(theta)
+        stderr = se_theta / (2.0 * amp) if amp > 0 and se_theta < theta else math.sqrt(se_theta)
+        label = labels[index][0]
+        index += 1
+
+        def amp_interval(level: float, j: int = j) -> tuple[float, float]:
+            z = float(stats.norm.ppf(0.5 + level / 2.0))
+            lo, hi = score_interval(sol, j, z)
+            return math.sqrt(max(lo, 0.0)), math.sqrt(max(hi, 0.0))
+
+        out[label] = Coefficient(label, amp, stderr, display_unit(rate, label), amp_interval)
+        if spec.nonlinear_name is not None:
+            p = len(sol.specs) + k
+            log_value = float(sol.log_phi[k])
+            se_log = math.sqrt(max(sol.param_cov[p, p], 0.0))
+            value = math.exp(log_value)
+            label = labels[index][0]
+            index += 1
+
+            def log_interval(
+                level: float, v: float = value, s: float = se_log
+            ) -> tuple[float, float]:
+                z = float(stats.norm.ppf(0.5 + level / 2.0))
+                return v * math.exp(-z * s), v * math.exp(z * s)
+
+            out[label] = Coefficient(
+                label, value, value * se_log, display_unit(rate, label), log_interval
+            )
+            k += 1
+    return out
+
+
+def _fit_gls(
+    result: AllanResult,
+    specs: list[TermSpec],
+    auto: bool,
+    units: str,
+    penalty: float,
+    max_fraction: float,
+) -> FitResult:
+    if result.kind != "overlapping":
+        raise ValueError(
+            f"method='gls' models the overlapping Allan variance, got kind={result.kind!r}; "
+            "compute avar(x, fs, kind='overlapping') or use method='seed'"
+        )
+    keep = _points(result, "gls", max_fraction)
+    n_needed = _n_params(specs) if not auto else 1
+    _check_count(int(keep.sum()), n_needed, "the model" if not auto else "an automatic fit")
+    dt = 1.0 / result.fs
+    data = GLSData(
+        tau=result.tau[keep],
+        m=result.m[keep].astype(np.float64),
+        y=np.asarray(result.var, dtype=np.float64)[keep],
+        dt=dt,
+        n_samples=result.n_samples,
+        units=units,
+    )
+    edf = np.asarray(result.edf, dtype=np.float64)[keep]
+    if auto:
+        usable = [s for s in specs if _n_params([s]) < int(keep.sum())]
+        sol, selection = _select(usable, data, edf, penalty)
+    else:
+        sol, selection = solve(specs, data, edf), ()
+    model = sol.model(units)
+    dof = int(keep.sum()) - _n_params(sol.specs)
+    p_value = float(stats.chi2.sf(sol.chi2, dof)) if dof > 0 else math.nan
+    residuals = (data.y - sol.fitted) / np.sqrt(np.diag(sol.cov))
+    return FitResult(
+        model=model,
+        coefficients=_coefficients(sol, model),
+        chi2=sol.chi2,
+        dof=dof,
+        p_value=p_value,
+        tau=data.tau,
+        var=data.y,
+        fitted=sol.fitted,
+        residuals=residuals,
+        cov=sol.cov,
+        method="gls",
+        classic=classic_readout(result.tau, np.sqrt(np.asarray(result.var, dtype=np.float64))),
+        selection=selection,
+        meta={"iterations": sol.iterations, "n_samples": result.n_samples, "fs": result.fs},
+    )
+
+
+def _fit_seed(result: AllanResult, units: str) -> FitResult:
+    keep = _points(result, "seed", 1.0)
+    _check_count(int(keep.sum()), 5, "method='seed'")
+    tau = result.tau[keep]
+    var = np.asarray(result.var, dtype=np.float64)[keep]
+    sf = seed_fit(tau, var)
+    raw_of = {"R": "r", "K": "k", "B": "b", "N": "n", "Q": "q"}
+    coefs: dict[str, Coefficient] = {}
+    for name, raw in raw_of.items():
+        scale = SCALE[name]
+
+        def interval(
+            level: float, p: float = sf.raw[raw], s: float = sf.raw_stderr[raw], c: float = scale
+        ) -> tuple[float, float]:
+            tq = float(stats.t.ppf(0.5 + level / 2.0, sf.dof))
+            return coefficient_bounds(p - tq * s, p + tq * s, c)
+
+        value = abs(sf.raw[raw]) * scale
+        coefs[name] = Coefficient(
+            name, value, sf.raw_stderr[raw] * scale, display_unit(units, name), interval
+        )
+    model = NoiseModel(
+        (
+            Quantization(Q=coefs["Q"].value),
+            White(N=coefs["N"].value),
+            Flicker(B=coefs["B"].value),
+            RateRandomWalk(K=coefs["K"].value),
+            RateRamp(R=coefs["R"].value),
+        ),
+        {"rate": units, "time": "s"},
+    )
+    fitted = sf.fitted
+    return FitResult(
+        model=model,
+        coefficients={k: coefs[k] for k in ("Q", "N", "B", "K", "R")},
+        chi2=sf.sse,
+        dof=sf.dof,
+        p_value=math.nan,
+        tau=tau,
+        var=var,
+        fitted=fitted,
+        residuals=(var - fitted) / math.sqrt(sf.sse / sf.dof),
+        cov=np.diag(np.full(tau.size, sf.sse / sf.dof)),
+        method="seed",
+        classic=classic_readout(result.tau, np.sqrt(np.asarray(result.var, dtype=np.float64))),
+        meta={"raw": sf.raw, "raw_bounds_95": sf.raw_bounds},
+    )
+
+
+def fit(
+    result_or_record: AllanResult | ArrayLike,
+    terms: str | Sequence[Any] = "auto",
+    *,
+    fs: float | None = None,
+    input: str = "rate",
+    method: Method = "gls",
+    units: str | None = None,
+    penalty: float = 9.0,
+    max_fraction: float = 0.125,
+) -> FitResult:
+    r"""Fit noise terms to an Allan curve with honest uncertainty.
+
+    The overlapping Allan variance estimates :math:`y_i` at :math:`\tau_i` are fitted by
+    generalized least squares, :math:`\min (y - G\theta)^\top C^{-1} (y - G\theta)` with
+    :math:`\theta \ge 0` the squared coefficients and :math:`C` the covariance of the estimates
+    under the fitted model (Whittle approximation, iterated; see
+    :mod:`allanite.fit.covariance` and :mod:`allanite.fit.gls`). Each term's exact sampled
+    Allan variance is used, not only its asymptote.
+
+    Parameters
+    ----------
+    result_or_record : AllanResult or array_like
+        An overlapping Allan variance (one channel) or a 1-D record (then ``fs`` is needed and
+        the octave grid is used).
+    terms : "auto" or list
+        ``"auto"``: Q, N, B, K, R, dropping by backward elimination every term whose removal
+        raises the chi-square by less than ``penalty`` (so absent terms are not invented).
+        Or a list of names (``"white"``/``"N"``, ``"quantization"``/``"Q"``, ``"flicker"``/
+        ``"B"``, ``"rrw"``/``"K"``, ``"ramp"``/``"R"``, ``"markov"``, ``"sine"``), Term classes,
+        or Term instances (starting values; a Flicker's ``f0`` is kept).
+    fs : float, optional
+        Sampling frequency in Hz (records only).
+    input : {"rate", "increment", "angle"}
+        What a record holds.
+    method : {"gls", "seed"}
+        ``"gls"`` (default) or ``"seed"``, the original program's unweighted nonlinear least
+        squares on sigma^2 with five squared coefficients and 95 % bounds (always the five
+        power-law terms).
+    units : str, optional
+        Rate unit of the data (default: the result's units, else ``"deg/s"``).
+    penalty : float
+        Chi-square increase a term must bring to be kept by ``"auto"`` (9: three standard
+        errors for a single coefficient).
+    max_fraction : float
+        Points with ``m > max_fraction * N`` are left out of the GLS fit: with fewer than about
+        two independent differences their spread is not captured by the approximation.
+
+    Returns
+    -------
+    FitResult
+        Model, coefficients with ``value``, ``stderr`` and ``ci(level)``, goodness of fit,
+        residuals, the IEEE slope-method readouts (``classic``).
+
+    Raises
+    ------
+    ValueError
+        Unknown term names, too few taus for the terms, all-NaN or negative variances, a
+        multi-channel result, a non-overlapping result with ``method="gls"``.
+
+    References
+    ----------
+    IEEE Std 952-1997 Annex C; IEEE Std 1431-2004; C. A. Greenhall and W. J. Riley,
+    "Uncertainty of stability variances based on finite differences" (2003); N. El-Sheimy,
+    H. Hou and X. Niu, "Analysis and modeling of inertial sensors using Allan variance",
+    IEEE Trans. Instrum. Meas. 57 (2008).
+    """
+    if method not in ("gls", "seed"):
+        raise ValueError(f"unknown method {method!r}; use 'gls' or 'seed'")
+    if not (isinstance(penalty, (int, float)) and penalty >= 0):
+        raise ValueError(f"penalty must be a non-negative number, got {penalty!r}")
+    if not 0.0 < max_fraction <= 0.5:
+        raise ValueError(f"max_fraction must lie in (0, 0.5], got {max_fraction!r}")
+    specs, auto = resolve_terms(terms)
+    result = _curve(result_or_record, fs, input, units, method)
+    rate = units or result.units or "deg/s"
+    rate_unit(rate)
+    if method == "seed":
+        return _fit_seed(result, rate)
+    return _fit_gls(result, specs, auto, rate, float(penalty), float(max_fraction))

@@ -1,0 +1,306 @@
+"""Result objects of a fit: coefficients with intervals, goodness of fit, tables, comparisons."""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy import stats
+
+from allanite.fit.classic import ClassicReadout
+from allanite.model import NoiseModel
+from allanite.units import convert, display_unit
+
+__all__ = ["Coefficient", "Comparison", "ComparisonRow", "FitResult"]
+
+
+@dataclass(frozen=True)
+class Coefficient:
+    """A fitted coefficient in the model's units.
+
+    Attributes
+    ----------
+    name : str
+        Label (``N``, ``B``, ``sigma``, ``tau_c_2``, ...).
+    value : float
+        Estimate (for amplitudes the square root of the non-negative squared amplitude).
+    stderr : float
+        Standard error (delta method; for an amplitude near zero, the square root of the
+        squared amplitude's standard error).
+    unit : str
+        Unit of ``value`` (the model's rate unit raised to the parameter's powers).
+    """
+
+    name: str
+    value: float
+    stderr: float
+    unit: str
+    interval: Callable[[float], tuple[float, float]] = field(repr=False, compare=False)
+
+    def ci(self, level: float = 0.95) -> tuple[float, float]:
+        """Two-sided confidence interval ``(low, high)`` at ``level`` (e.g. 0.95)."""
+        if not 0.0 < level < 1.0:
+            raise ValueError(f"level must lie in (0, 1), got {level}")
+        return self.interval(level)
+
+
+@dataclass(frozen=True)
+class ComparisonRow:
+    """One coefficient compared with a datasheet limit or a reference value."""
+
+    name: str
+    unit: str
+    value: float
+    low: float
+    high: float
+    reference: float
+    kind: str  # "limit" or "reference"
+    passed: bool | None
+    conclusive: bool
+
+
+@dataclass(frozen=True)
+class Comparison:
+    """Per-coefficient comparison (see :meth:`FitResult.compare`)."""
+
+    rows: tuple[ComparisonRow, ...]
+    level: float
+
+    @property
+    def passed(self) -> bool:
+        """True when every datasheet limit is met (reference rows do not count)."""
+        return all(r.passed is not False for r in self.rows)
+
+    def format(self) -> str:
+        """Plain-text table."""
+        head = f"{'coef':<8}{'value':>12}{'low':>12}{'high':>12}{'ref':>12}  {'unit':<16}verdict"
+        lines = [head]
+        for r in self.rows:
+            if r.kind == "limit":
+                verdict = "PASS" if r.passed else "FAIL"
+                if not r.conclusive:
+                    verdict += " (limit inside the interval)"
+            else:
+                verdict = "consistent" if r.conclusive is False else "differs"
+            lines.append(
+                f"{r.name:<8}{r.value:>12.4g}{r.low:>12.4g}{r.high:>12.4g}{r.reference:>12.4g}  "
+                f"{r.unit:<16}{verdict}"
+            )
+        return "\n".join(lines)
+
+
+@dataclass(frozen=True)
+class FitResult:
+    r"""A fitted noise model with honest uncertainty.
+
+    Attributes
+    ----------
+    model : NoiseModel
+        The fitted model (coefficients in ``model.units``).
+    coefficients : dict of str to Coefficient
+        By label: Q, N, B, K, R; sigma and tau_c of each Gauss-Markov term, amplitude and
+        frequency of each sinusoid (suffixed ``_1``, ``_2`` when a type repeats).
+    chi2, dof, p_value : float, int, float
+        Generalized chi-square :math:`r^\top C^{-1} r` with the covariance :math:`C` of the
+        AVAR estimates under the fitted model (so the correlation between taus is accounted
+        for), its degrees of freedom (points - parameters) and upper-tail p-value. For
+        ``method="seed"``: the unweighted sum of squares, no p-value (NaN).
+    tau, var, fitted : numpy.ndarray
+        The points used, the data and the fitted Allan variance there.
+    residuals : numpy.ndarray
+        Standardised residuals ``(var - fitted) / sqrt(diag C)``.
+    cov : numpy.ndarray
+        Covariance of the AVAR estimates under the fitted model (``(T, T)``).
+    method : str
+        ``"gls"`` or ``"seed"``.
+    classic : ClassicReadout
+        The IEEE slope-method readouts of the same curve (labelled, no uncertainty).
+    selection : tuple of dict
+        For ``terms="auto"``: each candidate with its chi-square increase when removed and
+        whether it was kept.
+    """
+
+    model: NoiseModel
+    coefficients: dict[str, Coefficient]
+    chi2: float
+    dof: int
+    p_value: float
+    tau: NDArray[np.float64]
+    var: NDArray[np.float64]
+    fitted: NDArray[np.float64]
+    residuals: NDArray[np.float64]
+    cov: NDArray[np.float64]
+    method: str
+    classic: ClassicReadout
+    selection: tuple[dict[str, Any], ...] = ()
+    meta: dict[str, Any] = field(default_factory=dict, compare=False)
+
+    def __getitem__(self, name: str) -> Coefficient:
+        try:
+            return self.coefficients[name]
+        except KeyError:
+            raise KeyError(
+                f"no coefficient {name!r}; this fit has {', '.join(self.coefficients)}"
+            ) from None
+
+    # --- display ----------------------------------------------------------------------------
+    def _unit_for(self, name: str, units: str | Mapping[str, str] | None) -> str:
+        if units is None:
+            return self.coefficients[name].unit
+        if isinstance(units, str):
+            return display_unit(units, name)
+        if name in units:
+            return units[name]
+        base = name.rsplit("_", 1)[0] if name[-1].isdigit() else name
+        return units.get(base, self.coefficients[name].unit)
+
+    def table(
+        self, units: str | Mapping[str, str] | None = None, level: float = 0.95
+    ) -> list[dict[str, Any]]:
+        """Coefficients as rows ``{name, value, stderr, low, high, unit}``.
+
+        Parameters
+        ----------
+        units : str or mapping, optional
+            A rate unit (``"deg/h"``: N in deg/sqrt(h), K in deg/h/sqrt(h), ...), or a unit
+            per coefficient (``{"N": "deg/sqrt(h)", "B": "deg/h"}``); default: model units.
+        level : float
+            Confidence level of ``low``/``high``.
+        """
+        rows = []
+        for name, coef in self.coefficients.items():
+            unit = self._unit_for(name, units)
+            lo, hi = coef.ci(level)
+            factor = _factor(coef, unit)
+            rows.append(
+                {
+                    "name": name,
+                    "value": coef.value * factor,
+                    "stderr": coef.stderr * factor,
+                    "low": lo * factor,
+                    "high": hi * factor,
+                    "unit": unit,
+                }
+            )
+        return rows
+
+    def format_table(
+        self, units: str | Mapping[str, str] | None = None, level: float = 0.95
+    ) -> str:
+        """Plain-text version of :meth:`table`, with the goodness of fit."""
+        pct = f"{100 * level:g}%"
+        lines = [
+            f"{'coef':<10}{'value':>12}{'stderr':>12}{pct + ' low':>12}{pct + ' high':>12}  unit"
+        ]
+        for row in self.table(units, level):
+            lines.append(
+                f"{row['name']:<10}{row['value']:>12.4g}{row['stderr']:>12.4g}{row['low']:>12.4g}"
+                f"{row['high']:>12.4g}  {row['unit']}"
+            )
+        if self.method == "gls":
+            lines.append(
+                f"chi2 = {self.chi2:.3g} for {self.dof} dof (correlated GLS), "
+                f"p = {self.p_value:.3g}"
+            )
+        return "\n".join(lines)
+
+    def to_dict(self, level: float = 0.95) -> dict[str, Any]:
+        """JSON-ready dictionary: model, coefficients with intervals, goodness of fit."""
+        return {
+            "method": self.method,
+            "model": self.model.to_dict(),
+            "coefficients": self.table(None, level),
+            "level": level,
+            "chi2": self.chi2,
+            "dof": self.dof,
+            "p_value": None if math.isnan(self.p_value) else self.p_value,
+            "tau": self.tau.tolist(),
+            "var": self.var.tolist(),
+            "fitted": self.fitted.tolist(),
+            "residuals": self.residuals.tolist(),
+            "classic": {"label": self.classic.label, **self.classic.values},
+        }
+
+    def to_json(self, level: float = 0.95, **kwargs: Any) -> str:
+        """JSON text of :meth:`to_dict`."""
+        return json.dumps(self.to_dict(level), **kwargs)
+
+    # --- comparison -------------------------------------------------------------------------
+    def compare(
+        self,
+        reference: Mapping[str, Any] | NoiseModel | FitResult,
+        *,
+        level: float = 0.95,
+    ) -> Comparison:
+        """Compare with a datasheet (limits) or a reference device (values).
+
+        Parameters
+        ----------
+        reference : mapping, NoiseModel or FitResult
+            A datasheet ``{"N": (0.15, "deg/sqrt(h)"), "B": (3.0, "deg/h")}`` of upper limits
+            (a bare number is in the model's units): a coefficient passes when its estimate is
+            at or below the limit, and the verdict is conclusive when the whole interval lies
+            on one side. Or another device's model/fit: each common coefficient is compared
+            with the reference value (``conclusive`` = the reference lies outside the interval,
+            i.e. the devices differ at ``level``; for a FitResult the two uncertainties are
+            combined).
+        level : float
+            Confidence level.
+        """
+        rows = []
+        if isinstance(reference, (NoiseModel, FitResult)):
+            other = reference.model if isinstance(reference, FitResult) else reference
+            ref_values = other.in_units(self.model.units["rate"]).coefficients()
+            for name, coef in self.coefficients.items():
+                if name not in ref_values:
+                    continue
+                lo, hi = coef.ci(level)
+                ref = ref_values[name]
+                if isinstance(reference, FitResult) and name in reference.coefficients:
+                    z = float(stats.norm.ppf(0.5 + level / 2))
+                    other_coef = reference.coefficients[name]
+                    factor = _factor(other_coef, coef.unit)
+                    spread = math.hypot(coef.stderr, other_coef.stderr * factor)
+                    differs = abs(coef.value - ref) > z * spread
+                else:
+                    differs = not lo <= ref <= hi
+                rows.append(
+                    ComparisonRow(
+                        name, coef.unit, coef.value, lo, hi, ref, "reference", None, differs
+                    )
+                )
+            return Comparison(tuple(rows), level)
+        if not isinstance(reference, Mapping):
+            raise TypeError(
+                "reference must be a datasheet mapping {'N': (limit, unit)}, a NoiseModel or a "
+                f"FitResult, got {type(reference).__name__}"
+            )
+        for name, spec in reference.items():
+            if name not in self.coefficients:
+                raise ValueError(
+                    f"the datasheet names {name!r} but the fit has {', '.join(self.coefficients)}"
+                )
+            coef = self.coefficients[name]
+            if isinstance(spec, tuple):
+                limit, unit = float(spec[0]), str(spec[1])
+            else:
+                limit, unit = float(spec), coef.unit
+            factor = _factor(coef, unit)
+            lo, hi = (v * factor for v in coef.ci(level))
+            value = coef.value * factor
+            passed = value <= limit
+            conclusive = hi <= limit or lo > limit
+            rows.append(
+                ComparisonRow(name, unit, value, lo, hi, limit, "limit", passed, conclusive)
+            )
+        return Comparison(tuple(rows), level)
+
+
+def _factor(coef: Coefficient, unit: str) -> float:
+    """Multiplier taking ``coef`` from its unit to ``unit``."""
+    return convert(1.0, coef.unit, unit)
