@@ -8,9 +8,9 @@ from __future__ import annotations
 
 from allanite.batch import BatchResult, batch
 from allanite.diagnosis import Diagnosis, diagnose
+from allanite.fit import Coefficient, FitResult, fit
 from allanite.io import Record, read_record
 from allanite.large import avar_large
-from allanite.fit import Coefficient, FitResult, fit
 from allanite.model import NoiseModel
 from allanite.terms import (
     Flicker,
@@ -40,10 +40,10 @@ __version__ = "0.1.0"
 __all__ = [
     "KINDS",
     "AllanResult",
-    "Coefficient",
-    "FitResult",
     "BatchResult",
+    "Coefficient",
     "Diagnosis",
+    "FitResult",
     "Flicker",
     "GaussMarkov",
     "NoiseModel",
@@ -56,11 +56,11 @@ __all__ = [
     "White",
     "__version__",
     "adev",
-    "fit",
     "avar",
     "avar_large",
     "batch",
     "diagnose",
+    "fit",
     "hdev",
     "mdev",
     "oadev",
