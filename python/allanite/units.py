@@ -145,11 +145,7 @@ class _Parser:
     def factor(self) -> tuple[float, float, float]:
         token = self.take()
         if token == "sqrt":
-            if self.take() != "(":
-                raise self.error("sqrt needs parentheses")
-            s, a, t = self.expr()
-            if self.take() != ")":
-                raise self.error("missing ')'")
+            s, a, t = self.factor()  # sqrt(...) or, as in "√h", a single atom
             return math.sqrt(s), a / 2.0, t / 2.0
         if token == "(":
             value = self.expr()
