@@ -306,3 +306,16 @@ def test_bounded_identification_in_memory_uses_the_decimated_head():
     # unbounded: exactly avar's identification
     full = _identify(phase, factors, "overlapping", "frequency", None)
     assert np.array_equal(full, identify_alpha(phase, factors, "overlapping", data="frequency"))
+
+
+@pytest.mark.parametrize("kind", ["overlapping", "hadamard"])
+@pytest.mark.parametrize("channels", [1, 3])
+def test_tau_blocked_pass_equals_one_factor_at_a_time(kind, channels):
+    """Small factors share tiled passes; each must equal its own single pass bit for bit."""
+    x = _record(40_000, c=channels, seed=11)
+    phase = _core.phase(x, "rate")
+    top = int(_core.max_m(kind, phase.shape[0]))
+    factors = np.unique(np.r_[1:40, 1023, 1024, 1025, 8191, 8192, 8193, 12_000, top])
+    alone = np.vstack([_core.variance(phase, [int(m)], kind, 1) for m in factors])
+    for threads in (1, 2, 3):
+        assert np.array_equal(_core.variance(phase, factors, kind, threads), alone)

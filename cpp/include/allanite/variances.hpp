@@ -322,6 +322,56 @@ inline void variance_one(const PhaseRef& phase, VarianceKind kind, std::int64_t 
   }
 }
 
+namespace detail {
+
+/// Terms per tile of the tau-blocked pass (a multiple of kSumBlock, so the block grid of
+/// every factor is unchanged and the sums are bit-for-bit those of variance_one).
+constexpr std::int64_t kTileTerms = 8 * kSumBlock;
+/// Largest factor tiled: the tile's rows (kTileTerms + 3m) x channels stay in L2.
+constexpr std::int64_t kTileMaxM = 8192;
+
+/// Overlapping AVAR/HVAR of the factors ms[idx[...]] in one pass over the phase: tile by
+/// tile, every factor adds the tile's terms to its own compensated sums.
+inline void variance_tiled(const PhaseRef& phase, VarianceKind kind, const std::vector<std::int64_t>& ms,
+                           const std::vector<std::size_t>& idx, RowMatrix& out) {
+  const std::int64_t M = phase.rows();
+  const Eigen::Index nc = phase.cols();
+  const double* x = phase.data();
+  const std::int64_t rs = phase.outerStride();
+  const bool had = kind == VarianceKind::Hadamard;
+  std::vector<std::vector<NeumaierSum>> totals(idx.size(), std::vector<NeumaierSum>(static_cast<std::size_t>(nc)));
+  std::vector<std::int64_t> n(idx.size());
+  std::int64_t longest = 0;
+  for (std::size_t a = 0; a < idx.size(); ++a) {
+    n[a] = n_terms(kind, M, ms[idx[a]]);
+    longest = std::max(longest, n[a]);
+  }
+  for (std::int64_t k0 = 0; k0 < longest; k0 += kTileTerms) {
+    const double* base = x + k0 * rs;
+    for (std::size_t a = 0; a < idx.size(); ++a) {
+      if (k0 >= n[a]) continue;
+      const std::int64_t m = ms[idx[a]];
+      const std::int64_t count = std::min(kTileTerms, n[a] - k0);
+      if (had) {
+        const Taps<3> t{{base, base + m * rs, base + 2 * m * rs, base + 3 * m * rs}, rs};
+        add_diff_squares(t, count, nc, totals[a].data());
+      } else {
+        const Taps<2> t{{base, base + m * rs, base + 2 * m * rs}, rs};
+        add_diff_squares(t, count, nc, totals[a].data());
+      }
+    }
+  }
+  const double norm = had ? 6.0 : 2.0;
+  for (std::size_t a = 0; a < idx.size(); ++a) {
+    const double md = static_cast<double>(ms[idx[a]]);
+    const double nd = static_cast<double>(n[a]);
+    for (Eigen::Index c = 0; c < nc; ++c)
+      out(static_cast<Eigen::Index>(idx[a]), c) = totals[a][static_cast<std::size_t>(c)].value() / (norm * md * md * nd);
+  }
+}
+
+}  // namespace detail
+
 /// Variances for a list of averaging factors (rows of the result), threaded over factors.
 /// Bit-for-bit independent of `threads`: each factor is computed by one thread.
 inline RowMatrix variance(const PhaseRef& phase, const std::vector<std::int64_t>& ms,
@@ -335,9 +385,34 @@ inline RowMatrix variance(const PhaseRef& phase, const std::vector<std::int64_t>
                                   " phase points; use a shorter averaging time");
   }
   RowMatrix out(static_cast<Eigen::Index>(ms.size()), phase.cols());
-  // longest passes (small m) first keeps both cores busy to the end
-  parallel_for(ms.size(), resolve_threads(threads), [&](std::size_t i) {
-    variance_one(phase, kind, ms[i], out.data() + static_cast<Eigen::Index>(i) * phase.cols());
+  const int nthreads = resolve_threads(threads);
+  // Cache blocking over taus: the overlapping estimators at small m read the same rows, so
+  // they share passes (detail::variance_tiled); one group per thread, the other factors are
+  // one task each. Longest tasks first keeps both cores busy to the end.
+  std::vector<std::vector<std::size_t>> groups;
+  std::vector<std::size_t> single;
+  const bool tiled = (kind == VarianceKind::Overlapping || kind == VarianceKind::Hadamard);
+  std::vector<std::size_t> small;
+  for (std::size_t i = 0; i < ms.size(); ++i) {
+    if (tiled && ms[i] <= detail::kTileMaxM)
+      small.push_back(i);
+    else
+      single.push_back(i);
+  }
+  if (small.size() > 1) {
+    const std::size_t ng = std::min<std::size_t>(static_cast<std::size_t>(nthreads), small.size());
+    groups.resize(ng);
+    for (std::size_t a = 0; a < small.size(); ++a) groups[a % ng].push_back(small[a]);
+  } else {
+    single.insert(single.begin(), small.begin(), small.end());
+  }
+  parallel_for(groups.size() + single.size(), nthreads, [&](std::size_t task) {
+    if (task < groups.size()) {
+      detail::variance_tiled(phase, kind, ms, groups[task], out);
+    } else {
+      const std::size_t i = single[task - groups.size()];
+      variance_one(phase, kind, ms[i], out.data() + static_cast<Eigen::Index>(i) * phase.cols());
+    }
   });
   return out;
 }
