@@ -44,7 +44,7 @@ RESULTS = HERE / "results"
 FS = 100.0
 
 #: skip a method when N x channels exceeds this (it would take minutes or tens of GB)
-LIMITS = {"reference": 3 * 10**7, "allantools": 3 * 10**7, "allan_variance": 10**8}
+LIMITS = {"reference": 10**7, "allantools": 3 * 10**7, "allan_variance": 3 * 10**7}
 
 
 def _rss_mb() -> float:
