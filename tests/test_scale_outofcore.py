@@ -180,6 +180,8 @@ def test_progress_callback_reports_both_stages(tmp_path):
         progress=lambda stage, done, total: calls.append((stage, done, total)),
     )
     stages = [c[0] for c in calls]
+    variance_done = [c[1] for c in calls if c[0] == "variance"]
+    assert variance_done == list(range(1, len(variance_done) + 1))  # one call per tau
     assert stages[0] == "phase"
     assert stages[-1] == "variance"
     assert stages.index("variance") == stages.count("phase")

@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import os
 import re
-from concurrent.futures import ThreadPoolExecutor, as_completed
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
 
@@ -319,13 +319,19 @@ def variance_from_store(
     with ThreadPoolExecutor(max_workers=workers) as pool:
         futures = [pool.submit(worker, r) for r in readers]
         done = 0
-        for fut in as_completed(futures):
-            fut.result()
-            while not finished.empty():
-                finished.get()
-                done += 1
+        # report each factor as it completes; a failed worker ends the wait at once
+        while done < nt and not any(f.done() and f.exception() for f in futures):
+            try:
+                finished.get(timeout=0.2)
+            except queue.Empty:
+                if all(f.done() for f in futures):
+                    break
+                continue
+            done += 1
             if progress is not None:
                 progress("variance", done, nt)
+        for fut in futures:
+            fut.result()
     return var, alphas
 
 
