@@ -60,6 +60,8 @@ class GLSSolution:
     iterations: int
     jacobian: NDArray[np.float64]
     basis: CovarianceBasis | None
+    design: NDArray[np.float64]  # unit-amplitude columns at the fitted nonlinear parameters
+    y: NDArray[np.float64]
 
     def model(self, units: str) -> NoiseModel:
         """The fitted NoiseModel."""
@@ -284,6 +286,8 @@ def solve(
         chi2=chi2,
         iterations=done,
         jacobian=jac,
+        design=g,
+        y=data.y,
         basis=basis,
     )
 
@@ -314,9 +318,16 @@ def score_interval(sol: GLSSolution, j: int, z: float) -> tuple[float, float]:
         return max(est - z * se_hat, 0.0), max(est + z * se_hat, 0.0)
     basis = sol.basis
 
+    white = _Whitener(sol.cov)
+    others = [k for k in range(sol.theta.size) if k != j]
+
     def se(theta0: float) -> float:
+        # profile: the other amplitudes re-fitted with theta_j held at theta0
         theta = np.maximum(sol.theta, 0.0).copy()
         theta[j] = max(theta0, 0.0)
+        if others:
+            rest, _ = _nnls(white, sol.design[:, others], sol.y - theta[j] * sol.design[:, j])
+            theta[others] = rest
         cov = _covariance(basis, theta)
         if cov is None:
             return se_hat
