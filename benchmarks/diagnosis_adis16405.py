@@ -76,11 +76,17 @@ def apply(model: NoiseModel, best: Any) -> NoiseModel:
     return model.plus(term)
 
 
-def refine(model: NoiseModel, x: np.ndarray, rounds: int, n_mc: int) -> tuple[NoiseModel, list]:
-    """Add the best attribution on run 1 itself while its gap is significant."""
+def refine(
+    model: NoiseModel, x: np.ndarray, rounds: int, n_mc: int, effects: list[str] | None
+) -> tuple[NoiseModel, list]:
+    """Apply the best attribution on run 1 itself while its gap is significant.
+
+    With ``effects=["rescale"]`` this is a coordinate descent of the model's coefficients
+    on run 1's log Allan variance, with the diagnosis' own statistic.
+    """
     steps = []
     for r in range(rounds):
-        d = diagnose(x, model, FS, units="deg/s", n_mc=n_mc, seed=100 + r)
+        d = diagnose(x, model, FS, units="deg/s", n_mc=n_mc, seed=100 + r, effects=effects)
         steps.append(
             {"G": d.statistic, "p_value": d.p_value, "best": d.best.to_dict() if d.best else None}
         )
@@ -112,6 +118,10 @@ def main() -> None:
         help="rounds of diagnosis-guided refinement of the run-1 model (add the best "
         "attribution on run 1 while its gap is significant)",
     )
+    parser.add_argument(
+        "--refine-effects", default="rescale", help="effects allowed in the refinement"
+    )
+    parser.add_argument("--refine-n-mc", type=int, help="replicates of the refinement rounds")
     args = parser.parse_args()
     if not DATA.is_dir():
         raise SystemExit(f"reference data {DATA} not found (it sits beside the repository)")
@@ -121,7 +131,8 @@ def main() -> None:
     start = model.to_dict()
     steps: list = []
     if args.refine:
-        model, steps = refine(model, run1, args.refine, args.n_mc)
+        effects = args.refine_effects.split(",") if args.refine_effects else None
+        model, steps = refine(model, run1, args.refine, args.refine_n_mc or args.n_mc, effects)
         print(f"refined on run 1: {model.to_json()}", flush=True)
     report: dict[str, Any] = {
         "axis": args.axis,

@@ -110,6 +110,7 @@ def make_cases(
     names = configs_sel or (["100"] if quick else ["100", "400"])
     configs = [CONFIGS[c] for c in names]
     labels = strengths_sel or (["medium", "strong"] if quick else list(STRENGTHS))
+    labels = [] if labels == ["none"] else labels
     strengths = {k: STRENGTHS[k] for k in labels}
     spike_sigmas = {"weak": 5.0, "medium": 7.0, "strong": 10.0}
     cases: list[Case] = []
@@ -416,7 +417,29 @@ def main() -> None:
     parser.add_argument("--strengths", help="comma-separated: weak,medium,strong")
     parser.add_argument("--nulls", type=int, help="number of null cases")
     parser.add_argument("--tag", default="", help="suffix of the result files")
+    parser.add_argument(
+        "--combine",
+        nargs="+",
+        metavar="JSON",
+        help="summarise the cases of earlier result files together (no new runs)",
+    )
     args = parser.parse_args()
+    if args.combine:
+        rows = [r for f in args.combine for r in json.loads(Path(f).read_text())["cases"]]
+        summary = summarize(rows)
+        text = table(summary)
+        print(text)
+        stem = RESULTS / ("validate_diagnosis" + args.tag)
+        stem.with_suffix(".json").write_text(
+            json.dumps({"summary": summary, "sources": args.combine}, indent=1, default=float)
+        )
+        stem.with_suffix(".md").write_text(
+            "# Sim-to-real diagnosis validation (combined)\n\n"
+            f"`python benchmarks/validate_diagnosis.py {' '.join(sys.argv[1:])}`: "
+            f"{len(rows)} cases from {', '.join(Path(f).name for f in args.combine)}.\n\n"
+            f"{text}\n"
+        )
+        return
     n_mc = args.n_mc or (60 if args.quick else 100)
     cases = make_cases(
         args.quick,
