@@ -103,7 +103,18 @@ class Diagnosis:
 
     @property
     def where(self) -> dict[str, Any]:
-        """Tau bands, frequency lines and time segments of the gap."""
+        """Tau bands, frequency lines and time segments of the gap.
+
+        Empty when the gap is not significant (each view keeps its own flagged locations in
+        ``tau.bands_s``, ``frequency.lines``, ``time.segments_s`` as hints).
+        """
+        if not self.significant:
+            return {
+                "tau_bands_s": [],
+                "frequency_lines_hz": [],
+                "time_segments_s": [],
+                "frequency_bands_hz": [],
+            }
         return {
             "tau_bands_s": [list(b) for b in self.tau.bands_s],
             "frequency_lines_hz": [line.frequency_hz for line in self.frequency.lines],
