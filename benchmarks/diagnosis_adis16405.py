@@ -122,10 +122,27 @@ def main() -> None:
         "--refine-effects", default="rescale", help="effects allowed in the refinement"
     )
     parser.add_argument("--refine-n-mc", type=int, help="replicates of the refinement rounds")
+    parser.add_argument(
+        "--record-mode",
+        action="store_true",
+        help="use run 1's record itself as the simulated sensor (no model, no holdout)",
+    )
     args = parser.parse_args()
     if not DATA.is_dir():
         raise SystemExit(f"reference data {DATA} not found (it sits beside the repository)")
     run1 = load(1, args.axis)
+    if args.record_mode:
+        out: dict[str, Any] = {"axis": args.axis, "sim": "run 1 record", "runs": {}}
+        for run in (2, 3):
+            t0 = time.perf_counter()
+            d = diagnose(load(run, args.axis), run1, FS, units="deg/s", sim_units="deg/s",
+                         n_mc=args.n_mc, seed=run)  # fmt: skip
+            out["runs"][f"run{run}"] = {"seconds": time.perf_counter() - t0, **summary(d)}
+            print(f"run {run} vs run-1 record: G = {d.statistic:.4g}, p = {d.p_value:.3g}, "
+                  f"best = {d.best.effect if d.best else None}")  # fmt: skip
+        RESULTS.mkdir(parents=True, exist_ok=True)
+        (RESULTS / "diagnosis_adis16405_record_mode.json").write_text(json.dumps(out, indent=1))
+        return
     model, how = fit_model(run1)
     print(f"model fitted on run 1 ({how}): {model.to_json()}", flush=True)
     start = model.to_dict()

@@ -162,8 +162,11 @@ def _bounds(cand: Candidate, tm: TauModel) -> tuple[NDArray[np.float64], NDArray
     """Return log bounds of the free parameters.
 
     Times lie within ``[dt/4, 4T]`` and rates within ``[1/(4T), 2 fs]``: a correlation time
-    longer than the record is a drift, not a process.
+    longer than the record is a drift, not a process. A rescale factor lies within
+    ``[1e-3, 1e3]``.
     """
+    if cand.base is not None:  # a rescale between 1/1000 (the term is absent) and 1000
+        return np.array([np.log(1e-3)]), np.array([np.log(1e3)])
     specs = {p.name: p for p in cand.term_cls.params}
     bounds = []
     for name in cand.free:
