@@ -350,3 +350,19 @@ def test_several_records_are_overlaid_and_summarised() -> None:
     assert "<h3>unit_a.npy</h3>" in report.html
     assert "<h3>unit_b.npy</h3>" in report.html
     assert report.html.count("<h3>unit_b.npy — gy</h3>") == 1  # its slope table
+
+
+def test_goodness_of_fit_is_reported_and_misfits_are_flagged() -> None:
+    fit_module = pytest.importorskip("allanite.fit")
+    rate = RNG.normal(size=20_000) * 0.5
+    result = allanite.avar(rate, FS, points=40, units="deg/s")
+    record = Record(samples=rate, fs=FS, units="deg/s", channels=("gx",), source="w.npy")
+    good = fit_module.fit(result, terms=["white"])
+    bad = fit_module.fit(result, terms=["rrw"])  # white noise fitted as rate random walk
+    html_good = build_report([DeviceAnalysis(record, result, (good,))]).html
+    html_bad = build_report([DeviceAnalysis(record, result, (bad,))]).html
+    assert f"for {good.dof} degrees of freedom" in html_good
+    assert "does not describe" not in html_good
+    assert good.p_value >= 0.001
+    assert bad.p_value < 0.001
+    assert "does not describe this Allan curve" in html_bad

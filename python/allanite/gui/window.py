@@ -34,6 +34,18 @@ def _numeric(text: str) -> bool:
     return bool(head) and (head[0].isdigit() or head.startswith("."))
 
 
+def _goodness_text(fit: Any, channel: str) -> str:
+    """`` — fit of <channel>: p = ...`` with a warning when the model misses the curve."""
+    from allanite.report.build import MISFIT_P
+
+    p = getattr(fit, "p_value", None)
+    if p is None or p != p:
+        return ""
+    if p < MISFIT_P:
+        return f" — ⚠ the model does not describe {channel}'s curve (p = {p:.2g})"
+    return f" — fit of {channel}: p = {p:.2g}"
+
+
 class MainWindow(QtWidgets.QMainWindow):
     """allanite's desktop window."""
 
@@ -434,7 +446,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self._show_figure(fig)
         self._fill_table(
             "Noise coefficients in customary units (intervals: "
-            f"{100 * self.session.options.level:.3g} %)",
+            f"{100 * self.session.options.level:.3g} %)" + _goodness_text(fit, names[c]),
             ["channel", "term", "symbol", "value", "interval", "unit"],
             rows,
         )

@@ -239,7 +239,30 @@ def _coefficient_section(
                 ["term", "symbol", "value", "interval", "unit", "ADEV slope"], rows, text_columns=2
             )
         )
+        parts.append(_goodness(device.fit(c)))
     return "".join(parts)
+
+
+#: p-value of the fit's chi-square below which the report warns that the model misfits
+MISFIT_P = 0.001
+
+
+def _goodness(fit: Any) -> str:
+    """Goodness of fit of a FitResult, with a warning when the model misses the curve."""
+    chi2, dof, p = (getattr(fit, k, None) for k in ("chi2", "dof", "p_value"))
+    if chi2 is None or dof is None or p is None or p != p:
+        return ""
+    text = (
+        f"Generalised χ² = {chi2:.4g} for {dof} degrees of freedom (correlations between τ "
+        f"accounted for), p = {p:.2g}."
+    )
+    if p < MISFIT_P:
+        return (
+            f'<div class="warn">{h.escape(text)} The fitted model does not describe this '
+            "Allan curve within its uncertainty: look at the model plot before using the "
+            "coefficients (a term may be missing, e.g. quantisation of a coarse sensor).</div>"
+        )
+    return f'<p class="note">{h.escape(text)}</p>'
 
 
 def _rate_adev(device: DeviceAnalysis, channel: int, level: float) -> tuple[Any, ...]:
