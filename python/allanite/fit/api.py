@@ -78,33 +78,66 @@ def _n_params(specs: Sequence[TermSpec]) -> int:
     return sum(1 + (s.nonlinear_name is not None) for s in specs)
 
 
+def _score(sol: GLSSolution, penalty: float) -> float:
+    """Return ``chi2 + log det C + penalty * parameters``.
+
+    The -2 log-likelihood of the Gaussian approximation plus the penalty, so that models with
+    different covariances stay comparable.
+    """
+    _, logdet = np.linalg.slogdet(sol.cov)
+    return float(sol.chi2 + logdet + penalty * _n_params(sol.specs))
+
+
 def _select(
     specs: list[TermSpec], data: GLSData, edf: NDArray[np.float64], penalty: float
 ) -> tuple[GLSSolution, tuple[dict[str, Any], ...]]:
-    """Forward selection: add the term that lowers chi2 most while the drop exceeds ``penalty``.
+    """Stepwise selection by a penalized Gaussian likelihood of the Allan variance estimates.
 
-    The chi-square of each candidate is computed with the covariance of the current model, so
-    an absent term lowers it by about a chi-square with one degree of freedom (one-sided, the
-    amplitude cannot be negative): with ``penalty = 9`` it is added with probability about
-    0.1 %. Starting from the best single term, a term enters only when it is needed.
+    Each model is scored by ``chi2 + log det C + penalty * p`` with its own fitted covariance
+    ``C`` (the Gaussian -2 log-likelihood of the estimates plus ``penalty`` per parameter).
+    Starting from the best single noise term, the term that lowers the score most is added
+    while it lowers it at all, and after each addition a term whose removal lowers the score
+    is dropped again (dropped terms do not return). An absent term lowers ``chi2`` by about a
+    one-sided chi-square with one degree of freedom, so with ``penalty = 9`` it enters with
+    probability of order 0.1 %.
     """
-    singles = [solve([s], data, edf) for s in specs]
-    best = int(np.argmin([sol.chi2 for sol in singles]))
-    current, sol = [specs[best]], singles[best]
-    records = {specs[best].cls.type: {"term": specs[best].cls.type, "delta_chi2": math.inf}}
-    while len(current) < len(specs):
-        candidates = [s for s in specs if s not in current]
-        drops = [sol.chi2 - solve([*current, c], data, edf, cov=sol.cov).chi2 for c in candidates]
-        for c, d in zip(candidates, drops, strict=True):
-            records[c.cls.type] = {"term": c.cls.type, "delta_chi2": float(d)}
-        j = int(np.argmax(drops))
-        if drops[j] < penalty:
+    starters = [s for s in specs if s.cls.stationary] or list(specs)
+    singles = [solve([s], data, edf) for s in starters]
+    best = int(np.argmin([_score(sol, penalty) for sol in singles]))
+    current, sol = [starters[best]], singles[best]
+    score = _score(sol, penalty)
+    records: dict[str, dict[str, Any]] = {}
+    dropped: list[TermSpec] = []
+    while True:
+        candidates = [s for s in specs if s not in current and s not in dropped]
+        if not candidates:
+            break
+        bigger = [solve([*current, c], data, edf) for c in candidates]
+        gains = [score - _score(big, penalty) for big in bigger]
+        for c, g in zip(candidates, gains, strict=True):
+            records[c.cls.type] = {"term": c.cls.type, "score_gain": float(g)}
+        j = int(np.argmax(gains))
+        if gains[j] <= 0:
             break
         current.append(candidates[j])
-        sol = solve(current, data, edf)
+        sol, score = bigger[j], score - gains[j]
+        while len(current) > 1:
+            smaller = [
+                solve(current[:i] + current[i + 1 :], data, edf) for i in range(len(current))
+            ]
+            gains = [score - _score(small, penalty) for small in smaller]
+            i = int(np.argmax(gains))
+            if gains[i] <= 0:
+                break
+            records[current[i].cls.type] = {"term": current[i].cls.type, "score_gain": -gains[i]}
+            dropped.append(current.pop(i))
+            sol, score = smaller[i], score - gains[i]
     kept = {s.cls.type for s in current}
     order = [s.cls.type for s in specs]
-    return sol, tuple({**records[t], "kept": t in kept} for t in order if t in records)
+    return sol, tuple(
+        {"term": t, "score_gain": records.get(t, {}).get("score_gain", math.inf), "kept": t in kept}
+        for t in order
+    )
 
 
 def _coefficients(sol: GLSSolution, model: NoiseModel) -> dict[str, Coefficient]:
@@ -276,9 +309,9 @@ def fit(
         An overlapping Allan variance (one channel) or a 1-D record (then ``fs`` is needed and
         the octave grid is used).
     terms : "auto" or list
-        ``"auto"``: Q, N, B, K, R by forward selection: starting from the best single term, the
-        term that lowers the chi-square most is added while it lowers it by at least
-        ``penalty`` (so absent terms are not invented).
+        ``"auto"``: Q, N, B, K, R by stepwise selection on the penalized Gaussian likelihood
+        of the estimates, ``chi2 + log det C + penalty * parameters`` (so absent terms are not
+        invented; see ``FitResult.selection``).
         Or a list of names (``"white"``/``"N"``, ``"quantization"``/``"Q"``, ``"flicker"``/
         ``"B"``, ``"rrw"``/``"K"``, ``"ramp"``/``"R"``, ``"markov"``, ``"sine"``), Term classes,
         or Term instances (starting values; a Flicker's ``f0`` is kept).
@@ -293,8 +326,8 @@ def fit(
     units : str, optional
         Rate unit of the data (default: the result's units, else ``"deg/s"``).
     penalty : float
-        Chi-square decrease a term must bring to be added by ``"auto"`` (9: three standard
-        errors for a single coefficient).
+        Penalty per parameter of ``"auto"`` (9: a term must lower the chi-square by about
+        three standard errors squared).
     max_fraction : float
         Points with ``m > max_fraction * N`` are left out of the GLS fit: with fewer than about
         two independent differences their spread is not captured by the approximation.

@@ -121,7 +121,8 @@ class FitResult:
     classic : ClassicReadout
         The IEEE slope-method readouts of the same curve (labelled, no uncertainty).
     selection : tuple of dict
-        For ``terms="auto"``: each candidate with its chi-square increase when removed and
+        For ``terms="auto"``: each candidate with the score gain of its last step (the
+        penalized -2 log-likelihood decrease when it was, or would have been, added) and
         whether it was kept.
     """
 
