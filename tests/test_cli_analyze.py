@@ -339,3 +339,20 @@ def test_console_script_runs(tmp_path: Path) -> None:
     assert bad.returncode == 2
     assert bad.stderr.count("\n") == 1
     assert "nope.npy" in bad.stderr
+
+
+def test_closed_pipe_is_not_an_error(tmp_path: Path) -> None:
+    path, extra = _npy(tmp_path)
+    # --taus all prints ~3000 rows, more than a pipe buffer: the writer hits a closed pipe
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "allanite", "analyze", str(path), *extra, "--taus", "all"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    assert proc.stdout is not None
+    assert proc.stdout.readline().startswith("record:")
+    proc.stdout.close()
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 0
+    assert "error" not in err

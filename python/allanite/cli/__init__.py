@@ -69,6 +69,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_USAGE
     try:
         return int(args.func(args) or 0)
+    except BrokenPipeError:  # the reader of stdout went away (e.g. `| head`): not an error
+        import os
+
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return EXIT_OK
     except (InputError, ValueError, TypeError, OSError) as exc:
         message = " ".join(str(exc).split())
         print(f"allanite {args.command}: error: {message}", file=sys.stderr)
