@@ -81,15 +81,22 @@ def _n_params(specs: Sequence[TermSpec]) -> int:
 def _score(sol: GLSSolution, penalty: float) -> float:
     """Return ``chi2 + log det C + penalty * parameters``.
 
-    The -2 log-likelihood of the Gaussian approximation plus the penalty, so that models with
-    different covariances stay comparable.
+    The -2 log-likelihood of the Gaussian approximation under the covariance ``C`` the fit
+    used, plus the penalty, so that models with different covariances stay comparable. A
+    model that needed a model discrepancy (see :func:`allanite.fit.gls.solve`) pays for it
+    as one more parameter.
     """
     _, logdet = np.linalg.slogdet(sol.cov)
-    return float(sol.chi2 + logdet + penalty * _n_params(sol.specs))
+    n_params = _n_params(sol.specs) + (sol.discrepancy > 0)
+    return float(sol.chi2_fit + logdet + penalty * n_params)
 
 
 def _select(
-    specs: list[TermSpec], data: GLSData, edf: NDArray[np.float64], penalty: float
+    specs: list[TermSpec],
+    data: GLSData,
+    edf: NDArray[np.float64],
+    penalty: float,
+    misfit_level: float,
 ) -> tuple[GLSSolution, tuple[dict[str, Any], ...]]:
     """Stepwise selection by a penalized Gaussian likelihood of the Allan variance estimates.
 
@@ -102,7 +109,7 @@ def _select(
     probability of order 0.1 %.
     """
     starters = [s for s in specs if s.cls.stationary] or list(specs)
-    singles = [solve([s], data, edf) for s in starters]
+    singles = [solve([s], data, edf, misfit_level=misfit_level) for s in starters]
     best = int(np.argmin([_score(sol, penalty) for sol in singles]))
     current, sol = [starters[best]], singles[best]
     score = _score(sol, penalty)
@@ -112,7 +119,7 @@ def _select(
         candidates = [s for s in specs if s not in current and s not in dropped]
         if not candidates:
             break
-        bigger = [solve([*current, c], data, edf) for c in candidates]
+        bigger = [solve([*current, c], data, edf, misfit_level=misfit_level) for c in candidates]
         gains = [score - _score(big, penalty) for big in bigger]
         for c, g in zip(candidates, gains, strict=True):
             records[c.cls.type] = {"term": c.cls.type, "score_gain": float(g)}
@@ -123,7 +130,8 @@ def _select(
         sol, score = bigger[j], score - gains[j]
         while len(current) > 1:
             smaller = [
-                solve(current[:i] + current[i + 1 :], data, edf) for i in range(len(current))
+                solve(current[:i] + current[i + 1 :], data, edf, misfit_level=misfit_level)
+                for i in range(len(current))
             ]
             gains = [score - _score(small, penalty) for small in smaller]
             i = int(np.argmax(gains))
@@ -188,6 +196,7 @@ def _fit_gls(
     units: str,
     penalty: float,
     max_fraction: float,
+    misfit_level: float,
 ) -> FitResult:
     if result.kind != "overlapping":
         raise ValueError(
@@ -209,13 +218,14 @@ def _fit_gls(
     edf = np.asarray(result.edf, dtype=np.float64)[keep]
     if auto:
         usable = [s for s in specs if _n_params([s]) < int(keep.sum())]
-        sol, selection = _select(usable, data, edf, penalty)
+        sol, selection = _select(usable, data, edf, penalty, misfit_level)
     else:
-        sol, selection = solve(specs, data, edf), ()
+        sol, selection = solve(specs, data, edf, misfit_level=misfit_level), ()
     model = sol.model(units)
     dof = int(keep.sum()) - _n_params(sol.specs)
     p_value = float(stats.chi2.sf(sol.chi2, dof)) if dof > 0 else math.nan
-    residuals = (data.y - sol.fitted) / np.sqrt(np.diag(sol.cov))
+    # standardised under the terms alone, so that a misfit shows where it is
+    residuals = (data.y - sol.fitted) / np.sqrt(np.diag(sol.model_cov))
     return FitResult(
         model=model,
         coefficients=_coefficients(sol, model),
@@ -231,6 +241,8 @@ def _fit_gls(
         classic=classic_readout(result.tau, np.sqrt(np.asarray(result.var, dtype=np.float64))),
         selection=selection,
         meta={"iterations": sol.iterations, "n_samples": result.n_samples, "fs": result.fs},
+        discrepancy=sol.discrepancy,
+        misfit_level=misfit_level,
     )
 
 
@@ -293,6 +305,7 @@ def fit(
     units: str | None = None,
     penalty: float = 9.0,
     max_fraction: float = 0.125,
+    misfit_level: float = 0.001,
 ) -> FitResult:
     r"""Fit noise terms to an Allan curve with honest uncertainty.
 
@@ -332,6 +345,16 @@ def fit(
         Points with ``m > max_fraction * N`` are left out of the GLS fit: with fewer than about
         two independent differences their spread is not captured by the approximation.
 
+    misfit_level : float
+        When the terms alone are rejected at this level (generalized chi-square p-value), the
+        model is misspecified for this curve (e.g. a sensor's digital filter at short tau):
+        a relative model discrepancy ``delta`` per tau is then added to the covariance by
+        the Paule-Mandel rule (chi-square = dof), so the coefficients follow the whole curve
+        instead of the most precise points and their intervals carry the model error.
+        ``FitResult.discrepancy`` reports ``delta``, ``chi2``/``p_value`` stay those of the
+        terms alone and ``FitResult.misfit`` flags the taus the model misses. 0 switches the
+        discrepancy off.
+
     Returns
     -------
     FitResult
@@ -355,6 +378,8 @@ def fit(
         raise ValueError(f"unknown method {method!r}; use 'gls' or 'seed'")
     if not (isinstance(penalty, (int, float)) and penalty >= 0):
         raise ValueError(f"penalty must be a non-negative number, got {penalty!r}")
+    if not (isinstance(misfit_level, (int, float)) and 0.0 <= misfit_level < 1.0):
+        raise ValueError(f"misfit_level must lie in [0, 1), got {misfit_level!r}")
     if not 0.0 < max_fraction <= 0.5:
         raise ValueError(f"max_fraction must lie in (0, 0.5], got {max_fraction!r}")
     specs, auto = resolve_terms(terms)
@@ -363,4 +388,6 @@ def fit(
     rate_unit(rate)
     if method == "seed":
         return _fit_seed(result, rate)
-    return _fit_gls(result, specs, auto, rate, float(penalty), float(max_fraction))
+    return _fit_gls(
+        result, specs, auto, rate, float(penalty), float(max_fraction), float(misfit_level)
+    )

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy import optimize
+from scipy import optimize, stats
 
 from allanite.fit.covariance import CovarianceBasis
 from allanite.fit.spec import TermSpec
@@ -31,6 +31,8 @@ from allanite.model import NoiseModel
 from allanite.terms import Term
 
 __all__ = ["GLSData", "GLSSolution", "score_interval", "solve"]
+
+_Vec = NDArray[np.float64]
 
 
 @dataclass(frozen=True)
@@ -54,9 +56,12 @@ class GLSSolution:
     theta_free: NDArray[np.float64]  # unconstrained GLS squared amplitudes (same phi)
     log_phi: NDArray[np.float64]  # nonlinear parameters (log), one per spec with one
     param_cov: NDArray[np.float64]  # covariance of (theta..., log_phi...)
-    cov: NDArray[np.float64]  # covariance of the AVAR estimates under the fitted model
+    cov: NDArray[np.float64]  # covariance of the AVAR estimates used: model + discrepancy
+    model_cov: NDArray[np.float64]  # covariance under the fitted terms alone (goodness of fit)
+    discrepancy: float  # relative model discrepancy delta (0: the terms fit)
     fitted: NDArray[np.float64]
-    chi2: float
+    chi2: float  # generalized chi-square under model_cov
+    chi2_fit: float  # generalized chi-square under cov (what the estimate minimises)
     iterations: int
     jacobian: NDArray[np.float64]
     basis: CovarianceBasis | None
@@ -213,38 +218,23 @@ def _covariance(basis: CovarianceBasis, theta: NDArray[np.float64]) -> NDArray[n
     return cov
 
 
-def solve(
-    specs: Sequence[TermSpec],
+def _model_fit(
+    specs: tuple[TermSpec, ...],
     data: GLSData,
-    edf: NDArray[np.float64],
-    *,
-    cov: NDArray[np.float64] | None = None,
-    iterations: int = 10,
-    rtol: float = 1e-4,
-) -> GLSSolution:
-    """Iteratively reweighted GLS fit of ``specs`` to ``data``.
+    current: NDArray[np.float64],
+    extra: NDArray[np.float64] | None,
+    fixed: bool,
+    iterations: int,
+    rtol: float,
+    log_phi: NDArray[np.float64] | None = None,
+) -> tuple[_Vec, _Vec, _Vec, CovarianceBasis | None, int]:
+    """Reweighting loop: returns ``theta, log_phi, covariance, basis, iterations``.
 
-    Parameters
-    ----------
-    specs : sequence of TermSpec
-        The terms.
-    data : GLSData
-        The curve.
-    edf : numpy.ndarray
-        Equivalent degrees of freedom of the points (for the first, diagonal weights only).
-    cov : numpy.ndarray, optional
-        A fixed covariance of the estimates (then no reweighting).
-    iterations : int
-        Maximum number of covariance updates.
-    rtol : float
-        Stop when the fitted curve changes by less than this (relative) between updates.
+    The returned ``theta`` is the GLS estimate under the returned covariance (so the estimate,
+    its covariance and the intervals built from them belong together). ``extra`` (the model
+    discrepancy) is added to the model covariance when given.
     """
-    specs = tuple(specs)
-    fixed = cov is not None
-    current = cov if cov is not None else _initial_cov(data, edf)
-    log_phi: NDArray[np.float64] | None = None
     basis: CovarianceBasis | None = None
-    theta = np.zeros(len(specs))
     fitted = np.zeros_like(data.y)
     done = 0
     for done in range(1, (1 if fixed else iterations) + 1):
@@ -255,23 +245,128 @@ def solve(
         log_phi = new_phi
         theta, _ = _profile(specs, data, white, log_phi)
         new_fitted = _design(specs, data, log_phi) @ theta
-        if basis is not None:
-            updated = _covariance(basis, theta)
-            current = _initial_cov(data, edf) if updated is None else updated
         change = np.max(np.abs(new_fitted - fitted) / np.maximum(new_fitted, 1e-300))
         fitted = new_fitted
+        if basis is not None:
+            updated = _covariance(basis, theta)
+            if updated is not None:
+                current = updated if extra is None else updated + extra
         if done > 1 and change < rtol:
             break
     assert log_phi is not None
-    white = _Whitener(current)
+    theta, _ = _profile(specs, data, _Whitener(current), log_phi)
+    return theta, log_phi, current, basis, done
+
+
+def _discrepancy_scale(
+    resid: NDArray[np.float64], cov: NDArray[np.float64], shape: NDArray[np.float64], dof: int
+) -> float:
+    r"""Paule-Mandel ``delta^2``: :math:`r^\top (C + \delta^2 D)^{-1} r = \nu`, ``D = diag(shape)``.
+
+    Returns 0 when the chi-square without the discrepancy is already at most ``dof``.
+    """
+
+    def excess(d2: float) -> float:
+        w = _Whitener(cov + d2 * np.diag(shape))(resid)
+        return float(w @ w) - dof
+
+    if excess(0.0) <= 0:
+        return 0.0
+    hi = float(np.max(resid**2 / shape))
+    while excess(hi) > 0:
+        hi *= 4.0
+    return float(optimize.brentq(excess, 0.0, hi, xtol=1e-12 * hi, rtol=1e-10))
+
+
+def solve(
+    specs: Sequence[TermSpec],
+    data: GLSData,
+    edf: NDArray[np.float64],
+    *,
+    cov: NDArray[np.float64] | None = None,
+    iterations: int = 10,
+    rtol: float = 1e-4,
+    misfit_level: float = 0.001,
+) -> GLSSolution:
+    r"""Iteratively reweighted GLS fit of ``specs`` to ``data``, with a model discrepancy.
+
+    First the terms are fitted with the covariance :math:`C(\theta)` of the estimates under
+    the fitted model. If that fit is rejected (generalized chi-square p-value below
+    ``misfit_level``), the model does not describe the curve to the estimates' precision
+    (a real sensor's digital filter, quantised samples, structure the IEEE terms lack), and
+    :math:`C(\theta)` alone would let the precise short-tau points dictate every coefficient
+    and let a term inflate its own predicted variance to escape the points contradicting it.
+    A relative model discrepancy is then added, independent between taus,
+
+    .. math:: C_\delta = C(\theta) + \delta^2\,\mathrm{diag}(y_i^2),
+
+    with :math:`\delta` chosen by the Paule-Mandel rule, the generalized chi-square under
+    :math:`C_\delta` equal to its degrees of freedom, iterated jointly with :math:`\theta`.
+    The coefficients and their intervals then carry the model error ("dark uncertainty");
+    the reported chi-square stays the one of the terms alone, so the misfit remains visible.
+
+    Parameters
+    ----------
+    specs : sequence of TermSpec
+        The terms.
+    data : GLSData
+        The curve.
+    edf : numpy.ndarray
+        Equivalent degrees of freedom of the points (for the first, diagonal weights only).
+    cov : numpy.ndarray, optional
+        A fixed covariance of the estimates (then no reweighting and no discrepancy).
+    iterations : int
+        Maximum number of covariance updates.
+    rtol : float
+        Stop when the fitted curve changes by less than this (relative) between updates.
+    misfit_level : float
+        Significance level of the goodness-of-fit test that switches the discrepancy on
+        (0 never switches it on).
+
+    References
+    ----------
+    R. C. Paule and J. Mandel, "Consensus values and weighting factors", J. Res. NBS 87
+    (1982); M. C. Kennedy and A. O'Hagan, "Bayesian calibration of computer models",
+    J. R. Stat. Soc. B 63 (2001), for the model-discrepancy term.
+    """
+    specs = tuple(specs)
+    fixed = cov is not None
+    start = cov if cov is not None else _initial_cov(data, edf)
+    theta, log_phi, current, basis, done = _model_fit(
+        specs, data, start, None, fixed, iterations, rtol
+    )
+    model_cov = current
+    n_params = len(specs) + log_phi.size
+    dof = data.y.size - n_params
+    delta2 = 0.0
     g = _design(specs, data, log_phi)
-    resid_w = white(data.y - g @ theta)
-    chi2 = float(resid_w @ resid_w)
-    gw = white(g)
+    chi2 = _chi2(model_cov, data.y - g @ theta)
+    if not fixed and dof > 0 and misfit_level > 0 and stats.chi2.sf(chi2, dof) < misfit_level:
+        shape = data.y**2
+        for _ in range(iterations):
+            assert basis is not None
+            updated = _covariance(basis, theta)
+            model_cov = model_cov if updated is None else updated
+            new_delta2 = _discrepancy_scale(data.y - g @ theta, model_cov, shape, dof)
+            extra = new_delta2 * np.diag(shape)
+            theta, log_phi, current, basis, more = _model_fit(
+                specs, data, model_cov + extra, extra, fixed, iterations, rtol, log_phi
+            )
+            done += more
+            g = _design(specs, data, log_phi)
+            settled = abs(new_delta2 - delta2) <= 1e-3 * max(new_delta2, 1e-300)
+            delta2 = new_delta2
+            if settled:
+                break
+        updated = _covariance(basis, theta) if basis is not None else None
+        model_cov = model_cov if updated is None else updated
+        chi2 = _chi2(model_cov, data.y - g @ theta)
+    gw = _Whitener(current)(g)
     col = np.linalg.norm(gw, axis=0)
     col[col == 0] = 1.0
     theta_free = np.asarray(
-        np.linalg.lstsq(gw / col, white(data.y), rcond=None)[0] / col, dtype=np.float64
+        np.linalg.lstsq(gw / col, _Whitener(current)(data.y), rcond=None)[0] / col,
+        dtype=np.float64,
     )
     jac = _jacobian(specs, data, theta, log_phi)
     param_cov = _parameter_covariance(jac, current)
@@ -282,14 +377,22 @@ def solve(
         log_phi=log_phi,
         param_cov=param_cov,
         cov=current,
-        fitted=fitted,
+        model_cov=model_cov,
+        discrepancy=math.sqrt(delta2),
+        fitted=g @ theta,
         chi2=chi2,
+        chi2_fit=_chi2(current, data.y - g @ theta),
         iterations=done,
         jacobian=jac,
         design=g,
         y=data.y,
         basis=basis,
     )
+
+
+def _chi2(cov: NDArray[np.float64], resid: NDArray[np.float64]) -> float:
+    w = _Whitener(cov)(resid)
+    return float(w @ w)
 
 
 def _parameter_covariance(
@@ -306,17 +409,21 @@ def score_interval(sol: GLSSolution, j: int, z: float) -> tuple[float, float]:
     r"""Interval of the squared amplitude ``theta_j`` with the covariance evaluated at the bound.
 
     The set of :math:`\theta_0 \ge 0` with :math:`|\hat\theta_j - \theta_0| \le z\,
-    \mathrm{se}_j(\theta_0)`, where :math:`\mathrm{se}_j(\theta_0)` comes from the covariance of
-    the AVAR estimates under the fitted model with :math:`\theta_j` set to :math:`\theta_0`
-    (a score-type interval, like Wilson's for a proportion: an AVAR estimate's spread grows
-    with its mean, so a Wald interval with the spread at the estimate under-covers).
-    Falls back to the Wald interval when no covariance basis is available.
+    \mathrm{se}_j(\theta_0)`, where :math:`\hat\theta_j \ge 0` is the reported (constrained)
+    estimate and :math:`\mathrm{se}_j(\theta_0)` comes from the covariance of the AVAR estimates
+    under the fitted model with :math:`\theta_j` set to :math:`\theta_0` (plus the fitted model
+    discrepancy, see :func:`solve`): a score-type interval, like Wilson's for a proportion (an
+    AVAR estimate's spread grows with its mean, so a Wald interval with the spread at the
+    estimate under-covers). The interval always contains the estimate; an estimate at the
+    bound 0 gets ``[0, upper]`` with ``upper > 0``. Falls back to the Wald interval when no
+    covariance basis is available.
     """
-    est = float(sol.theta_free[j])
+    est = max(float(sol.theta[j]), 0.0)
     se_hat = math.sqrt(max(sol.param_cov[j, j], 0.0))
     if sol.basis is None or se_hat == 0:
-        return max(est - z * se_hat, 0.0), max(est + z * se_hat, 0.0)
+        return max(est - z * se_hat, 0.0), est + z * se_hat
     basis = sol.basis
+    extra = sol.discrepancy**2 * np.diag(sol.y**2)
 
     white = _Whitener(sol.cov)
     others = [k for k in range(sol.theta.size) if k != j]
@@ -331,23 +438,20 @@ def score_interval(sol: GLSSolution, j: int, z: float) -> tuple[float, float]:
         cov = _covariance(basis, theta)
         if cov is None:
             return se_hat
-        return math.sqrt(max(_parameter_covariance(sol.jacobian, cov)[j, j], 0.0))
+        return math.sqrt(max(_parameter_covariance(sol.jacobian, cov + extra)[j, j], 0.0))
 
     def g(theta0: float) -> float:
         return (est - theta0) / max(se(theta0), 1e-300)
 
-    hi = max(est, 0.0) + z * se_hat
+    hi = est + z * se_hat
     for _ in range(40):
         if g(hi) <= -z:
             break
         hi = hi * 2.0 + z * se_hat
-    start = max(est, 0.0)
-    if g(start) <= -z:  # even zero is above the estimate by more than z spreads
-        upper = start
-    elif g(hi) > -z:  # the spread grows as fast as the value: no upper limit at this level
+    if g(hi) > -z:  # the spread grows as fast as the value: no upper limit at this level
         upper = math.inf
     else:
-        upper = optimize.brentq(lambda t: g(t) + z, start, hi, xtol=1e-12 * hi + 1e-300)
+        upper = optimize.brentq(lambda t: g(t) + z, est, hi, xtol=1e-12 * hi + 1e-300)
     if est <= 0 or g(0.0) <= z:
         lower = 0.0
     else:

@@ -113,9 +113,11 @@ class FitResult:
     tau, var, fitted : numpy.ndarray
         The points used, the data and the fitted Allan variance there.
     residuals : numpy.ndarray
-        Standardised residuals ``(var - fitted) / sqrt(diag C)``.
+        Standardised residuals ``(var - fitted) / sqrt(diag C)`` with ``C`` the covariance
+        under the fitted terms alone (without the discrepancy), so a misfit shows where it is.
     cov : numpy.ndarray
-        Covariance of the AVAR estimates under the fitted model (``(T, T)``).
+        Covariance of the AVAR estimates the fit used (``(T, T)``): under the fitted model,
+        plus ``discrepancy**2 * diag(var**2)`` when the terms alone were rejected.
     method : str
         ``"gls"`` or ``"seed"``.
     classic : ClassicReadout
@@ -124,6 +126,14 @@ class FitResult:
         For ``terms="auto"``: each candidate with the score gain of its last step (the
         penalized -2 log-likelihood decrease when it was, or would have been, added) and
         whether it was kept.
+    discrepancy : float
+        Relative model discrepancy :math:`\delta` per tau (Paule-Mandel, see
+        :func:`allanite.fit.gls.solve`): 0 when the terms fit the curve; otherwise the
+        coefficients' intervals include this model error and ``p_value`` is below
+        ``misfit_level``.
+    misfit_level : float
+        The significance level of the misfit test (``p_value``) and, Bonferroni-corrected
+        over the taus, of the per-tau flags :attr:`misfit`.
     """
 
     model: NoiseModel
@@ -140,6 +150,26 @@ class FitResult:
     classic: ClassicReadout
     selection: tuple[dict[str, Any], ...] = ()
     meta: dict[str, Any] = field(default_factory=dict, compare=False)
+    discrepancy: float = 0.0
+    misfit_level: float = 0.001
+
+    @property
+    def misspecified(self) -> bool:
+        """True when the goodness-of-fit test rejects the model at ``misfit_level``."""
+        return self.method == "gls" and bool(self.p_value < self.misfit_level)
+
+    @property
+    def misfit(self) -> NDArray[np.bool_]:
+        r"""Per tau: the fitted model misses the estimate (simultaneous test over the taus).
+
+        ``|residual| > z`` with :math:`z = \Phi^{-1}(1 - \alpha / (2T))`, :math:`\alpha` =
+        ``misfit_level``, ``T`` the number of points (Bonferroni). The complement is the tau
+        range where the fit may be read as good. All False for ``method="seed"``.
+        """
+        if self.method != "gls" or self.tau.size == 0:
+            return np.zeros(self.tau.size, dtype=bool)
+        z = float(stats.norm.isf(self.misfit_level / (2.0 * self.tau.size)))
+        return np.asarray(np.abs(self.residuals) > z)
 
     def __getitem__(self, name: str) -> Coefficient:
         try:
@@ -208,6 +238,14 @@ class FitResult:
                 f"chi2 = {self.chi2:.3g} for {self.dof} dof (correlated GLS), "
                 f"p = {self.p_value:.3g}"
             )
+            if self.discrepancy > 0:
+                bad = self.tau[self.misfit]
+                where = ", ".join(f"{t:.3g}" for t in bad) if bad.size else "none singly"
+                lines.append(
+                    f"model misspecified (p < {self.misfit_level:g}): intervals include a "
+                    f"model discrepancy of {100 * self.discrepancy:.3g} % per tau; "
+                    f"missed at tau [s] = {where}"
+                )
         return "\n".join(lines)
 
     def to_dict(self, level: float = 0.95) -> dict[str, Any]:
@@ -224,6 +262,8 @@ class FitResult:
             "var": self.var.tolist(),
             "fitted": self.fitted.tolist(),
             "residuals": self.residuals.tolist(),
+            "misfit": self.misfit.tolist(),
+            "discrepancy": self.discrepancy,
             "classic": {"label": self.classic.label, **self.classic.values},
         }
 
