@@ -136,6 +136,7 @@ def candidate_library(
     lines: list[tuple[float, float]] | None = None,
     spikes: tuple[float, float] | None = None,
     n_changes: int = 0,
+    warmup_tau: float | None = None,
     effects: list[str] | None = None,
 ) -> tuple[list[Candidate], list[str]]:
     """Candidates to fit, and the effects that cannot be tried (no Term class, no model term).
@@ -156,6 +157,9 @@ def candidate_library(
         Detected spikes (both parameters are then fixed from the time view).
     n_changes : int
         Number of detected level jumps (bias steps: ``interval = duration / n_changes``).
+    warmup_tau : float, optional
+        Warm-up time constant measured on the window means (then only the amplitude is
+        fitted, like the single free parameter of a bias step).
     effects : list of str, optional
         Restrict the library to these effects (``rescale`` selects every rescale).
     """
@@ -189,6 +193,8 @@ def candidate_library(
             fixed["interval"] = duration / max(n_changes, 1)
         elif effect == "warmup":
             fixed["duration"] = duration
+            if warmup_tau is not None:
+                fixed["tau_w"] = warmup_tau
         elif effect == "lowpass":
             replaces = whites[0]
             fixed["N"] = float(replaces.values()["N"])

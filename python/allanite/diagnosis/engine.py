@@ -12,6 +12,7 @@ from allanite.diagnosis.attribution import rank
 from allanite.diagnosis.candidates import candidate_library
 from allanite.diagnosis.holdout import holdout_check
 from allanite.diagnosis.inputs import MIN_SAMPLES, as_rate, check_units, make_source
+from allanite.diagnosis.level_shape import warmup_time_constant
 from allanite.diagnosis.result import Diagnosis, Holdout
 from allanite.variance import _check_fs
 
@@ -155,6 +156,7 @@ def diagnose(
             sig,
             duration=x_fit.size / rate,
             n_changes=len(analysis.time.change_points_s),
+            warmup_tau=warmup_time_constant(analysis.time, x_fit.size / rate),
             model=source.model,
             lines=[(ln.frequency_hz, ln.amplitude) for ln in analysis.frequency.lines],
             spikes=spikes,

@@ -25,7 +25,7 @@ from numpy.typing import NDArray
 
 from allanite.diagnosis.time_view import TimeView
 
-__all__ = ["level_misfit"]
+__all__ = ["level_misfit", "warmup_time_constant"]
 
 #: at most this many bias steps in the shape fit
 MAX_STEPS = 8
@@ -56,7 +56,6 @@ def level_misfit(effect: str, view: TimeView, duration: float) -> float:
         return 0.0
     sd = np.where(view.level_sd > 0, view.level_sd, np.inf)
     w = view.level.size
-    t0 = view.t_s - view.window_s / 2
     t1 = view.t_s + view.window_s / 2
     if effect == "ramp":
         line = view.t_s - duration / 2
@@ -80,9 +79,24 @@ def level_misfit(effect: str, view: TimeView, duration: float) -> float:
             cols.append(_step_column(float(t1[k]), t1, view.window_s, duration))
             chi2 = trials[k]
         return max(0.0, chi2 - (w - len(cols)))
-    best = np.inf
+    best, _ = _warmup_fit(view, duration)
+    return max(0.0, best - (w - 2))
+
+
+def _warmup_fit(view: TimeView, duration: float) -> tuple[float, float]:
+    sd = np.where(view.level_sd > 0, view.level_sd, np.inf)
+    t0 = view.t_s - view.window_s / 2
+    t1 = view.t_s + view.window_s / 2
+    best, best_tw = np.inf, float(view.window_s)
     for tw in np.geomspace(view.window_s / 4, duration, 48):
         shape = tw * (np.exp(-t0 / tw) - np.exp(-t1 / tw)) / view.window_s
         shape = shape - tw * (1.0 - np.exp(-duration / tw)) / duration
-        best = min(best, _wls_chi2(shape[:, None], view.level, sd))
-    return max(0.0, float(best) - (w - 2))
+        chi2 = _wls_chi2(shape[:, None], view.level, sd)
+        if chi2 < best:
+            best, best_tw = chi2, float(tw)
+    return float(best), best_tw
+
+
+def warmup_time_constant(view: TimeView, duration: float) -> float:
+    """Warm-up time constant ``T_w`` that best fits the window means (log grid, 48 points)."""
+    return _warmup_fit(view, duration)[1]
