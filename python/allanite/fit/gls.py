@@ -59,6 +59,7 @@ class GLSSolution:
     cov: NDArray[np.float64]  # covariance of the AVAR estimates used: model + discrepancy
     model_cov: NDArray[np.float64]  # covariance under the fitted terms alone (goodness of fit)
     discrepancy: float  # relative model discrepancy delta (0: the terms fit)
+    discrepancy_cov: NDArray[np.float64]  # the covariance added by it, cov - model_cov
     fitted: NDArray[np.float64]
     chi2: float  # generalized chi-square under model_cov
     chi2_fit: float  # generalized chi-square under cov (what the estimate minimises)
@@ -258,6 +259,18 @@ def _model_fit(
     return theta, log_phi, current, basis, done
 
 
+def _discrepancy_shape(y: NDArray[np.float64], fitted: NDArray[np.float64]) -> NDArray[np.float64]:
+    r"""Variance shape :math:`D_i = y_i f_i` of the relative model discrepancy.
+
+    The geometric mean of the estimate and the fitted value: the discrepancy term
+    :math:`(y - f)^2 / (\delta^2 y f) = (\sqrt{y/f} - \sqrt{f/y})^2/\delta^2` penalises a
+    model above the data as much as one equally far below (in ratio). With :math:`y^2` a model
+    far above a few points would dominate (and pull the whole curve low); with :math:`f^2`
+    a term could inflate its own allowance.
+    """
+    return y * np.maximum(fitted, 1e-3 * y)
+
+
 def _discrepancy_scale(
     resid: NDArray[np.float64], cov: NDArray[np.float64], shape: NDArray[np.float64], dof: int
 ) -> float:
@@ -298,9 +311,10 @@ def solve(
     and let a term inflate its own predicted variance to escape the points contradicting it.
     A relative model discrepancy is then added, independent between taus,
 
-    .. math:: C_\delta = C(\theta) + \delta^2\,\mathrm{diag}(y_i^2),
+    .. math:: C_\delta = C(\theta) + \delta^2\,\mathrm{diag}(y_i f_i),
 
-    with :math:`\delta` chosen by the Paule-Mandel rule, the generalized chi-square under
+    with :math:`f_i` the fitted value (see :func:`_discrepancy_shape`), and :math:`\delta`
+    chosen by the Paule-Mandel rule, the generalized chi-square under
     :math:`C_\delta` equal to its degrees of freedom, iterated jointly with :math:`\theta`.
     The coefficients and their intervals then carry the model error ("dark uncertainty");
     the reported chi-square stays the one of the terms alone, so the misfit remains visible.
@@ -339,10 +353,11 @@ def solve(
     n_params = len(specs) + log_phi.size
     dof = data.y.size - n_params
     delta2 = 0.0
+    shape = data.y**2
     g = _design(specs, data, log_phi)
     chi2 = _chi2(model_cov, data.y - g @ theta)
     if not fixed and dof > 0 and misfit_level > 0 and stats.chi2.sf(chi2, dof) < misfit_level:
-        shape = data.y**2
+        shape = _discrepancy_shape(data.y, g @ theta)
         for _ in range(iterations):
             assert basis is not None
             updated = _covariance(basis, theta)
@@ -354,10 +369,14 @@ def solve(
             )
             done += more
             g = _design(specs, data, log_phi)
-            settled = abs(new_delta2 - delta2) <= 1e-3 * max(new_delta2, 1e-300)
+            new_shape = _discrepancy_shape(data.y, g @ theta)
+            settled = abs(new_delta2 - delta2) <= 1e-3 * max(new_delta2, 1e-300) and np.allclose(
+                new_shape, shape, rtol=1e-3, atol=0.0
+            )
             delta2 = new_delta2
             if settled:
                 break
+            shape = new_shape
         updated = _covariance(basis, theta) if basis is not None else None
         model_cov = model_cov if updated is None else updated
         chi2 = _chi2(model_cov, data.y - g @ theta)
@@ -379,6 +398,7 @@ def solve(
         cov=current,
         model_cov=model_cov,
         discrepancy=math.sqrt(delta2),
+        discrepancy_cov=delta2 * np.diag(shape) if delta2 > 0 else np.zeros_like(current),
         fitted=g @ theta,
         chi2=chi2,
         chi2_fit=_chi2(current, data.y - g @ theta),
@@ -423,7 +443,7 @@ def score_interval(sol: GLSSolution, j: int, z: float) -> tuple[float, float]:
     if sol.basis is None or se_hat == 0:
         return max(est - z * se_hat, 0.0), est + z * se_hat
     basis = sol.basis
-    extra = sol.discrepancy**2 * np.diag(sol.y**2)
+    extra = sol.discrepancy_cov
 
     white = _Whitener(sol.cov)
     others = [k for k in range(sol.theta.size) if k != j]

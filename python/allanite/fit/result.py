@@ -171,6 +171,27 @@ class FitResult:
         z = float(stats.norm.isf(self.misfit_level / (2.0 * self.tau.size)))
         return np.asarray(np.abs(self.residuals) > z)
 
+    @property
+    def good_range(self) -> tuple[float, float] | None:
+        """``(tau_low, tau_high)`` of the longest run of consecutive taus the model does not miss.
+
+        The tau range over which the fitted model may be read as describing the curve (see
+        :attr:`misfit`); ties go to the longer taus. None when every tau is missed.
+        """
+        best: tuple[int, int] | None = None
+        start = None
+        flags = [*self.misfit.tolist(), True]
+        for i, bad in enumerate(flags):
+            if not bad and start is None:
+                start = i
+            elif bad and start is not None:
+                if best is None or i - start >= best[1] - best[0]:
+                    best = (start, i)
+                start = None
+        if best is None:
+            return None
+        return float(self.tau[best[0]]), float(self.tau[best[1] - 1])
+
     def __getitem__(self, name: str) -> Coefficient:
         try:
             return self.coefficients[name]
@@ -264,6 +285,7 @@ class FitResult:
             "residuals": self.residuals.tolist(),
             "misfit": self.misfit.tolist(),
             "discrepancy": self.discrepancy,
+            "good_range": self.good_range,
             "classic": {"label": self.classic.label, **self.classic.values},
         }
 
