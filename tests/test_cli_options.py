@@ -7,7 +7,8 @@ import json
 import numpy as np
 import pytest
 
-from allanite.cli.record_options import dump_json, progress, rate_unit
+from allanite.cli.progress import progress, progress_bars
+from allanite.cli.record_options import dump_json, rate_unit
 from allanite.io import Record
 
 
@@ -24,6 +25,23 @@ def test_progress_bar_on_a_terminal_only(
     err = capsys.readouterr().err
     assert "fitting" in err
     assert "0/3" in err  # the bar was drawn (and cleared: leave=False)
+
+
+def test_progress_bars_callback_draws_one_bar_per_stage(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    pytest.importorskip("tqdm")
+    with progress_bars(True) as bar:
+        for i in range(1, 4):
+            bar("phase", i * 10, 30)
+        bar("variance", 5, 5)
+    err = capsys.readouterr().err
+    assert "phase" in err
+    assert "0/30" in err  # the bar of the first stage, cleared when the next began
+    assert "variance" in err
+    with progress_bars(False) as bar:
+        bar("phase", 1, 2)
+    assert capsys.readouterr().err == ""
 
 
 def test_dump_json_is_strict() -> None:

@@ -13,6 +13,7 @@ import pytest
 
 import allanite
 from allanite.cli import main
+from allanite.datasheet import Measured
 from allanite.errors import InputError
 from allanite.io import Record
 from allanite.report import (
@@ -24,7 +25,6 @@ from allanite.report import (
     customary_rate,
     slope_table,
 )
-from allanite.report.datasheet import Measured
 
 FS = 100.0
 RNG = np.random.default_rng(3)

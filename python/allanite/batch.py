@@ -1,24 +1,28 @@
-r"""Batch analysis of many recordings: one table of noise coefficients and pass/fail.
+r"""Batch analysis of many recordings: one table of fitted noise coefficients and pass/fail.
 
 A production lot of gyros or a benchmark suite of logs goes through the same steps per
-record: read, Allan variance, coefficients, comparison with a datasheet. :func:`batch` runs
-them locally (one record after another, each using the compiled kernel's threads) or, when
-given a ``dask.distributed`` client, as one task per record on the cluster (the ``dask``
-extra); the table is the same either way because every record is computed by the same
-deterministic function.
+record: read, overlapping Allan variance, noise-model fit, comparison with a datasheet.
+:func:`batch` runs them locally (one record after another, each using the compiled kernel's
+threads) or, when given a ``dask.distributed`` client, as one task per record on the cluster
+(the ``dask`` extra); the table is the same either way because every record is computed by
+the same deterministic function.
 
-Coefficients. By default each channel's Allan curve is read with the ``guess`` of the IEEE
-power-law terms (:data:`allanite.terms.POWER_LAW_TERMS`): ``Q``, ``N``, ``B``, ``K``, ``R`` are
-the tightest values the curve allows for each term alone (e.g. :math:`N^2 = \min_\tau
-\sigma^2(\tau)\,\tau`, :math:`B = \min_\tau \sigma(\tau)/0.664`), the usual datasheet
-reading of an Allan plot (IEEE Std 952-1997, annex C). Units: the record's rate unit times
-seconds to the power of the term's ``ParamSpec.time`` (``N`` in unit*sqrt(s), ``B`` in unit,
-``K`` in unit/sqrt(s)). Pass ``coefficients=callable`` to use a model fit instead: it gets a
-single-channel :class:`~allanite.variance.AllanResult` and returns ``{name: value}``.
+Coefficients. Each channel's Allan variance is fitted with :func:`allanite.fit` (GLS with the
+estimates' own covariance; ``terms="auto"`` selects among Q, N, B, K, R by a penalized
+likelihood, so a term the data show no sign of is left out and its cells stay empty). Every
+coefficient is reported as its estimate and its two-sided ``level`` confidence interval
+(``<name>``, ``<name>_low``, ``<name>_high``), in the record's rate unit times seconds to
+the term's power (``N`` in unit*sqrt(s), ``B`` in unit, ``K`` in unit/sqrt(s)), together
+with the fit's goodness-of-fit ``p_value`` (generalized chi-square; below ``0.001`` the
+model misses the curve and the intervals include a model discrepancy).
 
-Datasheet. ``{"N": 0.01, "B": {"max": 0.003}, "K": {"min": 0, "max": 1e-4}}``: a number is
-an upper limit; a check fails when the coefficient is missing (no sign of the term) only if a
-``min`` is given.
+Datasheet. Either form of :mod:`allanite.datasheet`: the compact ``{"N": 0.01, "B":
+{"max": 0.003}}`` in the record's units, or the full ``{"limits": [{"quantity": "N", "max":
+0.3, "unit": "deg/sqrt(h)"}, {"quantity": "adev", "tau": 1, "max": 0.01, "unit":
+"deg/s"}]}``. Each limit is judged with the interval (:func:`allanite.datasheet.check_limits`):
+*pass* when the whole interval meets it, *marginal* when only the interval crosses it, *fail*
+when the estimate violates it, *missing* when not measured. A row passes unless a check fails
+or the record could not be analysed.
 """
 
 from __future__ import annotations
@@ -27,93 +31,21 @@ import json
 import math
 import os
 from collections.abc import Callable, Iterable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
+from allanite.datasheet import Check, Datasheet, Limit, Measured, check_limits, verdict
 from allanite.errors import InputError
-from allanite.variance import AllanResult
 
-__all__ = ["BatchResult", "batch", "curve_coefficients", "load_datasheet"]
+__all__ = ["BatchResult", "batch"]
 
-Coefficients = Callable[[AllanResult], Mapping[str, float | None]]
-Limit = tuple[float | None, float | None]
-
-
-def curve_coefficients(result: AllanResult) -> dict[str, float | None]:
-    """Coefficients ``Q, N, B, K, R`` read from a single-channel Allan curve (term guesses).
-
-    Parameters
-    ----------
-    result : AllanResult
-        Single-channel result (``result.channel(c)``).
-
-    Returns
-    -------
-    dict
-        Symbol -> value in the record's units, None where the curve shows no sign of the term.
-    """
-    from allanite.terms import POWER_LAW_TERMS
-
-    out: dict[str, float | None] = {}
-    for cls in POWER_LAW_TERMS:
-        term = cls.guess(result)
-        value = None if term is None else getattr(term, cls.symbol)
-        out[cls.symbol] = None if value is None or not math.isfinite(value) else float(value)
-    return out
-
-
-def _limits(datasheet: Mapping[str, Any] | None) -> dict[str, Limit]:
-    limits: dict[str, Limit] = {}
-    for name, spec in (datasheet or {}).items():
-        if isinstance(spec, Mapping):
-            unknown = set(spec) - {"min", "max"}
-            if unknown:
-                raise ValueError(
-                    f"datasheet entry {name!r} has keys {sorted(unknown)}; use min/max"
-                )
-            lo, hi = spec.get("min"), spec.get("max")
-        else:
-            lo, hi = None, spec
-        for bound in (lo, hi):
-            if bound is not None and (
-                isinstance(bound, bool) or not isinstance(bound, (int, float))
-            ):
-                raise TypeError(f"datasheet limit of {name!r} must be a number, got {bound!r}")
-        if lo is None and hi is None:
-            raise ValueError(f"datasheet entry {name!r} gives neither min nor max")
-        limits[str(name)] = (
-            None if lo is None else float(lo),
-            None if hi is None else float(hi),
-        )
-    return limits
-
-
-def load_datasheet(path: str | os.PathLike[str]) -> dict[str, Any]:
-    """Read a datasheet from JSON (``.json``) or YAML (``.yaml``/``.yml``, the ``yaml`` extra)."""
-    p = Path(path)
-    try:
-        text = p.read_text(encoding="utf-8")
-    except FileNotFoundError as exc:
-        raise InputError("datasheet not found; check the path", path=str(p)) from exc
-    if p.suffix.lower() in (".yaml", ".yml"):
-        try:
-            import yaml
-        except ImportError as exc:  # pragma: no cover - yaml is installed in the dev env
-            raise ImportError("YAML datasheets need pyyaml: pip install 'allanite[yaml]'") from exc
-        data = yaml.safe_load(text)
-    else:
-        try:
-            data = json.loads(text)
-        except json.JSONDecodeError as exc:
-            raise InputError(f"not valid JSON ({exc.msg})", path=str(p), line=exc.lineno) from exc
-    if not isinstance(data, dict):
-        raise InputError("a datasheet is a mapping like {'N': 0.01, 'B': 0.003}", path=str(p))
-    _limits(data)  # validate now, with the file name in the message
-    return data
+Terms = str | Sequence[Any]
+#: the coefficients ``terms="auto"`` chooses from, in table order
+AUTO_COEFFICIENTS: tuple[str, ...] = ("Q", "N", "B", "K", "R")
 
 
 @dataclass(frozen=True)
@@ -123,17 +55,20 @@ class BatchResult:
     Attributes
     ----------
     columns : tuple of str
-        Column names: ``record, channel, n_samples, fs, units``, the coefficient names,
-        ``pass_<name>`` per datasheet entry, ``pass`` and ``error``.
+        ``record, channel, n_samples, fs, units, p_value``; per coefficient ``<name>,
+        <name>_low, <name>_high`` (estimate and ``level`` interval); ``check_<quantity>`` per
+        datasheet limit (``pass``/``marginal``/``fail``/``missing``); ``status`` (the worst
+        check, ``pass`` without a datasheet, ``error`` when the record or channel could not be
+        analysed), ``pass`` (status is pass or marginal) and ``error`` (the message).
     rows : tuple of tuple
         The table (None where a value does not exist).
-    datasheet : dict
-        The limits used, ``{name: (min, max)}``.
+    datasheet : Datasheet or None
+        The limits used.
     """
 
     columns: tuple[str, ...]
     rows: tuple[tuple[Any, ...], ...]
-    datasheet: dict[str, Limit] = field(default_factory=dict)
+    datasheet: Datasheet | None = None
 
     def __len__(self) -> int:
         return len(self.rows)
@@ -161,7 +96,12 @@ class BatchResult:
         return {
             "columns": list(self.columns),
             "rows": [list(r) for r in self.rows],
-            "datasheet": {k: list(v) for k, v in self.datasheet.items()},
+            "datasheet": None
+            if self.datasheet is None
+            else {
+                "device": self.datasheet.device,
+                "limits": [_limit_dict(limit) for limit in self.datasheet.limits],
+            },
         }
 
     def to_json(self, **kwargs: Any) -> str:
@@ -193,6 +133,11 @@ class BatchResult:
             writer.writerows([cell(v) for v in row] for row in self.rows)
 
 
+def _limit_dict(limit: Limit) -> dict[str, Any]:
+    """A limit in the full datasheet form (JSON-ready; unit "" means record units)."""
+    return {k: v for k, v in vars(limit).items() if v is not None}
+
+
 @dataclass(frozen=True)
 class _Task:
     """Everything one record needs, picklable (sent to Dask workers)."""
@@ -202,7 +147,9 @@ class _Task:
     fs: float | None
     avar_options: dict[str, Any]
     read_options: dict[str, Any]
-    coefficients: Coefficients | None
+    terms: Terms
+    level: float
+    sheet: Datasheet | None
 
 
 def _load(task: _Task) -> tuple[NDArray[Any], float, str, str | None, tuple[str, ...]]:
@@ -236,64 +183,122 @@ def _load(task: _Task) -> tuple[NDArray[Any], float, str, str | None, tuple[str,
     )
 
 
+def _finite(value: float) -> float | None:
+    """Return a float, None for NaN/inf (so that tables compare equal and serialise to JSON)."""
+    return float(value) if math.isfinite(value) else None
+
+
+def _rate_unit(input_kind: str, units: str | None) -> str | None:
+    """Rate unit of the Allan variance: the record's unit, per second for angle/increment."""
+    if units is None or input_kind == "rate":
+        return units
+    return f"{units}/s"
+
+
+def _unit_free(sheet: Datasheet | None, rate: str | None) -> None:
+    """Refuse limits in physical units when the record's units are unknown."""
+    if sheet is None or rate is not None:
+        return
+    for limit in sheet.limits:
+        if limit.unit and limit.quantity != "adev":
+            raise ValueError(
+                f"the limit on {limit.quantity} is in {limit.unit} but the record's units are "
+                "unknown; give units= (--units), or write the limit in record units (compact "
+                "form)"
+            )
+
+
+def _fit_row(single: Any, task: _Task, rate: str | None) -> dict[str, Any]:
+    """Fit one channel and check it: coefficients with intervals, p-value, check statuses."""
+    from allanite.fit import fit
+
+    result = fit(single, task.terms)
+    coefficients: dict[str, tuple[float | None, float | None, float | None]] = {}
+    measured: dict[str, Measured] = {}
+    for name, coef in result.coefficients.items():
+        low, high = coef.ci(task.level)
+        coefficients[name] = (_finite(coef.value), _finite(low), _finite(high))
+        measured[name] = Measured(coef.value, low, high, coef.unit, coef.unit)
+    checks: list[Check] = []
+    if task.sheet is not None:
+        low_dev, high_dev = single.ci(task.level)
+        curve = (single.tau, single.dev, low_dev, high_dev, rate)
+        checks = check_limits(task.sheet, "", measured, curve)
+    return {
+        "coefficients": coefficients,
+        "p_value": _finite(result.p_value),
+        "checks": [c.status for c in checks],
+    }
+
+
 def _analyse(task: _Task) -> list[dict[str, Any]]:
     """Rows of one record (module-level so that Dask can pickle it)."""
     from allanite.large import avar_large
 
     try:
         samples, fs, input_kind, units, names = _load(task)
-        result = avar_large(samples, fs, input=input_kind, units=units, **task.avar_options)
+        rate = _rate_unit(input_kind, units)
+        _unit_free(task.sheet, rate)
+        result = avar_large(samples, fs, input=input_kind, units=rate, **task.avar_options)
     except (InputError, ValueError, TypeError, OSError) as exc:
         return [{"record": task.name, "channel": None, "error": " ".join(str(exc).split())}]
-    reader = task.coefficients or curve_coefficients
     rows = []
     for c in range(result.n_channels):
-        single = result.channel(c)
-        values = {k: (None if v is None else float(v)) for k, v in reader(single).items()}
-        rows.append(
-            {
-                "record": task.name,
-                "channel": names[c] if c < len(names) else str(c),
-                "n_samples": result.n_samples,
-                "fs": result.fs,
-                "units": units,
-                "coefficients": values,
-                "error": None,
-            }
-        )
+        row: dict[str, Any] = {
+            "record": task.name,
+            "channel": names[c] if c < len(names) else str(c),
+            "n_samples": result.n_samples,
+            "fs": result.fs,
+            "units": rate,
+            "error": None,
+        }
+        try:
+            row.update(_fit_row(result.channel(c), task, rate))
+        except (ValueError, TypeError) as exc:
+            row["error"] = " ".join(str(exc).split())
+        rows.append(row)
     return rows
 
 
-def _check(value: float | None, limit: Limit) -> bool:
-    lo, hi = limit
-    if value is None:
-        return lo is None  # no sign of the term passes an upper limit
-    return (lo is None or value >= lo) and (hi is None or value <= hi)
+def _limit_columns(sheet: Datasheet | None) -> list[str]:
+    """``check_<quantity>`` per limit (``check_adev@1s`` for an Allan deviation limit)."""
+    columns: list[str] = []
+    for limit in sheet.limits if sheet is not None else ():
+        key = f"adev@{limit.tau:g}s" if limit.quantity == "adev" else limit.quantity
+        column, k = f"check_{key}", 2
+        while column in columns:
+            column, k = f"check_{key}_{k}", k + 1
+        columns.append(column)
+    return columns
 
 
-def _table(per_record: Sequence[list[dict[str, Any]]], limits: dict[str, Limit]) -> BatchResult:
-    names: list[str] = []
+def _check_names(sheet: Datasheet | None, names: Sequence[str]) -> None:
+    unknown = [q for q in (sheet.quantities if sheet else ()) if q != "adev" and q not in names]
+    if unknown:
+        raise ValueError(
+            f"datasheet names {unknown} are not coefficients of the analysis "
+            f"({', '.join(names)}, or adev at a tau); fix the datasheet or the terms"
+        )
+
+
+def _table(per_record: Sequence[list[dict[str, Any]]], task: _Task) -> BatchResult:
+    names: list[str] = list(AUTO_COEFFICIENTS) if task.terms == "auto" else []
     for rows in per_record:
         for row in rows:
-            for key in row.get("coefficients", {}):
-                if key not in names:
-                    names.append(key)
-    analysed = any("coefficients" in row for rows in per_record for row in rows)
-    missing = [k for k in limits if k not in names]
-    if analysed and missing:
-        raise ValueError(
-            f"datasheet names {missing} are not coefficients of the analysis ({', '.join(names)})"
-        )
-    columns = ["record", "channel", "n_samples", "fs", "units", *names]
-    columns += [f"pass_{k}" for k in limits] + ["pass", "error"]
+            names += [k for k in row.get("coefficients", {}) if k not in names]
+    if any("coefficients" in row for rows in per_record for row in rows):
+        _check_names(task.sheet, names)
+    checks = _limit_columns(task.sheet)
+    columns = ["record", "channel", "n_samples", "fs", "units", "p_value"]
+    for name in names:
+        columns += [name, f"{name}_low", f"{name}_high"]
+    columns += [*checks, "status", "pass", "error"]
     table = []
     for rows in per_record:
         for row in rows:
-            coeffs = row.get("coefficients", {})
-            checks = [
-                None if row["error"] else _check(coeffs.get(k), lim) for k, lim in limits.items()
-            ]
-            ok = row["error"] is None and all(bool(c) for c in checks)
+            values = row.get("coefficients", {})
+            statuses = row.get("checks") or [None] * len(checks)
+            status = "error" if row["error"] is not None else verdict(statuses)
             table.append(
                 (
                     row["record"],
@@ -301,13 +306,15 @@ def _table(per_record: Sequence[list[dict[str, Any]]], limits: dict[str, Limit])
                     row.get("n_samples"),
                     row.get("fs"),
                     row.get("units"),
-                    *[coeffs.get(k) for k in names],
-                    *checks,
-                    ok,
+                    row.get("p_value"),
+                    *[v for name in names for v in values.get(name, (None, None, None))],
+                    *statuses,
+                    status,
+                    status in ("pass", "marginal"),
                     row["error"],
                 )
             )
-    return BatchResult(tuple(columns), tuple(table), dict(limits))
+    return BatchResult(tuple(columns), tuple(table), task.sheet)
 
 
 def _name(item: Any, index: int) -> tuple[str, Any]:
@@ -325,10 +332,10 @@ def batch(
     records: Iterable[Any],
     fs: float | None = None,
     *,
-    datasheet: Mapping[str, Any] | str | os.PathLike[str] | None = None,
-    coefficients: Coefficients | None = None,
+    datasheet: Datasheet | Mapping[str, Any] | str | os.PathLike[str] | None = None,
+    terms: Terms = "auto",
+    level: float = 0.95,
     client: Any = None,
-    kind: str = "overlapping",
     taus: Any = "log",
     points: int = 100,
     threads: int | None = None,
@@ -336,7 +343,7 @@ def batch(
     progress: Callable[[str, int, int], None] | None = None,
     **read_options: Any,
 ) -> BatchResult:
-    """Analyse many records into one table of coefficients with pass/fail.
+    """Analyse many records into one table of fitted coefficients with pass/fail.
 
     Parameters
     ----------
@@ -346,16 +353,20 @@ def batch(
         ``(name, array_or_path)`` pairs.
     fs : float, optional
         Sampling frequency in Hz for arrays (and files without a time column).
-    datasheet : mapping or path, optional
-        Limits per coefficient (see the module docstring) or a JSON/YAML file of them.
-    coefficients : callable, optional
-        ``f(single_channel_result) -> {name: value}``; default :func:`curve_coefficients`.
+    datasheet : Datasheet, mapping or path, optional
+        Limits in either form of :mod:`allanite.datasheet`, or a JSON/YAML file of them.
+    terms : "auto" or list
+        Terms fitted to every channel (see :func:`allanite.fit`); default ``"auto"``.
+    level : float
+        Confidence level of the intervals and of the datasheet checks (default 0.95).
     client : dask.distributed.Client, optional
         Run one task per record on this cluster (``pip install 'allanite[dask]'``); default:
         locally, in order.
-    kind, taus, points, threads, memory_limit
-        Passed to :func:`allanite.large.avar_large` for every record (``alpha`` is not
-        identified: coefficients do not need the EDF, so ``alpha=0`` keeps a batch fast).
+    taus, points, threads, memory_limit
+        Passed to :func:`allanite.large.avar_large` for every record (overlapping Allan
+        variance; the EDF assumes white FM, ``alpha=0``, which keeps a batch fast: the fit
+        computes its own covariance and the Allan deviation intervals of ``adev`` limits are
+        those of white noise).
     progress : callable, optional
         ``progress("records", done, total)`` after each record (on the calling thread; the
         same signature as the ``progress`` of :func:`allanite.large.avar_large`).
@@ -366,13 +377,25 @@ def batch(
     Returns
     -------
     BatchResult
-        The table; ``passed`` tells whether the whole lot passed.
+        One row per record and channel; ``passed`` tells whether the whole lot passed.
+
+    References
+    ----------
+    IEEE Std 952-1997 annex C; IEEE Std 1431-2004 (noise coefficients of gyros).
     """
-    limits = _limits(
-        load_datasheet(datasheet) if isinstance(datasheet, (str, os.PathLike)) else datasheet
+    if not (isinstance(level, float | int) and 0.0 < level < 1.0):
+        raise ValueError(f"level must lie between 0 and 1 (e.g. 0.95), got {level!r}")
+    sheet = Datasheet.coerce(
+        Path(datasheet)
+        if isinstance(datasheet, os.PathLike)
+        else dict(datasheet)
+        if isinstance(datasheet, Mapping)
+        else datasheet
     )
+    if terms == "auto":
+        _check_names(sheet, AUTO_COEFFICIENTS)
     avar_options = {
-        "kind": kind,
+        "kind": "overlapping",
         "taus": taus,
         "points": points,
         "threads": threads,
@@ -380,7 +403,7 @@ def batch(
         "alpha": 0,
     }
     tasks = [
-        _Task(name, source, fs, avar_options, dict(read_options), coefficients)
+        _Task(name, source, fs, avar_options, dict(read_options), terms, float(level), sheet)
         for name, source in (_name(item, i) for i, item in enumerate(records))
     ]
     if not tasks:
@@ -394,7 +417,7 @@ def batch(
                 progress("records", i, len(tasks))
     else:
         results = _run_dask(client, tasks, progress)
-    return _table(results, limits)
+    return _table(results, tasks[0])
 
 
 def _run_dask(

@@ -1,6 +1,9 @@
-"""Datasheet limits and the pass/fail check of a measured device against them.
+r"""Datasheet limits and the one pass/fail check of a measured device against them.
 
-A limits file is JSON::
+Used by ``allanite report``, ``allanite fit`` and :func:`allanite.batch` alike. A limits file
+is JSON (or YAML, ``.yaml``/``.yml``, with the ``yaml`` extra) in either of two forms.
+
+The full form, with units::
 
     {"device": "Gyro XYZ datasheet, grade A",
      "limits": [
@@ -9,20 +12,36 @@ A limits file is JSON::
         {"quantity": "adev", "tau": 1.0, "max": 0.01, "unit": "deg/s"}
      ]}
 
-``quantity`` is an IEEE coefficient symbol of a fitted term (N, B, K, Q, R, ...) or ``adev``
+``quantity`` is a coefficient label of a fitted term (N, B, K, Q, R, sigma, ...) or ``adev``
 (the measured Allan deviation at ``tau`` seconds, interpolated log-log). Each limit has ``max``
-and/or ``min``. The compact form of :mod:`allanite.batch`, ``{"N": 0.01, "B": {"max": 0.003}}``
-(a number is an upper limit; values in the record's rate unit times seconds to the term's
-power), is accepted too, so one limits file serves ``allanite report`` and ``allanite batch``.
-A check *passes* when the whole confidence interval lies within the limits,
-*fails* when the estimate itself lies outside, and is *marginal* when only the interval
-crosses a limit (the data cannot decide at that confidence level).
+and/or ``min``.
+
+The compact form, in the record's units: ``{"N": 0.01, "B": {"max": 0.003}, "K": {"min": 0,
+"max": 1e-4}}`` (a number is an upper limit; values in the record's rate unit times seconds
+to the term's power, e.g. N in deg/s*sqrt(s) for a record in deg/s).
+
+Status of a check at confidence level :math:`1-\alpha` with estimate :math:`\hat x` and
+interval :math:`[x_-, x_+]` (the fit's profile interval, or the Allan deviation's chi-square
+interval from its EDF):
+
+* *fail*: the estimate itself lies outside the limits (:math:`\hat x > \max` or
+  :math:`\hat x < \min`);
+* *marginal*: the estimate lies within but the interval crosses a limit (the data cannot
+  decide at that level);
+* *pass*: the whole interval lies within the limits;
+* *missing*: the quantity was not measured (a term the fit did not select, or ``tau``
+  outside the measured range). A coefficient whose term the fit did not select shows no sign
+  of that term, so it *fails* a positive ``min``; otherwise *missing* does not fail.
+
+References: IEEE Std 952-1997 annex C (reading noise coefficients off an Allan plot);
+ISO/IEC Guide 98-4:2012 (JCGM 106), conformity decisions with measurement uncertainty.
 """
 
 from __future__ import annotations
 
 import json
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -32,7 +51,16 @@ import numpy as np
 from allanite.errors import InputError
 from allanite.units import convert
 
-__all__ = ["Check", "Datasheet", "Limit", "Measured", "check_limits"]
+__all__ = [
+    "STATUSES",
+    "Check",
+    "Datasheet",
+    "Limit",
+    "Measured",
+    "adev_at",
+    "check_limits",
+    "verdict",
+]
 
 STATUSES: tuple[str, ...] = ("pass", "marginal", "fail", "missing")
 
@@ -80,13 +108,23 @@ class Datasheet:
         for name, spec in data.items():
             if name == "device":
                 continue
+            if name == "adev":
+                raise InputError(
+                    "an 'adev' limit needs tau and a unit: use the full form "
+                    '{"limits": [{"quantity": "adev", "tau": 1, "max": 0.01, "unit": "deg/s"}]}',
+                    path=source,
+                )
             if isinstance(spec, (int, float)) and not isinstance(spec, bool):
                 limits.append(Limit(quantity=str(name), unit="", max=float(spec)))
                 continue
-            if not isinstance(spec, dict) or not spec or set(spec) - {"min", "max"}:
+            if (
+                not isinstance(spec, dict)
+                or set(spec) - {"min", "max"}
+                or (spec.get("min") is None and spec.get("max") is None)
+            ):
                 raise InputError(
                     f'entry {name!r} must be a number (upper limit) or {{"min": ..., '
-                    '"max": ...}}',
+                    '"max": ...}} with at least one bound',
                     path=source,
                 )
             try:
@@ -147,19 +185,56 @@ class Datasheet:
 
     @classmethod
     def load(cls, path: str | Path) -> Datasheet:
-        """Read a limits JSON file."""
+        """Read a limits file: JSON, or YAML for ``.yaml``/``.yml`` (the ``yaml`` extra)."""
         path = Path(path)
         try:
-            data = json.loads(path.read_text(encoding="utf-8"))
+            text = path.read_text(encoding="utf-8")
         except FileNotFoundError as exc:
             raise InputError("no such file; check the path", path=str(path)) from exc
-        except json.JSONDecodeError as exc:
-            raise InputError(
-                f"not valid JSON ({exc.msg}, column {exc.colno}); fix the syntax",
-                path=str(path),
-                line=exc.lineno,
-            ) from exc
+        if path.suffix.lower() in (".yaml", ".yml"):
+            try:
+                import yaml
+            except ImportError as exc:  # pragma: no cover - pyyaml is in the dev env
+                raise ImportError(
+                    "YAML datasheets need pyyaml: pip install 'allanite[yaml]'"
+                ) from exc
+            try:
+                data = yaml.safe_load(text)
+            except yaml.YAMLError as exc:
+                mark = getattr(exc, "problem_mark", None)
+                raise InputError(
+                    f"not valid YAML ({getattr(exc, 'problem', exc)}); fix the syntax",
+                    path=str(path),
+                    line=None if mark is None else mark.line + 1,
+                ) from exc
+        else:
+            try:
+                data = json.loads(text)
+            except json.JSONDecodeError as exc:
+                raise InputError(
+                    f"not valid JSON ({exc.msg}, column {exc.colno}); fix the syntax",
+                    path=str(path),
+                    line=exc.lineno,
+                ) from exc
         return cls.from_dict(data, source=str(path))
+
+    @classmethod
+    def coerce(cls, sheet: Datasheet | dict[str, Any] | str | Path | None) -> Datasheet | None:
+        """A :class:`Datasheet` from a datasheet, a mapping of either form, or a file path."""
+        if sheet is None or isinstance(sheet, Datasheet):
+            return sheet
+        if isinstance(sheet, (str, Path)):
+            return cls.load(sheet)
+        if isinstance(sheet, dict):
+            return cls.from_dict(sheet)
+        raise TypeError(
+            f"datasheet must be a Datasheet, a mapping or a file path, got {type(sheet).__name__}"
+        )
+
+    @property
+    def quantities(self) -> tuple[str, ...]:
+        """The quantities limited, in order, without repeats (``adev`` once)."""
+        return tuple(dict.fromkeys(limit.quantity for limit in self.limits))
 
 
 @dataclass(frozen=True)
@@ -248,7 +323,8 @@ def check_limits(
     -------
     list of Check
         One per limit; ``missing`` when the quantity was not measured (no such fitted term, or
-        ``tau`` outside the measured range).
+        ``tau`` outside the measured range), ``fail`` for a term the fit did not find when the
+        limit asks for a positive minimum.
     """
     checks = []
     tau, dev, low, high, rate = adev
@@ -272,7 +348,8 @@ def check_limits(
             value, lo, hi = (convert(v, c.unit, target) for v in (c.value, c.low, c.high))
             measured = Measured(value, lo, hi, limit.unit)
         if measured is None:
-            checks.append(Check(limit, channel, None, None, None, "missing"))
+            absent = limit.quantity != "adev" and limit.min is not None and limit.min > 0
+            checks.append(Check(limit, channel, None, None, None, "fail" if absent else "missing"))
         else:
             checks.append(
                 Check(
@@ -285,3 +362,15 @@ def check_limits(
                 )
             )
     return checks
+
+
+def verdict(statuses: Iterable[str | None]) -> str:
+    """The worst of ``statuses``: ``fail`` > ``marginal`` > ``pass`` (``missing`` is neutral).
+
+    ``pass`` when there are none or all are missing (pass ``[c.status for c in checks]``).
+    """
+    seen = set(statuses)
+    for status in ("fail", "marginal"):
+        if status in seen:
+            return status
+    return "pass"

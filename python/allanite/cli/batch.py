@@ -4,16 +4,16 @@ from __future__ import annotations
 
 import argparse
 import glob
-import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
+from allanite.cli.progress import progress_bars
 from allanite.cli.record_options import add_record_arguments, read_options
 from allanite.io.atomic import atomic_output
 
-__all__ = ["progress_bars", "register", "run"]
+__all__ = ["register", "run"]
 
 EXAMPLES = """examples:
   allanite batch 'lot42/*.npy' --fs 2000 --units deg/s --datasheet sheet.json -o lot42.csv
@@ -21,10 +21,18 @@ EXAMPLES = """examples:
   allanite batch 'lot42/*.bin' --dtype int16 --n-channels 3 --fs 1000 --scale 0.01 \\
       --datasheet sheet.yaml --dask tcp://scheduler:8786
   allanite batch 'big/*.npy' --fs 1000 --memory-limit 1GB --dask local:2
+  allanite batch 'lot7/*.npy' --fs 400 --units deg/s --terms N,B,K --level 0.99 --json
 
-A datasheet is JSON or YAML: {"N": 0.01, "B": {"max": 0.003}, "K": {"min": 0, "max": 1e-4}}
-(numbers are upper limits; names are the coefficient columns Q, N, B, K, R in the record's
-units times seconds^p). Exit code 0 when every record passes, 1 when one fails, 2 on bad input.
+Every channel is fitted (allanite fit, terms chosen automatically unless --terms) and each
+coefficient is reported with its --level confidence interval and the fit's p-value.
+A datasheet is JSON or YAML, compact in the record's units
+  {"N": 0.01, "B": {"max": 0.003}, "K": {"min": 0, "max": 1e-4}}
+(numbers are upper limits; N in unit*sqrt(s), B in unit, K in unit/sqrt(s)) or with units
+  {"device": "...", "limits": [{"quantity": "N", "max": 0.3, "unit": "deg/sqrt(h)"},
+                              {"quantity": "adev", "tau": 1, "max": 0.01, "unit": "deg/s"}]}
+A limit PASSes when the whole interval meets it, is MARGINAL when only the interval crosses
+it, FAILs when the estimate violates it. Exit code 0 when no record fails (marginal is not a
+failure), 1 when one fails or cannot be analysed, 2 on bad input.
 """
 
 
@@ -33,9 +41,10 @@ def register(subparsers: Any) -> None:
     parser = subparsers.add_parser(
         "batch",
         help="noise coefficients and datasheet pass/fail of many recordings",
-        description="Analyse every file matching the patterns: Allan variance, coefficients "
-        "Q, N, B, K, R per channel, pass/fail against a datasheet; one table out. Runs "
-        "locally, or on a Dask cluster with --dask.",
+        description="Analyse every file matching the patterns: overlapping Allan variance, "
+        "noise-model fit per channel (coefficients with confidence intervals, goodness of "
+        "fit), pass/marginal/fail against a datasheet; one table out. Runs locally, or on a "
+        "Dask cluster with --dask.",
         epilog=EXAMPLES,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
@@ -44,16 +53,24 @@ def register(subparsers: Any) -> None:
     )
     add_record_arguments(parser)
     group = parser.add_argument_group("batch")
-    group.add_argument("--datasheet", help="JSON or YAML file of coefficient limits")
+    group.add_argument("--datasheet", help="JSON or YAML file of limits (see below)")
     group.add_argument("-o", "--output", help="write the table to this .csv or .json file")
     group.add_argument("--json", action="store_true", help="print the table as JSON")
     group.add_argument(
-        "--kind",
-        choices=("overlapping", "standard", "hadamard", "standard_hadamard", "modified", "total"),
-        default="overlapping",
-        help="estimator (default overlapping)",
+        "--terms",
+        default="auto",
+        help="terms to fit, comma separated (Q,N,B,K,R, markov, sine; default auto: chosen "
+        "from Q,N,B,K,R)",
     )
-    group.add_argument("--points", type=int, default=100, help="points of the log tau grid")
+    group.add_argument(
+        "--level",
+        type=float,
+        default=0.95,
+        help="confidence level of the intervals and the datasheet checks (default 0.95)",
+    )
+    group.add_argument(
+        "--points", type=int, default=100, help="points of the log tau grid (default 100)"
+    )
     group.add_argument("--threads", type=int, help="threads per record (default: all cores)")
     group.add_argument(
         "--memory-limit", help="memory budget per record, e.g. 1GB (larger phases go to disk)"
@@ -65,8 +82,14 @@ def register(subparsers: Any) -> None:
         "(needs the dask extra)",
     )
     bar = group.add_mutually_exclusive_group()
-    bar.add_argument("--progress", dest="progress", action="store_true", default=None)
-    bar.add_argument("--no-progress", dest="progress", action="store_false")
+    bar.add_argument(
+        "--progress",
+        dest="progress",
+        action="store_true",
+        default=None,
+        help="progress bar even when stderr is not a terminal",
+    )
+    bar.add_argument("--no-progress", dest="progress", action="store_false", help="no bar")
     parser.set_defaults(func=run)
 
 
@@ -80,43 +103,6 @@ def _expand(patterns: list[str]) -> list[str]:
     if not paths:
         raise ValueError(f"no files match {' '.join(patterns)}; check the pattern (quote it)")
     return paths
-
-
-@contextmanager
-def progress_bars(enabled: bool | None = None) -> Iterator[Any]:
-    """Yield a ``progress(stage, done, total)`` callback drawing one tqdm bar per stage.
-
-    ``enabled=None`` draws the bars when stderr is a terminal and tqdm (the ``progress``
-    extra) is installed; without tqdm the callback does nothing.
-    """
-    use = sys.stderr.isatty() if enabled is None else enabled
-    tqdm: Any = None
-    if use:
-        try:
-            import tqdm as tqdm_module
-        except ImportError:
-            pass
-        else:
-            tqdm = tqdm_module.tqdm
-    bars: dict[str, Any] = {}
-
-    def callback(stage: str, done: int, total: int) -> None:
-        if tqdm is None:
-            return
-        bar = bars.get(stage)
-        if bar is None:
-            for other in bars.values():
-                other.close()
-            bars.clear()
-            bar = bars[stage] = tqdm(total=total, desc=stage, file=sys.stderr, leave=False)
-        bar.total = total
-        bar.update(done - bar.n)
-
-    try:
-        yield callback
-    finally:
-        for bar in bars.values():
-            bar.close()
 
 
 @contextmanager
@@ -142,25 +128,54 @@ def _client(address: str | None) -> Iterator[Any]:
             yield client
 
 
-def _text_table(columns: tuple[str, ...], rows: tuple[tuple[Any, ...], ...]) -> str:
-    def cell(v: Any) -> str:
-        if v is None:
-            return "-"
-        if isinstance(v, bool):
-            return "PASS" if v else "FAIL"
-        if isinstance(v, float):
-            return f"{v:.4g}"
-        return str(v)
+def _cell(v: Any) -> str:
+    if v is None:
+        return "-"
+    if isinstance(v, bool):
+        return "PASS" if v else "FAIL"
+    if isinstance(v, float):
+        return f"{v:.4g}"
+    return str(v).upper() if v in ("pass", "marginal", "fail", "missing", "error") else str(v)
 
-    cells = [[cell(v) for v in row] for row in rows]
-    widths = [max([len(c)] + [len(r[i]) for r in cells]) for i, c in enumerate(columns)]
-    lines = ["  ".join(c.ljust(w) for c, w in zip(columns, widths, strict=True))]
+
+def _text_table(result: Any) -> str:
+    """Aligned text: one column per coefficient as ``value [low, high]``, checks, status."""
+    columns = list(result.columns)
+    shown = [c for c in columns if c not in ("n_samples", "fs", "units", "pass", "error")]
+    shown = [c for c in shown if not c.endswith(("_low", "_high"))]
+    header = [c if c != "p_value" else "p" for c in shown]
+    cells = []
+    for row in result.rows:
+        values = dict(zip(columns, row, strict=True))
+        line = []
+        for c in shown:
+            text = _cell(values[c])
+            if f"{c}_low" in values and values[c] is not None:
+                text += f" [{_cell(values[c + '_low'])}, {_cell(values[c + '_high'])}]"
+            line.append(text)
+        cells.append(line)
+    widths = [max([len(h)] + [len(r[i]) for r in cells]) for i, h in enumerate(header)]
+    lines = ["  ".join(h.ljust(w) for h, w in zip(header, widths, strict=True))]
     lines += ["  ".join(v.ljust(w) for v, w in zip(r, widths, strict=True)) for r in cells]
-    return "\n".join(line.rstrip() for line in lines)
+    errors = [
+        f"{values['record']}: {values['error']}"
+        for values in (dict(zip(columns, row, strict=True)) for row in result.rows)
+        if values["error"]
+    ]
+    return "\n".join([line.rstrip() for line in lines] + [f"error: {e}" for e in errors])
+
+
+def _terms(text: str) -> str | list[str]:
+    if text.strip() == "auto":
+        return "auto"
+    names = [t.strip() for t in text.split(",") if t.strip()]
+    if not names:
+        raise ValueError(f"--terms {text!r}: give auto or names like N,B,K")
+    return names
 
 
 def run(args: argparse.Namespace) -> int:
-    """Run ``allanite batch``; exit code 0 if every record passed, 1 if one failed."""
+    """Run ``allanite batch``; exit code 0 if no record failed, 1 if one failed."""
     from allanite.batch import batch
 
     paths = _expand(args.patterns)
@@ -172,8 +187,9 @@ def run(args: argparse.Namespace) -> int:
             paths,
             args.fs,
             datasheet=args.datasheet,
+            terms=_terms(args.terms),
+            level=args.level,
             client=client,
-            kind=args.kind,
             points=args.points,
             threads=args.threads,
             memory_limit=args.memory_limit,
@@ -186,5 +202,5 @@ def run(args: argparse.Namespace) -> int:
                 tmp.write_text(result.to_json(indent=1) + "\n")
             else:
                 result.to_csv(tmp)
-    print(result.to_json(indent=1) if args.json else _text_table(result.columns, result.rows))
+    print(result.to_json(indent=1) if args.json else _text_table(result))
     return 0 if result.passed else 1

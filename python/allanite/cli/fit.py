@@ -5,12 +5,12 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+from allanite.cli.progress import progress
 from allanite.cli.record_options import (
     add_grid_arguments,
     add_record_arguments,
     avar_from_args,
     dump_json,
-    progress,
     read_from_args,
 )
 from allanite.io.atomic import atomic_output
@@ -82,8 +82,8 @@ def _model_of(fit: Any) -> Any:
 
 def run(args: argparse.Namespace) -> int:
     """Run ``allanite fit``."""
+    from allanite.datasheet import Datasheet, check_limits
     from allanite.report.coefficients import coefficient_table
-    from allanite.report.datasheet import Datasheet, check_limits
 
     sheet = Datasheet.load(args.datasheet) if args.datasheet else None
     if _fit_function() is None:

@@ -9,10 +9,9 @@ policy, scale, units, raw layout) and ``read_from_args(path, args)`` turns them 
 from __future__ import annotations
 
 import argparse
-import sys
-from collections.abc import Iterable, Iterator
-from typing import Any, TypeVar
+from typing import Any
 
+from allanite.cli.progress import progress_bars
 from allanite.io.readers import FORMATS, read_record
 from allanite.io.record import INPUT_KINDS, Record
 from allanite.io.timebase import GAP_POLICIES
@@ -23,12 +22,9 @@ __all__ = [
     "add_record_arguments",
     "avar_from_args",
     "example_record",
-    "progress",
     "rate_unit",
     "read_from_args",
 ]
-
-T = TypeVar("T")
 
 
 def add_record_arguments(parser: argparse.ArgumentParser) -> None:
@@ -220,8 +216,6 @@ def avar_from_args(record: Record, args: argparse.Namespace) -> AllanResult:
     memory_limit = getattr(args, "memory_limit", None)
     if memory_limit is not None or getattr(args, "fast", False):
         large = {"memory_limit": memory_limit, "fast": bool(getattr(args, "fast", False))}
-    from allanite.cli.batch import progress_bars
-
     with progress_bars() as bar:
         return avar(
             part.samples if part.n_channels > 1 else part.samples[:, 0],
@@ -235,19 +229,6 @@ def avar_from_args(record: Record, args: argparse.Namespace) -> AllanResult:
             progress=bar if large else None,
             **large,
         )
-
-
-def progress(items: Iterable[T], *, desc: str, total: int | None = None) -> Iterator[T]:
-    """Iterate with a tqdm progress bar on stderr when tqdm is installed and stderr is a tty."""
-    if sys.stderr.isatty():
-        try:
-            from tqdm import tqdm
-        except ImportError:
-            pass
-        else:
-            yield from tqdm(items, desc=desc, total=total, leave=False, file=sys.stderr)
-            return
-    yield from items
 
 
 def dump_json(data: Any) -> str:

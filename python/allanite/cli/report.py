@@ -6,12 +6,12 @@ import argparse
 from pathlib import Path
 from typing import Any
 
+from allanite.cli.progress import progress
 from allanite.cli.record_options import (
     add_grid_arguments,
     add_record_arguments,
     avar_from_args,
     dump_json,
-    progress,
     read_from_args,
 )
 from allanite.report import Datasheet, DeviceAnalysis, build_report

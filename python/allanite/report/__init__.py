@@ -6,9 +6,9 @@
 
 from __future__ import annotations
 
+from allanite.datasheet import Check, Datasheet, Limit, check_limits
 from allanite.report.build import DeviceAnalysis, Report, build_report
 from allanite.report.coefficients import Coefficient, coefficient_table, customary_rate
-from allanite.report.datasheet import Check, Datasheet, Limit, check_limits
 from allanite.report.slopes import SlopeRow, slope_table
 
 __all__ = [

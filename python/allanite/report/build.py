@@ -18,11 +18,11 @@ from typing import Any
 
 import numpy as np
 
+from allanite.datasheet import Check, Datasheet, adev_at, check_limits
 from allanite.io.atomic import atomic_output
 from allanite.io.record import Record
 from allanite.report import html as h
 from allanite.report.coefficients import Coefficient, coefficient_table
-from allanite.report.datasheet import Check, Datasheet, adev_at, check_limits
 from allanite.report.slopes import MIN_EDF, slope_table
 from allanite.variance import AllanResult
 

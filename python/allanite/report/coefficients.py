@@ -13,7 +13,7 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from allanite.report.datasheet import Measured
+from allanite.datasheet import Measured
 from allanite.units import ANGLE_UNITS, Unit, coefficient_unit, convert, display_unit
 
 __all__ = ["Coefficient", "coefficient_table", "customary_rate"]
@@ -35,7 +35,7 @@ class Coefficient:
     model_unit: Unit | None = None
 
     def measured(self) -> Measured:
-        """As a :class:`~allanite.report.datasheet.Measured` for limit checks."""
+        """As a :class:`~allanite.datasheet.Measured` for limit checks."""
         return Measured(self.value, self.low, self.high, self.unit, self.model_unit)
 
 

@@ -1,0 +1,93 @@
+"""The one datasheet module: both formats, JSON/YAML files, the pass/marginal/fail rule."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from allanite.datasheet import Datasheet, Limit, Measured, check_limits, verdict
+from allanite.errors import InputError
+
+FULL = {
+    "device": "Demo",
+    "limits": [
+        {"quantity": "N", "max": 0.3, "unit": "deg/sqrt(h)"},
+        {"quantity": "adev", "tau": 1, "max": 0.01, "unit": "deg/s"},
+    ],
+}
+# a flat Allan deviation of 0.005 deg/s with a +-10 % interval
+CURVE = (
+    np.array([0.1, 1.0, 10.0]),
+    np.full(3, 0.005),
+    np.full(3, 0.0045),
+    np.full(3, 0.0055),
+    "deg/s",
+)
+
+
+def test_both_forms_build_the_same_limits() -> None:
+    full = Datasheet.from_dict(FULL)
+    assert full.limits[0] == Limit("N", "deg/sqrt(h)", max=0.3)
+    assert full.quantities == ("N", "adev")
+    compact = Datasheet.from_dict({"device": "lot", "N": 0.01, "K": {"min": 0, "max": 1e-4}})
+    assert compact.device == "lot"
+    assert compact.limits == (Limit("N", "", max=0.01), Limit("K", "", max=1e-4, min=0.0))
+    assert Datasheet.coerce(FULL) == full
+    assert Datasheet.coerce(full) is full
+    assert Datasheet.coerce(None) is None
+    with pytest.raises(TypeError, match="datasheet must be"):
+        Datasheet.coerce(0.3)  # type: ignore[arg-type]
+    with pytest.raises(InputError, match="'adev' limit needs tau"):
+        Datasheet.from_dict({"adev": 0.01})
+    with pytest.raises(InputError, match="at least one bound"):
+        Datasheet.from_dict({"N": {}})
+
+
+def test_json_and_yaml_files(tmp_path: Path) -> None:
+    js = tmp_path / "sheet.json"
+    js.write_text('{"N": 0.01, "B": {"max": 0.003}}')
+    yml = tmp_path / "sheet.yml"
+    yml.write_text("N: 0.01\nB:\n  max: 0.003\n")
+    assert Datasheet.load(js).limits == Datasheet.load(yml).limits
+    assert Datasheet.load(js).device == "sheet"
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("N: [0.01\n")
+    with pytest.raises(InputError, match=r"bad.yaml, line \d+: not valid YAML"):
+        Datasheet.load(bad)
+    with pytest.raises(InputError, match="no such file"):
+        Datasheet.load(tmp_path / "none.json")
+
+
+def test_status_from_the_interval() -> None:
+    sheet = Datasheet.from_dict({"N": 1.0})
+    statuses = [
+        check_limits(sheet, "x", {"N": Measured(v, lo, hi, "deg/sqrt(s)", "deg/sqrt(s)")}, CURVE)[
+            0
+        ].status
+        for v, lo, hi in ((0.5, 0.4, 0.6), (0.9, 0.8, 1.1), (1.1, 0.9, 1.3))
+    ]
+    assert statuses == ["pass", "marginal", "fail"]
+    # units converted: 0.06 deg/sqrt(h) = 0.001 deg/sqrt(s)
+    full = Datasheet.from_dict(FULL)
+    n = Measured(0.001, 0.0009, 0.0011, "deg/sqrt(s)", "deg/sqrt(s)")
+    checks = check_limits(full, "x", {"N": n}, CURVE)
+    assert checks[0].value == pytest.approx(0.06)
+    assert [c.status for c in checks] == ["pass", "pass"]
+
+
+def test_absent_terms_and_the_verdict() -> None:
+    sheet = Datasheet.from_dict({"R": {"min": 1.0}, "K": {"min": 0.0, "max": 1.0}, "B": 1.0})
+    checks = check_limits(sheet, "x", {}, CURVE)
+    # a term the fit did not find fails a positive minimum and is otherwise not measured
+    assert [c.status for c in checks] == ["fail", "missing", "missing"]
+    assert verdict([c.status for c in checks]) == "fail"
+    assert verdict(["pass", "missing", "marginal"]) == "marginal"
+    assert verdict(["missing"]) == "pass"
+    assert verdict([]) == "pass"
+    # an Allan deviation limit outside the measured taus is not measured either
+    far = Datasheet.from_dict(
+        {"limits": [{"quantity": "adev", "tau": 100, "min": 1.0, "unit": "deg/s"}]}
+    )
+    assert check_limits(far, "x", {}, CURVE)[0].status == "missing"
