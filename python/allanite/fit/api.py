@@ -221,7 +221,8 @@ def _fit_gls(
             f"method='gls' models the overlapping Allan variance, got kind={result.kind!r}; "
             "compute avar(x, fs, kind='overlapping') or use method='seed'"
         )
-    keep = _thin(result.m, _points(result, "gls", max_fraction), min_ratio)
+    enough = _points(result, "gls", max_fraction)
+    keep = _thin(result.m, enough, min_ratio)
     n_needed = _n_params(specs) if not auto else 1
     _check_count(int(keep.sum()), n_needed, "the model" if not auto else "an automatic fit")
     dt = 1.0 / result.fs
@@ -256,7 +257,11 @@ def _fit_gls(
         residuals=residuals,
         cov=sol.cov,
         method="gls",
-        classic=classic_readout(result.tau, np.sqrt(np.asarray(result.var, dtype=np.float64))),
+        # read on the taus with enough independent differences, like the fit (the last
+        # octaves scatter and would otherwise set the "flat minimum")
+        classic=classic_readout(
+            result.tau[enough], np.sqrt(np.asarray(result.var, dtype=np.float64)[enough])
+        ),
         selection=selection,
         meta={"iterations": sol.iterations, "n_samples": result.n_samples, "fs": result.fs},
         discrepancy=sol.discrepancy,
