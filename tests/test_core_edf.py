@@ -259,3 +259,143 @@ def test_confidence_interval_coverage_for_white_fm(kind: str) -> None:
         covered += int(lo[0] <= truth[kind] <= hi[0])
     se = math.sqrt(0.683 * 0.317 / reps)
     assert abs(covered / reps - 0.683) < 4 * se, covered / reps
+
+
+# --------------------------------------------------------------------------------------------
+# Noise identification: compiled streaming statistics, bounded memory, no reference.py
+
+
+def _numpy_levels(series: np.ndarray, levels: int) -> list[float]:
+    out = []
+    for _ in range(levels):
+        out.append(edf.lag1_acf(series))
+        series = np.diff(series)
+    return out
+
+
+@pytest.mark.parametrize("series", ["phase", "frequency"])
+@pytest.mark.parametrize("dtype", [np.float64, np.float32, np.int16, np.int32, np.int64])
+def test_lag1_acf_kernel_equals_numpy_definition(series: str, dtype: type) -> None:
+    """_core.lag1_acf = lag1_acf of x[::m] (or its m-averages) and its differences."""
+    rng = np.random.default_rng(77)
+    walk = np.cumsum(rng.standard_normal((30_001, 6)), axis=0) * 50 + 1000.0
+    base = walk.astype(dtype)[::2, ::2]  # strided rows and columns, no copy
+    ms = [1, 2, 5, 64, 333]
+    got = np.asarray(_core.lag1_acf(base, ms, series, 4, 2)).reshape(len(ms), 3, 4)
+    for t, m in enumerate(ms):
+        for c in range(3):
+            x = base[:, c].astype(np.float64)
+            z = x[::m] if series == "phase" else np.diff(x[: (x.size - 1) // m * m + 1 : m]) / m
+            np.testing.assert_allclose(got[t, c], _numpy_levels(z, 4), rtol=0, atol=1e-12)
+    for threads in (1, 3, 4):  # grouping of the factors never changes a bit
+        again = np.asarray(_core.lag1_acf(base, ms, series, 4, threads))
+        assert np.array_equal(again.reshape(got.shape), got)
+
+
+def test_lag1_acf_kernel_bad_arguments() -> None:
+    x = np.random.default_rng(1).standard_normal((100, 1))
+    with pytest.raises(ValueError, match="levels"):
+        _core.lag1_acf(x, [1], "phase", 5)
+    with pytest.raises(ValueError, match="at least 1"):
+        _core.lag1_acf(x, [0], "phase", 3)
+    with pytest.raises(ValueError, match="difference levels"):
+        _core.lag1_acf(x, [40], "frequency", 3)
+    with pytest.raises(ValueError, match="series"):
+        _core.lag1_acf(x, [1], "rate", 3)
+    with pytest.raises(ValueError, match="at least 1"):
+        edf.identify_alpha(x, np.array([0]), "overlapping")
+
+
+def _identify_by_definition(x: np.ndarray, factors: np.ndarray, kind: str, data: str) -> np.ndarray:
+    """Stable32's rule written out with numpy and reference.py (the test oracle)."""
+    from allanite import reference
+
+    shape = edf.estimator_shape(kind)
+    lo, hi = (-2, 2) if kind == "total" else (2 - 2 * shape.d, 2)
+    out = np.empty((factors.size, x.shape[1]), dtype=np.int64)
+    for c in range(x.shape[1]):
+        col = x[:, c].astype(np.float64)
+        for i, m in enumerate(factors.tolist()):
+            ybar = np.diff(col[: (col.size - 1) // m * m + 1 : m]) / m
+            series = col[::m] if data == "phase" else ybar
+            if series.size >= edf.ACF_MIN_POINTS:
+                alpha = edf.acf_noise_id(series, shape.d, phase=data == "phase")
+            else:
+                ratio = None
+                if 3 * m <= col.size:  # second differences ignore the trend of phase data
+                    av = reference.overlapping_variance(col, m)
+                    ratio = reference.modified_variance(col, m) / av if av else None
+                alpha = edf.b1_noise_id(ybar, m, ratio)
+            out[i, c] = min(max(alpha, lo), hi)
+    return out
+
+
+@pytest.mark.parametrize("kind", ["overlapping", "hadamard", "modified", "total"])
+def test_identify_alpha_equals_the_definition(kind: str) -> None:
+    """Compiled identification = the plain definition, for every noise type and both data."""
+    rng = np.random.default_rng(505)
+    n = 3000
+    white = rng.standard_normal((n + 2, 5))
+    rate = np.column_stack(
+        [
+            np.diff(white[:, 0])[:n],  # white PM (as rate)
+            white[:n, 1],  # white FM
+            np.cumsum(white[:n, 2]),  # random walk FM
+            np.cumsum(np.cumsum(white[:n, 3])),  # random run FM
+            white[:n, 4] + 0.01 * np.cumsum(white[:n, 4]),  # mixture
+        ]
+    )
+    top = _core.max_m(kind, n + 1)
+    factors = np.unique(np.r_[1, 2, 3, np.geomspace(1, top, 30).astype(np.int64), top])
+    phase = np.asarray(_core.phase(rate, "rate"))
+    got = edf.identify_alpha(phase, factors, kind, data="frequency")
+    np.testing.assert_array_equal(got, _identify_by_definition(phase, factors, kind, "frequency"))
+    # phase data as recorded (integer counts with a drift), R(n) from the detrended phase
+    walk = np.cumsum(rate, axis=0)
+    walk *= 1e5 / np.max(np.abs(walk), axis=0)
+    angle = np.round(walk + 30.0 * np.arange(n)[:, None]).astype(np.int32)
+    detrended = np.asarray(_core.phase(angle, "angle"))
+    got = edf.identify_alpha(angle, factors, kind, data="phase", detrended=detrended)
+    np.testing.assert_array_equal(got, _identify_by_definition(angle, factors, kind, "phase"))
+
+
+def test_identification_memory_is_bounded() -> None:
+    """No copy of the record or of a decimated series (numpy allocations traced)."""
+    import tracemalloc
+
+    x = np.random.default_rng(8).standard_normal(2_000_000)
+    phase = np.asarray(_core.phase(x.reshape(-1, 1), "rate"))
+    factors = np.unique(np.ceil(np.logspace(0, 6, 60)).astype(np.int64))
+    tracemalloc.start()
+    try:
+        edf.identify_alpha(phase, factors, "hadamard", data="frequency")
+        _, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    assert peak < 0.05 * phase.nbytes, peak  # the old path allocated 2-3 copies (32-48 MB)
+
+
+@pytest.mark.parametrize("kind", ["hadamard", "modified", "standard_hadamard", "total"])
+@pytest.mark.parametrize("input_kind", ["rate", "angle"])
+def test_large_records_never_use_the_reference_oracle(
+    kind: str, input_kind: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """2e5 x 3 samples: the library path is compiled only (reference.py would take minutes)."""
+    from allanite import reference
+
+    def forbidden(*args: object, **kwargs: object) -> None:
+        raise AssertionError("the library path called reference.py")
+
+    for name in dir(reference):
+        if not name.startswith("__") and callable(getattr(reference, name)):
+            monkeypatch.setattr(reference, name, forbidden)
+    rng = np.random.default_rng(200)
+    x = rng.standard_normal((200_000, 3))
+    res = allanite.avar(x, 100.0, input=input_kind, kind=kind)
+    assert res.alpha.shape == res.var.shape == (res.m.size, 3)
+    assert np.all(np.isfinite(res.edf))
+    assert np.all(res.edf > 0)
+    # white noise: white FM (rate) / white PM (angle) at the taus the lag-1 method covers
+    want = 0 if input_kind == "rate" else 2
+    n_series = (200_000 - 1) // res.m
+    assert np.mean(res.alpha[n_series >= 1000] == want) > 0.95

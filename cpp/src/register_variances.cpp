@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "allanite/noise_id.hpp"
 #include "allanite/phase.hpp"
 #include "allanite/variances.hpp"
 #include "bindings.hpp"
@@ -51,6 +52,36 @@ RowMatrix variance(const Eigen::Ref<const RowMatrix>& phase_ref, const std::vect
   return allanite::variance(phase_ref, ms, k, threads);
 }
 
+template <class T>
+RowMatrix lag1_acf_typed(const py::array& x, const std::vector<std::int64_t>& ms, AcfSeries series,
+                         int levels, int threads) {
+  const auto itemsize = static_cast<py::ssize_t>(sizeof(T));
+  const py::ssize_t s0 = x.strides(0), s1 = x.strides(1);
+  if (s0 % itemsize != 0 || s1 % itemsize != 0)
+    throw py::type_error("array strides are not a multiple of the item size (an exotic view); "
+                         "pass np.ascontiguousarray(x) instead");
+  StridedMap<T> view(static_cast<const T*>(x.data()), x.shape(0), x.shape(1),
+                     Strides(s0 / itemsize, s1 / itemsize));
+  py::gil_scoped_release release;
+  return lag1_acf_levels<T>(view, ms, series, levels, threads);
+}
+
+RowMatrix lag1_acf(const py::array& x, const std::vector<std::int64_t>& ms, const std::string& series,
+                   int levels, int threads) {
+  const AcfSeries s = parse_acf_series(series);
+  if (x.ndim() != 2)
+    throw py::value_error("lag1_acf() expects a 2-D (samples, channels) array, got " +
+                          std::to_string(x.ndim()) + " dimensions");
+  const py::dtype dt = x.dtype();
+  if (dt.is(py::dtype::of<double>())) return lag1_acf_typed<double>(x, ms, s, levels, threads);
+  if (dt.is(py::dtype::of<float>())) return lag1_acf_typed<float>(x, ms, s, levels, threads);
+  if (dt.is(py::dtype::of<std::int16_t>())) return lag1_acf_typed<std::int16_t>(x, ms, s, levels, threads);
+  if (dt.is(py::dtype::of<std::int32_t>())) return lag1_acf_typed<std::int32_t>(x, ms, s, levels, threads);
+  if (dt.is(py::dtype::of<std::int64_t>())) return lag1_acf_typed<std::int64_t>(x, ms, s, levels, threads);
+  throw py::type_error("unsupported dtype " + std::string(py::str(dt)) +
+                       "; use float64, float32, int16, int32 or int64");
+}
+
 }  // namespace
 
 void register_variances(py::module_& m) {
@@ -61,6 +92,11 @@ void register_variances(py::module_& m) {
         py::arg("threads") = 0,
         "Allan-family variance (tau0 = 1, phase units) for each averaging factor in m; "
         "returns (len(m), C).");
+  m.def("lag1_acf", &lag1_acf, py::arg("x"), py::arg("m"), py::arg("series"), py::arg("levels"),
+        py::arg("threads") = 0,
+        "Lag-1 autocorrelation of the decimated phase x[::m] (series='phase') or of the "
+        "m-sample frequency averages (series='frequency') and of their first levels-1 "
+        "differences, one streaming pass per factor; returns (len(m), C * levels).");
   m.def("n_terms",
         [](const std::string& kind, std::int64_t M, std::int64_t mm) {
           return allanite::n_terms(parse_variance_kind(kind), M, mm);

@@ -30,6 +30,21 @@ def variance(
     ``threads`` = 0 uses every core; results are bit-identical for any thread count.
     """
 
+def lag1_acf(
+    x: NDArray[np.generic],
+    m: Sequence[int] | NDArray[np.int64],
+    series: str,
+    levels: int,
+    threads: int = 0,
+) -> NDArray[np.float64]:
+    """Lag-1 autocorrelations for noise identification, shape ``(len(m), C * levels)``.
+
+    Entry ``(t, c * levels + d)`` is the lag-1 autocorrelation of the d-th difference of
+    ``x[::m, c]`` (``series="phase"``) or of its first difference, the m-sample frequency
+    averages (``series="frequency"``). One streaming pass over tiles of rows per group of
+    factors (no copies); ``x`` as for :func:`phase`. Bit-identical for any ``threads``.
+    """
+
 def n_terms(kind: str, n_phase: int, m: int) -> int:
     """Return the number of difference terms the estimator averages for factor ``m``."""
 

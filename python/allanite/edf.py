@@ -412,6 +412,23 @@ def lag1_acf(z: NDArray[np.float64]) -> float:
     return float(np.dot(z0[:-1], z0[1:])) / den * (z0.size - 1) / z0.size
 
 
+def _acf_decision(r1_of_level: Callable[[int], float], dmax: int, n: int, *, phase: bool) -> int:
+    r"""Riley & Greenhall's stopping rule on the lag-1 autocorrelations of successive levels.
+
+    ``r1_of_level(d)`` is the lag-1 autocorrelation of the d-th difference of a series of ``n``
+    values. Difference until :math:`\delta = r_1/(1+r_1) < 0.25`, ``d = dmax`` or fewer than
+    3 values remain; then :math:`p = -\mathrm{round}(2\delta) - 2d`.
+    """
+    d = 0
+    while True:
+        r1 = r1_of_level(d)
+        delta = r1 / (1.0 + r1)
+        if delta < 0.25 or d >= dmax or n - d < 3:
+            p = -round(2.0 * delta) - 2 * d
+            return int(p + 2 if phase else p)
+        d += 1
+
+
 def acf_noise_id(z: NDArray[np.float64], dmax: int, *, phase: bool) -> int:
     r"""Dominant power-law exponent by the lag-1 autocorrelation (Riley & Greenhall 2004).
 
@@ -433,16 +450,14 @@ def acf_noise_id(z: NDArray[np.float64], dmax: int, *, phase: bool) -> int:
     int
         Estimated ``alpha`` (not clipped).
     """
-    series = np.asarray(z, dtype=np.float64)
-    d = 0
-    while True:
-        r1 = lag1_acf(series)
-        delta = r1 / (1.0 + r1)
-        if delta < 0.25 or d >= dmax or series.size < 3:
-            p = -round(2.0 * delta) - 2 * d
-            return int(p + 2 if phase else p)
-        series = np.diff(series)
-        d += 1
+    levels = [np.asarray(z, dtype=np.float64)]
+
+    def r1_of_level(d: int) -> float:
+        while len(levels) <= d:
+            levels.append(np.diff(levels[-1]))
+        return lag1_acf(levels[d])
+
+    return _acf_decision(r1_of_level, dmax, levels[0].size, phase=phase)
 
 
 def _b1_expected(n: int, mu: int) -> float:
@@ -468,6 +483,33 @@ def _rn_expected(m: int, alpha: int) -> float:
 
 
 _MU_TO_ALPHA = {2: -3, 1: -2, 0: -1, -1: 0}
+
+
+def _b1_frequency_class(ybar: NDArray[np.float64]) -> int | None:
+    """B1 step of :func:`b1_noise_id`: ``alpha`` of a frequency noise, None for phase noise."""
+    n = ybar.size
+    if n < 3:
+        return 0
+    diffs = np.diff(ybar)
+    avar = 0.5 * float(np.mean(diffs**2))
+    if avar == 0.0:
+        return 0
+    b1 = float(np.var(ybar, ddof=1)) / avar
+    expected = {mu: _b1_expected(n, mu) for mu in (2, 1, 0, -1, -2)}
+    for mu in (2, 1, 0, -1):
+        lo, hi = expected[mu - 1], expected[mu]
+        boundary = 0.5 * (lo + hi) if mu == 2 else math.sqrt(lo * hi)
+        if b1 > boundary:
+            return _MU_TO_ALPHA[mu]
+    return None
+
+
+def _rn_phase_class(ratio: float | None, m: int) -> int:
+    """R(n) step of :func:`b1_noise_id`: white (2) or flicker (1) PM; 1 without a ratio."""
+    if ratio is None:
+        return 1
+    boundary = math.sqrt(_rn_expected(m, 1) * _rn_expected(m, 2))
+    return 1 if ratio > boundary else 2
 
 
 def b1_noise_id(
@@ -498,41 +540,54 @@ def b1_noise_id(
     int
         Estimated ``alpha``.
     """
-    n = ybar.size
-    if n < 3:
-        return 0
-    diffs = np.diff(ybar)
-    avar = 0.5 * float(np.mean(diffs**2))
-    if avar == 0.0:
-        return 0
-    b1 = float(np.var(ybar, ddof=1)) / avar
-    expected = {mu: _b1_expected(n, mu) for mu in (2, 1, 0, -1, -2)}
-    for mu in (2, 1, 0, -1):
-        lo, hi = expected[mu - 1], expected[mu]
-        boundary = 0.5 * (lo + hi) if mu == 2 else math.sqrt(lo * hi)
-        if b1 > boundary:
-            return _MU_TO_ALPHA[mu]
-    ratio = rn() if callable(rn) else rn
-    if ratio is None:
-        return 1
-    boundary = math.sqrt(_rn_expected(m, 1) * _rn_expected(m, 2))
-    return 1 if ratio > boundary else 2
+    alpha = _b1_frequency_class(np.asarray(ybar, dtype=np.float64))
+    if alpha is not None:
+        return alpha
+    return _rn_phase_class(rn() if callable(rn) else rn, m)
 
 
-def _mvar_avar_ratio(x: NDArray[np.float64], m: int) -> float | None:
-    """R(n) = MVAR / AVAR (overlapping) of a phase column, None when 3m exceeds the record."""
-    if 3 * m > x.size:
-        return None
-    column = np.ascontiguousarray(x, dtype=np.float64).reshape(-1, 1)
-    factors = np.array([m], dtype=np.int64)
-    avar = float(_core.variance(column, factors, "overlapping", 1)[0, 0])
-    if avar == 0.0:
-        return None
-    return float(_core.variance(column, factors, "modified", 1)[0, 0]) / avar
+def _mvar_avar_ratios(
+    phase: NDArray[np.float64], factors: list[int], threads: int
+) -> dict[int, NDArray[np.float64]]:
+    """R(n) = MVAR / AVAR (overlapping) of every channel at each factor, by the compiled kernels.
+
+    One call per estimator for all factors (threaded over factors); factors with ``3m`` beyond
+    the record get no entry, zero AVAR gives NaN (both mean "no ratio").
+    """
+    usable = [m for m in factors if 3 * m <= phase.shape[0]]
+    if not usable:
+        return {}
+    ms = np.asarray(usable, dtype=np.int64)
+    mvar = np.asarray(_core.variance(phase, ms, "modified", threads))
+    avar = np.asarray(_core.variance(phase, ms, "overlapping", threads))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = np.where(avar != 0.0, mvar / np.where(avar != 0.0, avar, 1.0), np.nan)
+    return {m: ratio[i] for i, m in enumerate(usable)}
+
+
+_CORE_DTYPES = (np.float64, np.float32, np.int16, np.int32, np.int64)
+
+
+def _as_core_array(x: NDArray[np.generic]) -> NDArray[np.generic]:
+    """2-D view the compiled module reads without a copy (converted only for other dtypes)."""
+    arr = np.asarray(x)
+    if arr.ndim == 1:
+        arr = arr[:, None]
+    if arr.ndim != 2:
+        raise ValueError(f"phase must be 1-D or 2-D (samples, channels), got shape {arr.shape}")
+    if arr.dtype.type not in _CORE_DTYPES or not arr.dtype.isnative:
+        arr = arr.astype(np.float64)
+    return arr
 
 
 def identify_alpha(
-    phase: NDArray[np.float64], m: NDArray[np.int64], kind: str, *, data: str = "frequency"
+    phase: NDArray[np.generic],
+    m: NDArray[np.int64],
+    kind: str,
+    *,
+    data: str = "frequency",
+    detrended: NDArray[np.float64] | None = None,
+    threads: int = 0,
 ) -> NDArray[np.int64]:
     """Dominant power-law exponent ``alpha`` for each averaging factor and channel.
 
@@ -543,13 +598,21 @@ def identify_alpha(
     remain, the B1/R(n) method (:func:`b1_noise_id`) otherwise. The result is clipped to the
     exponents the estimator can measure (``alpha + 2d > 1``).
 
+    Cost and memory: the lag-1 statistics of all difference levels come from one streaming
+    pass over the rows ``x[::m]`` per factor in the compiled module
+    (:func:`allanite._core.lag1_acf`, threaded over factors, no copy of the record or of the
+    decimated series), the B1 ratio from the fewer than 30 averages, and R(n) from the
+    compiled modified and overlapping Allan kernels, evaluated only at the factors where B1
+    points to phase noise. Extra memory is O(T C) besides the input.
+
     Parameters
     ----------
     phase : numpy.ndarray
-        Phase array ``(M, C)`` in sample units: for frequency-like records the prefix sums of
-        :func:`allanite._core.phase`; for phase data (angle input) the phase as recorded, trend
-        included, which is what Stable32 analyses (a frequency offset makes the lag-1 method
-        difference at least once).
+        Phase array ``(M, C)`` (or ``(M,)``) in sample units: for frequency-like records the
+        prefix sums of :func:`allanite._core.phase`; for phase data (angle input) the phase as
+        recorded, trend included, which is what Stable32 analyses (a frequency offset makes the
+        lag-1 method difference at least once). float64, float32, int16, int32 or int64 are
+        read in place (strided views too); other dtypes are converted.
     m : numpy.ndarray
         Averaging factors, shape ``(T,)``.
     kind : str
@@ -557,6 +620,12 @@ def identify_alpha(
     data : {"frequency", "phase"}
         Whether the record was frequency-like (rate, increments) or phase-like (angle); selects
         Stable32's frequency or phase variant of the method.
+    detrended : numpy.ndarray, optional
+        The detrended float64 phase of the same record (``_core.phase(x, "angle")``), used for
+        the ratio R(n) = MVAR/AVAR instead of ``phase``: second differences cancel the trend,
+        so the ratio is the same while no float64 copy of a raw record is needed.
+    threads : int
+        Worker threads of the compiled passes (0: all cores); the result does not depend on it.
 
     Returns
     -------
@@ -568,20 +637,46 @@ def identify_alpha(
     shape = estimator_shape(kind)
     dmax = shape.d
     lo, hi = (-2, 2) if kind == "total" else _alpha_range(shape.d)
-    x2 = np.asarray(phase, dtype=np.float64)
-    if x2.ndim == 1:
-        x2 = x2[:, None]
-    factors = np.asarray(m, dtype=np.int64)
-    out = np.empty((factors.size, x2.shape[1]), dtype=np.int64)
-    for c in range(x2.shape[1]):
-        x = x2[:, c]
-        for i, mi in enumerate(factors.tolist()):
-            decimated = x[::mi]
-            ybar = np.diff(x[: (x.size - 1) // mi * mi + 1 : mi]) / mi
-            series = decimated if data == "phase" else ybar
-            if series.size >= ACF_MIN_POINTS:
-                alpha = acf_noise_id(series, dmax, phase=data == "phase")
+    x2 = _as_core_array(phase)
+    rows, channels = x2.shape
+    factors = np.asarray(m, dtype=np.int64).reshape(-1)
+    if factors.size and factors.min() < 1:
+        raise ValueError(f"averaging factors must be at least 1, got {factors.min()}")
+    is_phase = data == "phase"
+    n_series = -(-rows // factors) if is_phase else (rows - 1) // factors
+    out = np.empty((factors.size, channels), dtype=np.int64)
+
+    acf = np.flatnonzero(n_series >= ACF_MIN_POINTS)
+    if acf.size:
+        r1 = np.asarray(_core.lag1_acf(x2, factors[acf], data, dmax + 1, threads))
+        r1 = r1.reshape(acf.size, channels, dmax + 1)
+        for row, i in enumerate(acf.tolist()):
+            for c in range(channels):
+                levels = r1[row, c].tolist()
+                out[i, c] = _acf_decision(
+                    levels.__getitem__, dmax, int(n_series[i]), phase=is_phase
+                )
+
+    pending: list[tuple[int, int]] = []  # (tau index, channel) where B1 points to phase noise
+    for i in np.flatnonzero(n_series < ACF_MIN_POINTS).tolist():
+        mi = int(factors[i])
+        rows_used = x2[: (rows - 1) // mi * mi + 1 : mi].astype(np.float64)
+        ybar = np.diff(rows_used, axis=0) / mi
+        for c in range(channels):
+            alpha = _b1_frequency_class(ybar[:, c])
+            if alpha is None:
+                pending.append((i, c))
             else:
-                alpha = b1_noise_id(ybar, mi, functools.partial(_mvar_avar_ratio, x, mi))
-            out[i, c] = min(max(alpha, lo), hi)
-    return out
+                out[i, c] = alpha
+    if pending:
+        source = detrended if detrended is not None else x2.astype(np.float64, copy=False)
+        ratios = _mvar_avar_ratios(
+            np.asarray(source, dtype=np.float64),
+            sorted({int(factors[i]) for i, _ in pending}),
+            threads,
+        )
+        for i, c in pending:
+            mi = int(factors[i])
+            ratio = float(ratios[mi][c]) if mi in ratios else math.nan
+            out[i, c] = _rn_phase_class(None if math.isnan(ratio) else ratio, mi)
+    return np.clip(out, lo, hi)

@@ -390,9 +390,11 @@ def avar(
         # Stable32 identifies phase data on the phase as recorded (its frequency offset makes
         # the lag-1 method difference at least once); frequency data on the averaged rates
         if input == "angle":
-            alphas = identify_alpha(arr.astype(np.float64), factors, kernel_kind, data="phase")
+            alphas = identify_alpha(
+                arr, factors, kernel_kind, data="phase", detrended=phase, threads=nthreads
+            )
         else:
-            alphas = identify_alpha(phase, factors, kernel_kind, data="frequency")
+            alphas = identify_alpha(phase, factors, kernel_kind, data="frequency", threads=nthreads)
     else:
         alphas = _given_alpha(alpha, var.shape)
     return assemble_result(

@@ -1,0 +1,238 @@
+// Lag-1 autocorrelation of decimated phase, the statistic of Stable32's noise identification.
+//
+// For an averaging factor m the series is the decimated phase z_k = x[k m] (phase data) or
+// the frequency averaged over m samples z_k = (x[(k+1) m] - x[k m]) / m (frequency data), and
+// its successive differences (levels d = 0, 1, ... of Riley & Greenhall 2004). For each level
+// the lag-1 autocorrelation
+//
+//   r1 = (n-1)/n * sum_{i<n-1} (z_i - zbar)(z_{i+1} - zbar) / sum_i (z_i - zbar)^2
+//
+// is accumulated in one streaming pass over the strided rows, with no copy of the series
+// (the factors of a thread's group share the pass: tiles of rows stay in L2 while every
+// factor reads its points x[j m] from them):
+// every level is centred on a value c_d known before the pass (the exact telescoped mean of a
+// differenced series, (last - first) / (n - 1) of the level below, or for level 0 the
+// telescoped mean of frequency data / the mid-range of phase data), and the sums of
+// u = z - c_d, u^2 and u_i u_{i+1} are kept blockwise with compensated totals. The exact
+// centring follows from delta = mean(u): sum (z - zbar)^2 = S2 - S1 delta and
+// sum (z_i - zbar)(z_{i+1} - zbar) = C - delta (2 S1 - u_0 - u_{n-1}) + (n - 1) delta^2.
+// Since c_d is the mean up to rounding (or within the spread of the data), no cancellation
+// occurs. Memory: O(levels x channels) per factor; work O(rows / m) per factor.
+#pragma once
+
+#include <Eigen/Core>
+#include <algorithm>
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "allanite/compensated.hpp"
+#include "allanite/parallel.hpp"
+#include "allanite/phase.hpp"
+
+namespace allanite {
+
+/// Most difference levels (dmax + 1 with dmax = 3 for the Hadamard family).
+constexpr int kMaxAcfLevels = 4;
+
+/// Which series the noise identification looks at.
+enum class AcfSeries { Phase, Frequency };
+
+inline AcfSeries parse_acf_series(const std::string& s) {
+  if (s == "phase") return AcfSeries::Phase;
+  if (s == "frequency") return AcfSeries::Frequency;
+  throw std::invalid_argument("series must be 'phase' or 'frequency', got '" + s + "'");
+}
+
+/// Number of values of the level-0 series for factor m over `rows` phase rows.
+inline std::int64_t acf_series_length(AcfSeries series, std::int64_t rows, std::int64_t m) {
+  return series == AcfSeries::Phase ? (rows + m - 1) / m : (rows - 1) / m;
+}
+
+namespace detail {
+
+/// Values per summation block (plain sums inside, compensated totals across blocks).
+constexpr std::int64_t kAcfBlock = 1024;
+/// Bytes of phase rows per tile: every factor of a group reads the tile while it is in L2.
+constexpr std::int64_t kAcfTileBytes = 256 * 1024;
+
+/// Streaming lag-1 statistics of one channel at one factor. The decimated points
+/// p_j = x[j m] (j < J) enter a cascade of differences of depth Off + L; levels
+/// Off ... Off + L - 1 are accumulated (Off = 0: phase series, Off = 1: frequency series,
+/// whose values p_{j+1} - p_j are the m-sample averages times m; r1 is scale free).
+template <int L, int Off>
+struct AcfState {
+  static constexpr int D = L + Off;
+  std::int64_t J = 0;  // decimated points
+  std::int64_t j = 0;  // points fed so far
+  double centre[L] = {};
+  double first[L] = {}, last[L] = {};
+  double prev_value[D] = {};
+  double prev_u[L] = {};
+  double b1[L] = {}, b2[L] = {}, bc[L] = {};
+  NeumaierSum s1[L], s2[L], cross[L];
+  std::int64_t in_block = 0;
+
+  /// Centres and end values of every level from the first and last D points.
+  template <class Point>
+  void start(std::int64_t points, Point&& point) {
+    J = points;
+    double head[D][D], tail[D][D];
+    for (int i = 0; i < D; ++i) {
+      head[0][i] = point(i);
+      tail[0][i] = point(J - D + i);
+    }
+    for (int d = 1; d < D; ++d)
+      for (int i = 0; i + d < D; ++i) {
+        head[d][i] = head[d - 1][i + 1] - head[d - 1][i];
+        tail[d][i] = tail[d - 1][i + 1] - tail[d - 1][i];
+      }
+    for (int a = 0; a < L; ++a) {
+      const int d = a + Off;
+      first[a] = head[d][0];
+      last[a] = tail[d][D - 1 - d];
+      // exact (telescoped) mean of a differenced level; mid-range of the phase itself
+      centre[a] = d == 0 ? 0.5 * head[0][0] + 0.5 * tail[0][D - 1]
+                         : (tail[d - 1][D - d] - head[d - 1][0]) / static_cast<double>(J - d);
+    }
+  }
+
+  void feed(double p) noexcept {
+    double v = p;
+    for (int d = 0; d < D; ++d) {
+      const std::int64_t idx = j - d;  // index of v within level d
+      if (d >= Off) {
+        const int a = d - Off;
+        const double u = v - centre[a];
+        b1[a] += u;
+        b2[a] += u * u;
+        if (idx >= 1) bc[a] += u * prev_u[a];
+        prev_u[a] = u;
+      }
+      const double next = v - prev_value[d];
+      prev_value[d] = v;
+      if (idx < 1) break;  // level d + 1 starts with level d's second value
+      v = next;
+    }
+    ++j;
+    if (++in_block == kAcfBlock) fold();
+  }
+
+  void fold() noexcept {
+    for (int a = 0; a < L; ++a) {
+      s1[a].add(b1[a]);
+      s2[a].add(b2[a]);
+      cross[a].add(bc[a]);
+      b1[a] = b2[a] = bc[a] = 0.0;
+    }
+    in_block = 0;
+  }
+
+  void finish(double* r1) noexcept {
+    fold();
+    for (int a = 0; a < L; ++a) {
+      const double n = static_cast<double>(J - (a + Off));
+      const double sum1 = s1[a].value();
+      const double delta = sum1 / n;
+      const double den = s2[a].value() - sum1 * delta;
+      const double u_first = first[a] - centre[a];
+      const double u_last = last[a] - centre[a];
+      const double num = cross[a].value() - delta * ((2.0 * sum1 - u_first) - u_last) +
+                         (n - 1.0) * delta * delta;
+      r1[a] = den > 0.0 ? num / den * (n - 1.0) / n : 0.0;
+    }
+  }
+};
+
+/// One group of factors in one pass over tiles of rows (each factor's points in order).
+template <int L, int Off, class T>
+void lag1_acf_group(const StridedMap<T>& x, const std::vector<std::int64_t>& ms,
+                    const std::vector<std::size_t>& group, RowMatrix& out) {
+  const std::int64_t rows = x.rows();
+  const Eigen::Index nc = x.cols();
+  std::vector<AcfState<L, Off>> states(group.size() * static_cast<std::size_t>(nc));
+  for (std::size_t g = 0; g < group.size(); ++g) {
+    const std::int64_t m = ms[group[g]];
+    for (Eigen::Index c = 0; c < nc; ++c)
+      states[g * static_cast<std::size_t>(nc) + static_cast<std::size_t>(c)].start(
+          (rows + m - 1) / m, [&](std::int64_t i) { return static_cast<double>(x(i * m, c)); });
+  }
+  const std::int64_t tile = std::max<std::int64_t>(
+      1, kAcfTileBytes / static_cast<std::int64_t>(sizeof(T) * static_cast<std::size_t>(nc)));
+  for (std::int64_t r0 = 0; r0 < rows; r0 += tile) {
+    const std::int64_t r1 = std::min(rows, r0 + tile);
+    for (std::size_t g = 0; g < group.size(); ++g) {
+      const std::int64_t m = ms[group[g]];
+      for (Eigen::Index c = 0; c < nc; ++c) {
+        auto& s = states[g * static_cast<std::size_t>(nc) + static_cast<std::size_t>(c)];
+        for (std::int64_t row = s.j * m; row < r1; row += m) s.feed(static_cast<double>(x(row, c)));
+      }
+    }
+  }
+  for (std::size_t g = 0; g < group.size(); ++g)
+    for (Eigen::Index c = 0; c < nc; ++c)
+      states[g * static_cast<std::size_t>(nc) + static_cast<std::size_t>(c)].finish(
+          out.data() + static_cast<Eigen::Index>(group[g]) * nc * L + c * L);
+}
+
+template <int L, class T>
+void lag1_acf_dispatch_off(AcfSeries series, const StridedMap<T>& x, const std::vector<std::int64_t>& ms,
+                           const std::vector<std::size_t>& group, RowMatrix& out) {
+  if (series == AcfSeries::Phase)
+    lag1_acf_group<L, 0>(x, ms, group, out);
+  else
+    lag1_acf_group<L, 1>(x, ms, group, out);
+}
+
+}  // namespace detail
+
+/// Lag-1 autocorrelation of `levels` difference levels of the series at every factor in ms,
+/// every channel: result (len(ms), C * levels), entry (t, c * levels + d). The factors are
+/// split into at most `threads` groups of about equal work (points ~ rows / m, assigned
+/// greedily, largest first); each group reads the rows once, tile by tile. Every factor's sums
+/// run in the same order whatever the grouping, so the result does not depend on threads.
+template <class T>
+RowMatrix lag1_acf_levels(const StridedMap<T>& x, const std::vector<std::int64_t>& ms,
+                          AcfSeries series, int levels, int threads) {
+  if (levels < 1 || levels > kMaxAcfLevels)
+    throw std::invalid_argument("levels must be between 1 and " + std::to_string(kMaxAcfLevels) +
+                                ", got " + std::to_string(levels));
+  const std::int64_t rows = x.rows();
+  for (const std::int64_t m : ms) {
+    if (m < 1)
+      throw std::invalid_argument("averaging factor m must be at least 1, got " + std::to_string(m));
+    const std::int64_t n0 = acf_series_length(series, rows, m);
+    if (n0 < levels + 1)
+      throw std::invalid_argument("averaging factor m = " + std::to_string(m) + " leaves " +
+                                  std::to_string(n0) + " values for " + std::to_string(levels) +
+                                  " difference levels; need at least " +
+                                  std::to_string(levels + 1));
+  }
+  const Eigen::Index nc = x.cols();
+  RowMatrix out(static_cast<Eigen::Index>(ms.size()), nc * levels);
+  if (ms.empty()) return out;
+  // greedy balanced groups over the work rows / m, heaviest factors first
+  const std::size_t ng = std::min<std::size_t>(static_cast<std::size_t>(resolve_threads(threads)), ms.size());
+  std::vector<std::size_t> order(ms.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return ms[a] < ms[b]; });
+  std::vector<std::vector<std::size_t>> groups(ng);
+  std::vector<double> load(ng, 0.0);
+  for (const std::size_t i : order) {
+    const auto g = static_cast<std::size_t>(std::min_element(load.begin(), load.end()) - load.begin());
+    groups[g].push_back(i);
+    load[g] += 1.0 / static_cast<double>(ms[i]);
+  }
+  parallel_for(ng, static_cast<int>(ng), [&](std::size_t g) {
+    switch (levels) {
+      case 1: detail::lag1_acf_dispatch_off<1>(series, x, ms, groups[g], out); return;
+      case 2: detail::lag1_acf_dispatch_off<2>(series, x, ms, groups[g], out); return;
+      case 3: detail::lag1_acf_dispatch_off<3>(series, x, ms, groups[g], out); return;
+      default: detail::lag1_acf_dispatch_off<4>(series, x, ms, groups[g], out); return;
+    }
+  });
+  return out;
+}
+
+}  // namespace allanite
