@@ -130,6 +130,37 @@ def test_covariance_matrix_and_residuals_are_consistent():
     assert 0.3 < corr < 0.7  # adjacent octaves of white noise are correlated ~0.5
 
 
+def test_estimate_at_the_bound_has_a_proper_interval():
+    """An absent term fitted at 0 gets ``[0, upper]`` with ``upper > 0``, never ``[0, 0]``.
+
+    White noise only, fitted with white + rate random walk: K often lands on the bound.
+    Over 20 seeds every K interval contains its estimate and has a positive upper limit.
+    """
+    rng = np.random.default_rng(17)
+    at_bound = 0
+    for _ in range(20):
+        x = rng.standard_normal(2**14) * 0.02 / math.sqrt(DT)
+        fitted = allanite.fit(x, ["white", "rrw"], fs=1 / DT)
+        k = fitted["K"]
+        for level in (0.5, 0.95):  # at 50 % a negative free estimate used to give [0, 0]
+            lo, hi = k.ci(level)
+            assert lo <= k.value <= hi
+            assert hi > 0
+        at_bound += k.value == 0
+    assert at_bound > 0  # the case under test occurred
+
+
+def test_well_specified_fit_has_no_discrepancy_and_reports_it():
+    fitted = allanite.fit(exact_curve(MODEL), ["N", "K"])
+    assert fitted.discrepancy == 0
+    assert not fitted.misspecified
+    assert fitted.good_range == (fitted.tau[0], fitted.tau[-1])
+    out = fitted.to_dict()
+    assert out["discrepancy"] == 0
+    assert out["misfit"] == [False] * fitted.tau.size
+    assert "misspecified" not in fitted.format_table()
+
+
 @pytest.mark.parametrize(
     ("kwargs", "error", "match"),
     [
@@ -141,6 +172,8 @@ def test_covariance_matrix_and_residuals_are_consistent():
         ({"penalty": -1.0}, ValueError, "penalty"),
         ({"fs": 7.0}, ValueError, "contradicts"),
         ({"units": "deg"}, ValueError, "not a rate unit"),
+        ({"misfit_level": 1.5}, ValueError, "misfit_level"),
+        ({"min_ratio": 0.5}, ValueError, "min_ratio"),
     ],
 )
 def test_bad_arguments(kwargs, error, match):
