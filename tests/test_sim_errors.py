@@ -57,18 +57,19 @@ def test_flicker_cutoff_above_nyquist_is_refused():
     assert simulate([Flicker(B=1.0, f0=20.0)], 100.0, 100, seed=1).shape == (100,)
 
 
-def test_progress_bar_counts_every_sample():
-    from allanite.cli.simulate import _progress
+def test_progress_reports_every_sample(tmp_path):
+    from allanite.model import NoiseModel
+    from allanite.simulation.writers import write_record
+    from allanite.terms import White
 
-    seen = []
-    with _progress(10, False) as update:
-        assert update is None
-    with _progress(10, True) as update:
-        assert update is not None  # tqdm is part of the dev environment
-        for _ in range(5):
-            update(2)
-            seen.append(2)
-    assert sum(seen) == 10
+    calls = []
+    model = NoiseModel((White(N=1.0),), {"rate": "deg/s", "time": "s"})
+    write_record(
+        tmp_path / "x.npy", model, 100.0, 1000, seed=1, progress=lambda *a: calls.append(a)
+    )
+    assert calls
+    assert calls[-1] == ("simulate", 1000, 1000)
+    assert [c[1] for c in calls] == sorted(c[1] for c in calls)
 
 
 @pytest.mark.parametrize(

@@ -6,8 +6,6 @@ Example: ``allanite simulate model.json --fs 2000 --duration 24h -o out.npy --ou
 from __future__ import annotations
 
 import argparse
-import contextlib
-from collections.abc import Callable, Iterator
 from typing import Any
 
 __all__ = ["register", "run"]
@@ -45,26 +43,9 @@ def register(subparsers: Any) -> None:
     parser.set_defaults(func=run)
 
 
-@contextlib.contextmanager
-def _progress(total: int, enabled: bool) -> Iterator[Callable[[int], None] | None]:
-    """Yield a tqdm update callback (if tqdm is installed and enabled), else None."""
-    if not enabled:
-        yield None
-        return
-    try:
-        from tqdm import tqdm
-    except ImportError:  # progress is an optional extra: stay quiet without it
-        yield None
-        return
-    bar = tqdm(total=total, unit="sample", unit_scale=True, desc="simulate", leave=False)
-    try:
-        yield bar.update
-    finally:
-        bar.close()
-
-
 def run(args: argparse.Namespace) -> int:
     """Load the model, simulate and write the record; returns the exit code."""
+    from allanite.cli.progress import progress_bars
     from allanite.model import NoiseModel
     from allanite.simulation import record_length
     from allanite.simulation.writers import format_of, write_record
@@ -75,7 +56,7 @@ def run(args: argparse.Namespace) -> int:
     unit = model.units["rate"]
     what = unit if args.output == "rate" else f"{unit}*s"
     big = n * args.channels >= 10_000_000
-    with _progress(n, big and not args.quiet) as update:
+    with progress_bars(None if big and not args.quiet else False) as update:
         write_record(
             args.out,
             model,

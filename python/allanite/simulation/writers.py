@@ -43,7 +43,7 @@ def write_chunks(
     n_channels: int,
     *,
     header: str | None = None,
-    progress: Callable[[int], None] | None = None,
+    progress: Callable[[str, int, int], None] | None = None,
 ) -> Path:
     """Write ``chunks`` (arrays of shape ``(k, n_channels)``) as one record of ``n_samples``.
 
@@ -58,7 +58,8 @@ def write_chunks(
     header : str, optional
         Column header line for CSV.
     progress : callable, optional
-        Called with the number of samples of each chunk after it is written.
+        ``progress("simulate", samples_written, n_samples)`` after each chunk (the library's
+        progress protocol, see :mod:`allanite.cli.progress`).
 
     Returns
     -------
@@ -83,7 +84,7 @@ def write_chunks(
                 handle.write(block.tobytes())
             written += block.shape[0]
             if progress is not None:
-                progress(block.shape[0])
+                progress("simulate", written, n_samples)
         if written != n_samples:
             raise ValueError(f"expected {n_samples} samples, got {written}")
     return Path(path)
@@ -101,13 +102,13 @@ def write_record(
     seed: Any = None,
     allow_aliasing: bool = False,
     units: str = "rate",
-    progress: Callable[[int], None] | None = None,
+    progress: Callable[[str, int, int], None] | None = None,
 ) -> Path:
     """Simulate a record from ``model`` straight into a file, in bounded memory.
 
     Parameters as in :func:`allanite.simulation.simulate`; ``path`` picks the format
-    (:data:`FORMATS`), ``units`` labels the CSV columns, ``progress`` is called with the
-    samples of each written chunk. The file appears only when complete.
+    (:data:`FORMATS`), ``units`` labels the CSV columns, ``progress("simulate", done, total)``
+    is called after each written chunk. The file appears only when complete.
     """
     format_of(path)  # fail on a bad suffix before any work
     total = record_length(fs, n, duration)
