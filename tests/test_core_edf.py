@@ -306,6 +306,24 @@ def test_lag1_acf_kernel_bad_arguments() -> None:
         edf.identify_alpha(x, np.array([0]), "overlapping")
 
 
+def test_mvar_avar_ratio_kernel_equals_reference() -> None:
+    """R(n) in one pass (window advanced by third differences) = reference MVAR / AVAR."""
+    from allanite import reference
+
+    rng = np.random.default_rng(12)
+    phase = np.cumsum(rng.standard_normal((4001, 3)), axis=0) + 1e3 * np.arange(4001)[:, None]
+    ms = [1, 2, 17, 400, 1333]
+    got = np.asarray(_core.mvar_avar_ratio(phase, ms, 2))
+    mvar, avar = reference.modified_variance, reference.overlapping_variance
+    want = [[mvar(phase[:, c], m) / avar(phase[:, c], m) for c in range(3)] for m in ms]
+    np.testing.assert_allclose(got, want, rtol=1e-10)
+    for threads in (1, 3):
+        assert np.array_equal(np.asarray(_core.mvar_avar_ratio(phase, ms, threads)), got)
+    assert np.isnan(np.asarray(_core.mvar_avar_ratio(np.zeros((30, 1)), [5]))).all()
+    with pytest.raises(ValueError, match="3m <= M"):
+        _core.mvar_avar_ratio(phase, [1334])
+
+
 def _identify_by_definition(x: np.ndarray, factors: np.ndarray, kind: str, data: str) -> np.ndarray:
     """Stable32's rule written out with numpy and reference.py (the test oracle)."""
     from allanite import reference

@@ -97,6 +97,14 @@ void register_variances(py::module_& m) {
         "Lag-1 autocorrelation of the decimated phase x[::m] (series='phase') or of the "
         "m-sample frequency averages (series='frequency') and of their first levels-1 "
         "differences, one streaming pass per factor; returns (len(m), C * levels).");
+  m.def("mvar_avar_ratio",
+        [](const Eigen::Ref<const RowMatrix>& phase_ref, const std::vector<std::int64_t>& ms, int threads) {
+          py::gil_scoped_release release;
+          return allanite::mvar_avar_ratio(phase_ref, ms, threads);
+        },
+        py::arg("phase"), py::arg("m"), py::arg("threads") = 0,
+        "R(n) = modified / overlapping Allan variance of each channel at each factor (3m <= "
+        "rows), one pass per factor; NaN where the Allan variance is zero. Returns (len(m), C).");
   m.def("n_terms",
         [](const std::string& kind, std::int64_t M, std::int64_t mm) {
           return allanite::n_terms(parse_variance_kind(kind), M, mm);

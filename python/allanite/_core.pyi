@@ -45,6 +45,15 @@ def lag1_acf(
     factors (no copies); ``x`` as for :func:`phase`. Bit-identical for any ``threads``.
     """
 
+def mvar_avar_ratio(
+    phase: NDArray[np.float64], m: Sequence[int] | NDArray[np.int64], threads: int = 0
+) -> NDArray[np.float64]:
+    """R(n) = modified / overlapping Allan variance, shape ``(len(m), C)`` (``3m <= rows``).
+
+    One pass per factor (the MVAR window advanced by third differences); NaN where the Allan
+    variance is zero. Bit-identical for any ``threads``.
+    """
+
 def n_terms(kind: str, n_phase: int, m: int) -> int:
     """Return the number of difference terms the estimator averages for factor ``m``."""
 

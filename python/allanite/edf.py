@@ -549,19 +549,15 @@ def b1_noise_id(
 def _mvar_avar_ratios(
     phase: NDArray[np.float64], factors: list[int], threads: int
 ) -> dict[int, NDArray[np.float64]]:
-    """R(n) = MVAR / AVAR (overlapping) of every channel at each factor, by the compiled kernels.
+    """R(n) = MVAR / AVAR (overlapping) of every channel at each factor (compiled, one pass).
 
-    One call per estimator for all factors (threaded over factors); factors with ``3m`` beyond
+    :func:`allanite._core.mvar_avar_ratio`, threaded over factors; factors with ``3m`` beyond
     the record get no entry, zero AVAR gives NaN (both mean "no ratio").
     """
     usable = [m for m in factors if 3 * m <= phase.shape[0]]
     if not usable:
         return {}
-    ms = np.asarray(usable, dtype=np.int64)
-    mvar = np.asarray(_core.variance(phase, ms, "modified", threads))
-    avar = np.asarray(_core.variance(phase, ms, "overlapping", threads))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        ratio = np.where(avar != 0.0, mvar / np.where(avar != 0.0, avar, 1.0), np.nan)
+    ratio = np.asarray(_core.mvar_avar_ratio(phase, np.asarray(usable, dtype=np.int64), threads))
     return {m: ratio[i] for i, m in enumerate(usable)}
 
 

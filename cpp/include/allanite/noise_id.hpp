@@ -23,6 +23,7 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <cstdint>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -30,6 +31,7 @@
 #include "allanite/compensated.hpp"
 #include "allanite/parallel.hpp"
 #include "allanite/phase.hpp"
+#include "allanite/variances.hpp"
 
 namespace allanite {
 
@@ -230,6 +232,52 @@ RowMatrix lag1_acf_levels(const StridedMap<T>& x, const std::vector<std::int64_t
       case 2: detail::lag1_acf_dispatch_off<2>(series, x, ms, groups[g], out); return;
       case 3: detail::lag1_acf_dispatch_off<3>(series, x, ms, groups[g], out); return;
       default: detail::lag1_acf_dispatch_off<4>(series, x, ms, groups[g], out); return;
+    }
+  });
+  return out;
+}
+
+/// R(n) = MVAR(m) / AVAR(m) (overlapping) of every channel at each factor, the ratio that
+/// separates white from flicker phase noise (SP1065 section 5.6), in one pass per factor:
+/// with d2(k) = x[k+2m] - 2 x[k+m] + x[k], AVAR sums d2(k)^2 (k < M - 2m), and the MVAR window
+/// w_j = sum_{i=j}^{j+m-1} d2(i) advances by the third difference
+/// w_{j+1} = w_j + (x[j+3m] - 3 x[j+2m] + 3 x[j+m] - x[j]) (compensated), summing w_j^2 over
+/// j <= M - 3m. Result (len(ms), C); NaN where the Allan variance is zero. Each factor is
+/// computed by one thread, so the result does not depend on `threads`.
+inline RowMatrix mvar_avar_ratio(const PhaseRef& phase, const std::vector<std::int64_t>& ms, int threads) {
+  const std::int64_t M = phase.rows();
+  for (const std::int64_t m : ms)
+    if (m < 1 || 3 * m > M)
+      throw std::invalid_argument("averaging factor m = " + std::to_string(m) + " is outside [1, " +
+                                  std::to_string(M / 3) + "] for " + std::to_string(M) +
+                                  " phase points (R(n) needs 3m <= M)");
+  const Eigen::Index nc = phase.cols();
+  const double* x = phase.data();
+  const std::int64_t rs = phase.outerStride();
+  RowMatrix out(static_cast<Eigen::Index>(ms.size()), nc);
+  parallel_for(ms.size(), resolve_threads(threads), [&](std::size_t t) {
+    const std::int64_t m = ms[t];
+    const std::int64_t n_avar = M - 2 * m, n_mvar = M - 3 * m + 1;
+    for (Eigen::Index c = 0; c < nc; ++c) {
+      const auto at = [&](std::int64_t k) { return x[k * rs + c]; };
+      const auto d2 = [&](std::int64_t k) { return detail::diff2(at(k), at(k + m), at(k + 2 * m)); };
+      NeumaierSum window;
+      for (std::int64_t i = 0; i < m; ++i) window.add(d2(i));
+      BlockedSum avar, mvar;
+      for (std::int64_t j = 0; j < n_avar; ++j) {
+        const double a = d2(j);
+        avar.add(a * a);
+        if (j < n_mvar) {
+          const double w = window.value();
+          mvar.add(w * w);
+          if (j + 1 < n_mvar) window.add(detail::diff3(at(j), at(j + m), at(j + 2 * m), at(j + 3 * m)));
+        }
+      }
+      const double av = avar.value();
+      const double md = static_cast<double>(m);
+      out(static_cast<Eigen::Index>(t), c) =
+          av > 0.0 ? (mvar.value() / (md * md * static_cast<double>(n_mvar))) / (av / static_cast<double>(n_avar))
+                   : std::numeric_limits<double>::quiet_NaN();
     }
   });
   return out;
