@@ -258,25 +258,35 @@ inline RowMatrix mvar_avar_ratio(const PhaseRef& phase, const std::vector<std::i
   parallel_for(ms.size(), resolve_threads(threads), [&](std::size_t t) {
     const std::int64_t m = ms[t];
     const std::int64_t n_avar = M - 2 * m, n_mvar = M - 3 * m + 1;
-    for (Eigen::Index c = 0; c < nc; ++c) {
-      const auto at = [&](std::int64_t k) { return x[k * rs + c]; };
-      const auto d2 = [&](std::int64_t k) { return detail::diff2(at(k), at(k + m), at(k + 2 * m)); };
-      NeumaierSum window;
-      for (std::int64_t i = 0; i < m; ++i) window.add(d2(i));
-      BlockedSum avar, mvar;
-      for (std::int64_t j = 0; j < n_avar; ++j) {
-        const double a = d2(j);
-        avar.add(a * a);
+    // channels inside the loop over terms: one pass over the rows for all of them
+    const auto at = [&](std::int64_t k, Eigen::Index c) { return x[k * rs + c]; };
+    const auto d2 = [&](std::int64_t k, Eigen::Index c) {
+      return detail::diff2(at(k, c), at(k + m, c), at(k + 2 * m, c));
+    };
+    const auto unc = static_cast<std::size_t>(nc);
+    std::vector<NeumaierSum> window(unc);
+    std::vector<BlockedSum> avar(unc), mvar(unc);
+    for (Eigen::Index c = 0; c < nc; ++c)
+      for (std::int64_t i = 0; i < m; ++i) window[static_cast<std::size_t>(c)].add(d2(i, c));
+    for (std::int64_t j = 0; j < n_avar; ++j) {
+      for (Eigen::Index c = 0; c < nc; ++c) {
+        const auto cc = static_cast<std::size_t>(c);
+        const double a = d2(j, c);
+        avar[cc].add(a * a);
         if (j < n_mvar) {
-          const double w = window.value();
-          mvar.add(w * w);
-          if (j + 1 < n_mvar) window.add(detail::diff3(at(j), at(j + m), at(j + 2 * m), at(j + 3 * m)));
+          const double w = window[cc].value();
+          mvar[cc].add(w * w);
+          if (j + 1 < n_mvar)
+            window[cc].add(detail::diff3(at(j, c), at(j + m, c), at(j + 2 * m, c), at(j + 3 * m, c)));
         }
       }
-      const double av = avar.value();
-      const double md = static_cast<double>(m);
+    }
+    const double md = static_cast<double>(m);
+    for (Eigen::Index c = 0; c < nc; ++c) {
+      const auto cc = static_cast<std::size_t>(c);
+      const double av = avar[cc].value();
       out(static_cast<Eigen::Index>(t), c) =
-          av > 0.0 ? (mvar.value() / (md * md * static_cast<double>(n_mvar))) / (av / static_cast<double>(n_avar))
+          av > 0.0 ? (mvar[cc].value() / (md * md * static_cast<double>(n_mvar))) / (av / static_cast<double>(n_avar))
                    : std::numeric_limits<double>::quiet_NaN();
     }
   });
