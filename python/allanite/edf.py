@@ -594,12 +594,13 @@ def identify_alpha(
     remain, the B1/R(n) method (:func:`b1_noise_id`) otherwise. The result is clipped to the
     exponents the estimator can measure (``alpha + 2d > 1``).
 
-    Cost and memory: the lag-1 statistics of all difference levels come from one streaming
-    pass over the rows ``x[::m]`` per factor in the compiled module
-    (:func:`allanite._core.lag1_acf`, threaded over factors, no copy of the record or of the
-    decimated series), the B1 ratio from the fewer than 30 averages, and R(n) from the
-    compiled modified and overlapping Allan kernels, evaluated only at the factors where B1
-    points to phase noise. Extra memory is O(T C) besides the input.
+    Cost and memory: the lag-1 statistics of all difference levels come from the compiled
+    :func:`allanite._core.lag1_acf`: one streaming pass over the record per worker thread,
+    every factor of the thread's group reading its rows ``x[::m]`` from tiles in cache (no copy
+    of the record or of the decimated series), the B1 ratio from the fewer than 30 averages,
+    and R(n) from the compiled one-pass :func:`allanite._core.mvar_avar_ratio`, evaluated
+    only at the factors where B1 points to phase noise. Extra memory is O(T C) besides the
+    input; nothing here calls :mod:`allanite.reference` (the test oracle).
 
     Parameters
     ----------
