@@ -1,9 +1,9 @@
 """The original synthesis procedure end to end on real data (ADIS16405 run 1, gyro X).
 
-Fit a model to the real record (the benchmark's clearly labelled simple stand-in fit until
-allanite.fit lands), simulate a record of the same length, and require the simulated Allan
-variance to stay inside the real curve's 99% chi-square band wherever the fit itself is good
-(the model inside the real 68% band). benchmarks/sim_to_real_adis.py draws the figure.
+Fit a model to the real record with allanite.fit, simulate a record of the same length, and
+require the simulated Allan variance to stay inside the real curve's 99% chi-square band
+wherever the fit itself is good (the taus it does not flag as missed).
+benchmarks/sim_to_real_adis.py draws the figure.
 """
 
 from __future__ import annotations
@@ -27,10 +27,12 @@ def test_simulated_twin_stays_in_the_real_band(shared_data):
     procedure = _procedure()
     x = procedure.load_gyro_x(shared_data / "imu" / "adis16405" / "run1.npz")
     assert x.shape == (1_000_000,)
-    real, sim, model, good, inside = procedure.compare(x)
-    assert len(model) >= 2
-    # the comparison must cover most of the curve to mean something
-    assert good.sum() >= 0.5 * good.size, f"fit good at only {good.sum()} of {good.size} taus"
+    real, sim, fitted, good, inside = procedure.compare(x)
+    assert len(fitted.model) >= 2
+    # the comparison must cover a wide range to mean something: at least two decades of tau
+    assert good.any()
+    span = real.tau[good].max() / real.tau[good].min()
+    assert span >= 100, f"fit good only over tau = {real.tau[good]}"
     bad = real.tau[good & ~inside]
     assert bad.size == 0, f"simulated AVAR outside the real 99% band at tau = {bad}"
     # and the simulated record is not the real one in disguise
