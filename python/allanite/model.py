@@ -235,12 +235,14 @@ class NoiseModel:
         channels: int = 1,
         seed: Any = None,
         allow_aliasing: bool = False,
+        flicker_method: str = "auto",
     ) -> NDArray[np.float64]:
         """Simulate ``n`` samples (or ``duration``, e.g. ``"30min"``) at ``fs`` Hz.
 
         Rate samples in the model's rate unit, angle increments or angle
         (``output="rate"|"increment"|"angle"``); shape ``(n,)`` or ``(n, channels)``. The same
-        seed gives the same samples. See :func:`allanite.simulation.simulate`, and
+        seed gives the same samples. ``flicker_method`` = ``"auto"|"spectral"|"kasdin"|"bank"``
+        chooses how flicker terms are simulated. See :func:`allanite.simulation.simulate`, and
         :func:`allanite.simulation.simulate_chunks` for records that do not fit in memory.
         """
         from allanite.simulation import simulate
@@ -256,6 +258,7 @@ class NoiseModel:
             channels=channels,
             seed=seed,
             allow_aliasing=allow_aliasing,
+            flicker_method=flicker_method,
         )
 
     def __iter__(self) -> Iterator[Term]:

@@ -39,6 +39,14 @@ def register(subparsers: Any) -> None:
         action="store_true",
         help="allow tones above the Nyquist frequency (simulated as aliased samples)",
     )
+    parser.add_argument(
+        "--flicker-method",
+        choices=("auto", "spectral", "kasdin", "bank"),
+        default="auto",
+        help="how flicker is simulated: auto (exact spectral synthesis up to 2^21 samples, "
+        "else a streaming Gauss-Markov bank), spectral, kasdin (Kasdin's fractional filter) "
+        "or bank",
+    )
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     parser.set_defaults(func=run)
 
@@ -66,6 +74,7 @@ def run(args: argparse.Namespace) -> int:
             channels=args.channels,
             seed=args.seed,
             allow_aliasing=args.allow_aliasing,
+            flicker_method=args.flicker_method,
             units=what,
             progress=update,
         )

@@ -1,4 +1,4 @@
-r"""Flicker (1/f) rate noise: exact spectral synthesis, or a streaming Gauss-Markov bank.
+r"""Flicker (1/f) rate noise: spectral synthesis, Kasdin's filter, or a streaming bank.
 
 * Records up to :data:`SPECTRAL_MAX_SAMPLES` samples (and :data:`SPECTRAL_MAX_VALUES` values
   over all channels): :class:`~allanite.simulation.spectral.
@@ -13,6 +13,11 @@ r"""Flicker (1/f) rate noise: exact spectral synthesis, or a streaming Gauss-Mar
   within about 0.5% from :math:`\tau \approx 30\Delta t` up to about a tenth of the longest
   correlation time, but it is not the band-limited flicker shape at the first few lags
   (about -30% at :math:`\tau = \Delta t`).
+* ``method="kasdin"`` (on request only, records of known length up to
+  :data:`~allanite.simulation.kasdin.KASDIN_MAX_SAMPLES`): Kasdin's fractional-difference
+  filter of white noise, :class:`~allanite.simulation.kasdin.KasdinStream`; its own exact
+  Allan variance is :func:`~allanite.simulation.kasdin.kasdin_avar` (+70% over the term at
+  :math:`\tau = \Delta t`, the 0.664 B plateau from about :math:`100\Delta t` on).
 
 References
 ----------
@@ -31,16 +36,20 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import nnls
 
 from allanite.simulation.gaussian import Ar1BankStream
+from allanite.simulation.kasdin import KasdinStream
 from allanite.simulation.spectral import SpectralStream
 from allanite.simulation.streams import TermStream
 
 __all__ = [
+    "FLICKER_METHODS",
     "SPECTRAL_MAX_SAMPLES",
     "bank_avar",
     "flicker_bank",
     "flicker_stream",
 ]
 
+#: ways to simulate flicker (see :func:`flicker_stream`)
+FLICKER_METHODS: tuple[str, ...] = ("auto", "spectral", "kasdin", "bank")
 #: longest record synthesised spectrally in one piece (longer ones use the streaming bank);
 #: one channel's synthesis needs about 24 x 4 x 8 bytes per sample transiently (200 MB here)
 SPECTRAL_MAX_SAMPLES = 1 << 21
@@ -172,19 +181,40 @@ def flicker_stream(
         See :class:`~allanite.simulation.streams.TermStream`.
     n_samples : int, optional
         Record length, if known (needed by the spectral method).
-    method : {"auto", "spectral", "bank"}
+    method : {"auto", "spectral", "kasdin", "bank"}
         ``auto`` = spectral when ``n_samples`` is known, at most
         :data:`SPECTRAL_MAX_SAMPLES` and ``n_samples * n_channels`` at most
-        :data:`SPECTRAL_MAX_VALUES`, else the streaming bank.
+        :data:`SPECTRAL_MAX_VALUES`, else the streaming bank. ``kasdin`` = Kasdin's
+        fractional filter (needs ``n_samples``; no cutoff ``f0``).
+
+    Raises
+    ------
+    ValueError
+        For an unknown method, ``f0`` above Nyquist, or a method that cannot serve the record
+        (spectral or kasdin without ``n_samples``, kasdin with ``f0`` or too long a record).
     """
-    if method not in ("auto", "spectral", "bank"):
-        raise ValueError(f"unknown flicker method {method!r}; use 'auto', 'spectral' or 'bank'")
+    if method not in FLICKER_METHODS:
+        raise ValueError(
+            f"unknown flicker method {method!r}; use one of {', '.join(map(repr, FLICKER_METHODS))}"
+        )
     dt = 1.0 / fs
     if term.f0 is not None and term.f0 > 0.5 * fs:
         raise ValueError(
             f"flicker cutoff f0 = {term.f0} Hz lies above the Nyquist frequency {0.5 * fs} Hz; "
             "its aliased part is not simulated: omit f0 (cutoff at Nyquist) or set f0 <= fs/2"
         )
+    if method == "kasdin":
+        if n_samples is None:
+            raise ValueError(
+                "the kasdin flicker method needs the record length n_samples (it filters the "
+                "whole record at once); give it, or use flicker method 'bank' to stream"
+            )
+        if term.f0 is not None:
+            raise ValueError(
+                f"the kasdin flicker filter has no cutoff but the term sets f0 = {term.f0} Hz; "
+                "use flicker method 'spectral' or 'bank', or drop f0"
+            )
+        return KasdinStream(term.B, n_samples, fs, n_channels, seed)
     spectral = method == "spectral" or (
         method == "auto"
         and n_samples is not None

@@ -22,8 +22,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from allanite import _core
+from allanite.simulation.flicker import FLICKER_METHODS
 from allanite.simulation.streams import SumStream, check_fs, seed_sequence
 from allanite.terms.base import Term
+from allanite.terms.flicker import Flicker
 
 __all__ = [
     "DEFAULT_CHUNK",
@@ -124,16 +126,29 @@ def _check_band(term: Term, fs: float, allow_aliasing: bool) -> None:
 
 
 def _open(
-    model: Any, fs: float, n: int, channels: int, seed: Any, allow_aliasing: bool
+    model: Any,
+    fs: float,
+    n: int,
+    channels: int,
+    seed: Any,
+    allow_aliasing: bool,
+    flicker_method: str = "auto",
 ) -> SumStream:
     terms = model_terms(model)
     if isinstance(channels, bool) or not isinstance(channels, numbers.Integral) or channels < 1:
         raise ValueError(f"channels must be a positive integer, got {channels!r}")
+    if flicker_method not in FLICKER_METHODS:
+        raise ValueError(
+            f"unknown flicker_method {flicker_method!r}; use one of "
+            f"{', '.join(map(repr, FLICKER_METHODS))}"
+        )
     for term in terms:
         _check_band(term, fs, allow_aliasing)
+    # per-type stream options: only flicker has a choice of method
+    options: dict[str, dict[str, Any]] = {Flicker.type: {"method": flicker_method}}
     children = seed_sequence(seed).spawn(len(terms))
     streams = [
-        term.stream(fs, int(channels), child, n_samples=n)
+        term.stream(fs, int(channels), child, n_samples=n, **options.get(term.type, {}))
         for term, child in zip(terms, children, strict=True)
     ]
     return SumStream(streams, fs, int(channels))
@@ -150,6 +165,7 @@ def simulate_chunks(
     seed: Any = None,
     chunk: int = DEFAULT_CHUNK,
     allow_aliasing: bool = False,
+    flicker_method: str = "auto",
 ) -> Iterator[NDArray[np.float64]]:
     """Yield the simulated record in ``(chunk, channels)`` pieces (the last may be shorter).
 
@@ -164,7 +180,7 @@ def simulate_chunks(
         raise ValueError(f"unknown output {output!r}; use 'rate', 'angle' or 'increment'")
     if isinstance(chunk, bool) or not isinstance(chunk, numbers.Integral) or chunk < 1:
         raise ValueError(f"chunk must be a positive number of samples, got {chunk!r}")
-    stream = _open(model, rate, total, channels, seed, allow_aliasing)
+    stream = _open(model, rate, total, channels, seed, allow_aliasing, flicker_method)
     dt = 1.0 / rate
     # compensated running sum carried across chunks (C++): identical for any chunking
     angle_hi, angle_lo = np.zeros(stream.n_channels), np.zeros(stream.n_channels)
@@ -190,6 +206,7 @@ def simulate(
     channels: int = 1,
     seed: Any = None,
     allow_aliasing: bool = False,
+    flicker_method: str = "auto",
 ) -> NDArray[np.float64]:
     r"""Simulate a record of ``n`` samples (or ``duration``) at ``fs`` Hz from a noise model.
 
@@ -213,6 +230,11 @@ def simulate(
         Same seed, same samples (whatever the chunking).
     allow_aliasing : bool
         Allow tones (and flicker cutoffs) above the Nyquist frequency ``fs/2``.
+    flicker_method : {"auto", "spectral", "kasdin", "bank"}
+        How flicker terms are simulated (:func:`allanite.simulation.flicker.flicker_stream`):
+        ``auto`` = exact spectral synthesis up to ``SPECTRAL_MAX_SAMPLES``, else the streaming
+        Gauss-Markov bank; ``kasdin`` = Kasdin's fractional filter (law:
+        :func:`allanite.simulation.kasdin.kasdin_avar`).
 
     Returns
     -------
@@ -222,7 +244,8 @@ def simulate(
     Raises
     ------
     ValueError
-        For ``fs <= 0``, a zero length, an unknown output, or a tone above Nyquist.
+        For ``fs <= 0``, a zero length, an unknown output or flicker method, a tone above
+        Nyquist, or a flicker method that cannot serve the record.
     """
     rate = check_fs(fs)
     total = record_length(rate, n, duration)
@@ -236,6 +259,7 @@ def simulate(
             seed=seed,
             chunk=total,
             allow_aliasing=allow_aliasing,
+            flicker_method=flicker_method,
         )
     )
     record = pieces[0]

@@ -26,6 +26,7 @@ Astron. Astrophys. 300 (1995) 707-710.
 
 from __future__ import annotations
 
+from abc import abstractmethod
 from collections.abc import Callable
 from typing import Any
 
@@ -34,7 +35,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from allanite.simulation.streams import TermStream, block_length
 
-__all__ = ["SpectralStream", "expected_avar", "synthesis_length"]
+__all__ = ["SpectralStream", "WholeRecordStream", "expected_avar", "synthesis_length"]
 
 PsdFunction = Callable[[NDArray[np.float64]], NDArray[np.float64]]
 
@@ -76,7 +77,37 @@ def expected_avar(
     return np.array(out)
 
 
-class SpectralStream(TermStream):
+class WholeRecordStream(TermStream):
+    """A stream whose whole record is synthesised at once, then served block by block.
+
+    Subclasses implement :meth:`_synthesise`, called once on the first request with the record
+    length rounded up to whole blocks; the samples therefore never depend on the chunking.
+    It holds ``8 n_samples C`` bytes: for records of moderate length.
+    """
+
+    def __init__(self, n_samples: int, fs: float, n_channels: int, seed: Any = None) -> None:
+        super().__init__(fs, n_channels, seed)
+        if n_samples < 1:
+            raise ValueError(f"n_samples must be positive, got {n_samples}")
+        self.n_samples = int(n_samples)
+        self._record: NDArray[np.float64] | None = None
+
+    @abstractmethod
+    def _synthesise(self, padded: int) -> NDArray[np.float64]:
+        """Return the whole record, shape ``(padded, C)``."""
+
+    def _generate(self, start: int, n: int) -> NDArray[np.float64]:
+        if self._record is None:
+            self._record = self._synthesise(_padded(self.n_samples, self.n_channels))
+        if start + n > self._record.shape[0]:
+            raise ValueError(
+                f"this {type(self).__name__} was built for {self.n_samples} samples; ask the "
+                "model for the full length up front (or use the streaming Gauss-Markov bank)"
+            )
+        return self._record[start : start + n]
+
+
+class SpectralStream(WholeRecordStream):
     """Samples of a stationary Gaussian process with one-sided sampled PSD ``psd(f)``.
 
     The whole record (``n_samples`` rounded up to whole blocks, per channel) is synthesised on
@@ -87,16 +118,11 @@ class SpectralStream(TermStream):
     def __init__(
         self, psd: PsdFunction, n_samples: int, fs: float, n_channels: int, seed: Any = None
     ) -> None:
-        super().__init__(fs, n_channels, seed)
-        if n_samples < 1:
-            raise ValueError(f"n_samples must be positive, got {n_samples}")
-        self.n_samples = int(n_samples)
+        super().__init__(n_samples, fs, n_channels, seed)
         self.length = synthesis_length(self.n_samples, self.n_channels)
         self._amplitude = np.sqrt(_line_powers(psd, self.length, self.dt))
-        self._record: NDArray[np.float64] | None = None
 
-    def _synthesise(self) -> NDArray[np.float64]:
-        padded = _padded(self.n_samples, self.n_channels)
+    def _synthesise(self, padded: int) -> NDArray[np.float64]:
         record = np.empty((padded, self.n_channels))
         half = self.length // 2
         for c in range(self.n_channels):
@@ -107,13 +133,3 @@ class SpectralStream(TermStream):
             spectrum[half] = z[0, -1] * self._amplitude[-1] * self.length
             record[:, c] = np.fft.irfft(spectrum, n=self.length)[:padded]
         return record
-
-    def _generate(self, start: int, n: int) -> NDArray[np.float64]:
-        if self._record is None:
-            self._record = self._synthesise()
-        if start + n > self._record.shape[0]:
-            raise ValueError(
-                f"this spectral stream was built for {self.n_samples} samples; ask the model for "
-                "the full length up front (or use the streaming Gauss-Markov bank)"
-            )
-        return self._record[start : start + n]

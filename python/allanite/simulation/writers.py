@@ -101,6 +101,7 @@ def write_record(
     channels: int = 1,
     seed: Any = None,
     allow_aliasing: bool = False,
+    flicker_method: str = "auto",
     units: str = "rate",
     progress: Callable[[str, int, int], None] | None = None,
 ) -> Path:
@@ -120,6 +121,7 @@ def write_record(
         channels=channels,
         seed=seed,
         allow_aliasing=allow_aliasing,
+        flicker_method=flicker_method,
     )
     names = ",".join(f"{output}_{c}[{units}]" for c in range(channels))
     return write_chunks(path, chunks, total, channels, header=names, progress=progress)

@@ -95,16 +95,23 @@ class Flicker(Term):
         return np.where(f <= self.cutoff(dt), out, 0.0)
 
     def stream(
-        self, fs: float, n_channels: int, seed: Any, *, n_samples: int | None = None
+        self,
+        fs: float,
+        n_channels: int,
+        seed: Any,
+        *,
+        n_samples: int | None = None,
+        method: str = "auto",
     ) -> TermStream:
         """Stream flicker noise (see :mod:`allanite.simulation.flicker`).
 
-        Spectral synthesis of the exact sampled PSD for records of known length up to 2^21
-        samples, else a streaming Gauss-Markov bank.
+        ``method="auto"``: spectral synthesis of the exact sampled PSD for records of known
+        length up to 2^21 samples, else a streaming Gauss-Markov bank; ``"spectral"``,
+        ``"kasdin"`` (Kasdin's fractional filter) or ``"bank"`` force one.
         """
         from allanite.simulation.flicker import flicker_stream
 
-        return flicker_stream(self, fs, n_channels, seed, n_samples=n_samples)
+        return flicker_stream(self, fs, n_channels, seed, n_samples=n_samples, method=method)
 
     @classmethod
     def guess(cls, result: AllanResult) -> Flicker | None:
