@@ -107,6 +107,9 @@ def test_chi_square_coverage_over_50_seeds():
     lo, hi = result.var_ci(0.95)
     inside = (lo[keep] <= theory) & (theory <= hi[keep])
     assert 0.90 <= inside.mean() <= 0.99, f"coverage {inside.mean():.3f}"
+    # the test has power: the term's band-limited law (70% lower at dt) is rejected
+    term_law = Flicker(B=B).avar(result.tau[keep], DT)[:, None]
+    assert ((lo[keep] <= term_law) & (term_law <= hi[keep])).mean() < 0.85
 
 
 @pytest.mark.slow
