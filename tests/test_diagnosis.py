@@ -186,6 +186,53 @@ def test_bias_step_is_localised(base):
     assert d.best.effect == "step"
 
 
+def test_rate_random_walk_wander_is_not_a_step(base):
+    # a real sensor with 15x the sim's K wanders: the window means drift far from the record
+    # mean near its ends; the random walk itself must explain that level evidence
+    real = NoiseModel(
+        (term("white", N=0.05), term("flicker", B=0.005), term("rrw", K=0.015)), UNITS
+    ).simulate(N, FS, seed=31)
+    d = run(real, base)
+    assert d.significant
+    assert d.best is not None
+    assert d.best.effect in ("rrw", "rescale:rrw")
+    assert "level" not in d.best.evidence["unexplained"]
+
+
+def test_warm_up_is_not_a_staircase_of_steps(base):
+    duration = N / FS
+    warm = term("warmup", amplitude=1.0, tau_w=0.05 * duration, duration=duration)
+    real = base.simulate(N, FS, seed=32) + NoiseModel((warm,), UNITS).simulate(N, FS, seed=1)
+    d = run(real, base)
+    assert d.significant
+    assert d.best is not None
+    assert d.best.effect == "warmup"
+    tau_w = d.best.params["tau_w"]
+    assert 0.5 * warm.tau_w < tau_w < 2.0 * warm.tau_w
+    steps = [a for a in d.attribution if a.effect == "step"]
+    # the staircase a step needs to follow the exponential pays two parameters per extra step
+    assert not steps or steps[0].evidence["level_shape_misfit"] > 2 * 3.84
+
+
+def test_added_level_variance_matches_the_exact_random_walk():
+    from allanite.diagnosis.time_view import added_level_variance
+
+    n, windows, k = 512, 16, 0.3
+    rrw = term("rrw", K=k)
+    got = added_level_variance(rrw, FS, n, windows, n_rep=4000, seed=3)
+    # exact: the sampled walk r[k] = r[k-1] + K sqrt(dt) w[k] is a linear map of i.i.d.
+    # innovations, and so is level_w = (mean over window w) - (record mean); its variance is
+    # the sum of the squared coefficients times K^2 dt
+    length = n // windows
+    avg = np.zeros((windows, n))
+    for w in range(windows):
+        avg[w, w * length : (w + 1) * length] = 1.0 / length
+    level = avg - np.full(n, 1.0 / n)
+    exact = np.sum((level @ np.tril(np.ones((n, n)))) ** 2, axis=1) * k**2 / FS
+    # Monte Carlo variance of a variance from 4000 Gaussian replicates: relative sd sqrt(2/4000)
+    np.testing.assert_allclose(got, exact, rtol=4 * np.sqrt(2 / 4000))
+
+
 def test_spikes_are_found_and_attributed(base):
     real = base.simulate(N, FS, seed=25)
     where = np.array([1000, 9000, 17000, 25000, 31000])

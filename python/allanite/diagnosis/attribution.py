@@ -47,7 +47,7 @@ from scipy import optimize, stats
 from allanite.diagnosis.candidates import Candidate
 from allanite.diagnosis.level_shape import level_misfit
 from allanite.diagnosis.tau_view import TauModel
-from allanite.diagnosis.time_view import TimeView
+from allanite.diagnosis.time_view import TimeView, added_level_variance
 
 __all__ = ["Attribution", "fit_candidate", "rank"]
 
@@ -253,8 +253,14 @@ def fit_candidate(
         window = np.array([time_view.window_s])
         with np.errstate(all="ignore"):
             a_w = np.asarray(cand.extra_avar(_values(cand, logp), window, tm.dt), dtype=float)
-        if a_w.size and np.isfinite(a_w[0]) and a_w[0] > 0:
-            level_p = time_view.level_p_values(float(a_w[0]))
+        added = cand.added_term(_values(cand, logp))
+        todo = any(significant.get(e, False) and e not in explained for e in ("jump", "level"))
+        if todo and a_w.size and np.isfinite(a_w[0]) and a_w[0] > 0:
+            fs, n_fit = 1.0 / tm.dt, round(duration / tm.dt)
+            level_var = None
+            if added is not None and n_fit >= 2 * time_view.level.size:
+                level_var = added_level_variance(added, fs, n_fit, time_view.level.size)
+            level_p = time_view.level_p_values(float(a_w[0]), level_var)
             n_ev = max(len(evidence_p), 1)
             for e, p in level_p.items():
                 if significant.get(e, False) and p >= alpha / n_ev and e not in explained:
@@ -264,8 +270,13 @@ def fit_candidate(
         return None
     unexplained = sorted(e for e, s in significant.items() if s and e not in explained)
     penalty = sum(min(-2.0 * np.log(max(evidence_p[e], 1e-300)), EVIDENCE_CAP) for e in unexplained)
-    penalty += k * float(stats.chi2.isf(alpha, 1))
-    shape = level_misfit(cand.effect, time_view, duration) if time_view is not None else 0.0
+    per_param = float(stats.chi2.isf(alpha, 1))
+    penalty += k * per_param
+    shape = (
+        level_misfit(cand.effect, time_view, duration, per_param)
+        if time_view is not None
+        else 0.0
+    )
     penalty += shape
     sig = _fisher_sigma(cand, tm, logp)
     values = _values(cand, logp)

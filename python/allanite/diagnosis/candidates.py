@@ -28,6 +28,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
+import numpy as np
+
 from allanite.terms import TERM_TYPES, Term
 
 __all__ = ["EFFECTS", "EXPLAINS", "SIGNATURE", "Candidate", "candidate_library"]
@@ -112,6 +114,23 @@ class Candidate:
             coef = self.term_cls.params[0].name
             return self.base.with_values(**{coef: values["scale"] * self.base.values()[coef]})
         return self.term_cls(**{**self.fixed, **values})
+
+    def added_term(self, values: dict[str, float]) -> Term | None:
+        """The independent process this candidate adds to the simulated sensor, if any.
+
+        ``rescale:`` by ``s > 1`` adds the same term with its coefficient times
+        ``sqrt(s^2 - 1)``; a rescale down and ``lowpass`` (which filters the model's own white
+        noise) add no process of their own (None).
+        """
+        if self.base is not None:
+            s2 = values["scale"] ** 2
+            if s2 <= 1.0:
+                return None
+            coef = self.term_cls.params[0].name
+            return self.base.with_values(**{coef: np.sqrt(s2 - 1.0) * self.base.values()[coef]})
+        if self.replaces is not None:
+            return None
+        return self.term(values)
 
     def extra_avar(self, values: dict[str, float], tau: Any, dt: float) -> Any:
         """Allan variance this candidate adds to the simulated sensor."""

@@ -12,7 +12,10 @@ is compared with its expectation ``W - p`` (``W`` windows, ``p`` fitted paramete
 * step(s) at the detected change points ``t_c``: ``l_w = sum_c b_c (f_w(t_c) - (T - t_c)/T)``
   with ``f_w`` the fraction of window ``w`` after ``t_c``, plus further steps at window
   boundaries while each lowers ``chi^2`` by more than 10.8 (``chi2_1`` quantile 0.999): bias
-  steps come at random times with random sizes;
+  steps come at random times with random sizes. Each further step has two parameters the
+  tau view does not see (its time and size), so it adds ``2 c`` to the misfit, with ``c`` the
+  per-parameter penalty of the ranking (a staircase of many steps can mimic any smooth level
+  shape, e.g. a warm-up, and must pay for its flexibility);
 * warm-up: window means of ``A e^{-t/T_w}`` minus the record mean, ``A`` by least squares and
   ``T_w`` on a logarithmic grid from a quarter window to the record length;
 * ramp: a straight line ``R (t_w - T/2)``.
@@ -50,8 +53,14 @@ def _step_column(
     return np.asarray(after - (duration - tc) / duration)
 
 
-def level_misfit(effect: str, view: TimeView, duration: float) -> float:
-    """Excess misfit of the level shape of ``effect`` (step, warmup, ramp); 0 otherwise."""
+def level_misfit(
+    effect: str, view: TimeView, duration: float, per_param: float = 0.0
+) -> float:
+    """Excess misfit of the level shape of ``effect`` (step, warmup, ramp); 0 otherwise.
+
+    ``per_param`` is the ranking's penalty per parameter (``chi2_1`` quantile ``1 - alpha``);
+    it is charged twice for every step beyond the detected change points.
+    """
     if effect not in ("step", "warmup", "ramp"):
         return 0.0
     sd = np.where(view.level_sd > 0, view.level_sd, np.inf)
@@ -78,7 +87,8 @@ def level_misfit(effect: str, view: TimeView, duration: float) -> float:
                 break
             cols.append(_step_column(float(t1[k]), t1, view.window_s, duration))
             chi2 = trials[k]
-        return max(0.0, chi2 - (w - len(cols)))
+        extra_steps = len(cols) - len(view.change_points_s)
+        return max(0.0, chi2 - (w - len(cols))) + 2.0 * per_param * extra_steps
     best, _ = _warmup_fit(view, duration)
     return max(0.0, best - (w - 2))
 

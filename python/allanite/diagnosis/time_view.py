@@ -45,7 +45,14 @@ from scipy import ndimage, stats
 
 from allanite.diagnosis.null import NullEnsemble, gumbel_isf, gumbel_sf, runs
 
-__all__ = ["TimePlan", "TimeView", "time_features", "time_plan", "time_view"]
+__all__ = [
+    "TimePlan",
+    "TimeView",
+    "added_level_variance",
+    "time_features",
+    "time_plan",
+    "time_view",
+]
 
 WINDOW_FAMILIES = ("level", "jump", "hf", "dyn")
 #: at most this many spikes are listed individually
@@ -167,14 +174,19 @@ class TimeView:
     spread: dict[str, NDArray[np.float64]] = field(default_factory=dict, repr=False)
     null_max: dict[str, NDArray[np.float64]] = field(default_factory=dict, repr=False)
 
-    def level_p_values(self, extra_avar_window: float) -> dict[str, float]:
-        """p-values of ``jump`` and ``level`` if the sensor had an extra stationary process.
+    def level_p_values(
+        self, extra_avar_window: float, extra_level_var: NDArray[np.float64] | None = None
+    ) -> dict[str, float]:
+        """p-values of ``jump`` and ``level`` if the sensor had an extra independent process.
 
-        A stationary process with Allan variance ``A`` at the window length adds ``2 A`` to
-        the variance of the difference of consecutive window means (the definition of the
-        Allan variance), so the jump spreads become ``sqrt(s_w^2 + 2 A)``; the level spreads
-        are inflated by the same average factor. A candidate that adds enough slow noise
-        explains the level evidence without being a step or a warm-up.
+        A process with stationary increments and Allan variance ``A`` at the window length adds
+        ``2 A`` to the variance of the difference of consecutive window means (the definition
+        of the Allan variance), so the jump spreads become ``sqrt(s_w^2 + 2 A)``. The level
+        spreads (window mean minus record mean) become ``sqrt(s_w^2 + v_w)`` with ``v_w`` the
+        process's own level variance per window (``extra_level_var``, e.g. from
+        :func:`added_level_variance`; a random walk wanders most at the record ends); without
+        it they are inflated by the average jump factor. A candidate that adds enough slow
+        noise explains the level evidence without being a step or a warm-up.
         """
         out: dict[str, float] = {}
         if "jump" not in self.residual:
@@ -184,10 +196,13 @@ class TimeView:
         out["jump"] = gumbel_sf(
             float(np.abs(self.residual["jump"] / new_j).max()), self.null_max["jump"]
         )
-        factor = float(np.mean(new_j / sd_j))
+        sd_l = self.spread["level"]
+        if extra_level_var is None:
+            new_l = sd_l * float(np.mean(new_j / sd_j))
+        else:
+            new_l = np.sqrt(sd_l**2 + np.maximum(extra_level_var, 0.0))
         out["level"] = gumbel_sf(
-            float(np.abs(self.residual["level"] / (self.spread["level"] * factor)).max()),
-            self.null_max["level"],
+            float(np.abs(self.residual["level"] / new_l).max()), self.null_max["level"]
         )
         return out
 
@@ -213,6 +228,23 @@ class TimeView:
             "segments_s": [list(s) for s in self.segments_s],
             "p_value": self.p_value,
         }
+
+
+def added_level_variance(
+    term: Any, fs: float, n: int, n_windows: int, *, n_rep: int = 48, seed: int = 20261121
+) -> NDArray[np.float64]:
+    """Level variance per window (window mean minus record mean) of ``term`` alone.
+
+    Monte Carlo over ``n_rep`` records of ``n`` samples of the term on its own (fixed seed, so
+    the diagnosis stays reproducible), laid out like the time view's ``n_windows`` windows.
+    """
+    from allanite.model import NoiseModel
+
+    x = NoiseModel((term,)).simulate(n, fs, channels=n_rep, seed=seed, allow_aliasing=True)
+    length = n // n_windows
+    means = x[: n_windows * length].reshape(n_windows, length, n_rep).mean(axis=1)
+    level = means - x.mean(axis=0)
+    return np.asarray(np.mean(level * level, axis=1), dtype=np.float64)
 
 
 def _merge(segments: list[tuple[float, float]]) -> list[tuple[float, float]]:
