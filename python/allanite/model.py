@@ -78,6 +78,19 @@ class NoiseModel:
             total = total + term.avar(t, dt)
         return total
 
+    def avar_excess_variance(self, tau: ArrayLike, dt: float, n: int) -> NDArray[np.float64]:
+        """Non-Gaussian part of the variance of the overlapping AVAR estimate of ``n`` samples.
+
+        The sum of the terms' :meth:`~allanite.terms.base.Term.avar_excess_variance`: the
+        fourth cumulants of independent effects add. With :meth:`avar` it corrects the EDF of
+        an estimate, see :meth:`allanite.variance.AllanResult.with_excess_variance`.
+        """
+        t = np.asarray(tau, dtype=np.float64)
+        total = np.zeros(t.shape)
+        for term in self.terms:
+            total = total + term.avar_excess_variance(t, dt, n)
+        return total
+
     def adev(self, tau: ArrayLike, dt: float) -> NDArray[np.float64]:
         """Allan deviation, the square root of :meth:`avar`."""
         return np.sqrt(self.avar(tau, dt))

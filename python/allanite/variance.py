@@ -126,6 +126,75 @@ class AllanResult:
         lo, hi = self.var_ci(level)
         return np.sqrt(lo), np.sqrt(hi)
 
+    def with_excess_variance(self, excess: ArrayLike, expected: ArrayLike) -> AllanResult:
+        r"""A copy whose EDF includes the non-Gaussian variance of the estimate.
+
+        The Greenhall-Riley EDF :math:`\nu` describes Gaussian noise, for which the estimate
+        has variance :math:`2\sigma^4/\nu`. A heavy-tailed process (spikes, bias steps,
+        telegraph noise) adds an excess (its fourth cumulants,
+        :meth:`allanite.model.NoiseModel.avar_excess_variance`), so with the expected value
+        :math:`\sigma^2` of the estimate (the model's Allan variance)
+
+        .. math:: \nu' = \frac{2\sigma^4}{2\sigma^4/\nu + \text{excess}},
+
+        the chi-square with :math:`\nu'` degrees of freedom matching the estimate's first two
+        moments (Satterthwaite); :meth:`var_ci` and :meth:`ci` then use it. Where the excess
+        is zero the EDF is kept bit for bit. A negative excess (a telegraph signal at
+        :math:`\tau \gg T_c` is lighter-tailed than Gaussian) is exact relative to the
+        model's Gaussian variance; where it exceeds the Greenhall variance of this record
+        (a misidentified noise type makes :math:`\nu` far too large) the Greenhall EDF is
+        kept, and ``meta["edf_excess_not_applied"]`` counts those entries.
+
+        Parameters
+        ----------
+        excess : array_like
+            Excess variance of the estimate (rate^4), shape ``(T,)`` or like :attr:`var`.
+        expected : array_like
+            Expected value of the estimate (rate^2), shape ``(T,)`` or like :attr:`var`.
+
+        Returns
+        -------
+        AllanResult
+            The same result with the corrected :attr:`edf`.
+
+        Raises
+        ------
+        ValueError
+            For another kind than ``overlapping`` (the excess is derived for it), mismatched
+            shapes, non-finite values or non-positive expected values.
+        """
+        if self.kind != "overlapping":
+            raise ValueError(
+                f"the excess variance is derived for the overlapping estimator, this result is "
+                f"{self.kind!r}: compute it with kind='overlapping'"
+            )
+        shape = self.var.shape
+        arrays = []
+        for name, value in (("excess", excess), ("expected", expected)):
+            a = np.asarray(value, dtype=np.float64)
+            if a.shape == self.tau.shape and len(shape) == 2:
+                a = a[:, None]
+            if np.broadcast_shapes(a.shape, shape) != shape:
+                raise ValueError(
+                    f"{name} must have shape {self.tau.shape} (one per tau) or {shape}, got "
+                    f"{a.shape}"
+                )
+            if not np.all(np.isfinite(a)):
+                raise ValueError(f"{name} must be finite")
+            arrays.append(a)
+        excess_var, mean = arrays
+        if np.any(mean <= 0):
+            raise ValueError("expected (the model's Allan variance) must be positive at every tau")
+        total = 2.0 * mean**2 / self.edf + excess_var
+        kept = total <= 0.0  # the Greenhall EDF overstates the EDF there already
+        edf = np.where(
+            kept | (excess_var == 0.0), self.edf, 2.0 * mean**2 / np.where(kept, 1.0, total)
+        )
+        meta = {**self.meta, "edf_excess": True, "edf_excess_not_applied": int(np.sum(kept))}
+        return dataclasses.replace(
+            self, edf=np.broadcast_to(edf, shape).astype(np.float64), meta=meta
+        )
+
     def channel(self, index: int) -> AllanResult:
         """Return one channel as a single-channel result."""
         if self.var.ndim == 1:

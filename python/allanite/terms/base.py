@@ -107,6 +107,36 @@ class Term(ABC):
             Allan variance in squared rate units.
         """
 
+    def avar_excess_variance(self, tau: ArrayLike, dt: float, n: int) -> NDArray[np.float64]:
+        r"""Non-Gaussian part of the variance of the overlapping AVAR estimate (rate^4).
+
+        The overlapping estimate of a record of ``n`` samples is a quadratic form in the
+        record; its variance is that of a Gaussian process with the same covariance (what the
+        Greenhall-Riley EDF describes) plus this excess, which the fourth cumulants of the
+        effect cause (:mod:`allanite.terms._estimator_kurtosis`). Use it through
+        :meth:`allanite.variance.AllanResult.with_excess_variance`:
+        :math:`1/\nu = 1/\nu_\text{Gauss} + \text{excess}/(2\,\sigma^4)`.
+
+        Zero here: exact for Gaussian terms; deterministic terms (and a random-phase sine) are
+        treated like Gaussian noise. Heavy-tailed effects (spikes, bias steps, telegraph
+        noise) override it.
+
+        Parameters
+        ----------
+        tau : array_like
+            Averaging times in seconds (whole multiples of ``dt``).
+        dt : float
+            Sample period in seconds.
+        n : int
+            Record length in samples.
+
+        Returns
+        -------
+        numpy.ndarray
+            Excess variance of the estimate in squared rate units squared, shaped like ``tau``.
+        """
+        return np.zeros(np.shape(tau))
+
     def psd(self, f: ArrayLike) -> NDArray[np.float64]:
         """One-sided power spectral density of the rate in rate^2/Hz (stationary terms only)."""
         raise NotImplementedError(f"{type(self).__name__} is not stationary and has no PSD")

@@ -28,6 +28,11 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from allanite.terms._checks import averaging_factor, check_parameters
+from allanite.terms._estimator_kurtosis import (
+    iid_excess_variance,
+    step_excess_variance,
+    telegraph_excess_variance,
+)
 from allanite.terms.base import ParamSpec, Term
 
 __all__ = [
@@ -219,6 +224,14 @@ class BiasSteps(Term):
         t, _, _ = averaging_factor(tau, dt)
         return self.size**2 * t / (3.0 * self.interval)
 
+    def avar_excess_variance(self, tau: ArrayLike, dt: float, n: int) -> NDArray[np.float64]:
+        """Exact excess variance of the estimate: few steps make it a Poisson count.
+
+        Compound-Poisson steps of Gaussian size, ``E[J^4] = 3 size^4``
+        (:func:`~allanite.terms._estimator_kurtosis.step_excess_variance`).
+        """
+        return step_excess_variance(tau, dt, n, 1.0 / self.interval, 3.0 * self.size**4)
+
     def stream(self, fs: float, n_channels: int, seed: Any, *, n_samples: int | None = None) -> Any:
         """Poisson steps, exact sample means."""
         from allanite.simulation.effects import StepStream
@@ -261,6 +274,15 @@ class Spikes(Term):
         t, _, step = averaging_factor(tau, dt)
         return self.probability(step) * self.amplitude**2 * step / t
 
+    def avar_excess_variance(self, tau: ArrayLike, dt: float, n: int) -> NDArray[np.float64]:
+        r"""Exact excess variance of the estimate (i.i.d. samples, heavy-tailed).
+
+        Per-sample fourth cumulant :math:`\kappa_4 = p a^4 (1 - 3p)`, i.e. excess kurtosis
+        :math:`1/p - 3` (:func:`~allanite.terms._estimator_kurtosis.iid_excess_variance`).
+        """
+        p = self.probability(dt)
+        return iid_excess_variance(tau, dt, n, p * self.amplitude**4 * (1.0 - 3.0 * p))
+
     def psd_sampled(self, f: ArrayLike, dt: float) -> NDArray[np.float64]:
         """White: ``2 p a^2 dt``."""
         return np.full(np.shape(f), 2.0 * self.probability(dt) * self.amplitude**2 * dt)
@@ -299,6 +321,15 @@ class Telegraph(Term):
         """Continuous Gauss-Markov Allan variance with ``s = amplitude`` (exact)."""
         t, _, _ = averaging_factor(tau, dt)
         return markov_avar_continuous(self.amplitude**2, self.tau_c, t)
+
+    def avar_excess_variance(self, tau: ArrayLike, dt: float, n: int) -> NDArray[np.float64]:
+        """Exact excess variance of the estimate, positive or negative.
+
+        Positive (a Poisson count of switches) at tau << Tc, negative (a two-valued signal is
+        lighter-tailed than Gaussian) at tau >> Tc
+        (:func:`~allanite.terms._estimator_kurtosis.telegraph_excess_variance`).
+        """
+        return telegraph_excess_variance(tau, dt, n, self.amplitude, self.tau_c)
 
     def psd(self, f: ArrayLike) -> NDArray[np.float64]:
         """One-sided PSD ``4 a^2 Tc / (1 + (2 pi f Tc)^2)``."""
