@@ -262,38 +262,69 @@ def test_telegraph_excess_sign():
 def test_with_excess_variance_formula():
     rng = np.random.default_rng(3)
     result = allanite.avar(rng.standard_normal((4096, 3)), FS, taus="octave", alpha=0)
-    expected = np.full(result.tau.shape, 2.0)
+    gaussian = np.full(result.tau.shape, 2.0)
     excess = np.linspace(0.0, 1.0, result.tau.size)
-    corrected = result.with_excess_variance(excess, expected)
-    want = (
-        2.0 * expected[:, None] ** 2 / (2.0 * expected[:, None] ** 2 / result.edf + excess[:, None])
-    )
+    corrected = result.with_excess_variance(excess, gaussian)
+    want = result.edf * (gaussian / (gaussian + excess))[:, None]
     np.testing.assert_allclose(corrected.edf, want, rtol=1e-14)
     assert corrected.edf[0, 0] == result.edf[0, 0]  # zero excess: Greenhall unchanged
     lo, hi = corrected.var_ci(0.95)
     lo0, hi0 = result.var_ci(0.95)
     assert np.all(hi[1:] - lo[1:] > hi0[1:] - lo0[1:])  # wider bands
-    single = result.channel(1).with_excess_variance(excess, expected)
+    single = result.channel(1).with_excess_variance(excess, gaussian)
     np.testing.assert_allclose(single.edf, want[:, 1], rtol=1e-14)
+    negative = result.with_excess_variance(-0.5 * gaussian, gaussian)  # lighter than Gaussian
+    np.testing.assert_allclose(negative.edf, 2.0 * result.edf, rtol=1e-14)
 
 
-def test_with_excess_variance_keeps_gaussian_edf_when_excess_exceeds_it():
-    result = allanite.avar(
-        np.random.default_rng(4).standard_normal(2048), FS, taus="octave", alpha=0
+def test_with_model_edf():
+    """The model's excess and Gaussian variance; a Gaussian model leaves the EDF as it is."""
+    model = NoiseModel((White(N=1e-3), Telegraph(amplitude=1e-3, tau_c=0.2)))
+    x = model.simulate(4096, FS, channels=2, seed=8)
+    result = allanite.avar(x, FS, taus="octave")
+    corrected = result.with_model_edf(model)
+    excess = model.avar_excess_variance(result.tau, DT, 4096)
+    gaussian = model.avar_gaussian_variance(result.tau, DT, 4096)
+    np.testing.assert_allclose(
+        corrected.edf, result.edf * (gaussian / (gaussian + excess))[:, None], rtol=1e-14
     )
-    expected = np.ones(result.tau.size)
-    excess = np.zeros(result.tau.size)
-    excess[-1] = -1e6
-    corrected = result.with_excess_variance(excess, expected)
-    assert corrected.edf[-1] == result.edf[-1]
-    assert corrected.meta["edf_excess_not_applied"] == 1
+    plain = result.with_model_edf(NoiseModel((White(N=1e-3),)))
+    np.testing.assert_array_equal(plain.edf, result.edf)
+    # angle input: n_samples angle points are n_samples - 1 rate samples
+    angle = allanite.avar(np.cumsum(x, axis=0) * DT, FS, input="angle", taus="octave")
+    excess_angle = model.avar_excess_variance(angle.tau, DT, 4095)
+    gaussian_angle = model.avar_gaussian_variance(angle.tau, DT, 4095)
+    np.testing.assert_allclose(
+        angle.with_model_edf(model).edf,
+        angle.edf * (gaussian_angle / (gaussian_angle + excess_angle))[:, None],
+        rtol=1e-14,
+    )
+
+
+@pytest.mark.parametrize("name", sorted(CASES))
+def test_gaussian_variance_against_covariance_oracle(name):
+    """FFT of the sampled PSD vs the covariance matrix of the samples (independent routes)."""
+    term, sigma_h0 = CASES[name]
+    m = np.array([1, 4, 64, 1024])
+    got = NoiseModel((term,)).avar_gaussian_variance(m * DT, DT, N)
+    want = [gaussian_part(int(k), N, sigma_h0) for k in m]
+    np.testing.assert_allclose(got, want, rtol=1e-9)
+
+
+def test_gaussian_variance_needs_spectra():
+    from allanite.terms import WarmUp
+
+    model = NoiseModel((White(N=1e-3), WarmUp(amplitude=0.1, tau_w=10.0, duration=40.0)))
+    with pytest.raises(ValueError, match="warmup"):
+        model.avar_gaussian_variance([0.01], DT, 4000)
 
 
 @pytest.mark.parametrize(
     ("kwargs", "message"),
     [
         ({"excess": np.zeros(3)}, "shape"),
-        ({"expected": -1.0}, "positive"),
+        ({"gaussian": -1.0}, "positive"),
+        ({"excess": -2.0}, "positive"),
         ({"excess": np.nan}, "finite"),
     ],
 )
@@ -301,7 +332,7 @@ def test_with_excess_variance_bad_input(kwargs, message):
     result = allanite.avar(
         np.random.default_rng(5).standard_normal(2048), FS, taus="octave", alpha=0
     )
-    args = {"excess": np.zeros(result.tau.size), "expected": np.ones(result.tau.size), **kwargs}
+    args = {"excess": np.zeros(result.tau.size), "gaussian": np.ones(result.tau.size), **kwargs}
     with pytest.raises(ValueError, match=message):
         result.with_excess_variance(**args)
 

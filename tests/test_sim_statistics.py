@@ -2,15 +2,16 @@
 
 Every stochastic term alone and mixtures: the 95% chi-square band of every (channel, tau)
 estimate must contain the theory for 90-99% of the pairs (tau from dt to T/10). The EDF is the
-one allanite.avar attaches (Greenhall-Riley with identified noise type), corrected by the
-model's excess variance of the estimate (AllanResult.with_excess_variance with
-NoiseModel.avar_excess_variance): zero for Gaussian terms, the fourth-cumulant part for the
-heavy-tailed ones (spikes, bias steps, telegraph noise), whose estimate at short tau is
-essentially a Poisson count of events. Their parameters give about 80 spikes, 33 steps and
-270 switches per record: enough events for a chi-square band to describe the estimate (with
-fewer than ~10 events per record the estimate has an atom at zero and no chi-square band can
-cover it). A deterministic sine: the Monte Carlo mean over the 50 channels must agree with the
-theory within its standard error (|z| < 4 at every tau); ramp and warm-up exactly.
+one allanite.avar attaches (Greenhall-Riley with identified noise type), scaled by the model's
+ratio of the Gaussian to the full variance of the estimate (AllanResult.with_model_edf, from
+NoiseModel.avar_gaussian_variance and avar_excess_variance): one for Gaussian terms; for the
+heavy-tailed ones (spikes, bias steps, telegraph noise) the excess from their fourth cumulants,
+as their estimate at short tau is essentially a Poisson count of events. Their parameters give
+about 80 spikes, 33 steps and 270 switches per record: enough events for a chi-square band to
+describe the estimate (with fewer than ~10 events per record the estimate has an atom at zero
+and no chi-square band can cover it). A deterministic sine: the Monte Carlo mean over the 50
+channels must agree with the theory within its standard error (|z| < 4 at every tau); ramp and
+warm-up exactly.
 """
 
 from __future__ import annotations
@@ -56,11 +57,6 @@ def _coverage(model, result, keep):
     return ((lo[keep] <= theory) & (theory <= hi[keep])).mean()
 
 
-def _with_model_excess(model, result):
-    excess = model.avar_excess_variance(result.tau, DT, result.n_samples)
-    return result.with_excess_variance(excess, model.avar(result.tau, DT))
-
-
 GAUSSIAN = {
     "white": [White(N=0.01)],
     "quantization": [Quantization(Q=1e-3)],
@@ -90,7 +86,7 @@ NON_GAUSSIAN = {
 def test_chi_square_coverage(name):
     terms = GAUSSIAN[name] if name in GAUSSIAN else NON_GAUSSIAN[name]
     model, result, keep = _estimate(terms, seed=sum(map(ord, name)))
-    corrected = _with_model_excess(model, result)
+    corrected = result.with_model_edf(model)
     coverage = _coverage(model, corrected, keep)
     assert 0.90 <= coverage <= 0.99, f"{name}: coverage {coverage:.3f}"
     if name in GAUSSIAN:  # no excess: the Greenhall-Riley EDF as it is

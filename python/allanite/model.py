@@ -91,6 +91,36 @@ class NoiseModel:
             total = total + term.avar_excess_variance(t, dt, n)
         return total
 
+    def avar_gaussian_variance(self, tau: ArrayLike, dt: float, n: int) -> NDArray[np.float64]:
+        """Variance of the overlapping AVAR estimate of ``n`` samples if the model were Gaussian.
+
+        Exact for the model's covariance (its sampled PSD, the sum of the terms'
+        ``psd_sampled``), not only for power laws
+        (:func:`~allanite.terms._estimator_kurtosis.gaussian_estimate_variance`); with
+        :meth:`avar_excess_variance` it gives the full variance of the estimate.
+
+        Raises
+        ------
+        ValueError
+            If a term has no sampled spectrum (warm-up, ramp, turn-on bias).
+        """
+        from allanite.terms._estimator_kurtosis import gaussian_estimate_variance
+
+        def spectrum(f: NDArray[np.float64]) -> NDArray[np.float64]:
+            total = np.zeros(f.shape)
+            for term in self.terms:
+                try:
+                    total = total + term.psd_sampled(f, dt)
+                except NotImplementedError:
+                    raise ValueError(
+                        f"term {term.type!r} has no sampled spectrum, so the Gaussian variance "
+                        "of the estimate is not defined for this model; leave it out "
+                        f"(model.without({term.type!r}))"
+                    ) from None
+            return total
+
+        return gaussian_estimate_variance(spectrum, tau, dt, n)
+
     def adev(self, tau: ArrayLike, dt: float) -> NDArray[np.float64]:
         """Allan deviation, the square root of :meth:`avar`."""
         return np.sqrt(self.avar(tau, dt))

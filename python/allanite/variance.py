@@ -126,31 +126,32 @@ class AllanResult:
         lo, hi = self.var_ci(level)
         return np.sqrt(lo), np.sqrt(hi)
 
-    def with_excess_variance(self, excess: ArrayLike, expected: ArrayLike) -> AllanResult:
+    def with_excess_variance(self, excess: ArrayLike, gaussian: ArrayLike) -> AllanResult:
         r"""A copy whose EDF includes the non-Gaussian variance of the estimate.
 
-        The Greenhall-Riley EDF :math:`\nu` describes Gaussian noise, for which the estimate
-        has variance :math:`2\sigma^4/\nu`. A heavy-tailed process (spikes, bias steps,
-        telegraph noise) adds an excess (its fourth cumulants,
-        :meth:`allanite.model.NoiseModel.avar_excess_variance`), so with the expected value
-        :math:`\sigma^2` of the estimate (the model's Allan variance)
+        The Greenhall-Riley EDF :math:`\nu` describes Gaussian power-law noise. A heavy-tailed
+        process (spikes, bias steps, telegraph noise) changes the variance of the estimate from
+        the Gaussian :math:`G` (the variance for a Gaussian process of the same covariance) to
+        :math:`G + \text{excess}`, its fourth cumulants giving the excess
+        (:mod:`allanite.terms._estimator_kurtosis`). The EDF is scaled by that ratio:
 
-        .. math:: \nu' = \frac{2\sigma^4}{2\sigma^4/\nu + \text{excess}},
+        .. math:: \nu' = \nu\,\frac{G}{G + \text{excess}},
 
-        the chi-square with :math:`\nu'` degrees of freedom matching the estimate's first two
-        moments (Satterthwaite); :meth:`var_ci` and :meth:`ci` then use it. Where the excess
-        is zero the EDF is kept bit for bit. A negative excess (a telegraph signal at
-        :math:`\tau \gg T_c` is lighter-tailed than Gaussian) is exact relative to the
-        model's Gaussian variance; where it exceeds the Greenhall variance of this record
-        (a misidentified noise type makes :math:`\nu` far too large) the Greenhall EDF is
-        kept, and ``meta["edf_excess_not_applied"]`` counts those entries.
+        i.e. the chi-square with :math:`\nu'` degrees of freedom matches the first two moments
+        of the estimate (Satterthwaite) when :math:`\nu = 2\sigma^4/G`; the ratio, a property
+        of the model, also holds where :math:`\nu` comes from an identified noise type.
+        :meth:`var_ci` and :meth:`ci` then use :math:`\nu'`. Where the excess is zero the EDF
+        is kept bit for bit. :meth:`with_model_edf` takes both from a model.
 
         Parameters
         ----------
         excess : array_like
-            Excess variance of the estimate (rate^4), shape ``(T,)`` or like :attr:`var`.
-        expected : array_like
-            Expected value of the estimate (rate^2), shape ``(T,)`` or like :attr:`var`.
+            Excess variance of the estimate (rate^4), shape ``(T,)`` or like :attr:`var`
+            (:meth:`allanite.model.NoiseModel.avar_excess_variance`). May be negative (a
+            telegraph signal at :math:`\tau \gg T_c` is lighter-tailed than Gaussian).
+        gaussian : array_like
+            Gaussian variance of the estimate (rate^4), same shapes
+            (:meth:`allanite.model.NoiseModel.avar_gaussian_variance`).
 
         Returns
         -------
@@ -161,7 +162,7 @@ class AllanResult:
         ------
         ValueError
             For another kind than ``overlapping`` (the excess is derived for it), mismatched
-            shapes, non-finite values or non-positive expected values.
+            shapes, non-finite values, ``gaussian <= 0`` or ``gaussian + excess <= 0``.
         """
         if self.kind != "overlapping":
             raise ValueError(
@@ -170,7 +171,7 @@ class AllanResult:
             )
         shape = self.var.shape
         arrays = []
-        for name, value in (("excess", excess), ("expected", expected)):
+        for name, value in (("excess", excess), ("gaussian", gaussian)):
             a = np.asarray(value, dtype=np.float64)
             if a.shape == self.tau.shape and len(shape) == 2:
                 a = a[:, None]
@@ -182,18 +183,38 @@ class AllanResult:
             if not np.all(np.isfinite(a)):
                 raise ValueError(f"{name} must be finite")
             arrays.append(a)
-        excess_var, mean = arrays
-        if np.any(mean <= 0):
-            raise ValueError("expected (the model's Allan variance) must be positive at every tau")
-        total = 2.0 * mean**2 / self.edf + excess_var
-        kept = total <= 0.0  # the Greenhall EDF overstates the EDF there already
-        edf = np.where(
-            kept | (excess_var == 0.0), self.edf, 2.0 * mean**2 / np.where(kept, 1.0, total)
-        )
-        meta = {**self.meta, "edf_excess": True, "edf_excess_not_applied": int(np.sum(kept))}
+        extra, base = arrays
+        if np.any(base <= 0) or np.any(base + extra <= 0):
+            raise ValueError(
+                "gaussian and gaussian + excess (variances of the estimate) must be positive; "
+                "take both from the same model (AllanResult.with_model_edf)"
+            )
+        edf = np.where(extra == 0.0, self.edf, self.edf * base / (base + extra))
+        meta = {**self.meta, "edf_excess": True}
         return dataclasses.replace(
             self, edf=np.broadcast_to(edf, shape).astype(np.float64), meta=meta
         )
+
+    def with_model_edf(self, model: Any) -> AllanResult:
+        """:meth:`with_excess_variance` with the excess and Gaussian variance of ``model``.
+
+        Parameters
+        ----------
+        model : allanite.model.NoiseModel
+            The model the record follows (e.g. the one it was simulated from, or a fit); a
+            model without heavy-tailed terms leaves the EDF unchanged.
+
+        Returns
+        -------
+        AllanResult
+            The same result with the corrected :attr:`edf`.
+        """
+        dt = 1.0 / self.fs
+        n_rate = self.n_samples - 1 if self.input == "angle" else self.n_samples
+        excess = model.avar_excess_variance(self.tau, dt, n_rate)
+        if not np.any(excess != 0.0):
+            return dataclasses.replace(self, meta={**self.meta, "edf_excess": True})
+        return self.with_excess_variance(excess, model.avar_gaussian_variance(self.tau, dt, n_rate))
 
     def channel(self, index: int) -> AllanResult:
         """Return one channel as a single-channel result."""

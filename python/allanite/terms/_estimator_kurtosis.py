@@ -81,7 +81,12 @@ from numpy.typing import ArrayLike, NDArray
 
 from allanite.terms._checks import averaging_factor
 
-__all__ = ["iid_excess_variance", "step_excess_variance", "telegraph_excess_variance"]
+__all__ = [
+    "gaussian_estimate_variance",
+    "iid_excess_variance",
+    "step_excess_variance",
+    "telegraph_excess_variance",
+]
 
 #: Gauss-Legendre nodes per panel of the integrals over the jump position
 _GAUSS_NODES = 16
@@ -167,6 +172,61 @@ def _check_cumulant(value: float, name: str) -> float:
     if not math.isfinite(v):
         raise ValueError(f"{name} must be finite, got {value!r}")
     return v
+
+
+def gaussian_estimate_variance(
+    spectrum: Callable[[NDArray[np.float64]], NDArray[np.float64]],
+    tau: ArrayLike,
+    dt: float,
+    n: int,
+) -> NDArray[np.float64]:
+    r"""Variance of the overlapping AVAR estimate of a Gaussian process with sampled PSD ``S``.
+
+    .. math:: \operatorname{Var} Q = 2c^2\Bigl[M C_0^2 + 2\sum_{k=1}^{M-1}(M-k)\,C_k^2\Bigr],
+              \qquad C_k = \int_0^{1/(2\Delta t)} S(f)\,2|H_m(f)|^2\cos(2\pi f k\Delta t)\,df,
+
+    :math:`|H_m(f)|^2 = 2\sin^4(\pi f m\Delta t)/(m\sin(\pi f\Delta t))^2` (so that
+    :math:`C_0 = 2\sigma^2(\tau)`), :math:`C_k = \operatorname{Cov}(d_h, d_{h+k})`: the first
+    part of the module docstring's identity, exact for any covariance where the Greenhall-Riley
+    EDF assumes a power law. The integral is the trapezoid rule on :math:`L \ge 4n`
+    frequencies (one FFT per tau), exact for the periodic sampled spectrum up to the lag
+    aliasing :math:`C_{k+L}`.
+
+    Parameters
+    ----------
+    spectrum : callable
+        One-sided PSD of the sampled rate, ``S(f)`` for ``0 < f <= 1/(2 dt)`` (rate^2/Hz),
+        e.g. ``lambda f: term.psd_sampled(f, dt)``.
+    tau : array_like
+        Averaging times in seconds (whole multiples of ``dt``).
+    dt : float
+        Sample period in seconds.
+    n : int
+        Record length in samples.
+
+    Returns
+    -------
+    numpy.ndarray
+        Variance of the estimate in rate^4, shaped like ``tau`` (NaN where ``2m > n``).
+    """
+    factors, n = _factors(tau, dt, n)
+    size = 1 << math.ceil(math.log2(4 * n))
+    f = np.arange(size // 2 + 1) / (size * dt)
+    f[0] = 1e-6 / (size * dt)  # the f -> 0 limit of S |H|^2 (finite for a random walk)
+    density = np.asarray(spectrum(f), dtype=np.float64)
+    x = np.pi * f * dt
+    out = np.full(factors.shape, np.nan)
+    for index, m in np.ndenumerate(factors):
+        m = int(m)
+        terms = n - 2 * m + 1
+        if terms < 1:
+            continue
+        response = 4.0 * np.sin(m * x) ** 4 / (m * np.sin(x)) ** 2  # 2 |H_m|^2
+        cov = np.fft.irfft(density * response, n=size)[:terms] / (2.0 * dt)
+        k = np.arange(1, terms)
+        sums = terms * cov[0] ** 2 + 2.0 * float(np.sum((terms - k) * cov[1:] ** 2))
+        out[index] = 2.0 * sums / (2.0 * terms) ** 2
+    return out
 
 
 def iid_excess_variance(

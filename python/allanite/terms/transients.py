@@ -232,6 +232,21 @@ class BiasSteps(Term):
         """
         return step_excess_variance(tau, dt, n, 1.0 / self.interval, 3.0 * self.size**4)
 
+    def psd_sampled(self, f: ArrayLike, dt: float) -> NDArray[np.float64]:
+        r"""Spectrum of the sample means, the second-order twin of rate random walk.
+
+        The steps have the covariance of the sample means of a Wiener process of intensity
+        :math:`K^2 = b^2/T_s`, whose increments are MA(1) (variance :math:`2K^2\Delta t/3`,
+        lag-one covariance :math:`K^2\Delta t/6`); with :math:`\omega = 2\pi f\Delta t`
+
+        .. math:: S(f) = \frac{K^2\Delta t^2\,(2 + \cos\omega)}{6\sin^2(\omega/2)}
+
+        (a random walk's spectrum: the process itself is not stationary, its differences are).
+        """
+        w = 2.0 * np.pi * np.asarray(f, dtype=np.float64) * dt
+        k2 = self.size**2 / self.interval
+        return k2 * dt**2 * (2.0 + np.cos(w)) / (6.0 * np.sin(0.5 * w) ** 2)
+
     def stream(self, fs: float, n_channels: int, seed: Any, *, n_samples: int | None = None) -> Any:
         """Poisson steps, exact sample means."""
         from allanite.simulation.effects import StepStream
