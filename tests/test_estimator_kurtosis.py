@@ -356,3 +356,25 @@ def test_excess_nan_beyond_half_record():
     got = BiasSteps(size=1.0, interval=1.0).avar_excess_variance([0.01, 0.6], DT, 100)
     assert np.isfinite(got[0])
     assert np.isnan(got[1])
+
+
+@pytest.mark.filterwarnings("error")
+def test_long_windows_fast_relaxation_finite():
+    """m dt >> Tc (phi^m underflows, no overflow on the way) and Tc >> record."""
+    tau = np.array([0.01, 10.0, 50.0])
+    for tau_c in (0.01, 1e4):
+        term = Telegraph(amplitude=1.0, tau_c=tau_c)
+        excess = term.avar_excess_variance(tau, DT, 20_000)
+        gaussian = NoiseModel((term,)).avar_gaussian_variance(tau, DT, 20_000)
+        assert np.all(np.isfinite(excess))
+        assert np.all(gaussian + excess > 0)
+
+
+def test_telegraph_slow_switching_limit_is_poisson_steps():
+    """Tc -> inf: the backward response is minus the forward one, the excess that of steps of
+    +-2a at rate 1/(2 Tc); the difference shrinks like tau / Tc (about 3 tau / Tc)."""
+    tau = np.array([0.01, 0.1, 1.0, 10.0])
+    for tau_c in (1e4, 1e6):
+        telegraph = telegraph_excess_variance(tau, DT, 20_000, 1.0, tau_c)
+        steps = step_excess_variance(tau, DT, 20_000, 1.0 / (2.0 * tau_c), 16.0)
+        assert np.all(np.abs(telegraph / steps - 1.0) < 4.0 * tau / tau_c)

@@ -120,12 +120,12 @@ def _profiles(m: int, theta: float) -> tuple[NDArray[np.float64], NDArray[np.flo
     r"""``w(t)``, ``T(t) = sum_{t'>t} w(t') phi^{t'-t-1}`` on ``t = 0 .. 2m-1``, ``T(-1)``."""
     t = np.arange(2 * m, dtype=np.float64)
     w = np.where(t < m, -1.0 / m, 1.0 / m)
-    second = _geometric(2 * m - 1 - t, theta) / m  # t >= m: the rest of the second window
-    k = m - 1 - t  # t < m: the rest of the first window, then the whole second one, decayed
+    tail = _geometric(2 * m - 1 - t, theta) / m  # t >= m: the rest of the second window
+    k = m - 1 - t[:m]  # t < m: the rest of the first window, then the whole second one, decayed
     whole = float(_geometric(m, theta))
-    first = (-_geometric(k, theta) + np.exp(-k * theta) * whole) / m
+    tail[:m] = (-_geometric(k, theta) + np.exp(-k * theta) * whole) / m
     before = whole * math.expm1(-m * theta) / m  # T(-1) = -(1 - phi^m)^2 / (m (1 - phi))
-    return w, np.where(t >= m, second, first), before
+    return w, tail, before
 
 
 def _site_sums(
