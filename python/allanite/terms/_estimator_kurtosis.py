@@ -1,4 +1,4 @@
-r"""Excess (non-Gaussian) variance of the overlapping Allan variance estimator.
+r"""Variance of the overlapping Allan variance estimate: Gaussian part and excess.
 
 The overlapping estimate at averaging factor :math:`m` of a record of :math:`n` rate samples
 :math:`y_j` is a quadratic form
@@ -17,11 +17,12 @@ innovations :math:`\xi_z` (variance :math:`\kappa_2(z)`, fourth cumulant :math:`
           + \sum_z \kappa_4(z)\,D(z)^2,\qquad D(z) = c\sum_h g_h(z)^2 .
 
 The first part is the variance for a Gaussian process of the same covariance (what the
-Greenhall-Riley EDF approximates); the second, the *excess*, is computed here. For a Poisson
-random measure of jumps (rate :math:`\lambda`, i.i.d. symmetric sizes :math:`J`, uniform
-positions) the sum becomes :math:`\lambda E[J^4]\int D(r)^2\,dr` (the cumulants of a Poisson
-integral are :math:`\int f^k d\nu`). Spikes (i.i.d. samples) and bias steps (a compound-Poisson
-random walk) are of this kind, so their excess is exact.
+Greenhall-Riley EDF approximates for power laws; :func:`gaussian_estimate_variance` computes
+it exactly from the sampled PSD); the second, the *excess*, is what the other functions
+compute. For a Poisson random measure of jumps (rate :math:`\lambda`, i.i.d. symmetric sizes
+:math:`J`, uniform positions) the sum becomes :math:`\lambda E[J^4]\int D(r)^2\,dr` (the
+cumulants of a Poisson integral are :math:`\int f^k d\nu`). Spikes (i.i.d. samples) and bias
+steps (a compound-Poisson random walk) are of this kind, so their excess is exact.
 
 **Random telegraph signal** :math:`s = \pm a`, switching at rate :math:`\lambda = 1/(2T_c)`.
 It is :math:`s(t) = \int_{-\infty}^t e^{-(t-r)/T_c}\,dM(r)` with the martingale
@@ -42,8 +43,9 @@ samples). At :math:`\tau \ll T_c`, :math:`f \approx -g` and the excess is the Po
 of switches, :math:`+16a^4\lambda\int D^2`, what a process driven by independent jumps of
 :math:`\pm 2a` would give; at :math:`\tau \gg T_c`, :math:`f \approx g` and the excess is
 negative, :math:`-48a^4\lambda\int D^2`: the two-valued signal is lighter-tailed than Gaussian.
-(The independent-jump approximation keeps only the first term and overstates the variance of
-the estimate by up to a factor 3 near :math:`\tau \approx 2T_c`.)
+(The approximation by independent jumps keeps only the first term; it overstates the variance
+of the estimate by a factor 3.4 at :math:`\tau \approx 2T_c` for :math:`T_c = 0.3` s,
+:math:`2^{14}` samples at 100 Hz, against Monte Carlo.)
 
 **Responses.** Sample means of a jump in sample :math:`i` at the fraction :math:`v\in(0,1]` of
 the period that follows it, relaxing as :math:`e^{-s/T_c}` (:math:`\theta = \Delta t/T_c`,
