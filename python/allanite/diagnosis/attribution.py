@@ -273,9 +273,7 @@ def fit_candidate(
     per_param = float(stats.chi2.isf(alpha, 1))
     penalty += k * per_param
     shape = (
-        level_misfit(cand.effect, time_view, duration, per_param)
-        if time_view is not None
-        else 0.0
+        level_misfit(cand.effect, time_view, duration, per_param) if time_view is not None else 0.0
     )
     penalty += shape
     sig = _fisher_sigma(cand, tm, logp)

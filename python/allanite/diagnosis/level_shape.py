@@ -53,9 +53,7 @@ def _step_column(
     return np.asarray(after - (duration - tc) / duration)
 
 
-def level_misfit(
-    effect: str, view: TimeView, duration: float, per_param: float = 0.0
-) -> float:
+def level_misfit(effect: str, view: TimeView, duration: float, per_param: float = 0.0) -> float:
     """Excess misfit of the level shape of ``effect`` (step, warmup, ramp); 0 otherwise.
 
     ``per_param`` is the ranking's penalty per parameter (``chi2_1`` quantile ``1 - alpha``);
