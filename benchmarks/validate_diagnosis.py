@@ -301,7 +301,7 @@ def evaluate(case: Case, seed: int, n_mc: int) -> dict[str, Any]:
                 fitted = float(np.sqrt(max(fitted**2 - base_value**2, 0.0)))
             if fitted is not None:
                 row["param_rel_error"] = abs(fitted - value) / value
-        if d.holdout is not None and d.holdout.shrinkage is not None:
+        if d.holdout is not None and d.holdout.gap_before > 0:  # a gap there to shrink
             row["holdout_shrinkage"] = d.holdout.shrinkage
     return row
 

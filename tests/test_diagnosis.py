@@ -168,7 +168,7 @@ def test_white_noise_too_small_in_the_sim(base):
     assert best.shrinkage > 0.8
     assert best.consistent_after
     assert d.holdout is not None
-    assert d.holdout.shrinkage is not None
+    assert d.holdout.gap_before > 0
     assert abs(d.holdout.shrinkage - best.shrinkage) < 0.15
 
 

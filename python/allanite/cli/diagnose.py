@@ -141,7 +141,11 @@ def _summary(d: Any) -> str:
             )
     if d.holdout is not None:
         shrink = d.holdout.shrinkage
-        text = "n/a (no gap in the held-out data)" if shrink is None else f"{100 * shrink:.0f} %"
+        text = (
+            "n/a (no gap in the held-out data)"
+            if d.holdout.gap_before <= 0
+            else f"{100 * shrink:.0f} %"
+        )
         lines.append(f"held-out shrinkage of {d.holdout.effect}: {text}")
     return "\n".join(lines)
 

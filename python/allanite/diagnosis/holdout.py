@@ -58,7 +58,7 @@ def holdout_check(
     g_before, g_after = tm.gap(), tm.gap(extra)
     return Holdout(
         effect=best.effect,
-        shrinkage=float(1.0 - g_after / g_before) if g_before > 0 else None,
+        shrinkage=float(1.0 - g_after / g_before) if g_before > 0 else 0.0,
         gap_before=g_before,
         gap_after=g_after,
         consistent_after=bool(tm.p_value(extra) > alpha),

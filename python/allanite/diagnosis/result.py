@@ -34,9 +34,9 @@ class Holdout:
     ----------
     effect : str
         The effect (the best attribution) whose fitted parameters were carried over.
-    shrinkage : float or None
-        ``1 - G_after / G_before`` on the held-out data (None when the held-out data shows no
-        tau-view gap to shrink).
+    shrinkage : float
+        ``1 - G_after / G_before`` on the held-out data (0 when the held-out data shows no
+        tau-view gap to shrink, the in-sample convention; ``gap_before`` then is 0).
     gap_before, gap_after : float
         ``G`` on the held-out data without and with the effect.
     consistent_after : bool
@@ -48,7 +48,7 @@ class Holdout:
     """
 
     effect: str
-    shrinkage: float | None
+    shrinkage: float
     gap_before: float
     gap_after: float
     consistent_after: bool

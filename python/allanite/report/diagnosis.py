@@ -108,7 +108,7 @@ def diagnosis_html(diagnosis: Any, *, channel: str, model_name: str) -> str:
         )
     if diagnosis.holdout is not None:
         hold = diagnosis.holdout
-        share = "–" if hold.shrinkage is None else f"{100 * hold.shrinkage:.0f} %"
+        share = "–" if hold.gap_before <= 0 else f"{100 * hold.shrinkage:.0f} %"
         parts.append(
             f"<p>Held-out check ({h.escape(hold.source)}, {hold.n_samples:,} samples): "
             f"{h.escape(hold.effect)} explains {share} of the gap there.</p>"
