@@ -161,6 +161,10 @@ def test_white_noise_too_small_in_the_sim(base):
     best = d.best
     assert best is not None
     assert best.effect in ("rescale:white", "white")
+    # adding white noise and rescaling it are the same model: equal scores, so each is listed
+    # as the other's indistinguishable alternative, and nothing else is
+    twin = {"white", "rescale:white"} - {best.effect}
+    assert set(best.alternatives) == twin
     n_fit = best.params["N"]
     n_added = truth_n if best.effect == "rescale:white" else np.sqrt(truth_n**2 - 0.05**2)
     sigma_n = best.params_sigma["N"]

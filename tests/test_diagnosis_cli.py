@@ -59,6 +59,7 @@ def test_json_is_exactly_one_object(files, tmp_path):
     for entry in data["attribution"]:
         assert isinstance(entry["shrinkage"], float)
         assert isinstance(entry["consistent_after"], bool)
+        assert all(isinstance(e, str) for e in entry["alternatives"])
     # the contract: {"shrinkage": float} | null; a sine is checked on the held-out half
     assert isinstance(data["holdout"]["shrinkage"], float)
     html = (tmp_path / "gap.html").read_text()

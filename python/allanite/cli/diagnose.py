@@ -138,6 +138,11 @@ def _summary(d: Any) -> str:
                 f"(shrinkage {100 * a.shrinkage:.0f} %, "
                 + ("consistent after" if a.consistent_after else "gap remains")
                 + ")"
+                + (
+                    f"; indistinguishable from {', '.join(a.alternatives)}"
+                    if a.alternatives
+                    else ""
+                )
             )
     if d.holdout is not None:
         shrink = d.holdout.shrinkage

@@ -31,13 +31,15 @@ scale); a bias step, a warm-up and a ramp also pay the excess misfit of their sh
 window means (:mod:`allanite.diagnosis.level_shape`); a slow stationary candidate explains
 level evidence when the jump/level test, with its own slow noise added to the null spreads,
 is no longer significant. ``consistent_after`` is true when the p-value of ``T_after`` (null
-law with ``k`` fewer degrees of freedom) exceeds ``alpha``. The gap is ``G = max(0, T - T0)``
-and the shrinkage ``1 - G_after / G_before`` (0 when the tau view shows no gap to shrink).
+law with ``k`` fewer degrees of freedom) exceeds ``alpha``. Effects whose scores differ by
+less than the penalty of one parameter are listed as each other's ``alternatives``. The gap
+is ``G = max(0, T - T0)`` and the shrinkage ``1 - G_after / G_before`` (0 when the tau view
+shows no gap to shrink).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -83,6 +85,11 @@ class Attribution:
         frequency/time evidence explained and left unexplained.
     sim_avar_after : numpy.ndarray
         Allan variance of the simulated sensor plus the effect on the tau-view grid (plots).
+    alternatives : list of str
+        Other kept effects whose score lies within the penalty of one parameter
+        (``chi2_1`` quantile ``1 - alpha``) of this one: at level ``alpha`` the data do not tell
+        them apart (e.g. a low-pass filter and a smaller quantization term that both lower
+        only the shortest taus).
     """
 
     effect: str
@@ -97,6 +104,7 @@ class Attribution:
     score: float
     evidence: dict[str, Any]
     sim_avar_after: NDArray[np.float64]
+    alternatives: tuple[str, ...] = ()
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dictionary (the CLI contract keys first)."""
@@ -107,6 +115,7 @@ class Attribution:
             "gap_after": self.gap_after,
             "shrinkage": self.shrinkage,
             "consistent_after": self.consistent_after,
+            "alternatives": list(self.alternatives),
             "params_sigma": dict(self.params_sigma),
             "term": dict(self.term),
             "p_after": self.p_after,
@@ -336,5 +345,14 @@ def rank(
         )
         for c in candidates
     ]
-    kept = [a for a in fitted if a is not None]
-    return sorted(kept, key=lambda a: a.score)
+    kept = sorted((a for a in fitted if a is not None), key=lambda a: a.score)
+    margin = float(stats.chi2.isf(alpha, 1))
+    return [
+        replace(
+            a,
+            alternatives=tuple(
+                b.effect for b in kept if b is not a and abs(b.score - a.score) < margin
+            ),
+        )
+        for a in kept
+    ]

@@ -95,13 +95,20 @@ def diagnosis_html(diagnosis: Any, *, channel: str, model_name: str) -> str:
                 _params(a.params, a.params_sigma),
                 f"{100 * a.shrinkage:.0f} %",
                 "yes" if a.consistent_after else "no",
+                ", ".join(a.alternatives) or "–",
             ]
             for a in diagnosis.attribution[:6]
         ]
         parts.append("<h3>What explains the gap (best first)</h3>")
         parts.append(
             h.table(
-                ["effect", "fitted parameters", "gap explained", "consistent after"],
+                [
+                    "effect",
+                    "fitted parameters",
+                    "gap explained",
+                    "consistent after",
+                    "indistinguishable from",
+                ],
                 rows,
                 text_columns=2,
             )
