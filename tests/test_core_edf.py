@@ -333,19 +333,51 @@ def _identify_by_definition(x: np.ndarray, factors: np.ndarray, kind: str, data:
     out = np.empty((factors.size, x.shape[1]), dtype=np.int64)
     for c in range(x.shape[1]):
         col = x[:, c].astype(np.float64)
-        for i, m in enumerate(factors.tolist()):
+        longest_acf, cap = 0, hi
+        for i, m in sorted(enumerate(factors.tolist()), key=lambda im: im[1]):
             ybar = np.diff(col[: (col.size - 1) // m * m + 1 : m]) / m
             series = col[::m] if data == "phase" else ybar
             if series.size >= edf.ACF_MIN_POINTS:
                 alpha = edf.acf_noise_id(series, shape.d, phase=data == "phase")
+                if m >= longest_acf:
+                    longest_acf, cap = m, alpha
             else:
                 ratio = None
                 if 3 * m <= col.size:  # second differences ignore the trend of phase data
                     av = reference.overlapping_variance(col, m)
                     ratio = reference.modified_variance(col, m) / av if av else None
                 alpha = edf.b1_noise_id(ybar, m, ratio)
+                if longest_acf:  # beyond the lag-1 range: at most the last lag-1 exponent
+                    alpha = min(alpha, cap)
             out[i, c] = min(max(alpha, lo), hi)
     return out
+
+
+def test_few_point_exponents_are_capped_beyond_the_lag1_range() -> None:
+    factors = np.array([1, 10, 100, 1000, 3000, 50])
+    points = np.array([9000, 900, 90, 9, 3, 180])
+    alpha = np.array([[2, 2], [0, 1], [-1, 0], [1, -2], [2, 2], [0, 1]])
+    got = edf.cap_few_point_alpha(alpha, factors, points)
+    # the longest lag-1 factor is 100 (alpha -1 and 0): 1000 and 3000 are capped there
+    np.testing.assert_array_equal(got, [[2, 2], [0, 1], [-1, 0], [-1, -2], [-1, 0], [0, 1]])
+    assert np.array_equal(alpha[3], [1, -2])  # the input is not modified
+    # nothing to cap when every factor (or none) has the lag-1 method
+    np.testing.assert_array_equal(edf.cap_few_point_alpha(alpha, factors, points + 10**4), alpha)
+    np.testing.assert_array_equal(edf.cap_few_point_alpha(alpha, factors, points * 0), alpha)
+
+
+def test_example_record_has_no_isolated_edf_jumps() -> None:
+    """B1/R(n) read the example's long taus as phase noise twice (EDF 127 and 55 among ~5)."""
+    from allanite.examples import example_record
+
+    x, fs = example_record()
+    res = allanite.avar(x, fs, input="angle")
+    few = (res.n_samples - 1) // res.m < edf.ACF_MIN_POINTS
+    assert few.sum() >= 5
+    edf_few = res.edf[few]
+    # beyond the lag-1 range the EDF falls with tau (fewer points, no jump back to phase noise)
+    assert np.all(np.diff(edf_few) <= 0), edf_few
+    assert np.all(res.alpha[few] <= res.alpha[~few][-1])
 
 
 @pytest.mark.parametrize("kind", ["overlapping", "hadamard", "modified", "total"])

@@ -300,11 +300,15 @@ def test_bounded_identification_in_memory_uses_the_decimated_head():
     x = _record(6000, c=2)
     phase = _core.phase(x, "rate")
     factors = np.array([1, 4, 32, 512], dtype=np.int64)
+    from allanite.edf import cap_few_point_alpha
+
     got = _identify(phase, factors, "overlapping", "frequency", 700)
-    for i, m in enumerate(factors.tolist()):
-        head = np.ascontiguousarray(phase[::m][:700])
-        expected = identify_alpha(head, np.array([1]), "overlapping", data="frequency")[0]
-        assert np.array_equal(got[i], expected)
+    heads = [np.ascontiguousarray(phase[::m][:700]) for m in factors.tolist()]
+    per_factor = np.array(
+        [identify_alpha(h, np.array([1]), "overlapping", data="frequency")[0] for h in heads]
+    )
+    points = np.array([h.shape[0] - 1 for h in heads])
+    assert np.array_equal(got, cap_few_point_alpha(per_factor, factors, points))
     # unbounded: exactly avar's identification
     full = _identify(phase, factors, "overlapping", "frequency", None)
     assert np.array_equal(full, identify_alpha(phase, factors, "overlapping", data="frequency"))

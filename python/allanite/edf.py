@@ -11,7 +11,11 @@ the averaging factor, the record length and the dominant power-law noise
 * the dominant noise exponent ``alpha`` at every averaging factor from the data, as Stable32
   does: the lag-1 autocorrelation method of Riley & Greenhall (2004) while at least 30
   decimated points remain, otherwise the B1 bias ratio (Howe et al. 2000), refined by the R(n)
-  ratio between white and flicker phase noise.
+  ratio between white and flicker phase noise. With so few points B1 and R(n) often read noise
+  as phase noise at one long tau among frequency-noise neighbours, which inflates that tau's EDF
+  (e.g. 127 between 9 and 7); beyond the longest tau the lag-1 method identified, the exponent
+  is therefore capped at that tau's (:func:`cap_few_point_alpha`: noise moves toward lower
+  ``alpha`` as tau grows, and the cap can only lower the EDF, widening the interval).
 
 References
 ----------
@@ -44,6 +48,7 @@ __all__ = [
     "EstimatorShape",
     "acf_noise_id",
     "b1_noise_id",
+    "cap_few_point_alpha",
     "equivalent_dof",
     "estimator_shape",
     "greenhall_edf",
@@ -576,6 +581,42 @@ def _as_core_array(x: NDArray[np.generic]) -> NDArray[np.generic]:
     return arr
 
 
+def cap_few_point_alpha(
+    alpha: NDArray[np.int64], factors: NDArray[np.int64], n_points: NDArray[np.int64]
+) -> NDArray[np.int64]:
+    """Cap the few-point exponents at the one of the longest reliably identified factor.
+
+    At factors with at least :data:`ACF_MIN_POINTS` decimated points the lag-1 method is
+    reliable; beyond the longest such factor (per channel) the B1/R(n) answer is limited to at
+    most that factor's ``alpha``. Power-law noise moves toward lower exponents (phase noise at
+    short tau, frequency noise and random walks at long tau), and the Allan-family EDF grows
+    with ``alpha``, so the cap never narrows an interval.
+
+    Parameters
+    ----------
+    alpha : numpy.ndarray
+        Identified exponents, shape ``(T, C)``.
+    factors : numpy.ndarray
+        Averaging factors, shape ``(T,)`` (any order).
+    n_points : numpy.ndarray
+        Decimated points the identification used at each factor, shape ``(T,)``.
+
+    Returns
+    -------
+    numpy.ndarray
+        A capped copy of ``alpha``.
+    """
+    out = np.array(alpha, dtype=np.int64, copy=True)
+    f = np.asarray(factors, dtype=np.int64).reshape(-1)
+    reliable = np.asarray(n_points).reshape(-1) >= ACF_MIN_POINTS
+    if not reliable.any() or reliable.all():
+        return out
+    ref = int(np.flatnonzero(reliable)[np.argmax(f[reliable])])
+    beyond = (~reliable) & (f > f[ref])
+    out[beyond] = np.minimum(out[beyond], out[ref][None, :])
+    return out
+
+
 def identify_alpha(
     phase: NDArray[np.generic],
     m: NDArray[np.int64],
@@ -591,8 +632,9 @@ def identify_alpha(
     frequency averaged over ``m`` samples (frequency data; the first difference of the decimated
     phase), then the lag-1 autocorrelation method (:func:`acf_noise_id`, ``dmax`` = 2 for the
     Allan family and 3 for Hadamard) is applied when at least :data:`ACF_MIN_POINTS` values
-    remain, the B1/R(n) method (:func:`b1_noise_id`) otherwise. The result is clipped to the
-    exponents the estimator can measure (``alpha + 2d > 1``).
+    remain, the B1/R(n) method (:func:`b1_noise_id`) otherwise, capped beyond the longest
+    lag-1 factor by :func:`cap_few_point_alpha`. The result is clipped to the exponents the
+    estimator can measure (``alpha + 2d > 1``).
 
     Cost and memory: the lag-1 statistics of all difference levels come from the compiled
     :func:`allanite._core.lag1_acf`: one streaming pass over the record per worker thread,
@@ -676,4 +718,4 @@ def identify_alpha(
             mi = int(factors[i])
             ratio = float(ratios[mi][c]) if mi in ratios else math.nan
             out[i, c] = _rn_phase_class(None if math.isnan(ratio) else ratio, mi)
-    return np.clip(out, lo, hi)
+    return np.clip(cap_few_point_alpha(out, factors, n_series), lo, hi)

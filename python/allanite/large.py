@@ -34,7 +34,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from allanite import _core
-from allanite.edf import identify_alpha
+from allanite.edf import cap_few_point_alpha, identify_alpha
 from allanite.io.large import ChunkedRecord, as_chunked
 from allanite.phase_store import PhaseStore, ProgressCallback, build_phase_store
 from allanite.taus import KERNEL_KIND, TauSpec, averaging_factors
@@ -203,10 +203,17 @@ def _identify(
     if alpha_rows is None:
         return identify_alpha(phase, factors, kernel_kind, data=identify)
     out = np.empty((factors.size, phase.shape[1]), dtype=np.int64)
+    points = np.empty(factors.size, dtype=np.int64)
     for i, m in enumerate(factors.tolist()):
         decimated = np.ascontiguousarray(phase[: m * alpha_rows : m])
         out[i] = identify_alpha(decimated, np.array([1]), kernel_kind, data=identify)[0]
-    return out
+        points[i] = _series_points(decimated.shape[0], identify)
+    return cap_few_point_alpha(out, factors, points)
+
+
+def _series_points(decimated_rows: int, identify: str) -> int:
+    """Values the identification sees in a decimated phase (one fewer for frequency data)."""
+    return decimated_rows if identify == "phase" else decimated_rows - 1
 
 
 def variance_from_store(
@@ -278,6 +285,7 @@ def variance_from_store(
     m_top = int(factors.max())
     var = np.empty((nt, nc))
     alphas = np.empty((nt, nc), dtype=np.int64) if identify is not None else None
+    points = np.zeros(nt, dtype=np.int64)
 
     def one(i: int, reader: _WindowReader) -> None:
         m = int(factors[i])
@@ -289,6 +297,7 @@ def variance_from_store(
         var[i] = (state[:, 0] + state[:, 1]) / (_NORM[order] * md * md * nd)
         if alphas is not None and identify is not None:
             alphas[i] = identify_alpha(decimated, np.array([1]), kernel_kind, data=identify)[0]
+            points[i] = _series_points(decimated.shape[0], identify)
 
     rows = alpha_rows if alpha_rows is not None else 1 << 22
     readers = [_WindowReader(store, order, chunk_terms, rows) for _ in range(workers)]
@@ -298,7 +307,7 @@ def variance_from_store(
             one(i, readers[0])
             if progress is not None:
                 progress("variance", done, nt)
-        return var, alphas
+        return var, _capped(alphas, factors, points)
     # each worker owns one reader; hand out factors round-robin from a shared queue
     import queue
 
@@ -332,7 +341,13 @@ def variance_from_store(
                 progress("variance", done, nt)
         for fut in futures:
             fut.result()
-    return var, alphas
+    return var, _capped(alphas, factors, points)
+
+
+def _capped(
+    alphas: NDArray[np.int64] | None, factors: NDArray[np.int64], points: NDArray[np.int64]
+) -> NDArray[np.int64] | None:
+    return None if alphas is None else cap_few_point_alpha(alphas, factors, points)
 
 
 def avar_large(
