@@ -36,18 +36,12 @@ from numpy.typing import NDArray
 
 from allanite.model import NoiseModel
 from allanite.terms import Quantization, Sine, Term
+from allanite.transfer import avar_transfer
 
 __all__ = ["CovarianceBasis", "avar_covariance", "avar_transfer"]
 
 #: excess kurtosis of a uniform quantization error
 UNIFORM_EXCESS_KURTOSIS = -1.2
-
-
-def avar_transfer(f: NDArray[np.float64], m: NDArray[np.float64], dt: float) -> NDArray[np.float64]:
-    """Power transfer ``|H_m(f)|^2`` of the overlapping AVAR, shape ``(len(m), len(f))``."""
-    f = np.asarray(f, dtype=np.float64)
-    mm = np.asarray(m, dtype=np.float64)[:, None]
-    return 2.0 * np.sin(np.pi * f * mm * dt) ** 4 / (mm * np.sin(np.pi * f * dt)) ** 2
 
 
 #: sin^4(x) = sum_p C4[p] cos(2 p x)

@@ -34,6 +34,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from allanite.simulation.streams import TermStream, block_length
+from allanite.transfer import avar_transfer
 
 __all__ = ["SpectralStream", "WholeRecordStream", "expected_avar", "synthesis_length"]
 
@@ -70,11 +71,9 @@ def expected_avar(
     length = synthesis_length(n_samples, n_channels)
     power = _line_powers(psd, length, dt)
     f = np.arange(1, length // 2 + 1) / (length * dt)
-    out = []
-    for mm in np.atleast_1d(np.asarray(m, dtype=np.float64)):
-        gain = 2.0 * np.sin(np.pi * f * mm * dt) ** 4 / (mm * np.sin(np.pi * f * dt)) ** 2
-        out.append(float(np.sum(power * gain)))
-    return np.array(out)
+    # one factor at a time: the synthesis grid can hold millions of lines
+    factors = np.atleast_1d(np.asarray(m, dtype=np.float64))
+    return np.array([float(np.sum(power * avar_transfer(f, [mm], dt)[0])) for mm in factors])
 
 
 class WholeRecordStream(TermStream):

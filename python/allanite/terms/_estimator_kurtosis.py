@@ -82,6 +82,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from allanite.terms._checks import averaging_factor
+from allanite.transfer import avar_transfer
 
 __all__ = [
     "gaussian_estimate_variance",
@@ -216,14 +217,13 @@ def gaussian_estimate_variance(
     f = np.arange(size // 2 + 1) / (size * dt)
     f[0] = 1e-6 / (size * dt)  # the f -> 0 limit of S |H|^2 (finite for a random walk)
     density = np.asarray(spectrum(f), dtype=np.float64)
-    x = np.pi * f * dt
     out = np.full(factors.shape, np.nan)
     for index, m in np.ndenumerate(factors):
         m = int(m)
         terms = n - 2 * m + 1
         if terms < 1:
             continue
-        response = 4.0 * np.sin(m * x) ** 4 / (m * np.sin(x)) ** 2  # 2 |H_m|^2
+        response = 2.0 * avar_transfer(f, [m], dt)[0]
         cov = np.fft.irfft(density * response, n=size)[:terms] / (2.0 * dt)
         k = np.arange(1, terms)
         sums = terms * cov[0] ** 2 + 2.0 * float(np.sum((terms - k) * cov[1:] ** 2))
