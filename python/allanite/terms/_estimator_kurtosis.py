@@ -170,6 +170,17 @@ def _position_integral(first: Coefficients, second: Coefficients, theta: float) 
     return total
 
 
+def _per_factor(
+    factors: NDArray[np.int64], n: int, one: Callable[[int], float]
+) -> NDArray[np.float64]:
+    """``one(m)`` at every factor with ``2m <= n`` (at least one difference), NaN elsewhere."""
+    out = np.full(factors.shape, np.nan)
+    for index, m in np.ndenumerate(factors):
+        if 2 * int(m) <= n:
+            out[index] = one(int(m))
+    return out
+
+
 def _check_cumulant(value: float, name: str) -> float:
     v = float(value)
     if not math.isfinite(v):
@@ -217,18 +228,16 @@ def gaussian_estimate_variance(
     f = np.arange(size // 2 + 1) / (size * dt)
     f[0] = 1e-6 / (size * dt)  # the f -> 0 limit of S |H|^2 (finite for a random walk)
     density = np.asarray(spectrum(f), dtype=np.float64)
-    out = np.full(factors.shape, np.nan)
-    for index, m in np.ndenumerate(factors):
-        m = int(m)
+
+    def one(m: int) -> float:
         terms = n - 2 * m + 1
-        if terms < 1:
-            continue
         response = 2.0 * avar_transfer(f, [m], dt)[0]
         cov = np.fft.irfft(density * response, n=size)[:terms] / (2.0 * dt)
         k = np.arange(1, terms)
         sums = terms * cov[0] ** 2 + 2.0 * float(np.sum((terms - k) * cov[1:] ** 2))
-        out[index] = 2.0 * sums / (2.0 * terms) ** 2
-    return out
+        return 2.0 * sums / (2.0 * terms) ** 2
+
+    return _per_factor(factors, n, one)
 
 
 def iid_excess_variance(
@@ -259,15 +268,13 @@ def iid_excess_variance(
     """
     factors, n = _factors(tau, dt, n)
     kappa = _check_cumulant(fourth_cumulant, "fourth_cumulant")
-    out = np.full(factors.shape, np.nan)
-    for index, m in np.ndenumerate(factors):
-        m = int(m)
-        if 2 * m > n:
-            continue
+
+    def one(m: int) -> float:
         w, _, _ = _profiles(m, 0.0)
         diagonal = _site_sums([(w, w)], m, n)[0] / (2.0 * (n - 2 * m + 1))
-        out[index] = kappa * float(np.sum(diagonal**2))
-    return out
+        return kappa * float(np.sum(diagonal**2))
+
+    return _per_factor(factors, n, one)
 
 
 def _jump_excess(m: int, n: int, theta: float, mirrored: bool) -> float:
@@ -352,11 +359,7 @@ def step_excess_variance(
     """
     factors, n = _factors(tau, dt, n)
     scale = float(step_rate) * dt * _check_cumulant(step_fourth_moment, "step_fourth_moment")
-    out = np.full(factors.shape, np.nan)
-    for index, m in np.ndenumerate(factors):
-        if 2 * m <= n:
-            out[index] = scale * _jump_excess(int(m), n, 0.0, mirrored=False)
-    return out
+    return _per_factor(factors, n, lambda m: scale * _jump_excess(m, n, 0.0, mirrored=False))
 
 
 def telegraph_excess_variance(
@@ -397,8 +400,4 @@ def telegraph_excess_variance(
         raise ValueError(f"tau_c must be a positive, finite time in seconds, got {tau_c!r}")
     theta = dt / tau_c
     scale = -16.0 * _check_cumulant(amplitude, "amplitude") ** 4 * dt / (2.0 * tau_c)
-    out = np.full(factors.shape, np.nan)
-    for index, m in np.ndenumerate(factors):
-        if 2 * m <= n:
-            out[index] = scale * _jump_excess(int(m), n, theta, mirrored=True)
-    return out
+    return _per_factor(factors, n, lambda m: scale * _jump_excess(m, n, theta, mirrored=True))
