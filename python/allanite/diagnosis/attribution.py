@@ -258,13 +258,14 @@ def fit_candidate(
     explained = sorted(e for e in cand.explains if significant.get(e, False))
     # slow stationary noise explains level wander too: re-test jump/level with the candidate
     level_p: dict[str, float] = {}
-    if time_view is not None and any(significant.get(e, False) for e in ("jump", "level")):
+    pending = [e for e in ("jump", "level") if significant.get(e, False) and e not in explained]
+    if time_view is not None and pending:
+        values = _values(cand, logp)
         window = np.array([time_view.window_s])
         with np.errstate(all="ignore"):
-            a_w = np.asarray(cand.extra_avar(_values(cand, logp), window, tm.dt), dtype=float)
-        added = cand.added_term(_values(cand, logp))
-        todo = any(significant.get(e, False) and e not in explained for e in ("jump", "level"))
-        if todo and a_w.size and np.isfinite(a_w[0]) and a_w[0] > 0:
+            a_w = np.asarray(cand.extra_avar(values, window, tm.dt), dtype=float)
+        if a_w.size and np.isfinite(a_w[0]) and a_w[0] > 0:
+            added = cand.added_term(values)
             fs, n_fit = 1.0 / tm.dt, round(duration / tm.dt)
             level_var = None
             if added is not None and n_fit >= 2 * time_view.level.size:
