@@ -1,0 +1,142 @@
+"""Simulator and estimator IMU noise configs: read them as noise models, write models back.
+
+One module per format, each with ``NAME``, ``TITLE``, ``SUFFIXES``, ``sniff(text)``,
+``read(text, rate=...) -> ImuConfig`` and ``write(config, rate=..., template=...,
+tau_range=...) -> Written``; every reader maps the simulator's own discrete law exactly onto
+:class:`~allanite.model.NoiseModel` Terms (see each module's docstring and
+``docs/SIMULATORS.md``), and every writer says what it dropped or projected
+(:mod:`allanite.formats.projection`).
+
+>>> from allanite.formats import read_config, write_config
+>>> cfg = read_config("model.sdf", rate=250)          # doctest: +SKIP
+>>> write_config(cfg, "imu.yaml").report()            # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from types import ModuleType
+
+from allanite.formats import (
+    airsim,
+    allanite_json,
+    gnss_ins_sim,
+    gz_sdf,
+    kalibr,
+    matlab,
+    openvins,
+    orbslam3,
+    px4_plugin,
+    vins,
+)
+from allanite.formats.base import ImuConfig, Written
+from allanite.formats.projection import Projection, project
+
+__all__ = [
+    "FORMATS",
+    "ImuConfig",
+    "Projection",
+    "Written",
+    "detect_format",
+    "format_module",
+    "project",
+    "read_config",
+    "write_config",
+]
+
+#: format name -> module, in the order content sniffing tries them
+FORMATS: dict[str, ModuleType] = {
+    m.NAME: m
+    for m in (
+        allanite_json,
+        px4_plugin,
+        gz_sdf,
+        openvins,
+        kalibr,
+        orbslam3,
+        vins,
+        airsim,
+        matlab,
+        gnss_ins_sim,
+    )
+}
+
+
+def format_module(name: str) -> ModuleType:
+    """The module of a format name, or a ValueError listing the names."""
+    if name not in FORMATS:
+        raise ValueError(f"unknown config format {name!r}; use one of {', '.join(FORMATS)}")
+    return FORMATS[name]
+
+
+def detect_format(path: str | Path, text: str | None = None) -> str:
+    """Format of a config from its content (and suffix); ``text`` is read when omitted.
+
+    Raises
+    ------
+    ValueError
+        When neither the content nor the suffix identifies one format.
+    """
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if text is not None:
+        by_suffix = [n for n, m in FORMATS.items() if suffix in m.SUFFIXES]
+        for name in by_suffix or list(FORMATS):
+            if FORMATS[name].sniff(text):
+                return name
+        for name, module in FORMATS.items():
+            if module.sniff(text):
+                return name
+    elif suffix:
+        candidates = [n for n, m in FORMATS.items() if suffix in m.SUFFIXES]
+        if len(candidates) == 1:
+            return candidates[0]
+    raise ValueError(
+        f"{path}: cannot tell which simulator config this is; give the format "
+        f"(CLI: --sim-format / --from / --to NAME), one of {', '.join(FORMATS)}"
+    )
+
+
+def read_config(
+    path: str | Path, *, format: str | None = None, rate: float | None = None
+) -> ImuConfig:
+    """Read a simulator/estimator IMU config (format from content and suffix unless given)."""
+    path = Path(path)
+    if not path.is_file():
+        raise ValueError(f"config file {path} not found")
+    text = path.read_text(encoding="utf-8")
+    name = format or detect_format(path, text)
+    try:
+        return format_module(name).read(text, rate=rate)
+    except ValueError as exc:
+        raise ValueError(f"{path} ({name}): {exc}") from None
+
+
+def write_config(
+    config: ImuConfig,
+    path: str | Path,
+    *,
+    format: str | None = None,
+    rate: float | None = None,
+    template: str | Path | None = None,
+    tau_range: tuple[float, float] | None = None,
+) -> Written:
+    """Write ``config`` to ``path`` atomically; return what was written, dropped, projected.
+
+    The format is ``format``, else the template's content, else the suffix of ``path``.
+    """
+    from allanite.io.atomic import atomic_output
+
+    path = Path(path)
+    template_text = Path(template).read_text(encoding="utf-8") if template is not None else None
+    if format is None:
+        if template is not None:
+            format = detect_format(Path(template), template_text)
+        else:
+            format = detect_format(path)
+    written: Written = format_module(format).write(
+        config, rate=rate, template=template_text, tau_range=tau_range
+    )
+    with atomic_output(path) as tmp:
+        Path(tmp).write_text(written.text, encoding="utf-8")
+    return written

@@ -1,0 +1,55 @@
+"""Continuous-time white + bias random walk densities (Kalibr and the estimators).
+
+Kalibr, OpenVINS, ORB-SLAM3 and VINS-Fusion describe each sensor by a noise density ``n``
+(rate/sqrt(Hz)) and a bias random-walk density ``w`` (rate/s/sqrt(Hz)): the discrete white
+std is ``n sqrt(rate)`` and the bias increment std ``w / sqrt(rate)``, which are exactly
+allanite's ``White(N=n)`` and ``RateRandomWalk(K=w)`` at any rate.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from allanite.formats.base import ImuConfig, number, sensor_model
+from allanite.model import NoiseModel
+from allanite.terms import RateRandomWalk, Term, White
+
+__all__ = ["HOLDS", "from_densities", "to_densities"]
+
+HOLDS = frozenset({"white", "rrw"})
+
+
+def from_densities(
+    get: dict[str, Any],
+    keys: dict[str, tuple[str, str]],
+    *,
+    fmt: str,
+    rate: float | None = None,
+    what: str,
+) -> ImuConfig:
+    """Build the config from ``{sensor: (density key, random-walk key)}`` found in ``get``."""
+    models: dict[str, NoiseModel] = {}
+    for sensor, (n_key, w_key) in keys.items():
+        if n_key not in get and w_key not in get:
+            continue
+        terms: list[Term] = []
+        n = number(get.get(n_key, 0.0), f"{what}: {n_key}")
+        w = number(get.get(w_key, 0.0), f"{what}: {w_key}")
+        if n > 0:
+            terms.append(White(N=n))
+        if w > 0:
+            terms.append(RateRandomWalk(K=w))
+        models[sensor] = sensor_model(terms, sensor)
+    if not models:
+        wanted = ", ".join(k for pair in keys.values() for k in pair)
+        raise ValueError(f"{what}: none of the keys {wanted} found")
+    return ImuConfig(
+        gyro=models.get("gyro"), accel=models.get("accel"), rate=rate, source_format=fmt
+    )
+
+
+def to_densities(model: NoiseModel) -> tuple[float, float]:
+    """``(noise density, random walk)`` of a model holding at most white and rrw terms."""
+    n = sum(t.values()["N"] ** 2 for t in model.terms_of_type("white")) ** 0.5
+    w = sum(t.values()["K"] ** 2 for t in model.terms_of_type("rrw")) ** 0.5
+    return float(n), float(w)

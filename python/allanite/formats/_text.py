@@ -1,0 +1,62 @@
+"""Small text helpers shared by the config formats: lenient YAML, in-place key updates."""
+
+from __future__ import annotations
+
+import re
+from typing import Any
+
+__all__ = ["load_yaml", "number_text", "update_keys"]
+
+
+def number_text(value: float) -> str:
+    """A float as config text, round-trip exact to 10 significant digits."""
+    return f"{value:.10g}"
+
+
+def load_yaml(text: str, what: str) -> dict[str, Any]:
+    """Parse YAML as OpenCV-style configs write it (``%YAML:1.0``, ``!!opencv-matrix`` tags)."""
+    try:
+        import yaml
+    except ImportError as exc:  # pragma: no cover - pyyaml is in the [yaml] extra
+        raise ImportError(f"reading {what} needs PyYAML: pip install 'allanite[yaml]'") from exc
+
+    class Loader(yaml.SafeLoader):
+        pass
+
+    def any_tag(loader: Any, suffix: str, node: Any) -> Any:
+        if isinstance(node, yaml.MappingNode):
+            return loader.construct_mapping(node)
+        if isinstance(node, yaml.SequenceNode):
+            return loader.construct_sequence(node)
+        return loader.construct_scalar(node)
+
+    Loader.add_multi_constructor("", any_tag)
+    body = "\n".join(
+        "" if line.lstrip().startswith("%YAML") else line for line in text.splitlines()
+    )
+    try:
+        data = yaml.load(body, Loader=Loader)  # a SafeLoader subclass
+    except yaml.YAMLError as exc:
+        raise ValueError(f"{what} is not valid YAML: {exc}") from None
+    if not isinstance(data, dict):
+        raise ValueError(f"{what} must be a YAML mapping of keys to values")
+    return data
+
+
+def update_keys(text: str, values: dict[str, str], *, indent: str = "") -> str:
+    """Replace the values of ``key: value`` lines in ``text``; append missing keys.
+
+    Comments after a value and every other line are kept, so a user's config stays theirs.
+    """
+    lines = text.splitlines()
+    missing = []
+    for key, value in values.items():
+        pattern = re.compile(rf"^(\s*{re.escape(key)}\s*:\s*)([^#\n]*?)(\s*(#.*)?)$")
+        for i, line in enumerate(lines):
+            match = pattern.match(line)
+            if match:
+                lines[i] = f"{match.group(1)}{value}{match.group(3)}"
+                break
+        else:
+            missing.append(f"{indent}{key}: {value}")
+    return "\n".join(lines + missing) + "\n"

@@ -1,0 +1,46 @@
+"""allanite's own NoiseModel JSON (one sensor) as a config format.
+
+The model is read in its own units and converted to SI (rad/s); writing gives the gyro model
+(or the accelerometer model when there is no gyro) with every term, nothing dropped.
+"""
+
+from __future__ import annotations
+
+from allanite.formats.base import GYRO_UNIT, ImuConfig, Written
+from allanite.model import NoiseModel
+
+NAME = "allanite"
+TITLE = "allanite NoiseModel JSON"
+SUFFIXES = (".json",)
+
+
+def sniff(text: str) -> bool:
+    """A JSON object with ``terms`` and ``units``."""
+    return '"terms"' in text and '"units"' in text
+
+
+def read(text: str, *, rate: float | None = None) -> ImuConfig:
+    """Read the model JSON (a gyro model: its rate unit is an angle per time)."""
+    model = NoiseModel.from_json(text)
+    return ImuConfig(gyro=model.in_units(GYRO_UNIT), rate=rate, source_format=NAME)
+
+
+def write(
+    config: ImuConfig,
+    *,
+    rate: float | None = None,
+    template: str | None = None,
+    tau_range: tuple[float, float] | None = None,
+) -> Written:
+    """The model JSON of the gyro (or, without one, the accelerometer)."""
+    model = config.gyro if config.gyro is not None else config.accel
+    if model is None:
+        raise ValueError("the config holds no noise model to write")
+    dropped = []
+    if config.gyro is not None and config.accel is not None:
+        dropped.append("accel: the model JSON holds one sensor; the accelerometer model")
+    if template is not None:
+        old = NoiseModel.from_json(template)
+        if old.units["rate"] != model.units["rate"]:
+            model = model.in_units(old.units["rate"])
+    return Written(model.to_json() + "\n", dropped, [])

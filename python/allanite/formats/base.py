@@ -1,0 +1,181 @@
+"""What every simulator/estimator config format shares: the IMU model and the write report.
+
+A config is read into an :class:`ImuConfig`: a gyro :class:`~allanite.model.NoiseModel` in
+rad/s and an accelerometer model in m/s^2 (either may be absent), each built from the
+simulator's own discrete law (see the format modules), plus the update rate and the constant
+offsets the format carries. Writing returns a :class:`Written`: the text and, never silently,
+what the format could not hold and the projections made instead.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+from allanite.model import NoiseModel
+from allanite.terms import Term
+
+__all__ = [
+    "ACCEL_UNIT",
+    "GYRO_UNIT",
+    "SENSORS",
+    "ImuConfig",
+    "Written",
+    "merge_same",
+    "need_rate",
+    "number",
+    "sensor_model",
+    "single",
+]
+
+GYRO_UNIT = "rad/s"
+ACCEL_UNIT = "m/s^2"
+#: sensor name -> SI unit of its model
+SENSORS: dict[str, str] = {"gyro": GYRO_UNIT, "accel": ACCEL_UNIT}
+
+
+def sensor_model(terms: list[Term] | tuple[Term, ...], sensor: str) -> NoiseModel:
+    """A NoiseModel of ``terms`` in the SI unit of ``sensor`` (``"gyro"`` or ``"accel"``).
+
+    Accelerometer models are in m/s^2. Until :mod:`allanite.units` knows accelerations the
+    unit check is bypassed for them (the terms and their Allan variances do not depend on the
+    unit; only conversions do, and none is made here).
+    """
+    unit = SENSORS[sensor]
+    try:
+        return NoiseModel(tuple(terms), {"rate": unit, "time": "s"})
+    except ValueError:
+        if sensor != "accel":
+            raise
+        model = object.__new__(NoiseModel)
+        object.__setattr__(model, "terms", tuple(terms))
+        object.__setattr__(model, "units", {"rate": unit, "time": "s"})
+        return model
+
+
+@dataclass(frozen=True)
+class ImuConfig:
+    """An IMU noise configuration read from (or to be written to) a simulator format.
+
+    Attributes
+    ----------
+    gyro, accel : NoiseModel or None
+        Noise models in rad/s and m/s^2 (SI), per axis (the formats give one value for all
+        axes unless ``notes`` says otherwise).
+    rate : float or None
+        Update rate in Hz when the config states it (or it was given).
+    offsets : dict
+        Constant, deterministic offsets the format carries (``"gyro"``/``"accel"`` -> value in
+        SI); a constant has no Allan variance and is not a noise Term.
+    source_format : str
+        Name of the format it was read from (``""`` when built in code).
+    notes : tuple of str
+        What the reader noticed (axes that differ, simulator defaults used, ...).
+    """
+
+    gyro: NoiseModel | None = None
+    accel: NoiseModel | None = None
+    rate: float | None = None
+    offsets: dict[str, float] = field(default_factory=dict)
+    source_format: str = ""
+    notes: tuple[str, ...] = ()
+
+    def model(self, sensor: str = "gyro") -> NoiseModel:
+        """The model of one sensor, with a clear error when the config has none."""
+        if sensor not in SENSORS:
+            raise ValueError(f"sensor must be 'gyro' or 'accel', got {sensor!r}")
+        found: NoiseModel | None = getattr(self, sensor)
+        if found is None:
+            raise ValueError(
+                f"the {self.source_format or 'given'} config holds no {sensor} noise model"
+            )
+        return found
+
+    def with_model(self, sensor: str, model: NoiseModel) -> ImuConfig:
+        """A copy with one sensor's model replaced (converted to SI)."""
+        si = model if model.units["rate"] == SENSORS[sensor] else model.in_units(SENSORS[sensor])
+        return ImuConfig(
+            gyro=si if sensor == "gyro" else self.gyro,
+            accel=si if sensor == "accel" else self.accel,
+            rate=self.rate,
+            offsets=dict(self.offsets),
+            source_format=self.source_format,
+            notes=self.notes,
+        )
+
+
+@dataclass(frozen=True)
+class Written:
+    """Text of a config and what the format could not hold.
+
+    Attributes
+    ----------
+    text : str
+        The file content.
+    dropped : list of str
+        Terms (``"gyro: quantization Q=..."``) the format cannot hold, left out.
+    projections : list of str
+        Terms replaced by the closest term the format holds, with the tau range and the
+        largest Allan-deviation error of the replacement.
+    """
+
+    text: str
+    dropped: list[str] = field(default_factory=list)
+    projections: list[str] = field(default_factory=list)
+
+    def report(self) -> list[str]:
+        """One line per dropped term and per projection (empty when the format held all)."""
+        return [f"dropped {d}" for d in self.dropped] + [f"projected {p}" for p in self.projections]
+
+
+def number(value: Any, where: str) -> float:
+    """A finite, non-negative float from a config value, or a ValueError naming ``where``."""
+    if isinstance(value, bool):
+        raise ValueError(f"{where}: expected a number, got {value!r}")
+    try:
+        out = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{where}: expected a number, got {value!r}") from None
+    if math.isnan(out) or out < 0:
+        raise ValueError(f"{where}: expected a non-negative number, got {value!r}")
+    return out
+
+
+def need_rate(rate: float | None, what: str) -> float:
+    """The update rate, or a ValueError saying why the format needs it."""
+    if rate is None:
+        raise ValueError(
+            f"{what} is a per-sample quantity, so the update rate is needed: give it with "
+            "rate= (CLI: --rate HZ)"
+        )
+    if not (math.isfinite(rate) and rate > 0):
+        raise ValueError(f"the update rate must be a positive frequency in Hz, got {rate!r}")
+    return float(rate)
+
+
+def single(model: NoiseModel, kind: str) -> Term | None:
+    """The one term of a type in ``model`` (None when absent); callers merge duplicates first."""
+    found = model.terms_of_type(kind)
+    return found[0] if found else None
+
+
+def merge_same(model: NoiseModel) -> NoiseModel:
+    """Merge repeated white, rrw, quantization and turn-on terms (their variances add)."""
+    out: list[Term] = []
+    merged: dict[str, Term] = {}
+    for term in model.terms:
+        if term.type in ("white", "rrw", "quantization", "turn_on_bias") and term.type in merged:
+            old = merged[term.type]
+            name = term.params[0].name
+            value = math.hypot(getattr(old, name), getattr(term, name))
+            new = old.with_values(**{name: value})
+            out[out.index(old)] = new
+            merged[term.type] = new
+            continue
+        if term.type in ("white", "rrw", "quantization", "turn_on_bias"):
+            merged[term.type] = term
+        out.append(term)
+    if len(out) == len(model.terms):
+        return model
+    return sensor_model(out, "accel" if model.units["rate"] == ACCEL_UNIT else "gyro")

@@ -1,0 +1,94 @@
+"""Kalibr ``imu.yaml``: continuous-time noise and bias random-walk densities (SI).
+
+==========================  ====================  ==========================================
+key                         unit                  model term
+==========================  ====================  ==========================================
+gyroscope_noise_density     rad/s/sqrt(Hz)        White N (gyro)
+gyroscope_random_walk       rad/s^2/sqrt(Hz)      RateRandomWalk K (gyro)
+accelerometer_noise_density m/s^2/sqrt(Hz)        White N (accel)
+accelerometer_random_walk   m/s^3/sqrt(Hz)        RateRandomWalk K (accel)
+update_rate                 Hz                    the rate
+==========================  ====================  ==========================================
+
+Kalibr's discrete law is std = density sqrt(rate) for the white noise and random-walk
+increments of std ``random_walk / sqrt(rate)``, exactly allanite's White and RateRandomWalk.
+Flicker and Gauss-Markov terms are projected onto the random walk over a stated tau range.
+
+References
+----------
+ETH ASL, Kalibr wiki "IMU Noise Model"; ``kalibr_common/ConfigReader.py``.
+"""
+
+from __future__ import annotations
+
+from allanite.formats._densities import HOLDS, from_densities, to_densities
+from allanite.formats._text import load_yaml, number_text, update_keys
+from allanite.formats.base import ImuConfig, Written, number
+from allanite.formats.projection import project_config
+
+NAME = "kalibr"
+TITLE = "Kalibr imu.yaml"
+SUFFIXES = (".yaml", ".yml")
+KEYS = {
+    "gyro": ("gyroscope_noise_density", "gyroscope_random_walk"),
+    "accel": ("accelerometer_noise_density", "accelerometer_random_walk"),
+}
+UNITS = {
+    "gyroscope_noise_density": "rad/s/sqrt(Hz)",
+    "gyroscope_random_walk": "rad/s^2/sqrt(Hz)",
+    "accelerometer_noise_density": "m/s^2/sqrt(Hz)",
+    "accelerometer_random_walk": "m/s^3/sqrt(Hz)",
+    "update_rate": "Hz",
+}
+
+
+def sniff(text: str) -> bool:
+    """Top-level Kalibr keys (OpenVINS nests them under ``imu0:``)."""
+    return "gyroscope_noise_density" in text and "imu0:" not in text
+
+
+def read(text: str, *, rate: float | None = None) -> ImuConfig:
+    """Read the densities (``update_rate`` gives the rate unless ``rate`` is given)."""
+    data = load_yaml(text, "Kalibr imu.yaml")
+    if rate is None and "update_rate" in data:
+        rate = number(data["update_rate"], "Kalibr imu.yaml: update_rate") or None
+    return from_densities(data, KEYS, fmt=NAME, rate=rate, what="Kalibr imu.yaml")
+
+
+def entries(
+    config: ImuConfig, rate: float | None, tau_range: tuple[float, float] | None
+) -> tuple[dict[str, float], list[str], list[str]]:
+    """``(values by key, dropped, projections)`` of the config (shared by OpenVINS)."""
+    models, dropped, projections = project_config(config, HOLDS, rate=rate, tau_range=tau_range)
+    values: dict[str, float] = {}
+    for sensor, (n_key, w_key) in KEYS.items():
+        if sensor in models:
+            values[n_key], values[w_key] = to_densities(models[sensor])
+    return values, dropped, projections
+
+
+def write(
+    config: ImuConfig,
+    *,
+    rate: float | None = None,
+    template: str | None = None,
+    tau_range: tuple[float, float] | None = None,
+    rostopic: str = "/imu0",
+) -> Written:
+    """Kalibr ``imu.yaml`` text (into ``template`` when given, keeping its other lines)."""
+    rate = rate or config.rate
+    values, dropped, projections = entries(config, rate, tau_range)
+    if template is not None:
+        text = update_keys(template, {k: number_text(v) for k, v in values.items()})
+        if rate:
+            text = update_keys(text, {"update_rate": number_text(rate)})
+        return Written(text, dropped, projections)
+    lines = ["# IMU noise model exported by allanite (continuous-time densities, SI units)"]
+    for key in sorted(values):
+        lines.append(f"{key}: {number_text(values[key])}  # {UNITS[key]}")
+    lines.append(f"rostopic: {rostopic}")
+    if rate:
+        lines.append(f"update_rate: {number_text(rate)}  # Hz")
+    lines.extend(f"# not representable in imu.yaml, dropped: {d}" for d in dropped)
+    lines.extend(f"# projected: {p}" for p in projections)
+    return Written("\n".join(lines) + "\n", dropped, projections)

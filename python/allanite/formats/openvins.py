@@ -1,0 +1,58 @@
+"""OpenVINS ``kalibr_imu_chain.yaml``: the Kalibr keys under ``imu0``.
+
+OpenVINS' simulator (``ov_msckf/src/sim/Simulator.cpp``) adds white noise of std
+``sigma / sqrt(dt)`` and a bias random walk of increments ``sigma_b sqrt(dt)``: exactly White
+N = noise density and RateRandomWalk K = random walk, as in :mod:`allanite.formats.kalibr`.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from allanite.formats import kalibr
+from allanite.formats._densities import from_densities
+from allanite.formats._text import load_yaml, number_text, update_keys
+from allanite.formats.base import ImuConfig, Written, number
+
+NAME = "openvins"
+TITLE = "OpenVINS kalibr_imu_chain.yaml (imu0)"
+SUFFIXES = (".yaml", ".yml")
+
+
+def sniff(text: str) -> bool:
+    """Kalibr keys nested under ``imu0:``."""
+    return "imu0:" in text and "gyroscope_noise_density" in text
+
+
+def read(text: str, *, rate: float | None = None) -> ImuConfig:
+    """Read ``imu0``'s densities (``update_rate`` gives the rate unless ``rate`` is given)."""
+    data = load_yaml(text, "OpenVINS config")
+    block: Any = data.get("imu0")
+    if not isinstance(block, dict):
+        raise ValueError("OpenVINS config: no 'imu0:' mapping with the IMU noise keys")
+    if rate is None and "update_rate" in block:
+        rate = number(block["update_rate"], "OpenVINS imu0: update_rate") or None
+    return from_densities(block, kalibr.KEYS, fmt=NAME, rate=rate, what="OpenVINS imu0")
+
+
+def write(
+    config: ImuConfig,
+    *,
+    rate: float | None = None,
+    template: str | None = None,
+    tau_range: tuple[float, float] | None = None,
+) -> Written:
+    """``kalibr_imu_chain.yaml`` text (into ``template`` when given)."""
+    rate = rate or config.rate
+    values, dropped, projections = kalibr.entries(config, rate, tau_range)
+    text_values = {k: number_text(v) for k, v in values.items()}
+    if rate:
+        text_values["update_rate"] = number_text(rate)
+    if template is not None:
+        return Written(update_keys(template, text_values, indent="  "), dropped, projections)
+    lines = ["%YAML:1.0 # need to specify the file type at the top!", "", "imu0:"]
+    lines += [f"  {k}: {v}  # {kalibr.UNITS[k]}" for k, v in sorted(text_values.items())]
+    lines += ["  rostopic: /imu0", "  time_offset: 0.0"]
+    lines.extend(f"# dropped: {d}" for d in dropped)
+    lines.extend(f"# projected: {p}" for p in projections)
+    return Written("\n".join(lines) + "\n", dropped, projections)

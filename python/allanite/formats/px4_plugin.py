@@ -1,0 +1,143 @@
+r"""PX4 / RotorS Gazebo-classic IMU plugin parameters (``libgazebo_imu_plugin.so``).
+
+``gyroscopeNoiseDensity`` (rad/s/sqrt(Hz)), ``gyroscopeRandomWalk`` (rad/s^2/sqrt(Hz)),
+``gyroscopeBiasCorrelationTime`` (s), ``gyroscopeTurnOnBiasSigma`` (rad/s), and the
+``accelerometer*`` parameters alike (m/s^2 based). The discrete law
+(``src/gazebo_imu_plugin.cpp``): white std ``density / sqrt(dt)``; bias
+``b[k] = phi b[k-1] + sigma_b sqrt(T/2 (1 - phi^2)) w[k]``, ``phi = exp(-dt/T)``, from 0;
+turn-on bias drawn once from N(0, sigma_on). Hence, at any rate, White ``N = density``,
+GaussMarkov ``sigma = random_walk sqrt(T/2)``, ``tau_c = T`` (the bias starts at 0 rather than
+in its stationary law, a transient of length ~T), TurnOnBias ``sigma = sigma_on``.
+Parameters missing from the SDF take the plugin's defaults (ADIS16448 values of
+``include/gazebo_imu_plugin.h``), as the simulator does.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+
+from allanite.formats._text import number_text
+from allanite.formats.base import ImuConfig, Written, number, sensor_model
+from allanite.formats.projection import project_config
+from allanite.model import NoiseModel
+from allanite.terms import GaussMarkov, Term, TurnOnBias, White
+
+NAME = "px4-plugin"
+TITLE = "PX4/RotorS Gazebo IMU plugin"
+SUFFIXES = (".sdf", ".xacro", ".urdf", ".world", ".xml", ".jinja")
+HOLDS = frozenset({"white", "markov", "turn_on_bias"})
+PREFIX = {"gyro": "gyroscope", "accel": "accelerometer"}
+SUFFIX = ("NoiseDensity", "RandomWalk", "BiasCorrelationTime", "TurnOnBiasSigma")
+#: the plugin's defaults (ADIS16448), include/gazebo_imu_plugin.h
+DEFAULTS = {
+    "gyroscopeNoiseDensity": 2.0 * 35.0 / 3600.0 / 180.0 * math.pi,
+    "gyroscopeRandomWalk": 2.0 * 4.0 / 3600.0 / 180.0 * math.pi,
+    "gyroscopeBiasCorrelationTime": 1.0e3,
+    "gyroscopeTurnOnBiasSigma": 0.5 / 180.0 * math.pi,
+    "accelerometerNoiseDensity": 2.0 * 2.0e-3,
+    "accelerometerRandomWalk": 2.0 * 3.0e-3,
+    "accelerometerBiasCorrelationTime": 300.0,
+    "accelerometerTurnOnBiasSigma": 20.0e-3 * 9.8,
+}
+
+
+def sniff(text: str) -> bool:
+    """The plugin's parameter names."""
+    return "gyroscopeNoiseDensity" in text or "libgazebo_imu_plugin" in text
+
+
+def _element(name: str) -> re.Pattern[str]:
+    return re.compile(rf"(<{name}>\s*)([^<]*?)(\s*</{name}>)")
+
+
+def terms_from_parameters(values: dict[str, float], sensor: str) -> list[Term]:
+    """The Terms of one sensor's plugin parameters (see the module docstring)."""
+    p = PREFIX[sensor]
+    terms: list[Term] = []
+    density, walk = values[p + "NoiseDensity"], values[p + "RandomWalk"]
+    tc, on = values[p + "BiasCorrelationTime"], values[p + "TurnOnBiasSigma"]
+    if density > 0:
+        terms.append(White(N=density))
+    if walk > 0:
+        if not tc > 0:
+            raise ValueError(f"{p}BiasCorrelationTime must be positive, got {tc!r}")
+        terms.append(GaussMarkov(sigma=walk * math.sqrt(tc / 2.0), tau_c=tc))
+    if on > 0:
+        terms.append(TurnOnBias(sigma=on))
+    return terms
+
+
+def read(text: str, *, rate: float | None = None) -> ImuConfig:
+    """Read the plugin parameters (missing ones take the plugin's defaults, noted)."""
+    values: dict[str, float] = {}
+    defaulted = []
+    for key, default in DEFAULTS.items():
+        match = _element(key).search(text)
+        if match:
+            values[key] = number(match.group(2), f"IMU plugin <{key}>")
+        else:
+            values[key] = default
+            defaulted.append(key)
+    notes = (f"plugin defaults used for {', '.join(defaulted)}",) if defaulted else ()
+    return ImuConfig(
+        gyro=sensor_model(terms_from_parameters(values, "gyro"), "gyro"),
+        accel=sensor_model(terms_from_parameters(values, "accel"), "accel"),
+        rate=rate,
+        source_format=NAME,
+        notes=notes,
+    )
+
+
+def parameters_from_model(model: NoiseModel, sensor: str, tc_default: float) -> dict[str, float]:
+    """Plugin parameters of a model holding white, one Gauss-Markov and a turn-on bias."""
+    p = PREFIX[sensor]
+    white = model.terms_of_type("white")
+    gm = model.terms_of_type("markov")
+    on = model.terms_of_type("turn_on_bias")
+    out = {p + "NoiseDensity": white[0].values()["N"] if white else 0.0}
+    if gm:
+        sigma, tc = gm[0].values()["sigma"], gm[0].values()["tau_c"]
+        out[p + "RandomWalk"] = sigma * math.sqrt(2.0 / tc)
+        out[p + "BiasCorrelationTime"] = tc
+    else:
+        out[p + "RandomWalk"] = 0.0
+        out[p + "BiasCorrelationTime"] = tc_default
+    out[p + "TurnOnBiasSigma"] = on[0].values()["sigma"] if on else 0.0
+    return out
+
+
+def write(
+    config: ImuConfig,
+    *,
+    rate: float | None = None,
+    template: str | None = None,
+    tau_range: tuple[float, float] | None = None,
+) -> Written:
+    """The plugin element (or ``template`` with the parameter values replaced)."""
+    rate = rate or config.rate
+    models, dropped, projections = project_config(config, HOLDS, rate=rate, tau_range=tau_range)
+    values: dict[str, float] = {}
+    for sensor, model in models.items():
+        values.update(
+            parameters_from_model(model, sensor, DEFAULTS[PREFIX[sensor] + "BiasCorrelationTime"])
+        )
+    notes = [f"<!-- dropped: {d.replace('--', '- -')} -->" for d in dropped]
+    notes += [f"<!-- projected: {p.replace('--', '- -')} -->" for p in projections]
+    if template is not None:
+        text = template
+        for key, value in values.items():
+            pattern = _element(key)
+            if pattern.search(text):
+                text = pattern.sub(rf"\g<1>{number_text(value)}\g<3>", text)
+            else:
+                raise ValueError(
+                    f"the template has no <{key}> element; add it to the plugin block or write "
+                    "without a template"
+                )
+        return Written(text, dropped, projections)
+    lines = [*notes, '<plugin name="imu_plugin" filename="libgazebo_imu_plugin.so">']
+    lines += ["  <linkName>imu_link</linkName>", "  <imuTopic>/imu</imuTopic>"]
+    lines += [f"  <{k}>{number_text(v)}</{k}>" for k, v in values.items()]
+    lines.append("</plugin>")
+    return Written("\n".join(lines) + "\n", dropped, projections)
