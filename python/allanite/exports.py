@@ -1,33 +1,9 @@
-"""Export a gyro noise model to what simulators and calibration tools read.
+"""Export a gyro noise model to MATLAB ``gyroparams`` and Kalibr ``imu.yaml``.
 
-MATLAB ``gyroparams`` (Sensor Fusion and Tracking / Navigation Toolbox), SI units:
-
-=================  ===================  ==========================================
-field              unit                 from the model
-=================  ===================  ==========================================
-NoiseDensity       (rad/s)/sqrt(Hz)     N, angle random walk (rad/sqrt(s))
-BiasInstability    rad/s                B, bias instability (ADEV floor / 0.664)
-RandomWalk         (rad/s)*sqrt(Hz)     K, rate random walk (rad/s/sqrt(s))
-=================  ===================  ==========================================
-
-MathWorks' Allan-variance example sets these fields to exactly N, B and K read off the Allan
-deviation, which is the convention followed here.
-
-Kalibr ``imu.yaml`` (continuous-time densities), SI units:
-
-==========================  ====================  ======================================
-key                         unit                  from the model
-==========================  ====================  ======================================
-gyroscope_noise_density     rad/s/sqrt(Hz)        N
-gyroscope_random_walk       rad/s^2/sqrt(Hz)      K
-accelerometer_noise_density m/s^2/sqrt(Hz)        given by the caller (no gyro model)
-accelerometer_random_walk   m/s^3/sqrt(Hz)        given by the caller
-update_rate                 Hz                    sampling rate
-==========================  ====================  ======================================
-
-Terms the formats cannot hold (quantization, ramp, Gauss-Markov, sinusoids) are not exported;
-:func:`matlab_gyroparams` and :func:`kalibr_imu` list them under ``"not_exported"`` so nothing
-is dropped silently.
+Kept for compatibility: these are thin wrappers over :mod:`allanite.formats` (the one place
+where every simulator/estimator format is read and written, see
+:mod:`allanite.formats.matlab` and :mod:`allanite.formats.kalibr` for the fields and units).
+Terms a format cannot hold are projected or dropped there, and listed in ``not_exported``.
 
 References
 ----------
@@ -40,9 +16,11 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from allanite.formats import kalibr, matlab
+from allanite.formats.base import ImuConfig, sensor_model
 from allanite.io.atomic import atomic_output
 from allanite.model import NoiseModel
-from allanite.terms import Flicker, RateRandomWalk, Term, White
+from allanite.terms import RateRandomWalk, Term, White
 
 __all__ = [
     "KALIBR_UNITS",
@@ -55,71 +33,60 @@ __all__ = [
     "save_matlab_gyroparams",
 ]
 
-MATLAB_UNITS = {
-    "NoiseDensity": "(rad/s)/sqrt(Hz)",
-    "BiasInstability": "rad/s",
-    "RandomWalk": "(rad/s)*sqrt(Hz)",
-}
-KALIBR_UNITS = {
-    "gyroscope_noise_density": "rad/s/sqrt(Hz)",
-    "gyroscope_random_walk": "rad/s^2/sqrt(Hz)",
-    "accelerometer_noise_density": "m/s^2/sqrt(Hz)",
-    "accelerometer_random_walk": "m/s^3/sqrt(Hz)",
-    "update_rate": "Hz",
-}
+MATLAB_UNITS = {k: v for k, v in matlab.UNITS["gyro"].items() if k != "ConstantBias"}
+KALIBR_UNITS = dict(kalibr.UNITS)
 
 
-def _one(model: NoiseModel, cls: type[Term], field: str) -> float:
-    found = model.terms_of_type(cls)
-    if len(found) > 1:
-        raise ValueError(
-            f"the model has {len(found)} {cls.type!r} terms; merge them before exporting"
-        )
-    return float(getattr(found[0], field)) if found else 0.0
-
-
-def _not_exported(model: NoiseModel) -> list[str]:
-    return [t.type for t in model.terms if not isinstance(t, (White, Flicker, RateRandomWalk))]
-
-
-def _si(model: NoiseModel) -> NoiseModel:
+def _gyro_config(model: NoiseModel, rate: float | None = None) -> ImuConfig:
     if not isinstance(model, NoiseModel):
         raise TypeError(f"export a NoiseModel (e.g. fit(...).model), got {type(model).__name__}")
-    return model.in_units("rad/s")
+    for kind in ("white", "rrw", "flicker"):
+        if len(model.terms_of_type(kind)) > 1:
+            raise ValueError(
+                f"the model has {len(model.terms_of_type(kind))} {kind!r} terms; merge them "
+                "before exporting"
+            )
+    return ImuConfig(gyro=model.in_units("rad/s"), rate=rate)
 
 
 def matlab_gyroparams(model: NoiseModel) -> dict[str, Any]:
-    """MATLAB ``gyroparams`` fields of ``model`` in SI units (see the module docstring).
+    """MATLAB ``gyroparams`` fields of ``model`` in SI units.
 
     Returns
     -------
     dict
         ``{"NoiseDensity": N, "BiasInstability": B, "RandomWalk": K, "units": {...},
-        "not_exported": [term types left out]}``, values in rad-based SI units.
+        "not_exported": [what was dropped or projected]}``, values in rad-based SI units.
     """
-    si = _si(model)
+    config = _gyro_config(model)
+    written = matlab.write(config)
+    back = matlab.read(written.text).model("gyro")
+    values = {"NoiseDensity": 0.0, "BiasInstability": 0.0, "RandomWalk": 0.0}
+    for field, kind in matlab.FIELDS.items():
+        found = back.terms_of_type(kind)
+        if found:
+            values[field] = float(found[0].values()[found[0].params[0].name])
     return {
-        "NoiseDensity": _one(si, White, "N"),
-        "BiasInstability": _one(si, Flicker, "B"),
-        "RandomWalk": _one(si, RateRandomWalk, "K"),
+        **values,
         "units": dict(MATLAB_UNITS),
-        "not_exported": _not_exported(si),
+        "not_exported": written.dropped + written.projections,
     }
 
 
 def matlab_gyroparams_script(model: NoiseModel, name: str = "gyro") -> str:
     """MATLAB code that builds the ``gyroparams`` object, with the units in comments."""
-    if not name.isidentifier():
-        raise ValueError(f"name must be a MATLAB identifier, got {name!r}")
-    p = matlab_gyroparams(model)
-    fields = ("NoiseDensity", "BiasInstability", "RandomWalk")
-    lines = ["% gyro noise parameters exported by allanite (SI units)", f"{name} = gyroparams( ..."]
-    for i, key in enumerate(fields):
-        end = ");" if i == len(fields) - 1 else ", ..."
-        lines.append(f"    '{key}', {p[key]:.10g}{end}  % {MATLAB_UNITS[key]}")
-    if p["not_exported"]:
-        lines.append(f"% not representable in gyroparams: {', '.join(p['not_exported'])}")
-    return "\n".join(lines) + "\n"
+    return matlab.write(_gyro_config(model), names={"gyro": name}).text
+
+
+def _accel(density: float | None, walk: float | None) -> NoiseModel | None:
+    if density is None and walk is None:
+        return None
+    terms: list[Term] = []
+    if density:
+        terms.append(White(N=float(density)))
+    if walk:
+        terms.append(RateRandomWalk(K=float(walk)))
+    return sensor_model(terms, "accel")
 
 
 def kalibr_imu(
@@ -130,7 +97,7 @@ def kalibr_imu(
     accelerometer_random_walk: float | None = None,
     rostopic: str = "/imu0",
 ) -> dict[str, Any]:
-    """Kalibr ``imu.yaml`` entries for the gyro ``model`` (SI units, see the module docstring).
+    """Kalibr ``imu.yaml`` entries for the gyro ``model`` (SI units).
 
     Parameters
     ----------
@@ -139,38 +106,41 @@ def kalibr_imu(
     update_rate : float
         IMU sampling rate in Hz.
     accelerometer_noise_density, accelerometer_random_walk : float, optional
-        Accelerometer densities in m/s^2/sqrt(Hz) and m/s^3/sqrt(Hz); Kalibr needs them, a gyro
-        model does not have them.
+        Accelerometer densities in SI units (the accelerometer model).
     rostopic : str
-        ROS topic of the IMU.
+        IMU topic.
+
+    Returns
+    -------
+    dict
+        Keys of ``imu.yaml`` plus ``not_exported`` (what was dropped or projected).
     """
     if not update_rate > 0:
         raise ValueError(f"update_rate must be a positive rate in Hz, got {update_rate!r}")
-    si = _si(model)
+    config = _gyro_config(model, update_rate)
+    accel = _accel(accelerometer_noise_density, accelerometer_random_walk)
+    if accel is not None:
+        config = ImuConfig(gyro=config.gyro, accel=accel, rate=update_rate)
+    values, dropped, projections = kalibr.entries(config, update_rate, None)
     out: dict[str, Any] = {"rostopic": rostopic, "update_rate": float(update_rate)}
-    if accelerometer_noise_density is not None:
-        out["accelerometer_noise_density"] = float(accelerometer_noise_density)
-    if accelerometer_random_walk is not None:
-        out["accelerometer_random_walk"] = float(accelerometer_random_walk)
-    out["gyroscope_noise_density"] = _one(si, White, "N")
-    out["gyroscope_random_walk"] = _one(si, RateRandomWalk, "K")
-    out["not_exported"] = _not_exported(si)
+    out.update(values)
+    out["not_exported"] = dropped + projections
     return out
 
 
 def kalibr_imu_yaml(model: NoiseModel, update_rate: float, **kwargs: Any) -> str:
     """Text of a Kalibr ``imu.yaml`` (see :func:`kalibr_imu`), units in comments."""
-    entries = kalibr_imu(model, update_rate, **kwargs)
-    skipped = entries.pop("not_exported")
-    lines = ["# IMU noise model exported by allanite (continuous-time densities, SI units)"]
-    for key, value in entries.items():
-        if key == "rostopic":
-            lines.append(f"rostopic: {value}")
-            continue
-        lines.append(f"{key}: {value:.10g}  # {KALIBR_UNITS[key]}")
-    if skipped:
-        lines.append(f"# not representable in imu.yaml: {', '.join(skipped)}")
-    return "\n".join(lines) + "\n"
+    rostopic = kwargs.pop("rostopic", "/imu0")
+    config = _gyro_config(model, update_rate)
+    accel = _accel(
+        kwargs.pop("accelerometer_noise_density", None),
+        kwargs.pop("accelerometer_random_walk", None),
+    )
+    if kwargs:
+        raise TypeError(f"unexpected arguments {', '.join(kwargs)}")
+    if accel is not None:
+        config = ImuConfig(gyro=config.gyro, accel=accel, rate=update_rate)
+    return kalibr.write(config, rate=update_rate, rostopic=rostopic).text
 
 
 def save_kalibr_imu_yaml(
