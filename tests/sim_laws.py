@@ -1,0 +1,87 @@
+"""Independent implementations of simulators' IMU noise laws, written from their sources.
+
+Used to validate :mod:`allanite.formats`: each function takes the simulator's own parameters
+(as its config holds them, in its units) and returns rate samples of one axis exactly as the
+simulator would add them to a zero true rate. They do not use allanite.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy import signal
+
+
+def _ar1(phi: float, drive: np.ndarray) -> np.ndarray:
+    """x[k] = phi x[k-1] + drive[k], x[-1] = 0."""
+    return signal.lfilter([1.0], [1.0, -phi], drive)
+
+
+def gz_sensors(p: dict, n: int, rate: float, rng: np.random.Generator) -> np.ndarray:
+    """gz-sensors GaussianNoiseModel + ImuSensor dynamic bias (src/GaussianNoiseModel.cc)."""
+    dt = 1.0 / rate
+    bias = rng.normal(p.get("bias_mean", 0.0), p.get("bias_stddev", 0.0))
+    if rng.uniform() < 0.5:
+        bias = -bias
+    out = rng.normal(p.get("mean", 0.0), p["stddev"], n) + bias
+    s_b, tc = p.get("dynamic_bias_stddev", 0.0), p.get("dynamic_bias_correlation_time", 0.0)
+    if s_b > 0 and tc > 0:
+        phi = math.exp(-dt / tc)
+        out += _ar1(phi, s_b * math.sqrt(tc / 2.0 * (1.0 - phi**2)) * rng.standard_normal(n))
+    prec = p.get("precision", 0.0)
+    if prec > 0:
+        out = np.round(out / prec) * prec
+    return out
+
+
+def px4_plugin(p: dict, n: int, rate: float, rng: np.random.Generator) -> np.ndarray:
+    """RotorS/PX4 gazebo_imu_plugin.cpp addNoise, gyroscope (one axis)."""
+    dt = 1.0 / rate
+    tau = p["gyroscopeBiasCorrelationTime"]
+    sigma_g_d = 1.0 / math.sqrt(dt) * p["gyroscopeNoiseDensity"]
+    sigma_b_g = p["gyroscopeRandomWalk"]
+    sigma_b_g_d = math.sqrt(-sigma_b_g * sigma_b_g * tau / 2.0 * (math.exp(-2.0 * dt / tau) - 1.0))
+    phi = math.exp(-1.0 / tau * dt)
+    turn_on = p["gyroscopeTurnOnBiasSigma"] * rng.standard_normal()
+    bias = _ar1(phi, sigma_b_g_d * rng.standard_normal(n))  # updated before it is added
+    return bias + sigma_g_d * rng.standard_normal(n) + turn_on
+
+
+def airsim(p: dict, n: int, rate: float, rng: np.random.Generator) -> np.ndarray:
+    """AirSim ImuSimple::addNoise, gyroscope (settings units: deg/sqrt(h), deg/h, s)."""
+    arw = p["AngularRandomWalk"] / math.sqrt(3600.0) * math.pi / 180.0
+    bias_stability = p["GyroBiasStability"] / 3600.0 * math.pi / 180.0
+    norm = bias_stability / math.sqrt(p["GyroBiasStabilityTau"])
+    sqrt_dt = math.sqrt(max(1.0 / rate, 1.0 / 1000.0))
+    steps = norm * sqrt_dt * rng.standard_normal(n)
+    bias = np.concatenate([[0.0], np.cumsum(steps)[:-1]])  # added, then updated
+    return arw / sqrt_dt * rng.standard_normal(n) + bias
+
+
+def kalibr(p: dict, n: int, rate: float, rng: np.random.Generator) -> np.ndarray:
+    """Kalibr IMU noise model (wiki): white density*sqrt(rate), bias walk rw/sqrt(rate).
+
+    The same law as OpenVINS' simulator (Simulator.cpp: sigma/sqrt(dt), sigma_b*sqrt(dt)) and
+    ORB-SLAM3's discretisation (Tracking.cc: Ng*sqrt(f), Ngw/sqrt(f)).
+    """
+    white = p["noise_density"] * math.sqrt(rate) * rng.standard_normal(n)
+    walk = np.cumsum(p["random_walk"] / math.sqrt(rate) * rng.standard_normal(n))
+    return white + walk
+
+
+def gnss_ins_sim(p: dict, n: int, rate: float, rng: np.random.Generator) -> np.ndarray:
+    """gnss-ins-sim gyro_gen + bias_drift (deg/h, deg/sqrt(h), s)."""
+    d2r = math.pi / 180.0
+    dt = 1.0 / rate
+    arw = p["gyro_arw"] * d2r / 60.0
+    drift = p["gyro_b_stability"] * d2r / 3600.0
+    corr = p["gyro_b_corr"]
+    if math.isinf(corr):
+        bias = drift * rng.standard_normal(n)
+    else:
+        a = 1.0 - 1.0 / rate / corr
+        b = drift * math.sqrt(1.0 - math.exp(-2.0 / (rate * corr)))
+        noise = rng.standard_normal(n)
+        bias = np.concatenate([[0.0], _ar1(a, b * noise[:-1])])
+    return p["gyro_b"] * d2r / 3600.0 + bias + arw / math.sqrt(dt) * rng.standard_normal(n)

@@ -1,0 +1,264 @@
+"""Simulator/estimator IMU configs: each format's discrete law, round trips, projections.
+
+Validation: records are simulated with each simulator's own law (``tests/sim_laws.py``, an
+independent implementation from its source), the config is imported, and the imported model's
+exact Allan variance must lie in the records' chi-square bands. Round trip: export -> import
+is the identity on the terms each format holds.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import allanite
+import sim_laws
+from allanite.formats import (
+    FORMATS,
+    ImuConfig,
+    detect_format,
+    format_module,
+    project,
+    read_config,
+    write_config,
+)
+from allanite.formats.base import sensor_model
+from allanite.terms import Flicker, GaussMarkov, Quantization, RateRandomWalk, TurnOnBias, White
+
+D2R = math.pi / 180.0
+LEVEL = 0.995  # chi-square band of every tau (fixed seeds; ~20 correlated taus per record)
+
+
+def _inside_bands(x: np.ndarray, rate: float, model, *, max_fraction: float = 0.1) -> None:
+    res = allanite.avar(x, rate, taus="octave")
+    keep = res.tau <= x.size / rate * max_fraction
+    lo, hi = res.var_ci(LEVEL)
+    theory = model.avar(res.tau, 1.0 / rate)
+    bad = keep & ((theory < lo) | (theory > hi))
+    assert not bad.any(), (
+        f"model AVAR outside the {LEVEL} band at tau {res.tau[bad]}: "
+        f"ratio {(res.var / theory)[bad]}"
+    )
+
+
+# --- validation with each simulator's law ----------------------------------------------------
+GZ = dict(
+    mean=0.002,
+    stddev=0.004,
+    bias_mean=0.001,
+    bias_stddev=0.0005,
+    dynamic_bias_stddev=2e-4,
+    dynamic_bias_correlation_time=30.0,
+    precision=0.004,
+)
+
+
+def _gz_text(p: dict, rate: float) -> str:
+    noise = "".join(f"<{k}>{v}</{k}>" for k, v in p.items())
+    axes = "".join(f"<{a}><noise type='gaussian_quantized'>{noise}</noise></{a}>" for a in "xyz")
+    return (
+        f"<sdf version='1.9'><model name='m'><link name='l'><sensor name='imu' type='imu'>"
+        f"<update_rate>{rate}</update_rate><imu><angular_velocity>{axes}</angular_velocity>"
+        f"</imu></sensor></link></model></sdf>"
+    )
+
+
+def test_gz_sdf_law():
+    rate, n = 100.0, 2**18
+    cfg = format_module("gz-sdf").read(_gz_text(GZ, rate))
+    assert cfg.rate == rate
+    assert cfg.offsets["gyro"] == GZ["mean"]
+    x = sim_laws.gz_sensors(GZ, n, rate, np.random.default_rng(1))
+    _inside_bands(x, rate, cfg.model("gyro"))
+    gm = cfg.model("gyro").terms_of_type("markov")[0]
+    assert gm.tau_c == 30.0
+    assert math.isclose(gm.sigma, 2e-4 * math.sqrt(15.0))
+
+
+def test_gz_sdf_stddev_is_per_sample_not_a_density():
+    # the same stddev at 10x the rate is 10x less noise per unit bandwidth
+    slow = format_module("gz-sdf").read(_gz_text({"stddev": 0.01}, 10.0)).model("gyro")
+    fast = format_module("gz-sdf").read(_gz_text({"stddev": 0.01}, 1000.0)).model("gyro")
+    assert math.isclose(slow.terms[0].N / fast.terms[0].N, 10.0)
+
+
+PX4 = {
+    "gyroscopeNoiseDensity": 3.4e-4,
+    "gyroscopeRandomWalk": 4e-4,
+    "gyroscopeBiasCorrelationTime": 20.0,
+    "gyroscopeTurnOnBiasSigma": 0.0087,
+}
+
+
+def test_px4_plugin_law():
+    rate, n = 250.0, 2**19
+    text = (
+        "<plugin filename='libgazebo_imu_plugin.so'>"
+        + "".join(f"<{k}>{v}</{k}>" for k, v in PX4.items())
+        + "</plugin>"
+    )
+    cfg = format_module("px4-plugin").read(text)
+    assert any("defaults" in note for note in cfg.notes)  # accelerometer parameters defaulted
+    x = sim_laws.px4_plugin(PX4, n, rate, np.random.default_rng(2))
+    _inside_bands(x, rate, cfg.model("gyro"))
+
+
+@pytest.mark.parametrize("rate", [200.0, 4000.0])
+def test_airsim_law_with_its_1khz_floor(rate):
+    p = {"AngularRandomWalk": 0.3, "GyroBiasStability": 400.0, "GyroBiasStabilityTau": 50.0}
+    text = (
+        '{"SettingsVersion": 1.2, "DefaultSensors": {"Imu": {"SensorType": 2, '
+        + ", ".join(f'"{k}": {v}' for k, v in p.items())
+        + "}}}"
+    )
+    cfg = format_module("airsim").read(text, rate=rate)
+    n = 2**18 if rate < 1000 else 2**20
+    x = sim_laws.airsim(p, n, rate, np.random.default_rng(3))
+    _inside_bands(x, rate, cfg.model("gyro"))
+
+
+KALIBR_TEXTS = {
+    "kalibr": "gyroscope_noise_density: {n}\ngyroscope_random_walk: {w}\nupdate_rate: 200.0\n",
+    "openvins": "%YAML:1.0\nimu0:\n  gyroscope_noise_density: {n}\n"
+    "  gyroscope_random_walk: {w}\n  update_rate: 200.0\n",
+    "orbslam3": "%YAML:1.0\nIMU.NoiseGyro: {n}\nIMU.GyroWalk: {w}\nIMU.Frequency: 200\n"
+    "Tbc: !!opencv-matrix\n  rows: 1\n  cols: 1\n  dt: f\n  data: [1.0]\n",
+    "vins": "%YAML:1.0\ngyr_n: {n}\ngyr_w: {w}\n",
+}
+
+
+@pytest.mark.parametrize("fmt", sorted(KALIBR_TEXTS))
+def test_density_formats_law(fmt):
+    p = {"noise_density": 1.7e-3, "random_walk": 2e-4}
+    text = KALIBR_TEXTS[fmt].format(n=p["noise_density"], w=p["random_walk"])
+    assert detect_format("c.yaml", text) == fmt
+    cfg = format_module(fmt).read(text, rate=200.0)
+    x = sim_laws.kalibr(p, 2**18, 200.0, np.random.default_rng(4))
+    _inside_bands(x, 200.0, cfg.model("gyro"))
+
+
+@pytest.mark.parametrize("corr", [40.0, math.inf])
+def test_gnss_ins_sim_law(corr):
+    p = {"gyro_b": 10.0, "gyro_arw": 0.25, "gyro_b_stability": 300.0, "gyro_b_corr": corr}
+    c = "np.inf" if math.isinf(corr) else str(corr)
+    text = (
+        "import numpy as np\nfs = 100.0\nimu_err = {'gyro_b': np.array([10.0, 10.0, 10.0]),\n"
+        "  'gyro_arw': np.array([0.25, 0.25, 0.25]) * 1.0, 'gyro_b_stability': 300.0,\n"
+        f"  'gyro_b_corr': np.array([{c}, {c}, {c}]),\n"
+        "  'accel_b': 0.0, 'accel_vrw': 0.03, 'accel_b_stability': 5e-5}\n"
+    )
+    cfg = format_module("gnss-ins-sim").read(text)
+    assert cfg.rate == 100.0
+    x = sim_laws.gnss_ins_sim(p, 2**18, 100.0, np.random.default_rng(5))
+    _inside_bands(x, 100.0, cfg.model("gyro"))
+
+
+# --- round trips --------------------------------------------------------------------------
+ROUND_TRIP = {
+    "gz-sdf": [White(N=1e-3), TurnOnBias(sigma=2e-3), GaussMarkov(sigma=1e-4, tau_c=50.0)],
+    "px4-plugin": [White(N=1e-3), GaussMarkov(sigma=1e-4, tau_c=50.0), TurnOnBias(sigma=2e-3)],
+    "kalibr": [White(N=1e-3), RateRandomWalk(K=2e-5)],
+    "openvins": [White(N=1e-3), RateRandomWalk(K=2e-5)],
+    "orbslam3": [White(N=1e-3), RateRandomWalk(K=2e-5)],
+    "vins": [White(N=1e-3), RateRandomWalk(K=2e-5)],
+    "airsim": [White(N=1e-3), RateRandomWalk(K=2e-5)],
+    "matlab": [White(N=1e-3), Flicker(B=1e-4), RateRandomWalk(K=2e-5)],
+    "gnss-ins-sim": [White(N=1e-3), GaussMarkov(sigma=1e-4, tau_c=50.0)],
+    "allanite": [White(N=1e-3), Quantization(Q=1e-5), Flicker(B=1e-4)],
+}
+
+
+def _same(a, b) -> None:
+    assert [t.type for t in a.terms] == [t.type for t in b.terms]
+    for s, t in zip(a.terms, b.terms, strict=True):
+        for k, v in s.values().items():
+            assert math.isclose(t.values()[k], v, rel_tol=1e-8), (s, t)
+
+
+@pytest.mark.parametrize("fmt", sorted(ROUND_TRIP))
+def test_export_import_is_identity_on_what_the_format_holds(fmt, tmp_path):
+    assert set(FORMATS) == set(ROUND_TRIP)
+    gyro = sensor_model(ROUND_TRIP[fmt], "gyro")
+    accel = sensor_model(
+        [
+            t.with_values(**{k: 3 * v for k, v in t.values().items() if k != "tau_c"})
+            for t in ROUND_TRIP[fmt]
+        ],
+        "accel",
+    )
+    cfg = ImuConfig(gyro=gyro, accel=None if fmt == "allanite" else accel, rate=250.0)
+    suffix = FORMATS[fmt].SUFFIXES[0]
+    written = write_config(cfg, tmp_path / f"out{suffix}", format=fmt, rate=250.0)
+    assert written.dropped == []
+    assert written.projections == []
+    back = read_config(tmp_path / f"out{suffix}", rate=250.0)
+    assert back.source_format == fmt  # detected from the content
+    _same(back.model("gyro"), gyro)
+    if fmt != "allanite":
+        _same(back.model("accel"), accel)
+
+
+def test_template_keeps_the_users_other_lines(tmp_path):
+    user = tmp_path / "vins.yaml"
+    user.write_text(
+        "%YAML:1.0\nimu_topic: /imu0\nacc_n: 0.1   # noise\ngyr_n: 0.01\n"
+        "acc_w: 0.001\ngyr_w: 0.0001\ng_norm: 9.81\n"
+    )
+    cfg = read_config(user)
+    cfg = cfg.with_model("gyro", sensor_model([White(N=0.02), RateRandomWalk(K=3e-4)], "gyro"))
+    write_config(cfg, tmp_path / "new.yaml", template=user)
+    text = (tmp_path / "new.yaml").read_text()
+    assert "imu_topic: /imu0" in text
+    assert "g_norm: 9.81" in text
+    assert "acc_n: 0.1   # noise" in text
+    assert "gyr_n: 0.02" in text
+    assert "gyr_w: 0.0003" in text
+
+
+def test_sdf_template_with_precision_keeps_precision(tmp_path):
+    user = tmp_path / "m.sdf"
+    user.write_text(_gz_text(GZ, 100.0))
+    cfg = read_config(user)
+    write_config(cfg, tmp_path / "n.sdf", template=user)
+    _same(read_config(tmp_path / "n.sdf").model("gyro"), cfg.model("gyro"))
+    assert "<precision>0.004</precision>" in (tmp_path / "n.sdf").read_text()
+
+
+# --- projections and errors ----------------------------------------------------------------
+def test_flicker_projected_onto_gauss_markov_matches_adev_over_the_range():
+    model = sensor_model([White(N=1e-3), Flicker(B=1e-4)], "gyro")
+    dt = 0.01
+    out = project(model, {"white", "markov"}, dt=dt, tau_range=(1.0, 1000.0))
+    assert [t.type for t in out.model.terms] == ["white", "markov"]
+    (text,) = out.projections
+    assert "1-1e+03 s" in text
+    assert "flicker" in text
+    reported = float(text.split("largest ADEV error ")[1].split(" %")[0])
+    taus = np.geomspace(1.0, 1000.0, 200)
+    taus = np.round(taus / dt) * dt
+    err = np.abs(out.model.adev(taus, dt) / model.adev(taus, dt) - 1.0)
+    assert np.max(err) * 100 <= reported + 0.5
+    assert reported < 15.0  # one Gauss-Markov follows a flicker plateau over 3 decades
+
+
+def test_dropped_terms_are_listed():
+    model = sensor_model([White(N=1e-3), Quantization(Q=1e-4)], "gyro")
+    out = project(model, {"white", "rrw"}, dt=0.01)
+    assert out.dropped
+    assert out.dropped[0].startswith("gyro: quantization")
+
+
+def test_sdf_needs_a_rate_and_says_so():
+    with pytest.raises(ValueError, match="--rate"):
+        format_module("gz-sdf").read(
+            _gz_text({"stddev": 0.01}, 0.0).replace("<update_rate>0.0</update_rate>", "")
+        )
+
+
+def test_undetectable_config_names_the_option(tmp_path):
+    path = tmp_path / "x.yaml"
+    path.write_text("foo: 1\n")
+    with pytest.raises(ValueError, match="--sim-format"):
+        read_config(path)
