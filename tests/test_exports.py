@@ -80,8 +80,9 @@ def test_kalibr_missing_terms_are_zero_and_gm_is_projected():
     assert entries["not_exported"] == []
     model = NoiseModel((White(N=0.01), GaussMarkov(0.1, 5.0)), {"rate": "rad/s", "time": "s"})
     entries = kalibr_imu(model, 100.0)
-    assert entries["gyroscope_noise_density"] == 0.01
-    # the Gauss-Markov bias cannot be held: it is projected onto the random walk, and said
+    # the Gauss-Markov bias cannot be held: it is projected onto the random walk and the
+    # white noise (a 5 s Gauss-Markov looks white beyond a minute), and said
+    assert entries["gyroscope_noise_density"] > 0.01
     assert entries["gyroscope_random_walk"] > 0.0
     assert len(entries["not_exported"]) == 1
     assert entries["not_exported"][0].startswith("gyro: markov")

@@ -25,6 +25,7 @@ SUBCOMMANDS: dict[str, str] = {
     "report": "allanite.cli.report",
     "batch": "allanite.cli.batch",
     "gui": "allanite.cli.gui",
+    "model": "allanite.cli.model",
 }
 
 EXIT_OK = 0

@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from allanite.cli.record_options import add_record_arguments, rate_unit, read_from_args
+from allanite.cli.sim_config import add_sim_config_arguments, load_sim_model, write_corrected
 from allanite.io.atomic import atomic_output
 from allanite.io.readers import read_record
 from allanite.io.record import INPUT_KINDS, Record
@@ -41,7 +42,12 @@ def register(subparsers: Any) -> None:
     add_record_arguments(parser)
     sim = parser.add_argument_group("simulated sensor (one of)")
     which = sim.add_mutually_exclusive_group(required=True)
-    which.add_argument("--sim-model", metavar="MODEL.json", help="noise model JSON")
+    which.add_argument(
+        "--sim-model",
+        metavar="CONFIG",
+        help="noise model: model JSON or a simulator/estimator IMU config (gz SDF, PX4 plugin, "
+        "Kalibr/OpenVINS/ORB-SLAM3/VINS yaml, AirSim json, MATLAB .m, gnss-ins-sim .py)",
+    )
     which.add_argument("--sim-record", metavar="SIM", help="simulated record file (.npy, ...)")
     sim.add_argument(
         "--sim-input",
@@ -54,6 +60,7 @@ def register(subparsers: Any) -> None:
         "--sim-fs", type=float, help="sampling frequency of the simulated record (must equal --fs)"
     )
     sim.add_argument("--sim-key", help="array name in an .npz simulated record")
+    add_sim_config_arguments(sim)
     diag = parser.add_argument_group("diagnosis")
     diag.add_argument(
         "--holdout",
@@ -162,7 +169,8 @@ def run(args: argparse.Namespace) -> int:
     record = read_from_args(args.real, args)
     real, part = _one_channel(record, "real")
     fs = part.require_fs()
-    sim: Any = Path(args.sim_model) if args.sim_model else _sim_record(args, fs)
+    loaded = load_sim_model(args, fs, rate_unit(part)) if args.sim_model else None
+    sim: Any = loaded.model if loaded is not None else _sim_record(args, fs)
     effects = [e.strip() for e in args.effects.split(",") if e.strip()] if args.effects else None
     result = diagnose(
         real,
@@ -179,6 +187,8 @@ def run(args: argparse.Namespace) -> int:
         alpha=args.alpha,
         seed=args.seed,
     )
+    if loaded is not None and args.write_corrected:
+        write_corrected(args, loaded, result)
     if args.output:
         with atomic_output(args.output) as tmp:
             tmp.write_text(result.to_json(indent=1))

@@ -123,7 +123,8 @@ def write_config(
 ) -> Written:
     """Write ``config`` to ``path`` atomically; return what was written, dropped, projected.
 
-    The format is ``format``, else the template's content, else the suffix of ``path``.
+    The format is ``format``, else the template's content, else the suffix of ``path`` (the
+    config's own format when it shares the suffix).
     """
     from allanite.io.atomic import atomic_output
 
@@ -133,7 +134,12 @@ def write_config(
         if template is not None:
             format = detect_format(Path(template), template_text)
         else:
-            format = detect_format(path)
+            suffix = path.suffix.lower()
+            candidates = [n for n, m in FORMATS.items() if suffix in m.SUFFIXES]
+            if config.source_format in candidates:
+                format = config.source_format  # e.g. .yaml -> .yaml keeps the format
+            else:
+                format = detect_format(path)
     written: Written = format_module(format).write(
         config, rate=rate, template=template_text, tau_range=tau_range
     )

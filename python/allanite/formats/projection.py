@@ -22,7 +22,7 @@ from scipy import optimize
 
 from allanite.formats.base import ImuConfig, merge_same, sensor_model
 from allanite.model import NoiseModel
-from allanite.terms import GaussMarkov, RateRandomWalk, Term
+from allanite.terms import GaussMarkov, RateRandomWalk, Term, White
 
 __all__ = ["SLOW_TYPES", "Projection", "default_tau_range", "project", "project_config"]
 
@@ -58,33 +58,55 @@ def _taus(tau_range: tuple[float, float], dt: float) -> np.ndarray:
 
 
 def _fit_slot(
-    slot: str, fixed: list[Term], target: np.ndarray, taus: np.ndarray, dt: float
-) -> Term:
+    slot: str,
+    fixed: list[Term],
+    white: Term | None,
+    target: np.ndarray,
+    taus: np.ndarray,
+    dt: float,
+) -> list[Term]:
+    """Fit the slot term (and ``white`` when given) to ``target``; return the fitted terms."""
     base = np.zeros_like(target)
     for t in fixed:
         base = base + t.avar(taus, dt)
     log_target = np.log(target)
+    n_slot = 2 if slot == "markov" else 1
 
-    def build(theta: np.ndarray) -> Term:
+    def build(theta: np.ndarray) -> list[Term]:
         if slot == "markov":
-            return GaussMarkov(sigma=float(np.exp(theta[0])), tau_c=float(np.exp(theta[1])))
-        return RateRandomWalk(K=float(np.exp(theta[0])))
+            out: list[Term] = [
+                GaussMarkov(sigma=float(np.exp(theta[0])), tau_c=float(np.exp(theta[1])))
+            ]
+        else:
+            out = [RateRandomWalk(K=float(np.exp(theta[0])))]
+        if white is not None:
+            out.append(White(N=float(np.exp(theta[n_slot]))))
+        return out
 
     def cost(theta: np.ndarray) -> float:
-        model = base + build(theta).avar(taus, dt)
+        model = base.copy()
+        for t in build(theta):
+            model = model + t.avar(taus, dt)
         return float(np.sum((np.log(np.maximum(model, 1e-300)) - log_target) ** 2))
 
     excess = np.maximum(target - base, target * 1e-6)
+    tail = [math.log(max(float(white.values()["N"]), 1e-300))] if white is not None else []
     if slot == "rrw":
-        starts = [np.array([0.5 * math.log(3.0 * float(np.max(excess / taus)))])]
+        starts = [np.array([0.5 * math.log(3.0 * float(np.max(excess / taus))), *tail])]
     else:
         starts = []
         for tc in np.geomspace(taus[0], taus[-1], 12):
             sigma = math.sqrt(float(np.max(excess))) / 0.617
-            starts.append(np.array([math.log(sigma), math.log(tc)]))
+            starts.append(np.array([math.log(sigma), math.log(tc), *tail]))
     best = min(starts, key=cost)
-    result = optimize.minimize(cost, best, method="Nelder-Mead", options={"xatol": 1e-6})
+    result = optimize.minimize(
+        cost, best, method="Nelder-Mead", options={"xatol": 1e-6, "maxiter": 4000}
+    )
     return build(result.x if result.fun <= cost(best) else best)
+
+
+def _worst(model: NoiseModel, target: np.ndarray, taus: np.ndarray, dt: float) -> float:
+    return float(np.max(np.abs(np.sqrt(model.avar(taus, dt) / target) - 1.0)))
 
 
 def project(
@@ -118,12 +140,21 @@ def project(
     slow: list[Term] = []
     dropped: list[str] = []
     seen: set[str] = set()
+    projected_fast: list[str] = []
     for term in model.terms:
         if term.type in holds and term.type not in seen:
             kept.append(term)
             seen.add(term.type)
         elif term.type in SLOW_TYPES:
             slow.append(term)
+        elif term.type == "lowpass" and "white" in holds and "white" not in seen:
+            white = White(N=float(term.values()["N"]))
+            kept.append(white)
+            seen.add("white")
+            projected_fast.append(
+                f"{sensor}: {_describe(term)} -> {_describe(white)}: the format has no sensor "
+                f"filter, so the ADEV below ~{1.0 / term.values()['bandwidth']:.3g} s differs"
+            )
         else:
             share = 0.0
             if term.stationary or term.type in ("warmup", "step"):
@@ -132,7 +163,7 @@ def project(
             dropped.append(
                 f"{sensor}: {_describe(term)}, up to {100 * share:.0f} % of the ADEV over {rng}"
             )
-    projections: list[str] = []
+    projections: list[str] = list(projected_fast)
     slot = "markov" if "markov" in holds else "rrw" if "rrw" in holds else None
     if slow and slot is None:
         dropped.extend(f"{sensor}: {_describe(t)} (no slow term in the format)" for t in slow)
@@ -140,14 +171,29 @@ def project(
         replaced = [t for t in kept if t.type == slot]
         fixed = [t for t in kept if t.type != slot and t.stationary]
         target = sensor_model([*fixed, *replaced, *slow], sensor).avar(taus, dt)
-        new = _fit_slot(slot, fixed, target, taus, dt)
-        kept = [t for t in kept if t.type != slot] + [new]
-        proj = sensor_model(kept, sensor)
-        err = np.sqrt(proj.avar(taus, dt) / target) - 1.0
-        worst = float(np.max(np.abs(err)))
+        others = [t for t in kept if t.type != slot]
+        new = _fit_slot(slot, fixed, None, target, taus, dt)
+        worst = _worst(sensor_model([*others, *new], sensor), target, taus, dt)
+        whites = [t for t in fixed if t.type == "white"]
+        if whites:
+            # the white noise free as well: taken only when it halves the largest error
+            rest = [t for t in fixed if t.type != "white"]
+            joint = _fit_slot(slot, rest, whites[0], target, taus, dt)
+            others_joint = [t for t in others if t.type != "white"]
+            trial = sensor_model([*others_joint, *joint], sensor)
+            worst_joint = _worst(trial, target, taus, dt)
+            if worst_joint < 0.5 * worst:
+                replaced, others, new, worst = (
+                    [*replaced, whites[0]],
+                    others_joint,
+                    joint,
+                    worst_joint,
+                )
+        kept = [*others, *new]
         sources = ", ".join(_describe(t) for t in [*replaced, *slow])
+        result = ", ".join(_describe(t) for t in new)
         projections.append(
-            f"{sensor}: {sources} -> {_describe(new)} matching the Allan deviation over "
+            f"{sensor}: {sources} -> {result} matching the Allan deviation over "
             f"{rng} (largest ADEV error {100 * worst:.1f} %)"
         )
     return Projection(sensor_model(kept, sensor), dropped, projections)
