@@ -85,7 +85,7 @@ def test_kalibr_missing_terms_are_zero_and_gm_is_projected():
     assert entries["gyroscope_noise_density"] > 0.01
     assert entries["gyroscope_random_walk"] > 0.0
     assert len(entries["not_exported"]) == 1
-    assert entries["not_exported"][0].startswith("gyro: markov")
+    assert "markov (sigma=0.1, tau_c=5)" in entries["not_exported"][0]
     assert "-> rrw" in entries["not_exported"][0]
     assert "markov" in kalibr_imu_yaml(model, 100.0)
 
