@@ -61,6 +61,15 @@ FORMATS: dict[str, ModuleType] = {
     )
 }
 
+#: format of a file written without a template or --to, by suffix, where several share it
+SUFFIX_DEFAULTS = {
+    ".json": "allanite",
+    ".sdf": "gz-sdf",
+    ".world": "gz-sdf",
+    ".yaml": "kalibr",
+    ".yml": "kalibr",
+}
+
 
 def format_module(name: str) -> ModuleType:
     """The module of a format name, or a ValueError listing the names."""
@@ -71,6 +80,9 @@ def format_module(name: str) -> ModuleType:
 
 def detect_format(path: str | Path, text: str | None = None) -> str:
     """Format of a config from its content (and suffix); ``text`` is read when omitted.
+
+    Without ``text`` (a file to write), a suffix several formats share gives the format of
+    :data:`SUFFIX_DEFAULTS` (``.json`` model JSON, ``.sdf`` gz-sensors, ``.yaml`` Kalibr).
 
     Raises
     ------
@@ -91,6 +103,8 @@ def detect_format(path: str | Path, text: str | None = None) -> str:
         candidates = [n for n, m in FORMATS.items() if suffix in m.SUFFIXES]
         if len(candidates) == 1:
             return candidates[0]
+        if suffix in SUFFIX_DEFAULTS:
+            return SUFFIX_DEFAULTS[suffix]
     raise ValueError(
         f"{path}: cannot tell which simulator config this is; give the format "
         f"(CLI: --sim-format / --from / --to NAME), one of {', '.join(FORMATS)}"

@@ -1,0 +1,98 @@
+"""``allanite model convert`` and ``allanite diagnose --sim-model CONFIG --write-corrected``."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from allanite.cli import main
+from allanite.formats import read_config
+from allanite.model import NoiseModel
+from allanite.terms import RateRandomWalk, White
+
+FS = 100.0
+N = 2**14
+
+
+def test_convert_kalibr_to_sdf_and_back(tmp_path, capsys):
+    src = tmp_path / "imu.yaml"
+    src.write_text("gyroscope_noise_density: 0.001\ngyroscope_random_walk: 2.0e-5\n"
+                   "update_rate: 200.0\n")  # fmt: skip
+    assert main(["model", "convert", str(src), str(tmp_path / "m.sdf"), "--to", "gz-sdf"]) == 0
+    assert "projected gyro: rrw" in capsys.readouterr().err  # the SDF holds no random walk
+    cfg = read_config(tmp_path / "m.sdf")
+    assert cfg.rate == 200.0
+    white = cfg.model("gyro").terms_of_type("white")[0]
+    assert math.isclose(white.N, 1e-3, rel_tol=1e-9)
+    assert main(["model", "convert", str(src), str(tmp_path / "model.json")]) == 0
+    model = NoiseModel.load(tmp_path / "model.json")
+    assert model.units["rate"] == "rad/s"
+    assert [t.type for t in model.terms] == ["white", "rrw"]
+
+
+def test_convert_errors_are_one_line_rc2(tmp_path, capsys):
+    src = tmp_path / "imu.yaml"
+    src.write_text("something: 1\n")
+    assert main(["model", "convert", str(src), str(tmp_path / "o.yaml")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1
+    assert "--from" in err
+    assert not (tmp_path / "o.yaml").exists()
+    sdf = tmp_path / "a.sdf"
+    noise = "<noise type='gaussian'><stddev>0.01</stddev></noise>"
+    sdf.write_text(f"<sensor type='imu'><imu><angular_velocity><x>{noise}</x>"
+                   "</angular_velocity></imu></sensor>")  # fmt: skip
+    assert main(["model", "convert", str(sdf), str(tmp_path / "o.json")]) == 2
+    assert "--rate" in capsys.readouterr().err
+    assert main(["model", "convert", str(sdf), str(tmp_path / "o.json"), "--rate", "100"]) == 0
+
+
+@pytest.fixture(scope="module")
+def loop(tmp_path_factory):
+    root = tmp_path_factory.mktemp("loop")
+    truth = NoiseModel((White(N=0.03), RateRandomWalk(K=0.002)), {"rate": "deg/s", "time": "s"})
+    np.save(root / "real.npy", truth.simulate(N, FS, seed=11))
+    # a simulator config with the white noise 3x too low (densities in SI units)
+    d2r = math.pi / 180
+    (root / "kalibr.yaml").write_text(
+        "# my camera-imu setup\nrostopic: /imu0\n"
+        f"gyroscope_noise_density: {0.01 * d2r}\ngyroscope_random_walk: {0.002 * d2r}\n"
+        "accelerometer_noise_density: 0.002\naccelerometer_random_walk: 0.0003\n"
+        "update_rate: 100.0\n"
+    )
+    return root
+
+
+def test_diagnose_a_kalibr_config_and_write_the_corrected_one(loop, capsys):
+    out = loop / "kalibr_fixed.yaml"
+    argv = [
+        "diagnose", str(loop / "real.npy"), "--fs", "100", "--units", "deg/s",
+        "--sim-model", str(loop / "kalibr.yaml"), "--n-mc", "40",
+        "--write-corrected", str(out),
+    ]  # fmt: skip
+    assert main(argv) == 0
+    captured = capsys.readouterr()
+    assert "SIGNIFICANT" in captured.out
+    assert "corrected config" in captured.err
+    text = out.read_text()
+    assert "# my camera-imu setup" in text  # the user's file, only the values changed
+    assert "accelerometer_noise_density: 0.002" in text
+    fixed = read_config(out).model("gyro").in_units("deg/s")
+    n = fixed.terms_of_type("white")[0].N
+    assert abs(n - 0.03) < 0.1 * 0.03  # the diagnosed white noise is folded in
+    # the corrected config closes the gap
+    argv[argv.index("--sim-model") + 1] = str(out)
+    argv = argv[: argv.index("--write-corrected")]
+    assert main(argv) == 0
+    assert "consistent with chance" in capsys.readouterr().out
+
+
+def test_diagnose_config_without_units_says_so(loop, capsys):
+    argv = [
+        "diagnose", str(loop / "real.npy"), "--fs", "100",
+        "--sim-model", str(loop / "kalibr.yaml"), "--n-mc", "20",
+    ]  # fmt: skip
+    assert main(argv) == 2
+    assert "--units" in capsys.readouterr().err
