@@ -72,8 +72,10 @@ def load_sim_model(args: argparse.Namespace, fs: float, units: str | None) -> Lo
         config = read_config(path, format=fmt, rate=fs)
     model = config.model(args.sim_sensor)
     if fmt == "allanite":
+        # the model JSON keeps its own unit: a mismatch with the record is reported, not fixed
         model = NoiseModel.from_json(path.read_text(encoding="utf-8"))
-    elif units is None:
+        return LoadedSim(model, config, fmt, float(config.rate or fs))
+    if units is None:
         raise ValueError(
             f"the {fmt} config is in SI units ({model.units['rate']}); give the unit of the "
             "real record with --units (e.g. --units deg/s)"
