@@ -75,6 +75,11 @@ def add_record_arguments(parser: argparse.ArgumentParser) -> None:
         help="whether a text file starts with column names (default: detected)",
     )
     group.add_argument("--key", help="array name in an .npz file or dataset path in HDF5")
+    group.add_argument(
+        "--topic",
+        help="ROS bag IMU topic (sensor_msgs/Imu), or ULog topic: sensor_combined (default), "
+        "sensor_gyro[:instance], sensor_accel",
+    )
     group.add_argument("--dtype", help="raw binary sample type, e.g. int16, <f4, float64")
     group.add_argument(
         "--n-channels", type=int, default=1, help="raw binary: interleaved channels (default 1)"
@@ -193,6 +198,7 @@ def read_options(args: argparse.Namespace) -> dict[str, Any]:
         "n_channels": args.n_channels,
         "byteorder": args.byte_order,
         "offset": args.offset,
+        "topic": getattr(args, "topic", None),
     }
 
 

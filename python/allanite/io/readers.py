@@ -39,6 +39,8 @@ FORMATS: dict[str, tuple[str, ...]] = {
     "raw": (".bin", ".raw", ".imu"),
     "hdf5": (".h5", ".hdf5", ".hdf"),
     "parquet": (".parquet", ".pq"),
+    "rosbag": (".bag", ".db3", ".mcap"),  # ROS 1 and ROS 2 (a ROS 2 bag directory too)
+    "ulog": (".ulg", ".ulog"),  # PX4 flight logs
 }
 
 Column = int | str
@@ -480,6 +482,7 @@ def read_record(
     n_channels: int = 1,
     byteorder: str = "little",
     offset: int = 0,
+    topic: str | None = None,
 ) -> Record:
     """Read a record from a file or a pandas DataFrame.
 
@@ -515,6 +518,9 @@ def read_record(
     dtype, n_channels, byteorder, offset
         Raw binary layout: sample type, interleaved channels, ``"little"``/``"big"``/
         ``"native"``, bytes to skip at the start.
+    topic : str, optional
+        ROS bag IMU topic, or ULog topic (``sensor_combined``, ``sensor_gyro[:instance]``,
+        ``sensor_accel``); see :mod:`allanite.io.robot_logs`.
 
     Returns
     -------
@@ -535,11 +541,15 @@ def read_record(
     path = Path(source)
     if not path.exists():
         raise InputError("no such file; check the path", path=str(path))
-    if path.is_dir():
-        raise InputError("is a directory; give a file", path=str(path))
-    fmt = format or detect_format(path)
+    from allanite.io.robot_logs import is_ros2_bag_dir
+
+    if path.is_dir() and not is_ros2_bag_dir(path):
+        raise InputError("is a directory; give a file (or a ROS 2 bag directory)", path=str(path))
+    fmt = format or ("rosbag" if path.is_dir() else detect_format(path))
     if fmt not in FORMATS:
         raise ValueError(f"unknown format {fmt!r}; use one of {', '.join(FORMATS)}")
+    if fmt in ("rosbag", "ulog"):
+        return _read_robot_log(path, fmt, topic, options)
     if path.stat().st_size == 0:
         raise InputError("the file is empty; check that the recording was written", path=str(path))
     if fmt == "text":
@@ -558,3 +568,24 @@ def read_record(
         loaded = _load_parquet(path, _as_list(columns), time_column)
     table, names, where = loaded
     return make_record(table, names, source=str(path), where=where, **options)
+
+
+def _read_robot_log(path: Path, fmt: str, topic: str | None, options: dict[str, Any]) -> Record:
+    """A ROS bag or ULog as a record: time stamps from the messages, units per axis."""
+    import dataclasses
+
+    from allanite.io.robot_logs import CHANNEL_UNITS, load_rosbag, load_ulog
+
+    loader = load_rosbag if fmt == "rosbag" else load_ulog
+    table, names, warnings = loader(path, topic)
+    if table.shape[0] < 3:
+        raise InputError(f"only {table.shape[0]} IMU message(s); need at least 3", path=str(path))
+    if options.get("time_column") is None:
+        options = {**options, "time_column": "t", "time_scale": 1.0}
+    record = make_record(table, names, source=str(path), **options)
+    units = {CHANNEL_UNITS.get(c) for c in record.channels}
+    meta = {"channel_units": {c: CHANNEL_UNITS.get(c) for c in record.channels}}
+    changes: dict[str, Any] = {"warnings": (*warnings, *record.warnings), "meta": meta}
+    if options.get("units") is None and len(units) == 1:
+        changes["units"] = units.pop()
+    return dataclasses.replace(record, **changes)

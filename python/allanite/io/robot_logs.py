@@ -1,0 +1,166 @@
+"""Robot logs read directly, without ROS: ROS 1 ``.bag``, ROS 2 (sqlite3, MCAP) and PX4 ULog.
+
+``sensor_msgs/Imu`` messages of a ROS bag are read with the pure-Python ``rosbags`` package
+(extra ``[bags]``), PX4 flight logs with ``pyulog`` (extra ``[ulog]``). Both loaders return a
+table whose first column is the message time stamp in seconds (the message header's stamp
+for ROS, ``timestamp_sample`` or ``timestamp`` for ULog), followed by the six axes
+``gyro_x gyro_y gyro_z`` (rad/s) and ``accel_x accel_y accel_z`` (m/s^2); the record is then
+built like any text file with a time column, so gaps and jitter are reported the same way.
+Messages are sorted by their stamps (bags are stored in arrival order).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from allanite.errors import InputError
+
+__all__ = [
+    "CHANNELS",
+    "CHANNEL_UNITS",
+    "LOG_SUFFIXES",
+    "is_ros2_bag_dir",
+    "load_rosbag",
+    "load_ulog",
+]
+
+CHANNELS = ("gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z")
+CHANNEL_UNITS = {c: ("rad/s" if c.startswith("gyro") else "m/s^2") for c in CHANNELS}
+LOG_SUFFIXES = {"rosbag": (".bag", ".db3", ".mcap"), "ulog": (".ulg", ".ulog")}
+IMU_TYPES = ("sensor_msgs/msg/Imu", "sensor_msgs/Imu")
+#: ULog topic -> (time field, gyro fields, accel fields)
+ULOG_TOPICS: dict[str, tuple[str, tuple[str, ...], tuple[str, ...]]] = {
+    "sensor_combined": (
+        "timestamp",
+        ("gyro_rad[0]", "gyro_rad[1]", "gyro_rad[2]"),
+        ("accelerometer_m_s2[0]", "accelerometer_m_s2[1]", "accelerometer_m_s2[2]"),
+    ),
+    "sensor_gyro": ("timestamp_sample", ("x", "y", "z"), ()),
+    "sensor_accel": ("timestamp_sample", (), ("x", "y", "z")),
+}
+
+
+def is_ros2_bag_dir(path: Path) -> bool:
+    """Whether ``path`` is a ROS 2 bag directory (it holds ``metadata.yaml``)."""
+    return path.is_dir() and (path / "metadata.yaml").is_file()
+
+
+def _sorted(t: NDArray[np.float64], rows: NDArray[np.float64], warnings: list[str]) -> Any:
+    order = np.argsort(t, kind="stable")
+    moved = int(np.count_nonzero(order != np.arange(t.size)))
+    if moved:
+        warnings.append(f"{moved} messages were out of time-stamp order and were sorted")
+    return t[order], rows[order]
+
+
+def load_rosbag(
+    path: Path, topic: str | None = None
+) -> tuple[NDArray[Any], tuple[str, ...], list[str]]:
+    """Read the ``sensor_msgs/Imu`` messages of a ROS 1 or ROS 2 bag.
+
+    Returns ``(table, names, warnings)``: columns ``t`` and :data:`CHANNELS`.
+    """
+    try:
+        from rosbags.highlevel import AnyReader
+        from rosbags.typesys import Stores, get_typestore
+    except ImportError as exc:
+        raise ImportError("reading ROS bags needs rosbags: pip install 'allanite[bags]'") from exc
+    try:
+        reader = AnyReader([path], default_typestore=get_typestore(Stores.ROS2_HUMBLE))
+        reader.open()
+    except Exception as exc:  # rosbags raises its own error types
+        raise InputError(f"not a readable ROS bag ({exc})", path=str(path)) from exc
+    try:
+        imu = [c for c in reader.connections if c.msgtype in IMU_TYPES]
+        topics = sorted({c.topic for c in imu})
+        if not topics:
+            found = ", ".join(sorted({f"{c.topic} ({c.msgtype})" for c in reader.connections}))
+            raise InputError(
+                f"no sensor_msgs/Imu topic in the bag; it has {found or 'no topics'}",
+                path=str(path),
+            )
+        if topic is None:
+            if len(topics) > 1:
+                raise InputError(
+                    f"the bag has several IMU topics ({', '.join(topics)}); choose one with "
+                    "topic= (CLI: --topic NAME)",
+                    path=str(path),
+                )
+            topic = topics[0]
+        if topic not in topics:
+            raise InputError(
+                f"no IMU topic {topic!r}; IMU topics: {', '.join(topics)}", path=str(path)
+            )
+        chosen = [c for c in imu if c.topic == topic]
+        stamps: list[float] = []
+        rows: list[tuple[float, ...]] = []
+        for conn, _, raw in reader.messages(connections=chosen):
+            msg: Any = reader.deserialize(raw, conn.msgtype)
+            stamp = msg.header.stamp
+            stamps.append(stamp.sec + stamp.nanosec * 1e-9)
+            w, a = msg.angular_velocity, msg.linear_acceleration
+            rows.append((w.x, w.y, w.z, a.x, a.y, a.z))
+    finally:
+        reader.close()
+    warnings: list[str] = []
+    t, data = _sorted(np.asarray(stamps), np.asarray(rows, dtype=np.float64), warnings)
+    return np.column_stack([t - t[0], data]), ("t", *CHANNELS), warnings
+
+
+def load_ulog(
+    path: Path, topic: str | None = None
+) -> tuple[NDArray[Any], tuple[str, ...], list[str]]:
+    """Read ``sensor_combined`` (default), ``sensor_gyro`` or ``sensor_accel`` of a ULog.
+
+    ``topic`` may carry an instance, ``sensor_gyro:1`` (default instance 0). Returns
+    ``(table, names, warnings)``: columns ``t`` and the axes the topic has.
+    """
+    try:
+        from pyulog import ULog
+    except ImportError as exc:
+        raise ImportError("reading PX4 ULog needs pyulog: pip install 'allanite[ulog]'") from exc
+    name, _, inst = (topic or "").partition(":")
+    instance = int(inst) if inst.isdigit() else 0
+    wanted = [name] if name else list(ULOG_TOPICS)
+    unknown = [n for n in wanted if n not in ULOG_TOPICS]
+    if unknown:
+        raise InputError(
+            f"ULog topic {unknown[0]!r} is not an IMU topic; use one of {', '.join(ULOG_TOPICS)}",
+            path=str(path),
+        )
+    try:
+        log = ULog(str(path), message_name_filter_list=wanted)
+    except Exception as exc:  # pyulog raises assorted errors on broken files
+        raise InputError(f"not a readable ULog file ({exc})", path=str(path)) from exc
+    present = {(d.name, d.multi_id): d for d in log.data_list}
+    for n in wanted:
+        if (n, instance) in present:
+            data = present[(n, instance)]
+            break
+    else:
+        found = ", ".join(f"{n}:{i}" for n, i in sorted(present)) or "none"
+        raise InputError(
+            f"no IMU topic {' / '.join(wanted)} (instance {instance}) in the log; found {found}",
+            path=str(path),
+        )
+    time_field, gyro, accel = ULOG_TOPICS[data.name]
+    if time_field not in data.data:
+        time_field = "timestamp"
+    names = [c for c, f in zip(CHANNELS[:3], gyro, strict=False)] + [
+        c for c, f in zip(CHANNELS[3:], accel, strict=False)
+    ]
+    columns = [np.asarray(data.data[f], dtype=np.float64) for f in (*gyro, *accel)]
+    warnings: list[str] = []
+    t, rows = _sorted(
+        np.asarray(data.data[time_field], dtype=np.float64) * 1e-6,
+        np.column_stack(columns),
+        warnings,
+    )
+    others = sorted(i for n, i in present if n == data.name and i != instance)
+    if others:
+        warnings.append(f"{data.name} has other instances {others}; read instance {instance}")
+    return np.column_stack([t - t[0], rows]), ("t", *names), warnings
