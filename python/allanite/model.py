@@ -7,6 +7,17 @@ The JSON schema is part of the public contract::
 
 Coefficients are in the model's rate unit and seconds (N in rate*sqrt(s), K in rate/sqrt(s),
 Q in rate*s, R in rate/s, B and Gauss-Markov sigma in rate, tau_c in s, frequency in Hz).
+
+``units.rate`` is the unit of the sensor's output and says which sensor the model describes
+(:func:`allanite.units.sensor_kind`): an angular rate for a gyroscope (``deg/s``, ``deg/h``,
+``rad/s``, ...), an acceleration for an accelerometer (``m/s^2``, ``g``, ``mg``, ``ug``,
+``ft/s^2``, ``gal``), or ``unit`` for a record whose unit was not known. ``units.time`` is
+always ``s``. An accelerometer model therefore reads::
+
+    {"units": {"rate": "m/s^2", "time": "s"},
+     "terms": [{"type": "white", "N": 6.0e-4}, {"type": "flicker", "B": 2.0e-4}]}
+
+with N (velocity random walk) in m/s^2*sqrt(s) = m/s/sqrt(s), B in m/s^2.
 """
 
 from __future__ import annotations
@@ -21,7 +32,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from allanite.terms import TERM_TYPES, Term, term_from_dict
-from allanite.units import convert, rate_unit
+from allanite.units import Unit, coefficient_unit, convert, rate_unit, sensor_kind
 
 __all__ = ["NoiseModel"]
 
@@ -203,8 +214,27 @@ class NoiseModel:
                 out.append((spec.name + suffix, term, spec))
         return out
 
+    @property
+    def sensor(self) -> str:
+        """``"gyro"``, ``"accelerometer"`` or ``"unknown"`` (from the dimension of the rate)."""
+        return sensor_kind(self.units["rate"])
+
+    def coefficient_units(self) -> dict[str, Unit]:
+        """Unit of every parameter by label: the rate unit and seconds to the term's powers."""
+        rate = self.units["rate"]
+        return {
+            label: coefficient_unit(rate, spec.rate, spec.time)
+            for label, _, spec in self.labelled_parameters()
+        }
+
     def in_units(self, rate: str) -> NoiseModel:
-        """Return the same model with coefficients expressed in another rate unit."""
+        """Return the same model with coefficients expressed in another rate unit.
+
+        Raises
+        ------
+        ValueError
+            If ``rate`` measures another quantity (a gyro model cannot be put in m/s^2).
+        """
         target = rate_unit(rate)
         factor = convert(1.0, self.units["rate"], target)
         terms = []
