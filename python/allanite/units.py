@@ -69,6 +69,7 @@ __all__ = [
     "parse_unit",
     "quantity",
     "rate_unit",
+    "record_rate_unit",
     "sensor_kind",
 ]
 
@@ -435,6 +436,28 @@ def integral_unit(text: str | Unit) -> str:
             f"{_article(unit.quantity)}; give e.g. --units deg, or --input rate"
         )
     return f"{unit.text}/s" if re.fullmatch(r"[A-Za-zµ°]+", unit.text) else f"({unit.text})/s"
+
+
+def record_rate_unit(units: str | None, input: str = "rate", *, strict: bool = False) -> str | None:
+    """Rate unit of a record whose samples are in ``units`` (None stays None).
+
+    Rate samples (``input="rate"``) must be in a rate unit (:func:`rate_unit`). Angle or
+    increment samples are in an angle or a velocity, whose rate is that unit per second
+    (:func:`integral_unit`); unless ``strict``, a rate unit is accepted for them too (the
+    unit of the rate they describe).
+
+    Raises
+    ------
+    ValueError
+        If the unit cannot be read or measures the wrong quantity (the message says which).
+    """
+    if units is None:
+        return None
+    if input == "rate":
+        return rate_unit(units).text
+    if strict or parse_unit(units).quantity not in _SENSORS:
+        return integral_unit(units)
+    return rate_unit(units).text
 
 
 def _pow_text(atom: str, p: float) -> str:

@@ -17,7 +17,7 @@ from allanite.fit.seed import SCALE, coefficient_bounds, seed_fit
 from allanite.fit.spec import TermSpec, resolve_terms
 from allanite.model import NoiseModel
 from allanite.terms import Flicker, Quantization, RateRamp, RateRandomWalk, White
-from allanite.units import SYMBOL_POWERS, coefficient_unit, rate_unit
+from allanite.units import RECORD_UNIT, SYMBOL_POWERS, coefficient_unit, rate_unit
 from allanite.variance import AllanResult, avar
 
 __all__ = ["fit"]
@@ -370,7 +370,9 @@ def fit(
         squares on sigma^2 with five squared coefficients and 95 % bounds (always the five
         power-law terms).
     units : str, optional
-        Rate unit of the data (default: the result's units, else ``"deg/s"``).
+        Rate unit of the data, an angular rate or an acceleration (default: the result's
+        units, else the record unit ``"unit"``: coefficients in the record's own unknown
+        unit, which converts to no physical unit).
     penalty : float
         Penalty per parameter of ``"auto"`` (9: a term must lower the chi-square by about
         three standard errors squared).
@@ -424,8 +426,8 @@ def fit(
         raise ValueError(f"max_fraction must lie in (0, 0.5], got {max_fraction!r}")
     specs, auto = resolve_terms(terms)
     result = _curve(result_or_record, fs, input, units, method)
-    rate = units or result.units or "deg/s"
-    rate_unit(rate)
+    # no silent deg/s: a curve without a unit is fitted in the record's own unit
+    rate = rate_unit(units or result.units or RECORD_UNIT).text
     if method == "seed":
         return _fit_seed(result, rate)
     return _fit_gls(
