@@ -179,8 +179,7 @@ def _unit_legend(result: Any, shown: list[str]) -> list[str]:
     lines = []
     for rate in dict.fromkeys(result.column("units")):
         units = ", ".join(
-            f"{n} in {coefficient_unit(rate or RECORD_UNIT, *SYMBOL_POWERS[n]).text}"
-            for n in names
+            f"{n} in {coefficient_unit(rate or RECORD_UNIT, *SYMBOL_POWERS[n]).text}" for n in names
         )
         if rate is None:
             lines.append(

@@ -226,7 +226,7 @@ def read_sensors(path: str | None, args: argparse.Namespace) -> list[Record]:
             "give one unit, one per channel or one per equal group of consecutive channels"
         )
     per_channel = [units[c // (n // len(units))] for c in range(n)]
-    groups: dict[str, list[int]] = {}
+    groups: dict[str, list[int | str]] = {}
     for c, unit in enumerate(per_channel):
         groups.setdefault(unit, []).append(c)
     out = []
