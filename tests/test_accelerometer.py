@@ -282,3 +282,17 @@ def test_records_without_units_are_shown_in_record_units(imu_csv, tmp_path, caps
     )
     assert code == 0, err
     assert "N in deg/h*sqrt(s)" in out
+
+
+def test_navigation_impact_reads_the_accelerometer_unit():
+    from allanite.impact.model_adapter import sensor_noise_from_model
+
+    si = sensor_noise_from_model(ACCEL_MODEL, sensor="accel")
+    in_mg = sensor_noise_from_model(ACCEL_MODEL.in_units("mg"), sensor="accel")
+    assert si.white == pytest.approx(N_ACCEL, rel=1e-12)
+    assert in_mg.white == pytest.approx(N_ACCEL, rel=1e-12)
+    assert in_mg.random_walk == pytest.approx(K_ACCEL, rel=1e-12)
+    with pytest.raises(ValueError, match="leave accel_scale at 1"):
+        sensor_noise_from_model(ACCEL_MODEL, sensor="accel", accel_scale=9.8)
+    with pytest.raises(ValueError, match=r"cannot convert 'm/s\^2' \(acceleration\)"):
+        sensor_noise_from_model(ACCEL_MODEL, sensor="gyro")

@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import functools
+import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -301,3 +303,32 @@ def test_unparseable_and_unknown_units():
         rate_unit("m/s")
     with pytest.raises(ValueError, match="empty"):
         parse_unit("  ")
+
+
+# --- the documented model JSON schema ----------------------------------------------------------
+
+DOCS = Path(__file__).resolve().parents[1] / "docs"
+README = Path(__file__).resolve().parents[1] / "README.md"
+
+
+def test_schema_file_is_generated_from_the_terms():
+    from allanite.model import json_schema
+    from allanite.terms import TERM_TYPES
+
+    stored = json.loads((DOCS / "noise-model.schema.json").read_text(encoding="utf-8"))
+    assert stored == json_schema(), "regenerate docs/noise-model.schema.json from json_schema()"
+    variants = stored["properties"]["terms"]["items"]["oneOf"]
+    assert {v["properties"]["type"]["const"] for v in variants} == set(TERM_TYPES)
+    white = next(v for v in variants if v["properties"]["type"]["const"] == "white")
+    assert "velocity random walk" in white["properties"]["N"]["description"]
+    assert "rate*s^0.5" in white["properties"]["N"]["description"]
+
+
+@pytest.mark.parametrize("path", [DOCS / "units.md", README], ids=["units.md", "README"])
+def test_documented_model_json_examples_load(path):
+    text = path.read_text(encoding="utf-8")
+    blocks = [b.split("```", 1)[0] for b in text.split("```json")[1:]]
+    assert blocks
+    for block in blocks:
+        model = NoiseModel.from_dict(json.loads(block))
+        assert model.sensor in ("gyro", "accelerometer")

@@ -34,7 +34,7 @@ from numpy.typing import ArrayLike, NDArray
 from allanite.terms import TERM_TYPES, Term, term_from_dict
 from allanite.units import Unit, coefficient_unit, convert, rate_unit, sensor_kind
 
-__all__ = ["NoiseModel"]
+__all__ = ["NoiseModel", "json_schema"]
 
 
 def _check_units(units: dict[str, str]) -> dict[str, str]:
@@ -339,3 +339,80 @@ class NoiseModel:
 
     def __len__(self) -> int:
         return len(self.terms)
+
+
+def json_schema() -> dict[str, Any]:
+    """JSON Schema (draft 2020-12) of the noise-model file, built from the Term registry.
+
+    ``docs/noise-model.schema.json`` is this schema; every term type, its parameters and
+    their units come from the :class:`~allanite.terms.base.Term` classes, so the schema
+    cannot drift from the code. The unit strings themselves are checked by
+    :func:`allanite.units.rate_unit` when a model is read (a schema cannot express the unit
+    grammar).
+    """
+    from allanite.units import RATE_UNITS
+
+    variants = []
+    for kind in sorted(TERM_TYPES):
+        cls = TERM_TYPES[kind]
+        props: dict[str, Any] = {"type": {"const": kind}}
+        for spec in (*cls.params, *cls.optional):
+            unit = _power_text(spec.rate, spec.time)
+            text = spec.description or spec.name
+            if spec.accel_description:
+                text += f" (accelerometer: {spec.accel_description})"
+            number: dict[str, Any] = {"type": "number", "description": f"{text}; unit {unit}"}
+            if spec in cls.optional:
+                number = {"type": ["number", "null"], "description": number["description"]}
+            props[spec.name] = number
+        variants.append(
+            {
+                "title": f"{kind} ({cls.symbol})",
+                "type": "object",
+                "properties": props,
+                "required": ["type", *[p.name for p in cls.params]],
+                "additionalProperties": False,
+            }
+        )
+    return {
+        "$schema": "https://json-schema.org/draft/2020-12/schema",
+        "$id": "https://allanite.readthedocs.io/noise-model.schema.json",
+        "title": "allanite noise model",
+        "description": (
+            "A sensor noise model: the sum of independent terms. Coefficients are in the "
+            "model's rate unit and seconds, to the powers given per parameter (rate = "
+            "units.rate). units.rate says which sensor the model describes: an angular rate "
+            "for a gyroscope, an acceleration for an accelerometer (g = 9.80665 m/s^2), or "
+            "'unit' for a record whose unit was not known."
+        ),
+        "type": "object",
+        "properties": {
+            "units": {
+                "type": "object",
+                "properties": {
+                    "rate": {
+                        "type": "string",
+                        "description": "unit of the sensor output, e.g. "
+                        + ", ".join(RATE_UNITS)
+                        + " (grammar: allanite.units)",
+                    },
+                    "time": {"const": "s"},
+                },
+                "required": ["rate", "time"],
+                "additionalProperties": False,
+            },
+            "terms": {"type": "array", "items": {"oneOf": variants}},
+        },
+        "required": ["units", "terms"],
+        "additionalProperties": False,
+    }
+
+
+def _power_text(rate: float, time: float) -> str:
+    """``rate*s^0.5``-style text of a parameter's powers."""
+    parts = []
+    if rate:
+        parts.append("rate" if rate == 1 else f"rate^{rate:g}")
+    if time:
+        parts.append("s" if time == 1 else f"s^{time:g}")
+    return "*".join(parts) if parts else "1"
