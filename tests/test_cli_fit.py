@@ -68,7 +68,8 @@ def test_fit_cli_text_and_bad_kind(tmp_path: Path, capsys: pytest.CaptureFixture
     np.savetxt(data, RATE[:20_000])
     assert main(["fit", str(data), "--fs", "100", "--units", "deg/s", "--points", "30"]) == 0
     out = capsys.readouterr().out
-    assert "channel col0:" in out
+    assert "channel col0 (gyro, deg/s):" in out
+    assert "angle random walk" in out
     assert "deg/sqrt(h)" in out
     target = tmp_path / "m.json"
     assert main(["fit", str(data), "--fs", "100", "--kind", "modified", "-o", str(target)]) == 2

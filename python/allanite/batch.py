@@ -40,6 +40,7 @@ from numpy.typing import NDArray
 
 from allanite.datasheet import Check, Datasheet, Limit, Measured, check_limits, verdict
 from allanite.errors import InputError
+from allanite.units import record_rate_unit
 
 __all__ = ["BatchResult", "batch"]
 
@@ -190,9 +191,7 @@ def _finite(value: float) -> float | None:
 
 def _rate_unit(input_kind: str, units: str | None) -> str | None:
     """Rate unit of the Allan variance: the record's unit, per second for angle/increment."""
-    if units is None or input_kind == "rate":
-        return units
-    return f"{units}/s"
+    return record_rate_unit(units, input_kind, strict=True)
 
 
 def _unit_free(sheet: Datasheet | None, rate: str | None) -> None:
@@ -227,7 +226,11 @@ def _fit_row(single: Any, task: _Task, rate: str | None) -> dict[str, Any]:
     return {
         "coefficients": coefficients,
         "p_value": _finite(result.p_value),
-        "checks": [c.status for c in checks],
+        # one status per limit, None where a limit is for another sensor (left out)
+        "checks": [
+            next((c.status for c in checks if c.limit is limit), None)
+            for limit in (task.sheet.limits if task.sheet is not None else ())
+        ],
     }
 
 

@@ -49,7 +49,7 @@ from typing import Any
 import numpy as np
 
 from allanite.errors import InputError
-from allanite.units import convert
+from allanite.units import convert, parse_unit, sensor_kind
 
 __all__ = [
     "STATUSES",
@@ -74,6 +74,23 @@ class Limit:
     max: float | None = None
     min: float | None = None
     tau: float | None = None
+
+    @property
+    def sensor(self) -> str | None:
+        """The sensor the limit is for, from its unit's dimension (None: any sensor).
+
+        A limit in an angle-based unit (``deg/sqrt(h)``, ``deg/h``) is a gyro limit, one in a
+        length-based unit (``m/s/sqrt(h)``, ``ug``, ``m/s^2``) an accelerometer limit; a
+        datasheet of a six-axis IMU lists both and each channel is checked against its own.
+        """
+        if not self.unit:
+            return None
+        unit = parse_unit(self.unit)
+        if unit.angle:
+            return "gyro"
+        if unit.length:
+            return "accelerometer"
+        return None
 
     @property
     def label(self) -> str:
@@ -179,6 +196,7 @@ class Datasheet:
                         tau=None if item.get("tau") is None else float(item["tau"]),
                     )
                 )
+                _ = limits[-1].sensor  # the unit must be readable
             except (TypeError, ValueError) as exc:
                 raise InputError(f"{where}: {exc}", path=source) from exc
         return cls(device=str(data.get("device", Path(source).stem)), limits=tuple(limits))
@@ -317,18 +335,29 @@ def check_limits(
     coefficients : dict
         Fitted coefficients by symbol (``N``, ``B``, ...), with intervals and units.
     adev : tuple
-        ``(tau, dev, low, high, rate_unit)`` of the measured deviation.
+        ``(tau, dev, low, high, rate_unit)`` of the measured deviation. The rate unit says
+        which sensor the channel is: limits in units of another sensor (an accelerometer
+        limit in m/s/sqrt(h) for a gyro channel) do not apply to it and are left out.
 
     Returns
     -------
     list of Check
-        One per limit; ``missing`` when the quantity was not measured (no such fitted term, or
-        ``tau`` outside the measured range), ``fail`` for a term the fit did not find when the
-        limit asks for a positive minimum.
+        One per applicable limit; ``missing`` when the quantity was not measured (no such
+        fitted term, or ``tau`` outside the measured range), ``fail`` for a term the fit did
+        not find when the limit asks for a positive minimum.
+
+    Raises
+    ------
+    ValueError
+        If a limit in a physical unit meets a channel whose unit is not known, or a limit's
+        unit cannot be converted to the coefficient's (the message names both units).
     """
     checks = []
     tau, dev, low, high, rate = adev
+    sensor = _sensor(rate)
     for limit in sheet.limits:
+        if sensor is not None and limit.sensor not in (None, sensor):
+            continue  # e.g. an accelerometer limit and a gyro channel
         measured: Measured | None = None
         if limit.quantity == "adev":
             at = adev_at(tau, dev, low, high, float(limit.tau or 0.0))
@@ -344,6 +373,12 @@ def check_limits(
                 raise ValueError(
                     f"limit on {limit.quantity} has no unit and the record's units are unknown; "
                     "give the limit's unit or the record's (--units)"
+                )
+            if limit.unit and _record_units(c.unit):
+                raise ValueError(
+                    f"the limit on {limit.quantity} is in {limit.unit} but the record's "
+                    "unit is not known; give the record's unit (--units) or write the "
+                    "limit in record units (compact form)"
                 )
             value, lo, hi = (convert(v, c.unit, target) for v in (c.value, c.low, c.high))
             measured = Measured(value, lo, hi, limit.unit)
@@ -362,6 +397,24 @@ def check_limits(
                 )
             )
     return checks
+
+
+def _sensor(rate: str | None) -> str | None:
+    """Sensor of a channel's rate unit (None when unknown)."""
+    if rate is None:
+        return None
+    try:
+        kind = sensor_kind(rate)
+    except ValueError:
+        return None
+    return None if kind == "unknown" else kind
+
+
+def _record_units(unit: str) -> bool:
+    try:
+        return bool(parse_unit(unit).record)
+    except ValueError:
+        return False
 
 
 def verdict(statuses: Iterable[str | None]) -> str:

@@ -7,6 +7,17 @@ The JSON schema is part of the public contract::
 
 Coefficients are in the model's rate unit and seconds (N in rate*sqrt(s), K in rate/sqrt(s),
 Q in rate*s, R in rate/s, B and Gauss-Markov sigma in rate, tau_c in s, frequency in Hz).
+
+``units.rate`` is the unit of the sensor's output and says which sensor the model describes
+(:func:`allanite.units.sensor_kind`): an angular rate for a gyroscope (``deg/s``, ``deg/h``,
+``rad/s``, ...), an acceleration for an accelerometer (``m/s^2``, ``g``, ``mg``, ``ug``,
+``ft/s^2``, ``gal``), or ``unit`` for a record whose unit was not known. ``units.time`` is
+always ``s``. An accelerometer model therefore reads::
+
+    {"units": {"rate": "m/s^2", "time": "s"},
+     "terms": [{"type": "white", "N": 6.0e-4}, {"type": "flicker", "B": 2.0e-4}]}
+
+with N (velocity random walk) in m/s^2*sqrt(s) = m/s/sqrt(s), B in m/s^2.
 """
 
 from __future__ import annotations
@@ -21,9 +32,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from allanite.terms import TERM_TYPES, Term, term_from_dict
-from allanite.units import convert, rate_unit
+from allanite.units import Unit, coefficient_unit, convert, rate_unit, sensor_kind
 
-__all__ = ["NoiseModel"]
+__all__ = ["NoiseModel", "json_schema"]
 
 
 def _check_units(units: dict[str, str]) -> dict[str, str]:
@@ -203,8 +214,27 @@ class NoiseModel:
                 out.append((spec.name + suffix, term, spec))
         return out
 
+    @property
+    def sensor(self) -> str:
+        """``"gyro"``, ``"accelerometer"`` or ``"unknown"`` (from the dimension of the rate)."""
+        return sensor_kind(self.units["rate"])
+
+    def coefficient_units(self) -> dict[str, Unit]:
+        """Unit of every parameter by label: the rate unit and seconds to the term's powers."""
+        rate = self.units["rate"]
+        return {
+            label: coefficient_unit(rate, spec.rate, spec.time)
+            for label, _, spec in self.labelled_parameters()
+        }
+
     def in_units(self, rate: str) -> NoiseModel:
-        """Return the same model with coefficients expressed in another rate unit."""
+        """Return the same model with coefficients expressed in another rate unit.
+
+        Raises
+        ------
+        ValueError
+            If ``rate`` measures another quantity (a gyro model cannot be put in m/s^2).
+        """
         target = rate_unit(rate)
         factor = convert(1.0, self.units["rate"], target)
         terms = []
@@ -309,3 +339,80 @@ class NoiseModel:
 
     def __len__(self) -> int:
         return len(self.terms)
+
+
+def json_schema() -> dict[str, Any]:
+    """JSON Schema (draft 2020-12) of the noise-model file, built from the Term registry.
+
+    ``docs/noise-model.schema.json`` is this schema; every term type, its parameters and
+    their units come from the :class:`~allanite.terms.base.Term` classes, so the schema
+    cannot drift from the code. The unit strings themselves are checked by
+    :func:`allanite.units.rate_unit` when a model is read (a schema cannot express the unit
+    grammar).
+    """
+    from allanite.units import RATE_UNITS
+
+    variants = []
+    for kind in sorted(TERM_TYPES):
+        cls = TERM_TYPES[kind]
+        props: dict[str, Any] = {"type": {"const": kind}}
+        for spec in (*cls.params, *cls.optional):
+            unit = _power_text(spec.rate, spec.time)
+            text = spec.description or spec.name
+            if spec.accel_description:
+                text += f" (accelerometer: {spec.accel_description})"
+            number: dict[str, Any] = {"type": "number", "description": f"{text}; unit {unit}"}
+            if spec in cls.optional:
+                number = {"type": ["number", "null"], "description": number["description"]}
+            props[spec.name] = number
+        variants.append(
+            {
+                "title": f"{kind} ({cls.symbol})",
+                "type": "object",
+                "properties": props,
+                "required": ["type", *[p.name for p in cls.params]],
+                "additionalProperties": False,
+            }
+        )
+    return {
+        "$schema": "https://json-schema.org/draft/2020-12/schema",
+        "$id": "https://allanite.readthedocs.io/noise-model.schema.json",
+        "title": "allanite noise model",
+        "description": (
+            "A sensor noise model: the sum of independent terms. Coefficients are in the "
+            "model's rate unit and seconds, to the powers given per parameter (rate = "
+            "units.rate). units.rate says which sensor the model describes: an angular rate "
+            "for a gyroscope, an acceleration for an accelerometer (g = 9.80665 m/s^2), or "
+            "'unit' for a record whose unit was not known."
+        ),
+        "type": "object",
+        "properties": {
+            "units": {
+                "type": "object",
+                "properties": {
+                    "rate": {
+                        "type": "string",
+                        "description": "unit of the sensor output, e.g. "
+                        + ", ".join(RATE_UNITS)
+                        + " (grammar: allanite.units)",
+                    },
+                    "time": {"const": "s"},
+                },
+                "required": ["rate", "time"],
+                "additionalProperties": False,
+            },
+            "terms": {"type": "array", "items": {"oneOf": variants}},
+        },
+        "required": ["units", "terms"],
+        "additionalProperties": False,
+    }
+
+
+def _power_text(rate: float, time: float) -> str:
+    """``rate*s^0.5``-style text of a parameter's powers."""
+    parts = []
+    if rate:
+        parts.append("rate" if rate == 1 else f"rate^{rate:g}")
+    if time:
+        parts.append("s" if time == 1 else f"s^{time:g}")
+    return "*".join(parts) if parts else "1"

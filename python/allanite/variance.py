@@ -20,6 +20,7 @@ from scipy import stats
 from allanite import _core
 from allanite.edf import equivalent_dof, identify_alpha
 from allanite.taus import KERNEL_KIND, TauSpec, averaging_factors
+from allanite.units import record_rate_unit
 
 __all__ = [
     "KINDS",
@@ -428,7 +429,11 @@ def avar(
     threads : int, optional
         Worker threads (default: all cores). Results are identical for any thread count.
     units : str, optional
-        Rate unit of the record, carried into the result.
+        Unit of the record, carried into the result as its rate unit: an angular rate
+        (``deg/s``, ``deg/h``, ``dph``, ``rad/s``, ...) or an acceleration (``m/s^2``, ``g``,
+        ``mg``, ``ug``, ...); for angle/increment samples also their angle (``deg``) or
+        velocity (``m/s``), read as that unit per second. Checked by
+        :func:`allanite.units.record_rate_unit` (a unit that is not one of these raises).
     memory_limit, progress, fast
         Large records (:func:`allanite.large.avar_large`, which also reads files in chunks):
         a working-memory budget like ``"1GB"`` beyond which the phase array goes to a
@@ -444,6 +449,7 @@ def avar(
     ----------
     W. J. Riley, *Handbook of Frequency Stability Analysis*, NIST SP1065 (2008).
     """
+    units = record_rate_unit(units, input)  # one validation of the unit, for every caller
     if memory_limit is not None or progress is not None or (fast is not False and fast is not None):
         from allanite.large import avar_large
 

@@ -162,7 +162,33 @@ def _text_table(result: Any) -> str:
         for values in (dict(zip(columns, row, strict=True)) for row in result.rows)
         if values["error"]
     ]
-    return "\n".join([line.rstrip() for line in lines] + [f"error: {e}" for e in errors])
+    return "\n".join(
+        [line.rstrip() for line in lines]
+        + _unit_legend(result, shown)
+        + [f"error: {e}" for e in errors]
+    )
+
+
+def _unit_legend(result: Any, shown: list[str]) -> list[str]:
+    """One line per rate unit of the table saying what unit each coefficient column is in."""
+    from allanite.units import RECORD_UNIT, SYMBOL_POWERS, coefficient_unit
+
+    names = [c for c in shown if c in SYMBOL_POWERS]
+    if not names or "units" not in result.columns:
+        return []
+    lines = []
+    for rate in dict.fromkeys(result.column("units")):
+        units = ", ".join(
+            f"{n} in {coefficient_unit(rate or RECORD_UNIT, *SYMBOL_POWERS[n]).text}" for n in names
+        )
+        if rate is None:
+            lines.append(
+                f"units: the records have no unit (give --units): coefficients in record units, "
+                f"{units}"
+            )
+        else:
+            lines.append(f"units: {units}")
+    return lines
 
 
 def _terms(text: str) -> str | list[str]:

@@ -11,7 +11,7 @@ from allanite.cli.record_options import (
     add_record_arguments,
     avar_from_args,
     dump_json,
-    read_from_args,
+    read_sensors,
 )
 from allanite.io.atomic import atomic_output
 from allanite.variance import AllanResult
@@ -24,6 +24,8 @@ EXAMPLES = """examples:
   allanite fit run1.npz --key gyro_counts --fs 100 --scale 0.05 --units deg/s --channels 0 \\
       --plot fit.png --json
   allanite fit dut.csv --time-column t --units deg/s --datasheet limits.json
+  allanite fit imu.csv --time-column t --channels gx,gy,gz,ax,ay,az \
+      --units deg/s,deg/s,deg/s,m/s^2,m/s^2,m/s^2          # six-axis: a table per sensor
 
 exit codes: 0 fitted (and every datasheet limit met or undecided), 1 a datasheet limit failed,
 2 bad input (no output written).
@@ -43,7 +45,11 @@ def register(subparsers: Any) -> None:
     )
     parser.add_argument("file", nargs="?", help="record file")
     parser.add_argument("--example", action="store_true", help="fit the example record")
-    parser.add_argument("-o", "--output", help="write the noise model (JSON) of the first channel")
+    parser.add_argument(
+        "-o",
+        "--output",
+        help="write the noise model (JSON) of the first channel (of the first sensor)",
+    )
     parser.add_argument("--plot", help="save the data, model and terms to FILE.png/.svg/.pdf")
     parser.add_argument("--json", action="store_true", help="print machine-readable JSON")
     parser.add_argument(
@@ -92,13 +98,13 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError(
             f"--kind {args.kind}: the fit models the overlapping Allan variance; leave --kind out"
         )
-    record = read_from_args(args.file, args)
-    result = avar_from_args(record, args)
+    sensors = read_sensors(args.file, args)
+    analysed = [(record, avar_from_args(record, args)) for record in sensors]
+    work = [(record, result, c) for record, result in analysed for c in range(record.n_channels)]
     channels = []
     fits = []
-    for c, name in progress(
-        list(enumerate(record.channels)), desc="fitting", total=record.n_channels
-    ):
+    for record, result, c in progress(work, desc="fitting", total=len(work)):
+        name = record.channels[c]
         fit = fit_result(result.channel(c))
         fits.append(fit)
         rows = coefficient_table(fit, result.units, args.level)
@@ -111,11 +117,14 @@ def run(args: argparse.Namespace) -> int:
         channels.append(
             {
                 "channel": name,
+                "sensor": _model_of(fit).sensor,
+                "units": result.units,
                 "checks": [k.to_dict() for k in checks],
                 "model": _model_of(fit).to_dict(),
                 "coefficients": [
                     {
                         "term": r.term,
+                        "quantity": r.quantity,
                         "symbol": r.symbol,
                         "value": r.value,
                         "low": r.low,
@@ -126,6 +135,7 @@ def run(args: argparse.Namespace) -> int:
                 ],
             }
         )
+    record, result = analysed[0]
     if args.plot:
         from allanite.plot import model_figure, save_figure
 
@@ -143,19 +153,30 @@ def run(args: argparse.Namespace) -> int:
             tmp.write_text(_model_of(fits[0]).to_json(), encoding="utf-8")
     failed = [k for item in channels for k in item["checks"] if k["status"] == "fail"]
     if args.json:
-        print(dump_json({"record": record.summary(), "channels": channels, "passed": not failed}))
+        summary = record.summary()
+        if len(sensors) > 1:
+            summary["units"] = [r.units for r in sensors for _ in r.channels]
+            summary["channels"] = [name for r in sensors for name in r.channels]
+        print(dump_json({"record": summary, "channels": channels, "passed": not failed}))
     else:
         for item in channels:
-            print(f"channel {item['channel']}:")
+            print(f"channel {item['channel']} ({_what(item)}):")
             for row in item["coefficients"]:
                 interval = (
                     "" if row["low"] != row["low"] else f"  [{row['low']:.4g}, {row['high']:.4g}]"
                 )
                 print(
-                    f"  {row['term']:>14} {row['symbol']:>8} = {row['value']:.4g} "
-                    f"{row['unit']}{interval}"
+                    f"  {row['quantity'] or row['term']:>26} {row['symbol']:>6} = "
+                    f"{row['value']:.4g} {row['unit']}{interval}"
                 )
             for check in item["checks"]:
                 value = "not measured" if check["value"] is None else f"{check['value']:.4g}"
                 print(f"  datasheet {check['quantity']}: {value} -> {check['status'].upper()}")
     return 1 if failed else 0
+
+
+def _what(item: dict[str, Any]) -> str:
+    """``gyro, deg/s`` or the note that a record without a unit is shown in record units."""
+    if item["units"] is None:
+        return "no --units given: coefficients in the record's own units"
+    return f"{item['sensor']}, {item['units']}"

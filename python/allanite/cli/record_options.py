@@ -9,12 +9,14 @@ policy, scale, units, raw layout) and ``read_from_args(path, args)`` turns them 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 from typing import Any
 
 from allanite.cli.progress import progress_bars
 from allanite.io.readers import FORMATS, read_record
 from allanite.io.record import INPUT_KINDS, Record
 from allanite.io.timebase import GAP_POLICIES
+from allanite.units import record_rate_unit
 from allanite.variance import KINDS, AllanResult, avar
 
 __all__ = [
@@ -24,6 +26,8 @@ __all__ = [
     "example_record",
     "rate_unit",
     "read_from_args",
+    "read_sensors",
+    "unit_list",
 ]
 
 
@@ -40,7 +44,12 @@ def add_record_arguments(parser: argparse.ArgumentParser) -> None:
     )
     group.add_argument(
         "--units",
-        help="unit of the samples after --scale, e.g. deg/s (rate) or deg (angle, increment)",
+        help="unit of the samples after --scale: a rate (deg/s, deg/h, dph, rad/s) or an "
+        "acceleration (m/s^2, g, mg, ug, ft/s^2) for rate samples, an angle (deg) or a "
+        "velocity (m/s) for angle/increment samples. fit and report take one unit per channel "
+        "(gx,gy,gz,ax,ay,az: deg/s,deg/s,deg/s,m/s^2,m/s^2,m/s^2) or one per group of "
+        "consecutive channels (deg/s,m/s^2: first half gyro, second half accelerometer). "
+        "Without it coefficients are printed in record units",
     )
     group.add_argument(
         "--scale", type=float, help="factor from counts to units: samples = counts * SCALE"
@@ -169,15 +178,83 @@ def example_record(args: argparse.Namespace | None = None) -> Record:
     )
 
 
+def unit_list(text: str | None) -> list[str]:
+    """The units of ``--units``: one, or several separated by commas (empty: none)."""
+    if text is None:
+        return []
+    return [u.strip() for u in text.split(",") if u.strip()]
+
+
 def read_from_args(path: str | None, args: argparse.Namespace) -> Record:
-    """Read ``path`` (or the example record with ``--example``) with the reader options."""
+    """Read ``path`` (or the example record with ``--example``) with the reader options.
+
+    Raises
+    ------
+    ValueError
+        If ``--units`` names several units (only :func:`read_sensors` splits a record by
+        unit) or a unit of the wrong kind for ``--input``.
+    """
+    units = unit_list(getattr(args, "units", None))
+    if len(units) > 1:
+        raise ValueError(
+            f"--units {args.units}: this command analyses one sensor at a time; give one unit "
+            "and pick the sensor's columns with --channels (allanite fit and report take one "
+            "unit per channel)"
+        )
+    record = _read(path, args)
+    rate_unit(record)  # the unit must suit the input kind
+    return record
+
+
+def read_sensors(path: str | None, args: argparse.Namespace) -> list[Record]:
+    """Read a record and split its channels by unit: one Record per sensor unit.
+
+    ``--units`` gives one unit for every channel, one per channel, or one per group of
+    consecutive channels (6 channels and 2 units: 3 and 3). A six-axis IMU file read with
+    ``--channels gx,gy,gz,ax,ay,az --units deg/s,m/s^2`` gives a gyro record (gx, gy, gz in
+    deg/s) and an accelerometer record (ax, ay, az in m/s^2).
+
+    Raises
+    ------
+    ValueError
+        If the number of units does not divide the number of channels, or a unit is of the
+        wrong kind (the message names the channel and the unit).
+    """
+    units = unit_list(getattr(args, "units", None))
+    if len(units) <= 1:
+        return [read_from_args(path, args)]
+    record = _read(path, args, units=None)
+    n = record.n_channels
+    if n % len(units):
+        raise ValueError(
+            f"--units gives {len(units)} units for {n} channels ({', '.join(record.channels)}); "
+            "give one unit, one per channel or one per equal group of consecutive channels"
+        )
+    per_channel = [units[c // (n // len(units))] for c in range(n)]
+    groups: dict[str, list[int | str]] = {}
+    for c, unit in enumerate(per_channel):
+        groups.setdefault(unit, []).append(c)
+    out = []
+    for unit, columns in groups.items():
+        part = dataclasses.replace(record.select(columns), units=unit)
+        try:
+            rate_unit(part)
+        except ValueError as exc:
+            names = ", ".join(part.channels)
+            raise ValueError(f"channel(s) {names}: {exc}") from None
+        out.append(part)
+    return out
+
+
+def _read(path: str | None, args: argparse.Namespace, **override: Any) -> Record:
     if path is None:
         if getattr(args, "example", False):
             record = example_record(args)
             chosen = _columns(args.channels)
-            return record.select(chosen) if chosen else record
+            record = record.select(chosen) if chosen else record
+            return dataclasses.replace(record, units=override["units"]) if override else record
         raise ValueError("give a FILE to analyse, or --example for the built-in example record")
-    return read_record(path, fs=args.fs, **read_options(args))
+    return read_record(path, fs=args.fs, **{**read_options(args), **override})
 
 
 def read_options(args: argparse.Namespace) -> dict[str, Any]:
@@ -203,12 +280,15 @@ def read_options(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def rate_unit(record: Record) -> str | None:
-    """Rate unit of a record: its unit for rate samples, unit per second for angle/increment."""
-    if record.units is None:
-        return None
-    if record.input == "rate":
-        return record.units
-    return f"{record.units}/s"
+    """Rate unit of a record: its unit for rate samples, unit per second for angle/increment.
+
+    Raises
+    ------
+    ValueError
+        If the unit is not a rate or acceleration for rate samples, or not an angle or a
+        velocity for angle/increment samples (e.g. ``--input angle --units deg/s``).
+    """
+    return record_rate_unit(record.units, record.input, strict=True)
 
 
 def avar_from_args(record: Record, args: argparse.Namespace) -> AllanResult:

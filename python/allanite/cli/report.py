@@ -12,7 +12,9 @@ from allanite.cli.record_options import (
     add_record_arguments,
     avar_from_args,
     dump_json,
+    rate_unit,
     read_from_args,
+    read_sensors,
 )
 from allanite.report import Datasheet, DeviceAnalysis, build_report
 
@@ -24,6 +26,8 @@ EXAMPLES = """examples:
   allanite report dut.csv --time-column t --units deg/s --reference ref.csv \\
       --datasheet limits.json -o dut.html --png
   allanite report real.npy --fs 400 --units rad/s --sim-model model.json -o gap.html
+  allanite report imu.csv --time-column t --channels gx,gy,gz,ax,ay,az \
+      --units deg/s,m/s^2 -o imu.html                    # six-axis: gyro and accelerometer
 
 exit codes: 0 report written (datasheet passed or not given), 1 report written but a datasheet
 limit failed, 2 bad input (nothing written).
@@ -89,6 +93,12 @@ def diagnosis_parts(
     return diagnosis_section(device.record, model_path, n_mc=n_mc)
 
 
+def _sensor_name(record: Any) -> str:
+    from allanite.units import sensor_kind
+
+    return f"{sensor_kind(rate_unit(record) or 'unit')}, {record.units}"
+
+
 def run(args: argparse.Namespace) -> int:
     """Run ``allanite report``."""
     if Path(args.output).suffix.lower() not in (".html", ".htm"):
@@ -99,11 +109,17 @@ def run(args: argparse.Namespace) -> int:
     sources: list[str | None] = list(args.files) or [None]
     devices = []
     for path in progress(sources, desc="analysing", total=len(sources)):
-        record = read_from_args(path, args)
-        device = DeviceAnalysis(record, avar_from_args(record, args))
-        if not args.no_fit:
-            device = DeviceAnalysis(device.record, device.result, fit_channels(device))
-        devices.append(device)
+        sensors = read_sensors(path, args)
+        for record in sensors:
+            name = ""
+            if len(sensors) > 1:  # one device per sensor of a six-axis record
+                name = f"{Path(record.source).name} ({_sensor_name(record)})"
+            device = DeviceAnalysis(record, avar_from_args(record, args), name=name)
+            if not args.no_fit:
+                device = DeviceAnalysis(
+                    device.record, device.result, fit_channels(device), name=name
+                )
+            devices.append(device)
     reference = None
     if args.reference:
         ref_record = read_from_args(args.reference, args)

@@ -17,7 +17,7 @@ from allanite.fit.seed import SCALE, coefficient_bounds, seed_fit
 from allanite.fit.spec import TermSpec, resolve_terms
 from allanite.model import NoiseModel
 from allanite.terms import Flicker, Quantization, RateRamp, RateRandomWalk, White
-from allanite.units import display_unit, rate_unit
+from allanite.units import RECORD_UNIT, SYMBOL_POWERS, coefficient_unit, rate_unit
 from allanite.variance import AllanResult, avar
 
 __all__ = ["fit"]
@@ -176,7 +176,7 @@ def _coefficients(sol: GLSSolution, model: NoiseModel) -> dict[str, Coefficient]
         se_theta = math.sqrt(max(sol.param_cov[j, j], 0.0))
         amp = math.sqrt(theta)
         stderr = se_theta / (2.0 * amp) if amp > 0 and se_theta < theta else math.sqrt(se_theta)
-        label = labels[index][0]
+        label, _, pspec = labels[index]
         index += 1
 
         def amp_interval(level: float, j: int = j) -> tuple[float, float]:
@@ -184,13 +184,14 @@ def _coefficients(sol: GLSSolution, model: NoiseModel) -> dict[str, Coefficient]
             lo, hi = score_interval(sol, j, z)
             return math.sqrt(max(lo, 0.0)), math.sqrt(max(hi, 0.0))
 
-        out[label] = Coefficient(label, amp, stderr, display_unit(rate, label), amp_interval)
+        unit = coefficient_unit(rate, pspec.rate, pspec.time).text
+        out[label] = Coefficient(label, amp, stderr, unit, amp_interval)
         if spec.nonlinear_name is not None:
             p = len(sol.specs) + k
             log_value = float(sol.log_phi[k])
             se_log = math.sqrt(max(sol.param_cov[p, p], 0.0))
             value = math.exp(log_value)
-            label = labels[index][0]
+            label, _, pspec = labels[index]
             index += 1
 
             def log_interval(
@@ -200,7 +201,11 @@ def _coefficients(sol: GLSSolution, model: NoiseModel) -> dict[str, Coefficient]
                 return v * math.exp(-z * s), v * math.exp(z * s)
 
             out[label] = Coefficient(
-                label, value, value * se_log, display_unit(rate, label), log_interval
+                label,
+                value,
+                value * se_log,
+                coefficient_unit(rate, pspec.rate, pspec.time).text,
+                log_interval,
             )
             k += 1
     return out
@@ -288,7 +293,11 @@ def _fit_seed(result: AllanResult, units: str) -> FitResult:
 
         value = abs(sf.raw[raw]) * scale
         coefs[name] = Coefficient(
-            name, value, sf.raw_stderr[raw] * scale, display_unit(units, name), interval
+            name,
+            value,
+            sf.raw_stderr[raw] * scale,
+            coefficient_unit(units, *SYMBOL_POWERS[name]).text,
+            interval,
         )
     model = NoiseModel(
         (
@@ -361,7 +370,9 @@ def fit(
         squares on sigma^2 with five squared coefficients and 95 % bounds (always the five
         power-law terms).
     units : str, optional
-        Rate unit of the data (default: the result's units, else ``"deg/s"``).
+        Rate unit of the data, an angular rate or an acceleration (default: the result's
+        units, else the record unit ``"unit"``: coefficients in the record's own unknown
+        unit, which converts to no physical unit).
     penalty : float
         Penalty per parameter of ``"auto"`` (9: a term must lower the chi-square by about
         three standard errors squared).
@@ -415,8 +426,8 @@ def fit(
         raise ValueError(f"max_fraction must lie in (0, 0.5], got {max_fraction!r}")
     specs, auto = resolve_terms(terms)
     result = _curve(result_or_record, fs, input, units, method)
-    rate = units or result.units or "deg/s"
-    rate_unit(rate)
+    # no silent deg/s: a curve without a unit is fitted in the record's own unit
+    rate = rate_unit(units or result.units or RECORD_UNIT).text
     if method == "seed":
         return _fit_seed(result, rate)
     return _fit_gls(

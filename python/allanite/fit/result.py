@@ -14,7 +14,7 @@ from scipy import stats
 
 from allanite.fit.classic import ClassicReadout
 from allanite.model import NoiseModel
-from allanite.units import convert, display_unit
+from allanite.units import convert, display_unit, parse_unit
 
 __all__ = ["Coefficient", "Comparison", "ComparisonRow", "FitResult"]
 
@@ -204,8 +204,8 @@ class FitResult:
     def _unit_for(self, name: str, units: str | Mapping[str, str] | None) -> str:
         if units is None:
             return self.coefficients[name].unit
-        if isinstance(units, str):
-            return display_unit(units, name)
+        if isinstance(units, str):  # the coefficient's dimension shown with that rate unit
+            return display_unit(units, parse_unit(self.coefficients[name].unit))
         if name in units:
             return units[name]
         base = name.rsplit("_", 1)[0] if name[-1].isdigit() else name

@@ -15,13 +15,51 @@ import numpy as np
 
 from allanite.io.readers import read_record
 from allanite.io.record import Record
-from allanite.units import convert, rate_unit
+from allanite.units import convert, rate_unit, sensor_kind
 from allanite.variance import AllanResult, avar
 
-__all__ = ["DISPLAY_UNITS", "Options", "Session"]
+__all__ = ["DISPLAY_UNITS", "RECORD_UNITS", "Options", "Session", "display_units_for"]
 
-#: rate units offered for display (converted from the record's unit)
-DISPLAY_UNITS: tuple[str, ...] = ("as recorded", "deg/s", "deg/h", "rad/s", "mrad/s")
+#: rate units offered for display (converted from the record's unit): gyro, then accelerometer
+DISPLAY_UNITS: tuple[str, ...] = (
+    "as recorded",
+    "deg/s",
+    "deg/h",
+    "rad/s",
+    "mrad/s",
+    "m/s^2",
+    "g",
+    "mg",
+    "ug",
+)
+#: units offered for a record's samples (rate, angle/increment; gyro and accelerometer)
+RECORD_UNITS: tuple[str, ...] = (
+    "deg/s",
+    "rad/s",
+    "deg/h",
+    "dph",
+    "deg",
+    "rad",
+    "m/s^2",
+    "g",
+    "mg",
+    "m/s",
+    "",
+)
+
+
+def display_units_for(rate: str | None) -> tuple[str, ...]:
+    """The display units that suit a record in ``rate``: those of the same sensor.
+
+    A gyro record is offered deg/s, deg/h, ...; an accelerometer record m/s^2, g, mg, ug; a
+    record without a unit only "as recorded".
+    """
+    if rate is None:
+        return DISPLAY_UNITS[:1]
+    kind = sensor_kind(rate)
+    return DISPLAY_UNITS[:1] + tuple(
+        u for u in DISPLAY_UNITS[1:] if kind != "unknown" and sensor_kind(u) == kind
+    )
 
 
 @dataclass
@@ -139,7 +177,7 @@ class Session:
         if unit == "as recorded" or result.units in (None, unit):
             return result
         rate_unit(unit)
-        factor = convert(1.0, result.units, unit)
+        factor = convert(1.0, result.units, unit)  # refuses a unit of another sensor
         return dataclasses.replace(result, var=result.var * factor**2, units=unit)
 
     def report_html(self, channels: list[int]) -> Any:

@@ -14,7 +14,7 @@ from typing import Any
 
 from PySide6 import QtCore, QtGui, QtWidgets
 
-from allanite.gui.session import DISPLAY_UNITS, Session
+from allanite.gui.session import DISPLAY_UNITS, RECORD_UNITS, Session, display_units_for
 from allanite.io.record import INPUT_KINDS, Record
 
 __all__ = ["VIEWS", "MainWindow"]
@@ -84,7 +84,7 @@ class MainWindow(QtWidgets.QMainWindow):
         rec.addRow("Samples are", self.input_combo)
         self.units_combo = QtWidgets.QComboBox()
         self.units_combo.setEditable(True)
-        self.units_combo.addItems(["deg/s", "rad/s", "deg/h", "deg", "rad", ""])
+        self.units_combo.addItems(list(RECORD_UNITS))
         rec.addRow("Units", self.units_combo)
         self.scale_edit = QtWidgets.QLineEdit()
         self.scale_edit.setPlaceholderText("1 (counts → units)")
@@ -328,11 +328,25 @@ class MainWindow(QtWidgets.QMainWindow):
 
                 self.session.record = dataclasses.replace(record, input=o.input, units=o.units)
         result = self.session.compute()
+        self._offer_display_units(result.units)
         self._info = (
             f"{self.session.summary_text()} — {result.tau.size} averaging times "
             f"({result.tau[0]:.3g} … {result.tau[-1]:.4g} s)"
         )
         self.redraw()
+
+    def _offer_display_units(self, rate: str | None) -> None:
+        """Offer only the display units of the record's sensor (gyro or accelerometer)."""
+        wanted = list(display_units_for(rate))
+        current = [self.display_combo.itemText(i) for i in range(self.display_combo.count())]
+        if wanted == current:
+            return
+        keep = self.display_combo.currentText()
+        self.display_combo.blockSignals(True)
+        self.display_combo.clear()
+        self.display_combo.addItems(wanted)
+        self.display_combo.setCurrentText(keep if keep in wanted else wanted[0])
+        self.display_combo.blockSignals(False)
 
     def set_view(self, name: str) -> None:
         """Switch to ``"Allan deviation"``, ``"Fit"`` or ``"Diagnosis"``."""

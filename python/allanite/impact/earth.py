@@ -10,12 +10,13 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from allanite.units import STANDARD_GRAVITY
+
 __all__ = ["EARTH_RATE", "STANDARD_GRAVITY", "Earth"]
 
 #: WGS-84 Earth rotation rate in rad/s
 EARTH_RATE = 7.292115e-5
-#: standard gravity in m/s^2 (CGPM 1901)
-STANDARD_GRAVITY = 9.80665
+# standard gravity g = 9.80665 m/s^2 is defined once, in allanite.units
 #: mean Earth radius in m (IUGG)
 MEAN_RADIUS = 6_371_008.8
 

@@ -44,11 +44,12 @@ def sensor_noise_from_model(model: Any, *, sensor: str, accel_scale: float = 1.0
     model : allanite.model.NoiseModel
         The sensor's noise model.
     sensor : {"gyro", "accel"}
-        A gyro model is converted from its rate unit to rad/s; an accelerometer model's
-        coefficients (whose "rate" is an acceleration, which the model's angle-based units
-        cannot name) are multiplied by ``accel_scale`` to give m/s^2.
+        A gyro model is converted from its rate unit to rad/s. An accelerometer model in an
+        acceleration unit (``m/s^2``, ``mg``, ``ug``, ...) is converted to m/s^2; one whose
+        units do not name an acceleration has its coefficients multiplied by ``accel_scale``.
     accel_scale : float
-        SI value (m/s^2) of one unit of an accelerometer model's acceleration.
+        SI value (m/s^2) of one unit of an accelerometer model's "rate", for models whose
+        units are not an acceleration (must stay 1 for a model in m/s^2, g, mg, ...).
 
     Returns
     -------
@@ -68,6 +69,13 @@ def sensor_noise_from_model(model: Any, *, sensor: str, accel_scale: float = 1.0
             raise ValueError(f"accel_scale must be > 0 (m/s^2 per model unit), got {accel_scale}")
         terms = model.terms
         scale = float(accel_scale)
+        if model.sensor == "accelerometer":  # the model's unit says what its rate is
+            if scale != 1.0:
+                raise ValueError(
+                    f"the model is already in {model.units['rate']!r}, an acceleration; leave "
+                    "accel_scale at 1 (it is for models whose units are not an acceleration)"
+                )
+            terms = model.in_units("m/s^2").terms
     else:
         raise ValueError(f"sensor must be 'gyro' or 'accel', got {sensor!r}")
 

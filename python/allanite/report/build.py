@@ -24,6 +24,7 @@ from allanite.io.record import Record
 from allanite.report import html as h
 from allanite.report.coefficients import Coefficient, coefficient_table
 from allanite.report.slopes import MIN_EDF, slope_table
+from allanite.units import sensor_kind
 from allanite.variance import AllanResult
 
 __all__ = ["DeviceAnalysis", "Report", "build_report"]
@@ -97,7 +98,13 @@ def _summary_rows(device: DeviceAnalysis) -> list[list[str]]:
         ["sampling frequency", f"{r.fs:g} Hz" if r.fs else "unknown"],
         ["duration", _duration(r.duration)],
         ["input", r.input],
-        ["units", r.units or "not given"],
+        [
+            "units",
+            r.units
+            or "not given: coefficients and deviations are in the record's own units "
+            "(give --units for physical units)",
+        ],
+        ["sensor", _sensor_of(device.result.units)],
     ]
     if r.scale is not None:
         rows.append(["scale (counts → units)", f"{r.scale:g}"])
@@ -128,6 +135,16 @@ def _summary_rows(device: DeviceAnalysis) -> list[list[str]]:
     return rows
 
 
+def _sensor_of(rate: str | None) -> str:
+    """``gyro``, ``accelerometer`` or ``unknown`` (record without a unit)."""
+    if rate is None:
+        return "unknown"
+    try:
+        return sensor_kind(rate)
+    except ValueError:
+        return "unknown"
+
+
 def _duration(seconds: float | None) -> str:
     if seconds is None:
         return "unknown"
@@ -143,20 +160,34 @@ def _curve_labels(device: DeviceAnalysis, multi: bool) -> list[str]:
     return [f"{prefix}{c}" for c in device.record.channels]
 
 
-def _allan_figure(
+def _allan_figures(
     devices: Sequence[DeviceAnalysis], reference: DeviceAnalysis | None, level: float
-) -> Any:
+) -> dict[str, Any]:
+    """One Allan deviation figure per unit (a six-axis record: gyro and accelerometer)."""
     from allanite.plot import allan_figure
 
     items = list(devices) + ([reference] if reference is not None else [])
-    labels: list[str] = []
+    labels: list[list[str]] = []
     for k, d in enumerate(items):
         names = _curve_labels(d, len(items) > 1)
         if reference is not None and k == len(items) - 1:
             names = [f"reference {d.label}: {c}" for c in d.record.channels]
-        labels += names
-    title = f"Allan deviation with {100 * level:.3g} % confidence intervals"
-    return allan_figure([d.result for d in items], labels=labels, level=level, title=title)
+        labels.append(names)
+    groups: dict[str | None, list[int]] = {}
+    for k, d in enumerate(items):
+        groups.setdefault(d.result.units, []).append(k)
+    figures = {}
+    for g, (unit, members) in enumerate(groups.items()):
+        title = f"Allan deviation with {100 * level:.3g} % confidence intervals"
+        if len(groups) > 1:
+            title = f"{_sensor_of(unit)} ({unit}): " + title
+        figures["adev" if g == 0 else f"adev-{g + 1}"] = allan_figure(
+            [items[k].result for k in members],
+            labels=[name for k in members for name in labels[k]],
+            level=level,
+            title=title,
+        )
+    return figures
 
 
 def _pick_rows(n: int) -> np.ndarray:
@@ -187,6 +218,7 @@ def _slope_section(device: DeviceAnalysis) -> str:
     dev = res.dev.reshape(res.tau.size, -1)
     edf = res.edf.reshape(dev.shape)
     parts = []
+    sensor = _sensor_of(res.units)
     for c, name in enumerate(device.record.channels):
         rows = [
             [
@@ -197,7 +229,7 @@ def _slope_section(device: DeviceAnalysis) -> str:
                 f"{r.slope:+.2f}",
                 str(r.n_points),
             ]
-            for r in slope_table(res.tau, dev[:, c], edf[:, c])
+            for r in slope_table(res.tau, dev[:, c], edf[:, c], sensor=sensor)
         ]
         parts.append(f"<h3>{h.escape(device.label)} — {h.escape(name)}</h3>")
         parts.append(
@@ -222,10 +254,15 @@ def _coefficient_section(
     parts = []
     for (d, c), coefs in coefficients.items():
         device = devices[d]
-        parts.append(f"<h3>{h.escape(device.label)} — {h.escape(device.record.channels[c])}</h3>")
+        rate = device.result.units
+        what = f"{_sensor_of(rate)}, {rate}" if rate else "record units: no --units given"
+        suffix = "" if what in device.label else f" ({h.escape(what)})"
+        parts.append(
+            f"<h3>{h.escape(device.label)} — {h.escape(device.record.channels[c])}{suffix}</h3>"
+        )
         rows = [
             [
-                k.term,
+                k.quantity or k.term,
                 k.symbol,
                 h.fmt(k.value),
                 "–" if k.low != k.low else f"{h.fmt(k.low, 3)} … {h.fmt(k.high, 3)}",
@@ -236,7 +273,9 @@ def _coefficient_section(
         ]
         parts.append(
             h.table(
-                ["term", "symbol", "value", "interval", "unit", "ADEV slope"], rows, text_columns=2
+                ["quantity", "symbol", "value", "interval", "unit", "ADEV slope"],
+                rows,
+                text_columns=2,
             )
         )
         parts.append(_goodness(device.fit(c)))
@@ -429,7 +468,7 @@ def build_report(
 
     if not devices:
         raise ValueError("a report needs at least one analysed record")
-    figures: dict[str, Any] = {"adev": _allan_figure(devices, reference, level)}
+    figures: dict[str, Any] = _allan_figures(devices, reference, level)
     figures.update(_fit_figures(devices, level))
     coefficients = {
         (d, c): coefficient_table(device.fit(c), device.result.units, level)
@@ -454,15 +493,18 @@ def build_report(
         for d in devices
     )
     body.append(h.section("Record summary", summary, anchor="summary"))
-    adev_png = figure_bytes(figures["adev"])
     body.append(
         h.section(
             "Allan deviation",
-            h.figure(
-                adev_png,
-                f"Error bars: {100 * level:.3g} % chi-square confidence intervals "
-                "from the equivalent degrees of freedom.",
-                "Allan deviation plot",
+            "".join(
+                h.figure(
+                    figure_bytes(fig),
+                    f"Error bars: {100 * level:.3g} % chi-square confidence intervals "
+                    "from the equivalent degrees of freedom.",
+                    "Allan deviation plot",
+                )
+                for key, fig in figures.items()
+                if key.startswith("adev")
             )
             + "".join(
                 h.figure(

@@ -1,10 +1,14 @@
 """Noise coefficients of a fit in customary units, with their intervals, for tables.
 
 Gyro datasheets quote angle random walk in deg/√h, bias instability in deg/h, rate random
-walk in deg/h/√h, quantization in the angle unit and rate ramp in deg/h² (IEEE Std 952). The
-conversion is :func:`allanite.units.display_unit` with the rate unit ``<angle>/h``; the values
-and intervals come from :meth:`allanite.fit.FitResult.table` (or, for a bare
-:class:`~allanite.model.NoiseModel`, from its coefficients, without intervals).
+walk in deg/h/√h, quantization in the angle unit and rate ramp in deg/h² (IEEE Std 952);
+accelerometer datasheets quote velocity random walk in m/s/√h, bias instability in µg,
+acceleration random walk in m/s/h^1.5, velocity quantization in m/s. The choice is
+:func:`allanite.units.customary_unit`, the names come from each parameter's
+:class:`~allanite.terms.base.ParamSpec` for the model's sensor; the values and intervals come
+from :meth:`allanite.fit.FitResult.table` (or, for a bare :class:`~allanite.model.NoiseModel`,
+from its coefficients, without intervals). A model in the record unit (a record without a
+unit) keeps its coefficients in record units (``unit*sqrt(s)``, ...).
 """
 
 from __future__ import annotations
@@ -14,7 +18,15 @@ from dataclasses import dataclass
 from typing import Any
 
 from allanite.datasheet import Measured
-from allanite.units import ANGLE_UNITS, Unit, coefficient_unit, convert, display_unit
+from allanite.units import (
+    ANGLE_UNITS,
+    Unit,
+    coefficient_unit,
+    convert,
+    customary_unit,
+    parse_unit,
+    sensor_kind,
+)
 
 __all__ = ["Coefficient", "coefficient_table", "customary_rate"]
 
@@ -23,7 +35,12 @@ _SLOPES = {"Q": "−1", "N": "−1/2", "B": "0", "K": "+1/2", "R": "+1"}
 
 @dataclass(frozen=True)
 class Coefficient:
-    """One fitted parameter with its interval, in a display unit."""
+    """One fitted parameter with its interval, in a display unit.
+
+    ``quantity`` is its customary name for the model's sensor (``angle random walk`` for a
+    gyro's N, ``velocity random walk`` for an accelerometer's) and ``sensor`` that sensor
+    (``gyro``, ``accelerometer`` or ``unknown`` for a record without a unit).
+    """
 
     term: str
     symbol: str
@@ -33,6 +50,8 @@ class Coefficient:
     unit: str
     slope: str | None = None
     model_unit: Unit | None = None
+    quantity: str = ""
+    sensor: str = "gyro"
 
     def measured(self) -> Measured:
         """As a :class:`~allanite.datasheet.Measured` for limit checks."""
@@ -40,10 +59,10 @@ class Coefficient:
 
 
 def customary_rate(rate: str | None) -> str | None:
-    """Rate unit whose :func:`~allanite.units.display_unit` s are the customary ones.
+    """Gyro rate unit whose :func:`~allanite.units.display_unit` s are the customary ones.
 
     ``deg/s`` gives ``deg/h`` (N in deg/√h, B in deg/h, K in deg/h/√h, R in deg/h²); None when
-    the angle unit of ``rate`` is not recognised (then the model's units are kept).
+    ``rate`` is not an angular rate (accelerometers use :func:`allanite.units.customary_unit`).
     """
     if rate is None:
         return None
@@ -51,11 +70,20 @@ def customary_rate(rate: str | None) -> str | None:
     return f"{angle}/h" if angle in ANGLE_UNITS else None
 
 
-def _unit(rate: str | None, label: str, fallback: str) -> str:
+def _sensor(rate: str | None) -> str:
     if rate is None:
+        return "unknown"
+    try:
+        return sensor_kind(rate)
+    except ValueError:
+        return "unknown"
+
+
+def _customary(rate: str | None, label: str, unit: Unit | None, fallback: str) -> str:
+    if rate is None or unit is None:
         return fallback
     try:
-        return display_unit(rate, label)
+        return customary_unit(rate, label, unit)
     except ValueError:
         return fallback
 
@@ -79,14 +107,15 @@ def coefficient_table(fit: Any, rate: str | None, level: float = 0.683) -> list[
     model = getattr(fit, "model", fit)
     units = getattr(model, "units", None)
     model_rate = units.get("rate") if isinstance(units, dict) else rate
-    show = customary_rate(model_rate)
+    sensor = _sensor(model_rate)
     labelled = {label: (term, spec) for label, term, spec in model.labelled_parameters()}
     rows: list[Coefficient] = []
     if hasattr(fit, "table") and hasattr(fit, "coefficients"):
         for row in fit.table(None, level):
             label = row["name"]
             term, spec = labelled.get(label, (None, None))
-            unit = _unit(show, label, row["unit"])
+            own = _model_unit(model_rate, spec, row["unit"])
+            unit = _customary(model_rate, label, own, row["unit"])
             values = [convert(row[k], row["unit"], unit) for k in ("value", "low", "high")]
             rows.append(
                 Coefficient(
@@ -97,14 +126,16 @@ def coefficient_table(fit: Any, rate: str | None, level: float = 0.683) -> list[
                     high=values[2],
                     unit=unit,
                     slope=_SLOPES.get(label),
-                    model_unit=_model_unit(model_rate, spec, row["unit"]),
+                    model_unit=own,
+                    quantity=spec.describe(sensor) if spec is not None else label,
+                    sensor=sensor,
                 )
             )
         return rows
     for label, (term, spec) in labelled.items():
         base = _model_unit(model_rate, spec, None)
         value = float(getattr(term, spec.name))
-        unit = _unit(show, label, str(base.text) if base is not None else "model units")
+        unit = _customary(model_rate, label, base, base.text if base is not None else "model units")
         if base is not None and unit != "model units":
             value = convert(value, base, unit)
         rows.append(
@@ -117,6 +148,8 @@ def coefficient_table(fit: Any, rate: str | None, level: float = 0.683) -> list[
                 unit=unit,
                 slope=_SLOPES.get(label) if spec.name == term.symbol else None,
                 model_unit=base,
+                quantity=spec.describe(sensor),
+                sensor=sensor,
             )
         )
     return rows
@@ -125,8 +158,6 @@ def coefficient_table(fit: Any, rate: str | None, level: float = 0.683) -> list[
 def _model_unit(rate: str | None, spec: Any, text: str | None) -> Unit | None:
     """Return the unit of a coefficient in the model: ``rate^r * s^t``."""
     if text is not None:
-        from allanite.units import parse_unit
-
         try:
             return parse_unit(text)
         except ValueError:

@@ -16,7 +16,15 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["MIN_EDF", "MIN_POINTS", "SLOPE_TERMS", "SlopeRow", "local_slopes", "slope_table"]
+__all__ = [
+    "ACCEL_SLOPE_TERMS",
+    "MIN_EDF",
+    "MIN_POINTS",
+    "SLOPE_TERMS",
+    "SlopeRow",
+    "local_slopes",
+    "slope_table",
+]
 
 #: canonical Allan-deviation slope -> (label, term that produces it, IEEE symbol)
 SLOPE_TERMS: dict[float, tuple[str, str, str]] = {
@@ -25,6 +33,14 @@ SLOPE_TERMS: dict[float, tuple[str, str, str]] = {
     0.0: ("0", "bias instability (flicker rate noise)", "B"),
     0.5: ("+1/2", "rate random walk", "K"),
     1.0: ("+1", "rate ramp", "R"),
+}
+#: the same for an accelerometer (IEEE Std 1293-2018 names)
+ACCEL_SLOPE_TERMS: dict[float, tuple[str, str, str]] = {
+    -1.0: ("−1", "velocity quantization / white velocity noise", "Q"),
+    -0.5: ("−1/2", "velocity random walk (white acceleration noise)", "N"),
+    0.0: ("0", "bias instability (flicker acceleration noise)", "B"),
+    0.5: ("+1/2", "acceleration random walk", "K"),
+    1.0: ("+1", "acceleration ramp", "R"),
 }
 _WINDOW_DECADES = 0.5
 #: points with fewer equivalent degrees of freedom are not classified (about 16 % scatter)
@@ -67,6 +83,7 @@ def slope_table(
     edf: NDArray[np.float64] | None = None,
     *,
     min_edf: float = MIN_EDF,
+    sensor: str = "gyro",
 ) -> list[SlopeRow]:
     """Group the measured curve into tau ranges of one canonical slope.
 
@@ -80,6 +97,8 @@ def slope_table(
         would invent slopes).
     min_edf : float
         Smallest EDF of a point that is classified.
+    sensor : {"gyro", "accelerometer"}
+        Names the terms as for that sensor (angle random walk or velocity random walk, ...).
 
     Returns
     -------
@@ -113,7 +132,8 @@ def slope_table(
                 fit = float(slopes[start])
             # the row is named after its own least-squares slope, so label and value agree
             c = float(canon[np.argmin(np.abs(canon - fit))])
-            label, term, symbol = SLOPE_TERMS[c]
+            names = ACCEL_SLOPE_TERMS if sensor == "accelerometer" else SLOPE_TERMS
+            label, term, symbol = names[c]
             rows.append(
                 SlopeRow(
                     tau_min=float(tau[start]),

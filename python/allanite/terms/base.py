@@ -30,13 +30,24 @@ class ParamSpec:
     """Unit of a parameter as powers of the model's rate unit and of seconds.
 
     ``N`` (rate * sqrt(s)) is ``ParamSpec("N", rate=1, time=0.5)``; a correlation time is
-    ``ParamSpec("tau_c", rate=0, time=1)``.
+    ``ParamSpec("tau_c", rate=0, time=1)``. The rate is the sensor's output (an angular rate
+    or an acceleration, see :func:`allanite.units.sensor_kind`), so the dimension of the
+    parameter follows from these powers (:func:`allanite.units.coefficient_unit`).
+    ``description`` names the quantity for a gyroscope, ``accel_description`` for an
+    accelerometer where the customary name differs (velocity random walk for N, ...).
     """
 
     name: str
     rate: float
     time: float
     description: str = ""
+    accel_description: str = ""
+
+    def describe(self, sensor: str = "gyro") -> str:
+        """Customary name of the parameter for a ``"gyro"`` or an ``"accelerometer"``."""
+        if sensor == "accelerometer" and self.accel_description:
+            return self.accel_description
+        return self.description
 
 
 #: registry of every Term subclass by its JSON ``type``

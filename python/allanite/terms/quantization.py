@@ -45,7 +45,13 @@ class Quantization(Term):
     type: ClassVar[str] = "quantization"
     symbol: ClassVar[str] = "Q"
     params: ClassVar[tuple[ParamSpec, ...]] = (
-        ParamSpec("Q", rate=1, time=1, description="angle quantization"),
+        ParamSpec(
+            "Q",
+            rate=1,
+            time=1,
+            description="angle quantization",
+            accel_description="velocity quantization",
+        ),
     )
 
     def __post_init__(self) -> None:

@@ -41,7 +41,13 @@ class RateRamp(Term):
     type: ClassVar[str] = "ramp"
     symbol: ClassVar[str] = "R"
     params: ClassVar[tuple[ParamSpec, ...]] = (
-        ParamSpec("R", rate=1, time=-1, description="rate ramp"),
+        ParamSpec(
+            "R",
+            rate=1,
+            time=-1,
+            description="rate ramp",
+            accel_description="acceleration ramp",
+        ),
     )
     stationary: ClassVar[bool] = False
 

@@ -44,7 +44,13 @@ class RateRandomWalk(Term):
     type: ClassVar[str] = "rrw"
     symbol: ClassVar[str] = "K"
     params: ClassVar[tuple[ParamSpec, ...]] = (
-        ParamSpec("K", rate=1, time=-0.5, description="rate random walk"),
+        ParamSpec(
+            "K",
+            rate=1,
+            time=-0.5,
+            description="rate random walk",
+            accel_description="acceleration random walk",
+        ),
     )
 
     def __post_init__(self) -> None:

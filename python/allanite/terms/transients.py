@@ -383,7 +383,13 @@ class LowPassWhite(Term):
     type: ClassVar[str] = "lowpass_white"
     symbol: ClassVar[str] = "N"
     params: ClassVar[tuple[ParamSpec, ...]] = (
-        ParamSpec("N", rate=1, time=0.5, description="angle random walk before the filter"),
+        ParamSpec(
+            "N",
+            rate=1,
+            time=0.5,
+            description="angle random walk before the filter",
+            accel_description="velocity random walk before the filter",
+        ),
         ParamSpec("bandwidth", rate=0, time=-1, description="-3 dB bandwidth in Hz"),
     )
 

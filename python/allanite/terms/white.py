@@ -41,7 +41,13 @@ class White(Term):
     type: ClassVar[str] = "white"
     symbol: ClassVar[str] = "N"
     params: ClassVar[tuple[ParamSpec, ...]] = (
-        ParamSpec("N", rate=1, time=0.5, description="angle random walk"),
+        ParamSpec(
+            "N",
+            rate=1,
+            time=0.5,
+            description="angle random walk",
+            accel_description="velocity random walk",
+        ),
     )
 
     def __post_init__(self) -> None:
