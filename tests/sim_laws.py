@@ -35,15 +35,17 @@ def gz_sensors(p: dict, n: int, rate: float, rng: np.random.Generator) -> np.nda
     return out
 
 
-def px4_plugin(p: dict, n: int, rate: float, rng: np.random.Generator) -> np.ndarray:
-    """RotorS/PX4 gazebo_imu_plugin.cpp addNoise, gyroscope (one axis)."""
+def px4_plugin(
+    p: dict, n: int, rate: float, rng: np.random.Generator, sensor: str = "gyroscope"
+) -> np.ndarray:
+    """RotorS/PX4 gazebo_imu_plugin.cpp addNoise, one axis of ``sensor`` (or accelerometer)."""
     dt = 1.0 / rate
-    tau = p["gyroscopeBiasCorrelationTime"]
-    sigma_g_d = 1.0 / math.sqrt(dt) * p["gyroscopeNoiseDensity"]
-    sigma_b_g = p["gyroscopeRandomWalk"]
+    tau = p[sensor + "BiasCorrelationTime"]
+    sigma_g_d = 1.0 / math.sqrt(dt) * p[sensor + "NoiseDensity"]
+    sigma_b_g = p[sensor + "RandomWalk"]
     sigma_b_g_d = math.sqrt(-sigma_b_g * sigma_b_g * tau / 2.0 * (math.exp(-2.0 * dt / tau) - 1.0))
     phi = math.exp(-1.0 / tau * dt)
-    turn_on = p["gyroscopeTurnOnBiasSigma"] * rng.standard_normal()
+    turn_on = p[sensor + "TurnOnBiasSigma"] * rng.standard_normal()
     bias = _ar1(phi, sigma_b_g_d * rng.standard_normal(n))  # updated before it is added
     return bias + sigma_g_d * rng.standard_normal(n) + turn_on
 

@@ -96,3 +96,20 @@ def test_diagnose_config_without_units_says_so(loop, capsys):
     ]  # fmt: skip
     assert main(argv) == 2
     assert "--units" in capsys.readouterr().err
+
+
+def test_accelerometer_of_a_config_is_chosen_by_the_record_unit(loop, capsys):
+    truth = NoiseModel((White(N=0.004), RateRandomWalk(K=3e-4)), {"rate": "m/s^2", "time": "s"})
+    np.save(loop / "accel.npy", truth.simulate(N, FS, seed=12))
+    out = loop / "fixed.yaml"
+    argv = [
+        "diagnose", str(loop / "accel.npy"), "--fs", "100", "--units", "m/s^2",
+        "--sim-model", str(loop / "kalibr.yaml"), "--n-mc", "40", "--write-corrected", str(out),
+    ]  # fmt: skip
+    assert main(argv) == 0
+    assert "SIGNIFICANT" in capsys.readouterr().out  # the config's 0.002 vs the real 0.004
+    fixed = read_config(out)
+    n = fixed.model("accel").terms_of_type("white")[0].N
+    assert abs(n - 0.004) < 0.1 * 0.004
+    gyro = fixed.model("gyro").terms_of_type("white")[0].N
+    assert math.isclose(gyro, 0.01 * math.pi / 180, rel_tol=1e-8)  # the gyro is untouched

@@ -105,6 +105,22 @@ def test_px4_plugin_law():
     _inside_bands(x, rate, cfg.model("gyro"))
 
 
+def test_px4_plugin_accelerometer_law():
+    rate, n = 250.0, 2**19
+    p = {
+        "accelerometerNoiseDensity": 4e-3,
+        "accelerometerRandomWalk": 6e-3,
+        "accelerometerBiasCorrelationTime": 30.0,
+        "accelerometerTurnOnBiasSigma": 0.196,
+    }
+    text = "".join(f"<{k}>{v}</{k}>" for k, v in p.items())
+    model = format_module("px4-plugin").read(text).model("accel")
+    assert model.units["rate"] == "m/s^2"
+    assert model.sensor == "accelerometer"
+    x = sim_laws.px4_plugin(p, n, rate, np.random.default_rng(6), sensor="accelerometer")
+    _inside_bands(x, rate, model)
+
+
 @pytest.mark.parametrize("rate", [200.0, 4000.0])
 def test_airsim_law_with_its_1khz_floor(rate):
     p = {"AngularRandomWalk": 0.3, "GyroBiasStability": 400.0, "GyroBiasStabilityTau": 50.0}

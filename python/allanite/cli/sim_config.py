@@ -31,8 +31,8 @@ def add_sim_config_arguments(group: Any) -> None:
     group.add_argument(
         "--sim-sensor",
         choices=("gyro", "accel"),
-        default="gyro",
-        help="which sensor of the config to compare with the record (default gyro)",
+        help="which sensor of the config to compare with the record (default: from the "
+        "record's --units, rad/s-like -> gyro, m/s^2-like -> accel)",
     )
     group.add_argument(
         "--sim-rate",
@@ -56,6 +56,7 @@ class LoadedSim:
     config: ImuConfig
     format: str
     rate: float
+    sensor: str = "gyro"
 
 
 def load_sim_model(args: argparse.Namespace, fs: float, units: str | None) -> LoadedSim:
@@ -70,11 +71,12 @@ def load_sim_model(args: argparse.Namespace, fs: float, units: str | None) -> Lo
     config = read_config(path, format=fmt, rate=rate)
     if config.rate is None and rate is None:
         config = read_config(path, format=fmt, rate=fs)
-    model = config.model(args.sim_sensor)
+    sensor = args.sim_sensor or _sensor_of(units)
+    model = config.model(sensor)
     if fmt == "allanite":
         # the model JSON keeps its own unit: a mismatch with the record is reported, not fixed
         model = NoiseModel.from_json(path.read_text(encoding="utf-8"))
-        return LoadedSim(model, config, fmt, float(config.rate or fs))
+        return LoadedSim(model, config, fmt, float(config.rate or fs), sensor)
     if units is None:
         raise ValueError(
             f"the {fmt} config is in SI units ({model.units['rate']}); give the unit of the "
@@ -84,7 +86,15 @@ def load_sim_model(args: argparse.Namespace, fs: float, units: str | None) -> Lo
         model = model.in_units(units)
     for note in config.notes:
         print(f"note: {note}", file=sys.stderr)
-    return LoadedSim(model, config, fmt, float(config.rate or fs))
+    return LoadedSim(model, config, fmt, float(config.rate or fs), sensor)
+
+
+def _sensor_of(units: str | None) -> str:
+    if units is None:
+        return "gyro"
+    from allanite.units import sensor_kind
+
+    return "accel" if sensor_kind(units) == "accelerometer" else "gyro"
 
 
 def write_corrected(args: argparse.Namespace, loaded: LoadedSim, diagnosis: Any) -> None:
@@ -92,7 +102,7 @@ def write_corrected(args: argparse.Namespace, loaded: LoadedSim, diagnosis: Any)
     from allanite.formats.corrected import corrected_model
 
     model, what = corrected_model(loaded.model, diagnosis)
-    config = loaded.config.with_model(args.sim_sensor, model)
+    config = loaded.config.with_model(loaded.sensor, model)
     tau = diagnosis.tau.tau
     written = write_config(
         config,

@@ -20,11 +20,12 @@ from allanite.formats._densities import HOLDS
 from allanite.formats.base import ImuConfig, Written, number, sensor_model
 from allanite.formats.projection import project_config
 from allanite.terms import RateRandomWalk, Term, White
+from allanite.units import STANDARD_GRAVITY
 
 NAME = "airsim"
 TITLE = "AirSim settings.json IMU"
 SUFFIXES = (".json",)
-G = 9.80665
+G = STANDARD_GRAVITY  # AirSim's EarthUtils::Gravity and its literal 9.80665f
 D2R = math.pi / 180.0
 MIN_SAMPLE_TIME = 1e-3
 #: key -> (factor to SI, default in the key's unit)

@@ -1,12 +1,13 @@
 """allanite's own NoiseModel JSON (one sensor) as a config format.
 
-The model is read in its own units and converted to SI (rad/s); writing gives the gyro model
-(or the accelerometer model when there is no gyro) with every term, nothing dropped.
+The model is read in its own units and converted to SI (rad/s for a gyro, m/s^2 for an
+accelerometer, from the dimension of its unit); writing gives the gyro model (or the
+accelerometer model when there is no gyro) with every term, nothing dropped.
 """
 
 from __future__ import annotations
 
-from allanite.formats.base import GYRO_UNIT, ImuConfig, Written
+from allanite.formats.base import ACCEL_UNIT, GYRO_UNIT, ImuConfig, Written
 from allanite.model import NoiseModel
 
 NAME = "allanite"
@@ -20,8 +21,10 @@ def sniff(text: str) -> bool:
 
 
 def read(text: str, *, rate: float | None = None) -> ImuConfig:
-    """Read the model JSON (a gyro model: its rate unit is an angle per time)."""
+    """Read the model JSON (gyro or accelerometer from the dimension of its unit)."""
     model = NoiseModel.from_json(text)
+    if model.sensor == "accelerometer":
+        return ImuConfig(accel=model.in_units(ACCEL_UNIT), rate=rate, source_format=NAME)
     return ImuConfig(gyro=model.in_units(GYRO_UNIT), rate=rate, source_format=NAME)
 
 

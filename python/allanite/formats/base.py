@@ -36,22 +36,8 @@ SENSORS: dict[str, str] = {"gyro": GYRO_UNIT, "accel": ACCEL_UNIT}
 
 
 def sensor_model(terms: list[Term] | tuple[Term, ...], sensor: str) -> NoiseModel:
-    """A NoiseModel of ``terms`` in the SI unit of ``sensor`` (``"gyro"`` or ``"accel"``).
-
-    Accelerometer models are in m/s^2. Until :mod:`allanite.units` knows accelerations the
-    unit check is bypassed for them (the terms and their Allan variances do not depend on the
-    unit; only conversions do, and none is made here).
-    """
-    unit = SENSORS[sensor]
-    try:
-        return NoiseModel(tuple(terms), {"rate": unit, "time": "s"})
-    except ValueError:
-        if sensor != "accel":
-            raise
-        model = object.__new__(NoiseModel)
-        object.__setattr__(model, "terms", tuple(terms))
-        object.__setattr__(model, "units", {"rate": unit, "time": "s"})
-        return model
+    """A NoiseModel of ``terms`` in the SI unit of ``sensor`` (rad/s gyro, m/s^2 accel)."""
+    return NoiseModel(tuple(terms), {"rate": SENSORS[sensor], "time": "s"})
 
 
 @dataclass(frozen=True)

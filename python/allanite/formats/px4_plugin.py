@@ -38,7 +38,7 @@ DEFAULTS = {
     "accelerometerNoiseDensity": 2.0 * 2.0e-3,
     "accelerometerRandomWalk": 2.0 * 3.0e-3,
     "accelerometerBiasCorrelationTime": 300.0,
-    "accelerometerTurnOnBiasSigma": 20.0e-3 * 9.8,
+    "accelerometerTurnOnBiasSigma": 20.0e-3 * 9.8,  # the header's literal 9.8
 }
 
 
