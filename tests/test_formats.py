@@ -278,3 +278,32 @@ def test_undetectable_config_names_the_option(tmp_path):
     path.write_text("foo: 1\n")
     with pytest.raises(ValueError, match="--sim-format"):
         read_config(path)
+
+
+def test_corrected_model_skips_effects_the_format_cannot_represent():
+    from types import SimpleNamespace
+
+    from allanite.formats import px4_plugin
+    from allanite.formats.corrected import corrected_model
+
+    model = sensor_model([White(N=1e-3)], "gyro")
+
+    def attribution(effect, term):
+        return SimpleNamespace(
+            effect=effect, term=term, params={"x": 1.0}, gap_before=10.0, gap_after=1.0,
+            shrinkage=0.9,
+        )  # fmt: skip
+
+    diagnosis = SimpleNamespace(
+        significant=True,
+        attribution=[
+            attribution("lowpass", {"type": "lowpass_white", "N": 1e-3, "bandwidth": 20.0}),
+            attribution("sine", {"type": "sine", "amplitude": 1e-3, "frequency": 3.0}),
+            attribution("flicker", {"type": "flicker", "B": 1e-4}),
+        ],
+    )
+    out, what = corrected_model(model, diagnosis, px4_plugin.HOLDS)
+    assert [t.type for t in out.terms] == ["white", "flicker"]  # projected when written
+    assert "skipped lowpass, sine" in what
+    out, _ = corrected_model(model, diagnosis)  # the model JSON holds everything
+    assert [t.type for t in out.terms] == ["lowpass_white"]

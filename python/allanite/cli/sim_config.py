@@ -99,9 +99,11 @@ def _sensor_of(units: str | None) -> str:
 
 def write_corrected(args: argparse.Namespace, loaded: LoadedSim, diagnosis: Any) -> None:
     """Write the corrected config and list what was folded in, dropped and projected."""
+    from allanite.formats import format_module
     from allanite.formats.corrected import corrected_model
 
-    model, what = corrected_model(loaded.model, diagnosis)
+    holds = format_module(loaded.format).HOLDS
+    model, what = corrected_model(loaded.model, diagnosis, holds)
     config = loaded.config.with_model(loaded.sensor, model)
     tau = diagnosis.tau.tau
     written = write_config(

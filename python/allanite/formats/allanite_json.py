@@ -9,10 +9,13 @@ from __future__ import annotations
 
 from allanite.formats.base import ACCEL_UNIT, GYRO_UNIT, ImuConfig, Written
 from allanite.model import NoiseModel
+from allanite.terms import TERM_TYPES
 
 NAME = "allanite"
 TITLE = "allanite NoiseModel JSON"
 SUFFIXES = (".json",)
+#: every term type: the model JSON holds them all
+HOLDS = frozenset(TERM_TYPES)
 
 
 def sniff(text: str) -> bool:

@@ -10,13 +10,14 @@ from __future__ import annotations
 from typing import Any
 
 from allanite.formats import kalibr
-from allanite.formats._densities import from_densities
+from allanite.formats._densities import HOLDS, from_densities
 from allanite.formats._text import load_yaml, number_text, update_keys
 from allanite.formats.base import ImuConfig, Written, number
 
 NAME = "openvins"
 TITLE = "OpenVINS kalibr_imu_chain.yaml (imu0)"
 SUFFIXES = (".yaml", ".yml")
+__all__ = ["HOLDS", "read", "sniff", "write"]
 
 
 def sniff(text: str) -> bool:

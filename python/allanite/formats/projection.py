@@ -147,7 +147,7 @@ def project(
             seen.add(term.type)
         elif term.type in SLOW_TYPES:
             slow.append(term)
-        elif term.type == "lowpass" and "white" in holds and "white" not in seen:
+        elif term.type == "lowpass_white" and "white" in holds and "white" not in seen:
             white = White(N=float(term.values()["N"]))
             kept.append(white)
             seen.add("white")
