@@ -28,7 +28,7 @@ import numpy as np
 
 import allanite
 from allanite.formats import px4_plugin, read_config, write_config
-from allanite.formats.corrected import corrected_model
+from allanite.formats.corrected import corrected_model, representable
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
@@ -110,10 +110,21 @@ def main() -> int:
             f"plugin-law record G = {d_rec.statistic:.4g}",
             flush=True,
         )
-        if not d.significant or d.best is None or k == ROUNDS:
+        if (
+            not d.significant
+            or not any(
+                representable(a.effect, str(a.term["type"]), px4_plugin.HOLDS)
+                for a in d.attribution
+            )
+            or k == ROUNDS
+        ):
             break
-        best = d.best
         corrected, what = corrected_model(model, d, px4_plugin.HOLDS)
+        best = next(
+            a
+            for a in d.attribution
+            if representable(a.effect, str(a.term["type"]), px4_plugin.HOLDS)
+        )
         nxt = RESULTS / f"sim_loop_adis_round{k + 1}.sdf"
         written = write_config(
             config.with_model("gyro", corrected),
@@ -124,6 +135,7 @@ def main() -> int:
         )
         entry["best"] = {
             "effect": best.effect,
+            "top_ranked": d.attribution[0].effect,
             "params": best.params,
             "reported_gap_after": best.gap_after,
             "reported_shrinkage": best.shrinkage,
