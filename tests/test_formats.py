@@ -183,6 +183,7 @@ ROUND_TRIP = {
     "matlab": [White(N=1e-3), Flicker(B=1e-4), RateRandomWalk(K=2e-5)],
     "gnss-ins-sim": [White(N=1e-3), GaussMarkov(sigma=1e-4, tau_c=50.0)],
     "allanite": [White(N=1e-3), Quantization(Q=1e-5), Flicker(B=1e-4)],
+    "gazebo-classic": [White(N=1e-3), TurnOnBias(sigma=2e-3)],
 }
 
 
@@ -206,11 +207,12 @@ def test_export_import_is_identity_on_what_the_format_holds(fmt, tmp_path):
     )
     cfg = ImuConfig(gyro=gyro, accel=None if fmt == "allanite" else accel, rate=250.0)
     suffix = FORMATS[fmt].SUFFIXES[0]
+    forced = {"gazebo-classic": "gazebo-classic"}
     written = write_config(cfg, tmp_path / f"out{suffix}", format=fmt, rate=250.0)
     assert written.dropped == []
     assert written.projections == []
-    back = read_config(tmp_path / f"out{suffix}", rate=250.0)
-    assert back.source_format == fmt  # detected from the content
+    back = read_config(tmp_path / f"out{suffix}", rate=250.0, format=forced.get(fmt))
+    assert back.source_format == fmt  # detected from the content (unless never detected)
     _same(back.model("gyro"), gyro)
     if fmt != "allanite":
         _same(back.model("accel"), accel)
@@ -307,3 +309,12 @@ def test_corrected_model_skips_effects_the_format_cannot_represent():
     assert "skipped lowpass, sine" in what
     out, _ = corrected_model(model, diagnosis)  # the model JSON holds everything
     assert [t.type for t in out.terms] == ["lowpass_white"]
+
+
+def test_gazebo_classic_ignores_the_dynamic_bias():
+    cfg = format_module("gazebo-classic").read(_gz_text(GZ, 100.0))
+    assert [t.type for t in cfg.model("gyro").terms] == ["white", "turn_on_bias"]
+    assert any("dynamic_bias" in note for note in cfg.notes)
+    x = sim_laws.gz_sensors({**GZ, "dynamic_bias_stddev": 0.0}, 2**17, 100.0,
+                            np.random.default_rng(7))  # fmt: skip
+    _inside_bands(x, 100.0, cfg.model("gyro"))

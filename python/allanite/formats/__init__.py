@@ -20,6 +20,7 @@ from types import ModuleType
 from allanite.formats import (
     airsim,
     allanite_json,
+    gazebo_classic,
     gnss_ins_sim,
     gz_sdf,
     kalibr,
@@ -58,6 +59,7 @@ FORMATS: dict[str, ModuleType] = {
         airsim,
         matlab,
         gnss_ins_sim,
+        gazebo_classic,
     )
 }
 

@@ -210,11 +210,12 @@ def write(
     rate: float | None = None,
     template: str | None = None,
     tau_range: tuple[float, float] | None = None,
+    holds: frozenset[str] = HOLDS,
 ) -> Written:
     """The ``<sensor type="imu">`` element (or ``template`` with its noise blocks replaced)."""
     rate = need_rate(rate or config.rate, "gz-sensors <stddev>")
     dt = 1.0 / rate
-    models, dropped, projections = project_config(config, HOLDS, rate=rate, tau_range=tau_range)
+    models, dropped, projections = project_config(config, holds, rate=rate, tau_range=tau_range)
     if template is not None:
         root = _parse(template)
         imu = root if _local(root.tag) == "imu" else _find(root, "imu")
