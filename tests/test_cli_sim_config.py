@@ -113,3 +113,20 @@ def test_accelerometer_of_a_config_is_chosen_by_the_record_unit(loop, capsys):
     assert abs(n - 0.004) < 0.1 * 0.004
     gyro = fixed.model("gyro").terms_of_type("white")[0].N
     assert math.isclose(gyro, 0.01 * math.pi / 180, rel_tol=1e-8)  # the gyro is untouched
+
+
+def test_sdf_without_rate_takes_the_records(loop, capsys):
+    noise = "<noise type='gaussian'><stddev>0.3</stddev></noise>"  # 0.03 deg/s*sqrt(s) at 100 Hz
+    axes = "".join(f"<{a}>{noise}</{a}>" for a in "xyz")
+    sdf = loop / "imu.sdf"
+    sdf.write_text(f"<sensor type='imu'><imu><angular_velocity>{axes}</angular_velocity></imu>"
+                   "</sensor>".replace("0.3", str(0.03 * 10 * math.pi / 180)))  # fmt: skip
+    argv = [
+        "diagnose", str(loop / "real.npy"), "--fs", "100", "--units", "deg/s",
+        "--sim-model", str(sdf), "--n-mc", "40",
+    ]  # fmt: skip
+    assert main(argv) == 0
+    captured = capsys.readouterr()
+    assert "taken from the record: 100 Hz" in captured.err
+    # per-sample stddev at the record's 100 Hz is the real white noise: no gap at this length
+    assert "consistent with chance" in captured.out

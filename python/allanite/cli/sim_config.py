@@ -68,9 +68,16 @@ def load_sim_model(args: argparse.Namespace, fs: float, units: str | None) -> Lo
         raise ValueError(f"--sim-model {path}: no such file")
     fmt = args.sim_format or detect_format(path, path.read_text(encoding="utf-8"))
     rate = args.sim_rate
-    config = read_config(path, format=fmt, rate=rate)
-    if config.rate is None and rate is None:
+    try:
+        config = read_config(path, format=fmt, rate=rate)
+    except ValueError as exc:
+        if rate is not None or "update rate is needed" not in str(exc):
+            raise
+        config = None
+    if config is None or (config.rate is None and rate is None):
+        # the simulator's rate is not in the config: the record's rate is the natural one
         config = read_config(path, format=fmt, rate=fs)
+        print(f"note: simulator IMU rate taken from the record: {fs:g} Hz", file=sys.stderr)
     sensor = args.sim_sensor or _sensor_of(units)
     model = config.model(sensor)
     if fmt == "allanite":

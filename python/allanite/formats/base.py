@@ -133,7 +133,7 @@ def need_rate(rate: float | None, what: str) -> float:
     if rate is None:
         raise ValueError(
             f"{what} is a per-sample quantity, so the update rate is needed: give it with "
-            "rate= (CLI: --rate HZ)"
+            "rate= (CLI: --rate HZ; diagnose: --sim-rate HZ)"
         )
     if not (math.isfinite(rate) and rate > 0):
         raise ValueError(f"the update rate must be a positive frequency in Hz, got {rate!r}")
