@@ -3,8 +3,8 @@
 One module per format, each with ``NAME``, ``TITLE``, ``SUFFIXES``, ``sniff(text)``,
 ``read(text, rate=...) -> ImuConfig`` and ``write(config, rate=..., template=...,
 tau_range=...) -> Written``; every reader maps the simulator's own discrete law exactly onto
-:class:`~allanite.model.NoiseModel` Terms (see each module's docstring and
-``docs/SIMULATORS.md``), and every writer says what it dropped or projected
+:class:`~allanite.model.NoiseModel` Terms (each module's docstring names the
+simulator source file its law was taken from), and every writer says what it dropped or projected
 (:mod:`allanite.formats.projection`).
 
 >>> from allanite.formats import read_config, write_config
