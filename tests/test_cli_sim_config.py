@@ -130,3 +130,45 @@ def test_sdf_without_rate_takes_the_records(loop, capsys):
     assert "taken from the record: 100 Hz" in captured.err
     # per-sample stddev at the record's 100 Hz is the real white noise: no gap at this length
     assert "consistent with chance" in captured.out
+
+
+def test_write_corrected_needs_a_config(loop, capsys):
+    np.save(loop / "sim.npy", np.zeros(N))
+    argv = [
+        "diagnose", str(loop / "real.npy"), "--fs", "100", "--units", "deg/s",
+        "--sim-record", str(loop / "sim.npy"), "--write-corrected", str(loop / "x.yaml"),
+    ]  # fmt: skip
+    assert main(argv) == 2
+    assert "--sim-model" in capsys.readouterr().err
+    assert not (loop / "x.yaml").exists()
+
+
+def test_a_ros_bag_against_a_gazebo_sdf(loop, tmp_path, capsys):
+    pytest.importorskip("rosbags")
+    from test_io_robot_logs import write_bag
+
+    rate = 100.0
+    truth = NoiseModel((White(N=0.002), RateRandomWalk(K=1e-3)), {"rate": "rad/s", "time": "s"})
+    gyro = truth.simulate(N, rate, channels=3, seed=21)
+    data = np.column_stack([gyro, np.zeros((N, 2)), np.full(N, 9.81)])
+    write_bag(tmp_path / "flight.bag", "ros1", data, np.arange(N) / rate, topics=("/imu0",))
+    stddev = 0.002 * math.sqrt(rate)  # the white noise right, the random walk missing
+    noise = f"<noise type='gaussian'><stddev>{stddev}</stddev></noise>"
+    axes = "".join(f"<{a}>{noise}</{a}>" for a in "xyz")
+    (tmp_path / "imu.sdf").write_text(
+        f"<sensor type='imu'><update_rate>{rate}</update_rate><imu><angular_velocity>{axes}"
+        "</angular_velocity></imu></sensor>"
+    )
+    argv = [
+        "diagnose", str(tmp_path / "flight.bag"), "--topic", "/imu0", "--channels", "gyro_x",
+        "--units", "rad/s", "--sim-model", str(tmp_path / "imu.sdf"), "--n-mc", "40",
+        "--write-corrected", str(tmp_path / "fixed.sdf"),
+    ]  # fmt: skip
+    assert main(argv) == 0
+    captured = capsys.readouterr()
+    assert "SIGNIFICANT" in captured.out
+    fixed = read_config(tmp_path / "fixed.sdf").model("gyro")
+    # the SDF holds no random walk: the diagnosed rrw comes back as a long Gauss-Markov bias
+    (gm,) = fixed.terms_of_type("markov")
+    assert gm.tau_c > 10.0
+    assert "projected gyro: rrw" in captured.err

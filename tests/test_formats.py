@@ -318,3 +318,28 @@ def test_gazebo_classic_ignores_the_dynamic_bias():
     x = sim_laws.gz_sensors({**GZ, "dynamic_bias_stddev": 0.0}, 2**17, 100.0,
                             np.random.default_rng(7))  # fmt: skip
     _inside_bands(x, 100.0, cfg.model("gyro"))
+
+
+def test_matlab_script_vectors_and_property_assignments():
+    text = (
+        "g = gyroparams('NoiseDensity', [1e-3 1e-3 2e-3], ...\n"
+        "    'RandomWalk', 2e-5);  % comment\n"
+        "g.BiasInstability = 1e-4;\n"
+        "a = accelparams('NoiseDensity', 3e-3, 'ConstantBias', [0.1 0.1 0.1]);\n"
+    )
+    cfg = format_module("matlab").read(text)
+    assert [t.type for t in cfg.model("gyro").terms] == ["white", "flicker", "rrw"]
+    assert cfg.model("gyro").terms[0].N == 1e-3
+    assert any("differs between axes" in n for n in cfg.notes)
+    assert cfg.model("accel").terms[0].N == 3e-3
+    assert cfg.offsets["accel"] == 0.1
+
+
+def test_sdf_axes_that_differ_are_noted_and_selectable():
+    old = "<z><noise type='gaussian_quantized'><stddev>0.01"
+    new = "<z><noise type='gaussian'><stddev>0.02"
+    text = _gz_text({"stddev": 0.01}, 100.0).replace(old, new, 1)
+    cfg = format_module("gz-sdf").read(text)
+    assert any("axes z differ" in n for n in cfg.notes)
+    z = format_module("gz-sdf").read(text, axis="z").model("gyro")
+    assert math.isclose(z.terms[0].N, 2 * cfg.model("gyro").terms[0].N)

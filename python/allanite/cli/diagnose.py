@@ -169,6 +169,11 @@ def run(args: argparse.Namespace) -> int:
     record = read_from_args(args.real, args)
     real, part = _one_channel(record, "real")
     fs = part.require_fs()
+    if args.write_corrected and not args.sim_model:
+        raise ValueError(
+            "--write-corrected needs --sim-model CONFIG: a simulated record has no config to "
+            "correct"
+        )
     loaded = load_sim_model(args, fs, rate_unit(part)) if args.sim_model else None
     sim: Any = loaded.model if loaded is not None else _sim_record(args, fs)
     effects = [e.strip() for e in args.effects.split(",") if e.strip()] if args.effects else None
