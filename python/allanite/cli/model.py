@@ -17,8 +17,9 @@ EXAMPLES = (
   allanite model convert kalibr.yaml px4_imu.sdf --to px4-plugin
   allanite model convert settings.json gyro.m --rate 400 --tau-range 0.1 1000
 
-formats: """
-    + ", ".join(f"{name} ({m.TITLE})" for name, m in FORMATS.items())
+formats:
+"""
+    + "\n".join(f"  {name:<15} {m.TITLE}" for name, m in FORMATS.items())
     + """
 
 What the target format cannot hold is projected (slow terms onto its Gauss-Markov bias or
