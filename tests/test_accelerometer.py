@@ -258,6 +258,7 @@ def test_records_without_units_are_shown_in_record_units(imu_csv, tmp_path, caps
     assert code == 0, err
     assert "no --units given: coefficients in the record's own units" in out
     assert "unit*sqrt(s)" in out
+    assert "angle random walk / velocity random walk" in out  # the sensor is not known
     assert "deg" not in out
     # the library: no silent deg/s either
     x = np.random.default_rng(1).standard_normal(20_000)
