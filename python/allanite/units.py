@@ -435,7 +435,13 @@ def integral_unit(text: str | Unit) -> str:
             f"'arcsec') or, for an accelerometer, a velocity ('m/s'), but {unit.text!r} is "
             f"{_article(unit.quantity)}; give e.g. --units deg, or --input rate"
         )
-    return f"{unit.text}/s" if re.fullmatch(r"[A-Za-zµ°]+", unit.text) else f"({unit.text})/s"
+    text = unit.text.replace(" ", "")
+    if re.fullmatch(r"[A-Za-zµ°]+", text):
+        return f"{text}/s"
+    match = re.fullmatch(r"([A-Za-zµ]+)/s", text)
+    if match is not None and match.group(1) in LENGTH_UNITS:
+        return f"{match.group(1)}/s^2"  # m/s -> m/s^2
+    return f"({text})/s"
 
 
 def record_rate_unit(units: str | None, input: str = "rate", *, strict: bool = False) -> str | None:
