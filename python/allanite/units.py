@@ -8,10 +8,10 @@ and the error names both units otherwise::
 
     >>> convert(6.153e-3, "deg/sqrt(s)", "deg/sqrt(h)")   # N: 1 deg/sqrt(s) = 60 deg/sqrt(h)
     0.36918
-    >>> convert(8.1e-4, "deg/s/sqrt(s)", "deg/h/sqrt(h)") # K: factor 3600 * 60
+    >>> round(convert(8.1e-4, "deg/s/sqrt(s)", "deg/h/sqrt(h)"), 9)  # K: factor 3600 * 60
     174.96
     >>> convert(1.0, "m/s^2", "ug")                        # 1 m/s^2 = 101972 ug
-    101971.62129779283
+    101971.62129779284
 
 The output quantity of a sensor (the model's ``rate``) is an angular rate (gyroscope,
 angle/time) or an acceleration (accelerometer, length/time²). The coefficients of a
@@ -501,7 +501,7 @@ def coefficient_unit(rate: str | Unit, rate_power: float, time_power: float) -> 
 
 def _split_rate(rate: str) -> tuple[str, str, float] | None:
     """``(numerator, time atom, time power)`` of a rate written ``X/T`` or ``X/T^2``."""
-    text = rate.replace(" ", "")
+    text = rate.replace(" ", "").replace("²", "^2").replace("³", "^3")
     for alias in ("dph", "dps", "rpm"):
         if text == alias:
             text = _ALIASES[alias][1:-1]
@@ -599,11 +599,11 @@ def display_unit(rate: str, name: str | Unit | tuple[float, float]) -> str:
 
     The coefficient ``rate^p * s^q`` (given by its symbol, by ``(p, q)`` or by its unit) is
     shown with the time unit ``T`` of ``rate``: ``deg/h`` gives N in ``deg/sqrt(h)``, B in
-    ``deg/h``, K in ``deg/h/sqrt(h)``, Q in ``deg``, R in ``deg/h^2``; an acceleration in g,
-    mg or ug (time unit s) gives N in ``ug/sqrt(Hz)``-like ``ug*sqrt(s)``, K in
-    ``ug/sqrt(s)``; ``m/s^2`` gives N in ``m/s/sqrt(s)`` (= m/s²/√Hz) and K in
-    ``m/s^2/sqrt(s)``. Gauss-Markov sigma and sinusoid amplitude are in ``rate``, ``tau_c``
-    in ``s`` and ``frequency`` in ``Hz``.
+    ``deg/h``, K in ``deg/h/sqrt(h)``, Q in ``deg``, R in ``deg/h^2``; ``ug`` (or g, mg,
+    gal: time unit s) gives N in ``ug/sqrt(Hz)``, B in ``ug``, K in ``ug/sqrt(s)``;
+    ``m/s^2`` gives N in ``m/s/sqrt(s)`` (= m/s²/√Hz), K in ``m/s^2/sqrt(s)``, Q in
+    ``m/s``. Gauss-Markov sigma and sinusoid amplitude are in ``rate``, ``tau_c`` in ``s``
+    and ``frequency`` in ``Hz``.
 
     Raises
     ------
