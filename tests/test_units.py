@@ -265,6 +265,8 @@ def test_standard_gravity_is_defined_once():
         (1.0, "m/s/sqrt(h)", "m/s^2/sqrt(Hz)", 1.0 / 60.0),
         (1.0, "ug/sqrt(Hz)", "m/s/sqrt(h)", 9.80665e-6 * 60.0),
         (1.0, "mg/√Hz", "ug/√Hz", 1000.0),
+        (1.0, "μg", "µg", 1.0),  # Greek mu and the micro sign
+        (1.0, "μrad/s", "urad/s", 1.0),
         # acceleration random walk: m/s/h^1.5 = m/s^2/sqrt(h) * ... = 1/(3600*60) m/s^2/sqrt(s)
         (1.0, "m/s/h^1.5", "m/s^2/sqrt(s)", 1.0 / (3600.0 * 60.0)),
         (1.0, "m/s^3", "m/s^2/h", 3600.0),

@@ -165,6 +165,7 @@ _ALIASES = {
     "²": "^2",
     "³": "^3",
     "·": "*",
+    "μ": "µ",  # Greek mu, as typed, for the micro sign
 }
 _TOKEN = re.compile(r"\s*(sqrt|[A-Za-zµ°]+|-?\d+(?:\.\d*)?|[()*/^])")
 
