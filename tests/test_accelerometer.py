@@ -71,7 +71,7 @@ def test_velocity_increments_are_an_accelerometer_record(accel_record):
     dv = ACCEL_MODEL.simulate(200_000, FS, seed=5, output="increment")
     res = allanite.oadev(dv, FS, input="increment", units="m/s", taus="octave")
     ref = allanite.oadev(accel_record, FS, units="m/s^2", taus="octave")
-    assert allanite.units.sensor_kind(res.units) == "accelerometer"
+    assert res.units == "m/s^2"
     np.testing.assert_allclose(res.dev, ref.dev, rtol=1e-9)
 
 
@@ -258,6 +258,7 @@ def test_records_without_units_are_shown_in_record_units(imu_csv, tmp_path, caps
     assert code == 0, err
     assert "no --units given: coefficients in the record's own units" in out
     assert "unit*sqrt(s)" in out
+    assert "angle random walk / velocity random walk" in out  # the sensor is not known
     assert "deg" not in out
     # the library: no silent deg/s either
     x = np.random.default_rng(1).standard_normal(20_000)
@@ -296,3 +297,26 @@ def test_navigation_impact_reads_the_accelerometer_unit():
         sensor_noise_from_model(ACCEL_MODEL, sensor="accel", accel_scale=9.8)
     with pytest.raises(ValueError, match=r"cannot convert 'm/s\^2' \(acceleration\)"):
         sensor_noise_from_model(ACCEL_MODEL, sensor="gyro")
+
+
+def test_datasheet_verdict_does_not_depend_on_the_record_unit(tmp_path, capsys):
+    # issue 13: a deg/sqrt(h) limit passed the deg/s file and failed the identical deg/h file
+    x = N_GYRO * np.sqrt(FS) * np.random.default_rng(2).standard_normal(40_000)
+    sheet = tmp_path / "sheet.json"
+    limits = [
+        {"quantity": "N", "max": 0.61, "unit": "deg/sqrt(h)"},
+        {"quantity": "adev", "tau": 1.0, "max": 40.0, "unit": "deg/h"},
+    ]
+    sheet.write_text(json.dumps({"limits": limits}))
+    checks = {}
+    for unit, factor in (("deg/s", 1.0), ("deg/h", 3600.0), ("dph", 3600.0), ("deg/min", 60.0)):
+        path = tmp_path / f"{unit.replace('/', '_')}.npy"
+        np.save(path, x * factor)
+        argv = ["fit", str(path), "--fs", "100", "--units", unit, "--datasheet", str(sheet)]
+        code, out, err = _run([*argv, "--json"], capsys)
+        assert code == 0, err
+        checks[unit] = json.loads(out)["channels"][0]["checks"]
+    for unit, found in checks.items():
+        for a, b in zip(found, checks["deg/s"], strict=True):
+            assert a["status"] == b["status"] == "pass", unit
+            assert a["value"] == pytest.approx(b["value"], rel=1e-9), unit

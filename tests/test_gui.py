@@ -129,3 +129,18 @@ def test_gui_bad_file_shows_error_not_traceback(tmp_path: Path) -> None:
     assert "b03a2e" in window.status_label.styleSheet()
     assert window.session.record is None
     window.close()
+
+
+def test_gui_offers_the_units_of_an_accelerometer_record() -> None:
+    from allanite.io import Record
+
+    window = create_window()
+    samples = RNG.normal(size=(N, 1)) * 0.01
+    window.use_record(Record(samples=samples, fs=FS, units="m/s^2", channels=("ax",)))
+    offered = [window.display_combo.itemText(i) for i in range(window.display_combo.count())]
+    assert offered == ["as recorded", "m/s^2", "g", "mg", "ug"]
+    window.display_combo.setCurrentText("mg")
+    shown = window.session.display_result("mg")
+    np.testing.assert_allclose(shown.dev, window.session.result.dev / (1e-3 * 9.80665), rtol=1e-12)
+    assert "m/s^2" in [window.units_combo.itemText(i) for i in range(window.units_combo.count())]
+    window.close()

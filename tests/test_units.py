@@ -135,6 +135,41 @@ def _si(fit, name: str) -> float:
     return coef.value * parse_unit(coef.unit).scale
 
 
+ANGLES = ["rad", "mrad", "urad", "deg", "mdeg", "arcmin", "arcsec", "rev"]
+LENGTHS = ["m", "cm", "mm", "um", "km", "ft", "in"]
+GEES = ["g", "mg", "ug", "gal", "mGal"]
+TIMES = ["s", "ms", "us", "min", "h", "day"]
+
+
+def _composed(sensor: str, name: str) -> st.SearchStrategy[str]:
+    """Display units of N or K built from any atoms (every spelling of the dimension)."""
+    t = st.sampled_from(TIMES)
+    if sensor == "gyro":
+        a = st.sampled_from(ANGLES)
+        if name == "N":  # angle / sqrt(time)
+            return st.one_of(
+                st.builds(lambda a, t: f"{a}/sqrt({t})", a, t),
+                st.builds(lambda a, t: f"{a}/{t}/sqrt(Hz)", a, t),
+                st.builds(lambda a, t, u: f"({a}/{t})*sqrt({u})", a, t, t),
+            )
+        return st.one_of(  # angle / time^1.5
+            st.builds(lambda a, t: f"{a}/{t}^1.5", a, t),
+            st.builds(lambda a, t, u: f"{a}/{t}/sqrt({u})", a, t, t),
+        )
+    length, gee = st.sampled_from(LENGTHS), st.sampled_from(GEES)
+    if name == "N":  # length / time^1.5
+        return st.one_of(
+            st.builds(lambda x, t, u: f"{x}/{t}/sqrt({u})", length, t, t),
+            st.builds(lambda x: f"{x}/sqrt(Hz)", gee),
+            st.builds(lambda x, t: f"{x}*sqrt({t})", gee, t),
+        )
+    return st.one_of(  # length / time^2.5
+        st.builds(lambda x, t, u: f"{x}/{t}^2/sqrt({u})", length, t, t),
+        st.builds(lambda x, t, u: f"{x}/{t}/{u}^1.5", length, t, t),
+        st.builds(lambda x, t: f"{x}/sqrt({t})", gee, t),
+    )
+
+
 @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(
     sensor=st.sampled_from(["gyro", "accelerometer"]),
@@ -144,8 +179,8 @@ def test_same_record_same_coefficients_in_every_unit(sensor, data):
     rates = GYRO_RATES if sensor == "gyro" else ACCEL_RATES
     record_unit = data.draw(st.sampled_from(rates), label="record unit")
     display = data.draw(st.sampled_from(rates), label="display rate")
-    n_unit = data.draw(st.sampled_from(N_UNITS[sensor]), label="N unit")
-    k_unit = data.draw(st.sampled_from(K_UNITS[sensor]), label="K unit")
+    n_unit = data.draw(st.sampled_from(N_UNITS[sensor]) | _composed(sensor, "N"), label="N unit")
+    k_unit = data.draw(st.sampled_from(K_UNITS[sensor]) | _composed(sensor, "K"), label="K unit")
     reference = _fit_in("rad/s" if sensor == "gyro" else "m/s^2")
     fit = _fit_in(record_unit)
     # the fit itself is scale-equivariant: the SI values agree
@@ -230,6 +265,8 @@ def test_standard_gravity_is_defined_once():
         (1.0, "m/s/sqrt(h)", "m/s^2/sqrt(Hz)", 1.0 / 60.0),
         (1.0, "ug/sqrt(Hz)", "m/s/sqrt(h)", 9.80665e-6 * 60.0),
         (1.0, "mg/√Hz", "ug/√Hz", 1000.0),
+        (1.0, "μg", "µg", 1.0),  # Greek mu and the micro sign
+        (1.0, "μrad/s", "urad/s", 1.0),
         # acceleration random walk: m/s/h^1.5 = m/s^2/sqrt(h) * ... = 1/(3600*60) m/s^2/sqrt(s)
         (1.0, "m/s/h^1.5", "m/s^2/sqrt(s)", 1.0 / (3600.0 * 60.0)),
         (1.0, "m/s^3", "m/s^2/h", 3600.0),

@@ -38,6 +38,7 @@ from allanite.edf import cap_few_point_alpha, identify_alpha
 from allanite.io.large import ChunkedRecord, as_chunked
 from allanite.phase_store import PhaseStore, ProgressCallback, build_phase_store
 from allanite.taus import KERNEL_KIND, TauSpec, averaging_factors
+from allanite.units import record_rate_unit
 from allanite.variance import (
     INPUTS,
     KINDS,
@@ -413,6 +414,7 @@ def avar_large(
         raise ValueError(f"unknown kind {kind!r}; use one of {', '.join(KINDS)}")
     if input not in INPUTS:
         raise ValueError(f"unknown input {input!r}; use 'rate', 'increment' or 'angle'")
+    units = record_rate_unit(units, input)  # the same check as avar's
     rate = _check_fs(fs)
     nthreads = _check_threads(threads)
     limit = parse_memory(memory_limit)

@@ -8,10 +8,10 @@ and the error names both units otherwise::
 
     >>> convert(6.153e-3, "deg/sqrt(s)", "deg/sqrt(h)")   # N: 1 deg/sqrt(s) = 60 deg/sqrt(h)
     0.36918
-    >>> convert(8.1e-4, "deg/s/sqrt(s)", "deg/h/sqrt(h)") # K: factor 3600 * 60
+    >>> round(convert(8.1e-4, "deg/s/sqrt(s)", "deg/h/sqrt(h)"), 9)  # K: factor 3600 * 60
     174.96
     >>> convert(1.0, "m/s^2", "ug")                        # 1 m/s^2 = 101972 ug
-    101971.62129779283
+    101971.62129779284
 
 The output quantity of a sensor (the model's ``rate``) is an angular rate (gyroscope,
 angle/time) or an acceleration (accelerometer, length/time²). The coefficients of a
@@ -165,6 +165,7 @@ _ALIASES = {
     "²": "^2",
     "³": "^3",
     "·": "*",
+    "μ": "µ",  # Greek mu, as typed, for the micro sign
 }
 _TOKEN = re.compile(r"\s*(sqrt|[A-Za-zµ°]+|-?\d+(?:\.\d*)?|[()*/^])")
 
@@ -435,7 +436,13 @@ def integral_unit(text: str | Unit) -> str:
             f"'arcsec') or, for an accelerometer, a velocity ('m/s'), but {unit.text!r} is "
             f"{_article(unit.quantity)}; give e.g. --units deg, or --input rate"
         )
-    return f"{unit.text}/s" if re.fullmatch(r"[A-Za-zµ°]+", unit.text) else f"({unit.text})/s"
+    text = unit.text.replace(" ", "")
+    if re.fullmatch(r"[A-Za-zµ°]+", text):
+        return f"{text}/s"
+    match = re.fullmatch(r"([A-Za-zµ]+)/s", text)
+    if match is not None and match.group(1) in LENGTH_UNITS:
+        return f"{match.group(1)}/s^2"  # m/s -> m/s^2
+    return f"({text})/s"
 
 
 def record_rate_unit(units: str | None, input: str = "rate", *, strict: bool = False) -> str | None:
@@ -495,7 +502,7 @@ def coefficient_unit(rate: str | Unit, rate_power: float, time_power: float) -> 
 
 def _split_rate(rate: str) -> tuple[str, str, float] | None:
     """``(numerator, time atom, time power)`` of a rate written ``X/T`` or ``X/T^2``."""
-    text = rate.replace(" ", "")
+    text = rate.replace(" ", "").replace("²", "^2").replace("³", "^3")
     for alias in ("dph", "dps", "rpm"):
         if text == alias:
             text = _ALIASES[alias][1:-1]
@@ -593,11 +600,11 @@ def display_unit(rate: str, name: str | Unit | tuple[float, float]) -> str:
 
     The coefficient ``rate^p * s^q`` (given by its symbol, by ``(p, q)`` or by its unit) is
     shown with the time unit ``T`` of ``rate``: ``deg/h`` gives N in ``deg/sqrt(h)``, B in
-    ``deg/h``, K in ``deg/h/sqrt(h)``, Q in ``deg``, R in ``deg/h^2``; an acceleration in g,
-    mg or ug (time unit s) gives N in ``ug/sqrt(Hz)``-like ``ug*sqrt(s)``, K in
-    ``ug/sqrt(s)``; ``m/s^2`` gives N in ``m/s/sqrt(s)`` (= m/s²/√Hz) and K in
-    ``m/s^2/sqrt(s)``. Gauss-Markov sigma and sinusoid amplitude are in ``rate``, ``tau_c``
-    in ``s`` and ``frequency`` in ``Hz``.
+    ``deg/h``, K in ``deg/h/sqrt(h)``, Q in ``deg``, R in ``deg/h^2``; ``ug`` (or g, mg,
+    gal: time unit s) gives N in ``ug/sqrt(Hz)``, B in ``ug``, K in ``ug/sqrt(s)``;
+    ``m/s^2`` gives N in ``m/s/sqrt(s)`` (= m/s²/√Hz), K in ``m/s^2/sqrt(s)``, Q in
+    ``m/s``. Gauss-Markov sigma and sinusoid amplitude are in ``rate``, ``tau_c`` in ``s``
+    and ``frequency`` in ``Hz``.
 
     Raises
     ------

@@ -44,9 +44,15 @@ class ParamSpec:
     accel_description: str = ""
 
     def describe(self, sensor: str = "gyro") -> str:
-        """Customary name of the parameter for a ``"gyro"`` or an ``"accelerometer"``."""
+        """Customary name of the parameter for a ``"gyro"`` or an ``"accelerometer"``.
+
+        For an ``"unknown"`` sensor (a record without a unit) both names are given where
+        they differ (``angle random walk / velocity random walk``).
+        """
         if sensor == "accelerometer" and self.accel_description:
             return self.accel_description
+        if sensor == "unknown" and self.accel_description:
+            return f"{self.description} / {self.accel_description}"
         return self.description
 
 
