@@ -74,10 +74,12 @@ def load_sim_model(args: argparse.Namespace, fs: float, units: str | None) -> Lo
         if rate is not None or "update rate is needed" not in str(exc):
             raise
         config = None
-    if config is None or (config.rate is None and rate is None):
-        # the simulator's rate is not in the config: the record's rate is the natural one
+    if config is None:
+        # a per-sample config without its rate: the record's rate is the natural one
         config = read_config(path, format=fmt, rate=fs)
         print(f"note: simulator IMU rate taken from the record: {fs:g} Hz", file=sys.stderr)
+    elif config.rate is None and rate is None and fmt != "allanite":
+        config = read_config(path, format=fmt, rate=fs)  # rate-dependent laws (AirSim > 1 kHz)
     sensor = args.sim_sensor or _sensor_of(units)
     model = config.model(sensor)
     if fmt == "allanite":
