@@ -122,6 +122,40 @@ def test_analyze_every_format_matches_library(
     assert data["record"]["n_samples"] == N
 
 
+@pytest.mark.parametrize("dtype", ["float64", "float32", "int16", "int32", "int64"])
+@pytest.mark.parametrize("suffix", [".bin", ".i16"])
+def test_raw_binary_every_dtype_loads_without_scale(
+    dtype: str, suffix: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Regression: little-endian raw files failed with 'unsupported dtype float64' unless
+    --scale converted them, and --dtype was ignored for suffixes other than .bin."""
+    samples = COUNTS.astype(dtype)
+    path = tmp_path / f"rec{suffix}"
+    samples.astype(np.dtype(dtype).newbyteorder("<")).tofile(path)
+    argv = ["analyze", str(path), "--dtype", dtype, "--n-channels", "2", "--fs", str(FS)]
+    code, out, err = _run([*argv, "--points", "12", "--json"], capsys)
+    assert code == 0, err
+    data = json.loads(out)
+    expected = allanite.avar(samples, FS, points=12)
+    np.testing.assert_allclose(data["allan"]["dev"], expected.dev, rtol=1e-12)
+    assert data["record"]["n_samples"] == N
+
+
+def test_raw_options_with_a_self_describing_file_are_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path, extra = _npy(tmp_path)
+    code, out, err = _run(["analyze", str(path), *extra, "--offset", "16"], capsys)
+    assert code == 2
+    assert out == ""
+    assert "--offset describe raw binary, but the file is npy" in err
+    text, extra = _text(tmp_path)
+    code, out, err = _run(["analyze", str(text), *extra, "--dtype", "int16"], capsys)
+    assert code == 2
+    assert out == ""
+    assert "--dtype describe raw binary, but the file is plain text" in err
+
+
 def test_analyze_text_table_channels_kind_and_outputs(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

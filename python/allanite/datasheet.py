@@ -49,6 +49,7 @@ from typing import Any
 import numpy as np
 
 from allanite.errors import InputError
+from allanite.extras import require
 from allanite.units import convert
 
 __all__ = [
@@ -192,12 +193,9 @@ class Datasheet:
         except FileNotFoundError as exc:
             raise InputError("no such file; check the path", path=str(path)) from exc
         if path.suffix.lower() in (".yaml", ".yml"):
-            try:
-                import yaml
-            except ImportError as exc:  # pragma: no cover - pyyaml is in the dev env
-                raise ImportError(
-                    "YAML datasheets need pyyaml: pip install 'allanite[yaml]'"
-                ) from exc
+            yaml = require(
+                "yaml", extra="yaml", purpose="reading YAML datasheets", package="pyyaml"
+            )
             try:
                 data = yaml.safe_load(text)
             except yaml.YAMLError as exc:

@@ -19,6 +19,7 @@ from scipy import stats
 
 from allanite import _core
 from allanite.edf import equivalent_dof, identify_alpha
+from allanite.extras import require
 from allanite.taus import KERNEL_KIND, TauSpec, averaging_factors
 
 __all__ = [
@@ -270,10 +271,7 @@ class AllanResult:
 
     def to_frame(self) -> Any:
         """Return a :class:`pandas.DataFrame` with one row per tau (needs the ``pandas`` extra)."""
-        try:
-            import pandas as pd
-        except ImportError as exc:  # pragma: no cover - exercised without pandas only
-            raise ImportError("to_frame() needs pandas: pip install 'allanite[pandas]'") from exc
+        pd = require("pandas", extra="pandas", purpose="to_frame()")
         return pd.DataFrame(self._columns())
 
     def to_csv(self, path: str | Path) -> None:

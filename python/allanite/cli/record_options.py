@@ -75,19 +75,20 @@ def add_record_arguments(parser: argparse.ArgumentParser) -> None:
         help="whether a text file starts with column names (default: detected)",
     )
     group.add_argument("--key", help="array name in an .npz file or dataset path in HDF5")
-    group.add_argument("--dtype", help="raw binary sample type, e.g. int16, <f4, float64")
     group.add_argument(
-        "--n-channels", type=int, default=1, help="raw binary: interleaved channels (default 1)"
+        "--dtype",
+        help="raw binary sample type, e.g. int16, <f4, float64 (this and the next three "
+        "options mean raw binary whatever the file suffix)",
+    )
+    group.add_argument(
+        "--n-channels", type=int, help="raw binary: interleaved channels (default 1)"
     )
     group.add_argument(
         "--byte-order",
         choices=("little", "big", "native"),
-        default="little",
         help="raw binary byte order (default little)",
     )
-    group.add_argument(
-        "--offset", type=int, default=0, help="raw binary: bytes to skip at the start"
-    )
+    group.add_argument("--offset", type=int, help="raw binary: bytes to skip at the start")
 
 
 def add_grid_arguments(parser: argparse.ArgumentParser) -> None:
