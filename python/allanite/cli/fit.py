@@ -12,6 +12,7 @@ from allanite.cli.record_options import (
     avar_from_args,
     dump_json,
     read_from_args,
+    warn_implausible,
 )
 from allanite.io.atomic import atomic_output
 from allanite.variance import AllanResult
@@ -94,6 +95,7 @@ def run(args: argparse.Namespace) -> int:
         )
     record = read_from_args(args.file, args)
     result = avar_from_args(record, args)
+    record = warn_implausible(record, args, result)
     channels = []
     fits = []
     for c, name in progress(

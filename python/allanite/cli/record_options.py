@@ -9,12 +9,17 @@ policy, scale, units, raw layout) and ``read_from_args(path, args)`` turns them 
 from __future__ import annotations
 
 import argparse
+import dataclasses
+import sys
 from typing import Any
+
+import numpy as np
 
 from allanite.cli.progress import progress_bars
 from allanite.io.readers import FORMATS, read_record
 from allanite.io.record import INPUT_KINDS, Record
 from allanite.io.timebase import GAP_POLICIES
+from allanite.plausibility import check_allan, check_samples, refuse_constant
 from allanite.variance import KINDS, AllanResult, avar
 
 __all__ = [
@@ -24,6 +29,8 @@ __all__ = [
     "example_record",
     "rate_unit",
     "read_from_args",
+    "record_command",
+    "warn_implausible",
 ]
 
 
@@ -173,7 +180,9 @@ def read_from_args(path: str | None, args: argparse.Namespace) -> Record:
             chosen = _columns(args.channels)
             return record.select(chosen) if chosen else record
         raise ValueError("give a FILE to analyse, or --example for the built-in example record")
-    return read_record(path, fs=args.fs, **read_options(args))
+    record = read_record(path, fs=args.fs, **read_options(args))
+    refuse_constant(record.samples, record.channels, source=record.source)
+    return record
 
 
 def read_options(args: argparse.Namespace) -> dict[str, Any]:
@@ -195,6 +204,43 @@ def read_options(args: argparse.Namespace) -> dict[str, Any]:
         "byteorder": args.byte_order,
         "offset": args.offset,
     }
+
+
+#: reader option -> (its flag, its default): what :func:`record_command` writes back
+_READER_FLAGS: dict[str, tuple[str, Any]] = {
+    "fs": ("--fs", None),
+    "input": ("--input", None),
+    "units": ("--units", None),
+    "scale": ("--scale", None),
+    "channels": ("--channels", None),
+    "time_column": ("--time-column", None),
+    "time_scale": ("--time-scale", 1.0),
+    "gaps": ("--gaps", "error"),
+    "format": ("--format", None),
+    "delimiter": ("--delimiter", None),
+    "header": ("--header", "auto"),
+    "key": ("--key", None),
+    "dtype": ("--dtype", None),
+    "n_channels": ("--n-channels", None),
+    "byte_order": ("--byte-order", None),
+    "offset": ("--offset", None),
+}
+
+
+def record_command(command: str, path: str | None, args: argparse.Namespace) -> str:
+    """The command line ``allanite COMMAND`` that reads the same record with the same options.
+
+    Used to point from one subcommand to the next (e.g. from ``analyze`` to ``fit``).
+    """
+    import shlex
+
+    words = ["allanite", command]
+    words += [path] if path is not None else ["--example"]
+    for name, (flag, default) in _READER_FLAGS.items():
+        value = getattr(args, name, default)
+        if value is not None and value != default:
+            words += [flag, f"{value:g}" if isinstance(value, float) else str(value)]
+    return " ".join(shlex.quote(w) for w in words)
 
 
 def rate_unit(record: Record) -> str | None:
@@ -230,6 +276,40 @@ def avar_from_args(record: Record, args: argparse.Namespace) -> AllanResult:
             progress=bar if large else None,
             **large,
         )
+
+
+def warn_implausible(
+    record: Record, args: argparse.Namespace, result: AllanResult | None = None
+) -> Record:
+    """Run the plausibility checks, print each finding on stderr, return the record with them.
+
+    The findings (:mod:`allanite.plausibility`: angle given as rate, rate given as angle,
+    counts without a scale, stuck segments) are appended to ``record.warnings``, so the JSON
+    summary and the report carry them too. ``result`` is the record's Allan analysis; without
+    it a quick one (50-point log grid) is computed for the slope checks.
+    """
+    part = record.longest_segment()
+    fs = part.require_fs()
+    if result is None:
+        samples = part.samples if part.n_channels > 1 else part.samples[:, 0]
+        result = avar(samples, fs, input=part.input, points=50)  # type: ignore[arg-type]
+    dev = np.asarray(result.dev, dtype=np.float64).reshape(result.tau.size, -1)
+    findings = check_samples(
+        part.samples,
+        fs,
+        input=part.input,
+        channels=part.channels,
+        scale=record.scale,
+        short_dev=dev[0],
+    ) + check_allan(result, part.channels)
+    command = getattr(args, "command", None) or "allanite"
+    for finding in findings:
+        print(f"allanite {command}: warning: {finding.message}", file=sys.stderr)
+    if not findings:
+        return record
+    return dataclasses.replace(
+        record, warnings=record.warnings + tuple(f.message for f in findings)
+    )
 
 
 def dump_json(data: Any) -> str:

@@ -13,6 +13,7 @@ from allanite.cli.record_options import (
     avar_from_args,
     dump_json,
     read_from_args,
+    warn_implausible,
 )
 from allanite.report import Datasheet, DeviceAnalysis, build_report
 
@@ -100,7 +101,8 @@ def run(args: argparse.Namespace) -> int:
     devices = []
     for path in progress(sources, desc="analysing", total=len(sources)):
         record = read_from_args(path, args)
-        device = DeviceAnalysis(record, avar_from_args(record, args))
+        result = avar_from_args(record, args)
+        device = DeviceAnalysis(warn_implausible(record, args, result), result)
         if not args.no_fit:
             device = DeviceAnalysis(device.record, device.result, fit_channels(device))
         devices.append(device)
