@@ -46,3 +46,32 @@ def test_unknown_diagnose_effects_are_refused_with_the_known_ones(
     assert "unknown effect(s) 'bogus'; known effects: white, quantization, flicker" in line
     # known names, including rescale forms, are accepted
     assert main([*argv, "--effects", "white,rescale:white,rescale", "--n-mc", "20"]) == 0
+
+
+def test_datasheet_unknown_quantity_is_refused_not_missing(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Regression: a typo in a limit's quantity was reported as MISSING with exit code 0."""
+    from allanite.datasheet import Datasheet
+    from allanite.errors import InputError
+
+    sheet = tmp_path / "limits.json"
+    sheet.write_text(
+        '{"limits": [{"quantity": "N", "max": 1, "unit": "deg/sqrt(h)"},'
+        ' {"quantity": "Bias", "max": 10, "unit": "deg/h"}]}'
+    )
+    match = r"limits\[1\]: unknown quantity 'Bias' \(did you mean 'B'"
+    with pytest.raises(InputError, match=match):
+        Datasheet.load(sheet)
+    rec = tmp_path / "rec.npy"
+    np.save(rec, RNG.standard_normal(20_000) * 0.01)
+    argv = ["fit", str(rec), "--fs", "100", "--units", "deg/s", "--datasheet", str(sheet)]
+    assert main(argv) == 2
+    line = _one_line_error(capsys, "fit")
+    assert "unknown quantity 'Bias'" in line
+    assert "use adev or a noise coefficient: B, K, N, Q, R," in line
+    # the real names, a suffixed label and the compact form are accepted
+    Datasheet.from_dict({"sigma_2": 1.0, "N": {"max": 1.0}})
+    Datasheet.from_dict({"limits": [{"quantity": "adev", "tau": 1, "max": 1, "unit": "deg/s"}]})
+    with pytest.raises(InputError, match=r"entry 'ARW': unknown quantity 'ARW' \(did you mean 'N'"):
+        Datasheet.from_dict({"ARW": 0.1})
