@@ -75,3 +75,53 @@ def test_datasheet_unknown_quantity_is_refused_not_missing(
     Datasheet.from_dict({"limits": [{"quantity": "adev", "tau": 1, "max": 1, "unit": "deg/s"}]})
     with pytest.raises(InputError, match=r"entry 'ARW': unknown quantity 'ARW' \(did you mean 'N'"):
         Datasheet.from_dict({"ARW": 0.1})
+
+
+def _model_file(tmp_path: Path) -> Path:
+    path = tmp_path / "model.json"
+    NoiseModel([White(0.001)], units={"rate": "deg/s", "time": "s"}).save(path)
+    return path
+
+
+def test_simulate_refuses_an_output_larger_than_the_free_space(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Regression: simulate -n 1000000000000 started writing an 8 TB file."""
+    import shutil
+    from collections import namedtuple
+
+    from allanite.simulation.writers import output_size, write_record
+
+    usage = namedtuple("usage", "total used free")
+    monkeypatch.setattr(shutil, "disk_usage", lambda _: usage(10**12, 0, 5 * 10**9))
+    model = _model_file(tmp_path)
+    out = tmp_path / "big.npy"
+    assert main(["simulate", str(model), "--fs", "100", "-n", "1e12", "-o", str(out)]) == 2
+    line = _one_line_error(capsys, "simulate")
+    assert "cannot write" in line
+    assert "big.npy: the record needs 8 TB but" in line
+    assert "has 5 GB free; write fewer samples (-n, --duration)" in line
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["model.json"]
+    with pytest.raises(OSError, match="needs 8 TB"):
+        write_record(out, NoiseModel.load(model), 100.0, 10**12)
+    # sizes: exact for .npy/raw, an upper bound for CSV
+    assert output_size("a.bin", 1000, 3) == 24_000
+    assert output_size("a.npy", 1000, 3) == 24_128
+
+
+def test_simulate_says_what_it_wrote(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    model = _model_file(tmp_path)
+    for name, channels in (("s.npy", 1), ("s.csv", 2)):
+        out = tmp_path / name
+        argv = ["simulate", str(model), "--fs", "100", "--duration", "1h", "--seed", "3"]
+        assert main([*argv, "--channels", str(channels), "-o", str(out)]) == 0
+        printed, err = capsys.readouterr()
+        assert err == ""
+        size = out.stat().st_size
+        axes = " x 2 channels" if channels == 2 else ""
+        assert printed == (
+            f"wrote {out}: 360000 samples{axes} of rate [deg/s] at 100 Hz (1 h, seed 3), "
+            f"{size / 1e6:.3g} MB\n"
+        )
+    assert main([*argv, "-o", str(tmp_path / "q.npy"), "--quiet"]) == 0
+    assert capsys.readouterr() == ("", "")
