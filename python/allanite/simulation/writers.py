@@ -8,7 +8,6 @@ advance) and then the raw little-endian float64 rows; ``.csv`` one row per sampl
 
 from __future__ import annotations
 
-import numbers
 import os
 from collections.abc import Callable, Iterable
 from pathlib import Path
@@ -171,7 +170,7 @@ def write_record(
     """
     format_of(path)  # fail on a bad suffix before any work
     total = record_length(fs, n, duration)
-    if isinstance(channels, bool) or not isinstance(channels, numbers.Integral) or channels < 1:
+    if isinstance(channels, bool) or not isinstance(channels, (int, np.integer)) or channels < 1:
         raise ValueError(f"channels must be a positive integer, got {channels!r}")
     check_free_space(path, output_size(path, total, int(channels)))
     chunks = simulate_chunks(
