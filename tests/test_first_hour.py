@@ -125,3 +125,27 @@ def test_simulate_says_what_it_wrote(tmp_path: Path, capsys: pytest.CaptureFixtu
         )
     assert main([*argv, "-o", str(tmp_path / "q.npy"), "--quiet"]) == 0
     assert capsys.readouterr() == ("", "")
+
+
+def test_negative_channel_indices_are_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Regression: --channels -1 silently took the last column."""
+    from allanite.errors import InputError
+    from allanite.io import read_record
+
+    path = tmp_path / "three.npy"
+    np.save(path, RNG.standard_normal((1000, 3)))
+    assert main(["analyze", str(path), "--fs", "100", "--channels", "-1"]) == 2
+    line = _one_line_error(capsys, "analyze")
+    assert "column -1: columns are numbered from 0 to 2; negative indices are not accepted" in line
+    with pytest.raises(InputError, match="negative indices are not accepted"):
+        read_record(path, fs=100.0, columns=[0, -2])
+    with pytest.raises(InputError, match="negative indices"):
+        read_record(path, fs=100.0, time_column=-1)
+    record = read_record(path, fs=100.0)
+    with pytest.raises(ValueError, match=r"channel -1: channels are numbered from 0 to 2"):
+        record.select([-1])
+    assert main(["analyze", "--example", "--channels", "-1"]) == 2
+    assert "negative indices are not accepted" in _one_line_error(capsys, "analyze")
+    assert record.select([2]).channels == (record.channels[2],)

@@ -54,8 +54,8 @@ def add_record_arguments(parser: argparse.ArgumentParser) -> None:
     )
     group.add_argument(
         "--channels",
-        help="columns to analyse, by 0-based index or header name, comma separated (e.g. 1,2 or "
-        "gx,gy)",
+        help="columns to analyse, by 0-based index (no negative indices) or header name, comma "
+        "separated (e.g. 1,2 or gx,gy)",
     )
     group.add_argument(
         "--time-column", help="column of time stamps (index or name); fs is inferred from it"

@@ -110,13 +110,19 @@ def _as_list(columns: Column | Sequence[Column] | None) -> list[Column] | None:
 def _resolve(names: tuple[str, ...], key: Column, source: str, what: str) -> int:
     if isinstance(key, (int, np.integer)) and not isinstance(key, bool):
         i = int(key)
-        if not -len(names) <= i < len(names):
+        if i < 0:
+            raise InputError(
+                f"{what} {i}: columns are numbered from 0 to {len(names) - 1}; negative indices "
+                f"are not accepted (the last column is {len(names) - 1}, named {names[-1]!r})",
+                path=source,
+            )
+        if i >= len(names):
             raise InputError(
                 f"{what} {i} does not exist: the data has {len(names)} column(s) "
                 f"({', '.join(names)}); columns are numbered from 0",
                 path=source,
             )
-        return i % len(names)
+        return i
     if isinstance(key, str):
         if key in names:
             return names.index(key)
