@@ -20,6 +20,7 @@ from scipy import stats
 from allanite import _core
 from allanite.edf import equivalent_dof, identify_alpha
 from allanite.extras import require
+from allanite.notebook import repr_html
 from allanite.taus import KERNEL_KIND, TauSpec, averaging_factors
 
 __all__ = [
@@ -89,6 +90,7 @@ class AllanResult:
     n_samples: int
     units: str | None = None
     meta: dict[str, Any] = field(default_factory=dict, compare=False)
+    _repr_html_ = repr_html  # Jupyter: a compact table and the plot (allanite.notebook)
 
     @property
     def dev(self) -> NDArray[np.float64]:
