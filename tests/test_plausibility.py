@@ -199,3 +199,36 @@ def test_angle_read_as_rate_warns_in_the_cli(
     code, _out, err = _cli(["analyze", str(path), "--fs", "100", "--input", "angle"], capsys)
     assert code == 0
     assert err == ""
+
+
+def test_runs_are_the_same_whatever_the_chunk() -> None:
+    from allanite.plausibility import _runs
+
+    rng = np.random.default_rng(9)
+    for _ in range(100):
+        n = int(rng.integers(1, 400))
+        v = np.round(rng.standard_normal(n) * rng.uniform(0.05, 2))
+        change = np.flatnonzero(v[1:] != v[:-1]) + 1
+        starts = np.concatenate(([0], change))
+        expected = list(zip(starts, np.diff(np.concatenate((starts, [n]))), strict=True))
+        for chunk in (1, 2, 7, 64, 1000):
+            got = [
+                (a, k) for s, lengths in _runs(v, chunk) for a, k in zip(s, lengths, strict=True)
+            ]
+            assert got == expected
+
+
+def test_stuck_search_memory_does_not_grow_with_the_record() -> None:
+    """One streaming pass: the working memory is a few chunks, not several record copies."""
+    import tracemalloc
+
+    x = np.random.default_rng(3).standard_normal(4_000_000)  # 32 MB
+    x[1_000_000:1_000_100] = x[1_000_000]
+    tracemalloc.start()
+    try:
+        found = stuck_segments(x)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert found == [(1_000_000, 1_000_100)]
+    assert peak < 20e6, peak  # one copy of the change indices alone would be 32 MB

@@ -24,7 +24,7 @@ The slopes come from :mod:`allanite.report.slopes` (half-decade windows, points 
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -103,7 +103,7 @@ def refuse_constant(
     if x.shape[0] < 2:
         return
     names = list(channels) or [f"ch{i}" for i in range(x.shape[1])]
-    dead = [c for c in range(x.shape[1]) if np.all(x[:, c] == x[0, c])]
+    dead = [c for c in range(x.shape[1]) if x[:, c].min() == x[:, c].max()]
     if not dead:
         return
     which = ", ".join(f"{names[c]} (all {x.shape[0]} samples equal {x[0, c]:.6g})" for c in dead)
@@ -118,6 +118,28 @@ def refuse_constant(
     )
 
 
+def _runs(v: NDArray[Any], chunk: int = 1 << 18) -> Iterator[tuple[NDArray[Any], NDArray[Any]]]:
+    """Runs of equal consecutive samples as ``(starts, lengths)`` arrays, chunk by chunk.
+
+    Memory is O(chunk) whatever the record's length; a run crossing a chunk border is carried
+    over and reported once, whole.
+    """
+    n = v.size
+    open_start = 0  # start of the run still open at the end of the previous chunk
+    for lo in range(0, n, chunk):
+        hi = min(n, lo + chunk)
+        block = v[lo:hi]
+        change = np.flatnonzero(block[1:] != block[:-1]) + 1 + lo
+        if lo > 0 and v[lo] != v[lo - 1]:
+            change = np.concatenate(([lo], change))
+        if change.size == 0:
+            continue
+        starts = np.concatenate(([open_start], change[:-1]))
+        yield starts, change - starts
+        open_start = int(change[-1])
+    yield np.array([open_start]), np.array([n - open_start])
+
+
 def stuck_segments(x: NDArray[Any]) -> list[tuple[int, int]]:
     """Runs of equal consecutive samples too long for the record, as ``(start, stop)`` indices.
 
@@ -125,20 +147,30 @@ def stuck_segments(x: NDArray[Any]) -> list[tuple[int, int]]:
     99.9th percentile of the record's own run lengths. The record is its own reference: float
     samples almost never repeat, so 20 equal ones are stuck; quantized or slowly varying
     samples repeat naturally (noise below the step, a resting angle), and only a run far
-    longer than their longest ordinary dwell is reported.
+    longer than their longest ordinary dwell is reported. One streaming pass, O(1) memory.
     """
     v = np.asarray(x).ravel()
     if v.size < 2 * MIN_STUCK:
         return []
-    change = np.flatnonzero(v[1:] != v[:-1]) + 1
-    starts = np.concatenate(([0], change))
-    stops = np.concatenate((change, [v.size]))
-    lengths = stops - starts
-    if lengths.max() < MIN_STUCK:
+    cap = 1 << 16  # run lengths are counted exactly up to cap; longer ones are kept
+    counts = np.zeros(cap + 1, dtype=np.int64)
+    long_starts: list[NDArray[Any]] = []
+    long_lengths: list[NDArray[Any]] = []
+    for starts, lengths in _runs(v):
+        counts += np.bincount(np.minimum(lengths, cap), minlength=cap + 1)
+        keep = lengths >= MIN_STUCK
+        long_starts.append(starts[keep])
+        long_lengths.append(lengths[keep])
+    starts = np.concatenate(long_starts)
+    lengths = np.concatenate(long_lengths)
+    if lengths.size == 0:
         return []
-    longest = max(MIN_STUCK, STUCK_FACTOR * float(np.quantile(lengths, 0.999)))
+    # 99.9th percentile of the run lengths from their histogram (lengths above cap only
+    # matter when they are that common, and then the record is not judged run by run anyway)
+    rank = int(np.searchsorted(np.cumsum(counts), 0.999 * counts.sum()))
+    longest = max(MIN_STUCK, STUCK_FACTOR * rank)
     keep = lengths >= longest
-    return [(int(a), int(b)) for a, b in zip(starts[keep], stops[keep], strict=True)]
+    return [(int(a), int(a + n)) for a, n in zip(starts[keep], lengths[keep], strict=True)]
 
 
 def check_samples(
