@@ -421,6 +421,14 @@ def test_first_screen_summary_above_the_table(
     code, fit_out, err = _run([*command[1:], "--json"], capsys)
     assert code == 0, err
     assert json.loads(fit_out)["channels"][0]["coefficients"]
+    # the same summary in the JSON, in the record's units (N in deg/s*sqrt(s) = deg/sqrt(s))
+    code, out, _ = _run(["analyze", str(path), "--fs", "100", "--json"], capsys)
+    (summary,) = json.loads(out)["summary"]
+    assert summary["channel"] == "col0"
+    assert [row["term"] for row in summary["slopes"]] == ["angle random walk (white rate noise)"]
+    assert summary["readouts"]["N"] == pytest.approx(value / 60, rel=1e-3)
+    assert summary["readouts"]["B"] is None
+    assert "no uncertainty" in summary["readouts"]["label"]
     # --table: the table alone (no summary); --summary: the summary alone
     code, out, _ = _run(["analyze", str(path), "--fs", "100", "--table"], capsys)
     assert "slope regions" not in out

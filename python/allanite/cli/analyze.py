@@ -18,11 +18,11 @@ from allanite.cli.record_options import (
     record_command,
     warn_implausible,
 )
-from allanite.fit.classic import classic_readout
+from allanite.fit.classic import ClassicReadout, classic_readout
 from allanite.io.atomic import atomic_output
 from allanite.io.record import Record
 from allanite.report.coefficients import customary_rate
-from allanite.report.slopes import MIN_EDF, slope_table
+from allanite.report.slopes import MIN_EDF, SlopeRow, slope_table
 from allanite.units import coefficient_unit, convert, display_unit
 from allanite.variance import AllanResult
 
@@ -86,7 +86,11 @@ def register(subparsers: Any) -> None:
 
 
 def analysis_dict(record: Record, result: AllanResult, level: float) -> dict[str, Any]:
-    """JSON-ready analysis: the record summary and the result with intervals at ``level``."""
+    """JSON-ready analysis of a record.
+
+    The record summary (with its warnings), the result with intervals at ``level`` and, per
+    channel, the slope regions and slope-method readouts (:func:`summary_dict`).
+    """
     lo, hi = result.ci(level)
     allan = result.to_dict()
     allan.update(
@@ -97,7 +101,11 @@ def analysis_dict(record: Record, result: AllanResult, level: float) -> dict[str
             "dev_high": hi.tolist(),
         }
     )
-    return {"record": record.summary(), "allan": allan}
+    summary = [
+        {"channel": name, **(summary_dict(result.channel(c)) or {})}
+        for c, name in enumerate(record.channels)
+    ]
+    return {"record": record.summary(), "allan": allan, "summary": summary}
 
 
 _READOUT_UNITS = {"N": "*sqrt(s)", "B": "", "K": "/sqrt(s)"}
@@ -119,6 +127,45 @@ def _readout_value(result: AllanResult, symbol: str, value: float) -> str:
     return f"{value:.4g} (rate unit){_READOUT_UNITS[symbol]}"
 
 
+#: estimators whose curve the slope table and the slope-method readouts are defined on
+_SUMMARY_KINDS = ("overlapping", "standard", "total")
+
+
+def summary_parts(result: AllanResult) -> tuple[list[SlopeRow], ClassicReadout] | None:
+    """Slope regions and slope-method readouts of one channel (None for other estimators).
+
+    Only points with at least ``MIN_EDF`` equivalent degrees of freedom are read, as in the
+    report's slope table, so the scatter of the last taus does not invent a segment.
+    """
+    if result.kind not in _SUMMARY_KINDS:
+        return None
+    dev = np.asarray(result.dev, dtype=np.float64)
+    reliable = np.asarray(result.edf) >= MIN_EDF
+    return (
+        slope_table(result.tau, dev, result.edf),
+        classic_readout(result.tau[reliable], dev[reliable]),
+    )
+
+
+def summary_dict(result: AllanResult) -> dict[str, Any] | None:
+    """JSON-ready summary of one channel: slope regions and readouts (rate units, seconds)."""
+    parts = summary_parts(result)
+    if parts is None:
+        return None
+    rows, readout = parts
+    return {
+        "slopes": [
+            {"tau_min": r.tau_min, "tau_max": r.tau_max, "slope": r.slope, "term": r.term}
+            for r in rows
+        ],
+        "readouts": {
+            "label": readout.label,
+            **{k: readout.values.get(k) for k in ("N", "B", "K")},
+            "tau": {k: readout.tau.get(k) for k in ("N", "B", "K")},
+        },
+    }
+
+
 def summary_lines(result: AllanResult, fit_command: str | None = None) -> list[str]:
     """The first screen of one channel: slope regions and the classic readouts (N, B, K).
 
@@ -126,9 +173,14 @@ def summary_lines(result: AllanResult, fit_command: str | None = None) -> list[s
     method), labelled as readouts with no uncertainty; ``fit_command`` points to the fit.
     """
     lines = []
-    dev = np.asarray(result.dev, dtype=np.float64)
-    if result.kind in ("overlapping", "standard", "total"):
-        rows = slope_table(result.tau, dev, result.edf)
+    parts = summary_parts(result)
+    if parts is None:
+        lines.append(
+            f"  (slope regions and readouts are read off the Allan deviation; this is the "
+            f"{_DEV_NAMES.get(result.kind, result.kind)})"
+        )
+    else:
+        rows, readout = parts
         if rows:
             lines.append("  slope regions of the curve:")
             lines.extend(
@@ -138,9 +190,6 @@ def summary_lines(result: AllanResult, fit_command: str | None = None) -> list[s
             )
         else:
             lines.append("  slope regions: too few reliable points to classify")
-        # read only the points whose scatter is small enough to classify (as the slope table)
-        reliable = np.asarray(result.edf) >= MIN_EDF
-        readout = classic_readout(result.tau[reliable], dev[reliable])
         lines.append(
             "  slope-method readouts (IEEE 952 graphical reading, no uncertainty; not a fit):"
         )
@@ -157,11 +206,6 @@ def summary_lines(result: AllanResult, fit_command: str | None = None) -> list[s
                 "K": f"+1/2 segment near tau = {at:.3g} s, read at tau = 3 s",
             }
             lines.append(f"    {symbol} = {_readout_value(result, symbol, value)}  ({how[symbol]})")
-    else:
-        lines.append(
-            f"  (slope regions and readouts are read off the Allan deviation; this is the "
-            f"{_DEV_NAMES.get(result.kind, result.kind)})"
-        )
     if fit_command:
         lines.append(f"  fitted coefficients with intervals: {fit_command}")
     return lines

@@ -109,7 +109,8 @@ def run(args: argparse.Namespace) -> int:
     reference = None
     if args.reference:
         ref_record = read_from_args(args.reference, args)
-        reference = DeviceAnalysis(ref_record, avar_from_args(ref_record, args))
+        ref_result = avar_from_args(ref_record, args)
+        reference = DeviceAnalysis(warn_implausible(ref_record, args, ref_result), ref_result)
         if not args.no_fit:
             reference = DeviceAnalysis(reference.record, reference.result, fit_channels(reference))
     diag_html = None
