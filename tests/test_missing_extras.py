@@ -83,6 +83,9 @@ def test_without_matplotlib(
     line = _one_line_rc2([*argv, "-o", str(out / "a.csv")], capsys, "plot", "analyze")
     assert "plotting needs matplotlib" in line
     assert list(out.iterdir()) == []  # no partial output
+    report = ["report", str(path), "--fs", "100", "-o", str(out / "r.html"), "--no-fit"]
+    _one_line_rc2(report, capsys, "plot", "report")
+    assert list(out.iterdir()) == []
 
 
 def test_without_pyside6(
