@@ -151,8 +151,10 @@ def test_paths_and_datasheet_files(tmp_path):
 def test_bad_datasheets_and_options():
     with pytest.raises(InputError, match="must be a number"):
         batch(_lot(1), FS, datasheet={"N": {}})
-    with pytest.raises(ValueError, match="not coefficients"):
+    with pytest.raises(InputError, match=r"unknown quantity 'ARW' \(did you mean 'N'\?\)"):
         batch(_lot(1), FS, datasheet={"ARW": 1.0})
+    with pytest.raises(ValueError, match="not coefficients"):
+        batch(_lot(1), FS, datasheet={"sigma": 1.0}, terms=["N"])
     with pytest.raises(InputError, match="must be a number"):
         batch(_lot(1), FS, datasheet={"N": "small"})
     with pytest.raises(TypeError, match="datasheet must be"):

@@ -122,6 +122,40 @@ def test_analyze_every_format_matches_library(
     assert data["record"]["n_samples"] == N
 
 
+@pytest.mark.parametrize("dtype", ["float64", "float32", "int16", "int32", "int64"])
+@pytest.mark.parametrize("suffix", [".bin", ".i16"])
+def test_raw_binary_every_dtype_loads_without_scale(
+    dtype: str, suffix: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Regression: little-endian raw files failed with 'unsupported dtype float64' unless
+    --scale converted them, and --dtype was ignored for suffixes other than .bin."""
+    samples = COUNTS.astype(dtype)
+    path = tmp_path / f"rec{suffix}"
+    samples.astype(np.dtype(dtype).newbyteorder("<")).tofile(path)
+    argv = ["analyze", str(path), "--dtype", dtype, "--n-channels", "2", "--fs", str(FS)]
+    code, out, err = _run([*argv, "--points", "12", "--json"], capsys)
+    assert code == 0, err
+    data = json.loads(out)
+    expected = allanite.avar(samples, FS, points=12)
+    np.testing.assert_allclose(data["allan"]["dev"], expected.dev, rtol=1e-12)
+    assert data["record"]["n_samples"] == N
+
+
+def test_raw_options_with_a_self_describing_file_are_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path, extra = _npy(tmp_path)
+    code, out, err = _run(["analyze", str(path), *extra, "--offset", "16"], capsys)
+    assert code == 2
+    assert out == ""
+    assert "--offset describe raw binary, but the file is npy" in err
+    text, extra = _text(tmp_path)
+    code, out, err = _run(["analyze", str(text), *extra, "--dtype", "int16"], capsys)
+    assert code == 2
+    assert out == ""
+    assert "--dtype describe raw binary, but the file is plain text" in err
+
+
 def test_analyze_text_table_channels_kind_and_outputs(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -356,3 +390,51 @@ def test_closed_pipe_is_not_an_error(tmp_path: Path) -> None:
     _, err = proc.communicate(timeout=120)
     assert proc.returncode == 0
     assert "error" not in err
+
+
+def test_first_screen_summary_above_the_table(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """White rate noise N: one -1/2 region, N read at tau = 1 s, the fit command, the table."""
+    n_true = 0.01  # deg/s/sqrt(Hz) = deg/sqrt(s)
+    x = np.random.default_rng(8).standard_normal(200_000) * n_true * np.sqrt(FS)
+    path = tmp_path / "white.npy"
+    np.save(path, x)
+    code, out, err = _run(["analyze", str(path), "--fs", "100", "--units", "deg/s"], capsys)
+    assert code == 0, err
+    lines = out.splitlines()
+    summary = lines.index("  slope regions of the curve:")
+    table = next(i for i, line in enumerate(lines) if "tau [s]" in line)
+    assert summary < table
+    assert "(−1/2): angle random walk" in lines[summary + 1]
+    assert "slope-method readouts (IEEE 952 graphical reading, no uncertainty; not a fit):" in out
+    n_line = next(line for line in lines if line.startswith("    N = "))
+    value = float(n_line.split()[2])
+    assert n_line.split()[3] == "deg/sqrt(h)"
+    # the readout of a white-noise curve at tau = 1 s is N itself (1 deg/sqrt(s) = 60 deg/sqrt(h))
+    assert value == pytest.approx(60 * n_true, rel=0.05)
+    assert "read at tau = 1 s" in n_line
+    assert "    B: —  (no flat minimum on the curve)" in lines
+    fit_line = next(line for line in lines if "fitted coefficients with intervals:" in line)
+    command = fit_line.split(": ", 1)[1].split()
+    assert command[:3] == ["allanite", "fit", str(path)]
+    code, fit_out, err = _run([*command[1:], "--json"], capsys)
+    assert code == 0, err
+    assert json.loads(fit_out)["channels"][0]["coefficients"]
+    # the same summary in the JSON, in the record's units (N in deg/s*sqrt(s) = deg/sqrt(s))
+    code, out, _ = _run(["analyze", str(path), "--fs", "100", "--json"], capsys)
+    (summary,) = json.loads(out)["summary"]
+    assert summary["channel"] == "col0"
+    assert [row["term"] for row in summary["slopes"]] == ["angle random walk (white rate noise)"]
+    assert summary["readouts"]["N"] == pytest.approx(value / 60, rel=1e-3)
+    assert summary["readouts"]["B"] is None
+    assert "no uncertainty" in summary["readouts"]["label"]
+    # --table: the table alone (no summary); --summary: the summary alone
+    code, out, _ = _run(["analyze", str(path), "--fs", "100", "--table"], capsys)
+    assert "slope regions" not in out
+    assert "tau [s]" in out
+    code, out, _ = _run(["analyze", str(path), "--fs", "100", "--summary"], capsys)
+    assert "slope regions" in out
+    assert "tau [s]" not in out
+    assert "N = " in out
+    assert "(rate unit)*sqrt(s)" in out

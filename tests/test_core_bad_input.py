@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pytest
 
@@ -174,3 +176,56 @@ def test_constant_record_gives_zeros_not_nan() -> None:
         lo, hi = res.ci()
         assert np.all(lo == 0.0)
         assert np.all(hi == 0.0)
+
+
+# dtype objects that equal the native ones but are other objects: '<f8' made through
+# newbyteorder is float64 (regression: the core compared dtypes by identity and refused them)
+_SAME_TYPES = ["float64", "float32", "int16", "int32", "int64"]
+
+
+def _same_but_other_object(name: str) -> np.dtype[Any]:
+    native = np.dtype(name)
+    other = native.newbyteorder("S").newbyteorder("S")  # a distinct descriptor object
+    assert other == native
+    return other
+
+
+@pytest.mark.parametrize("name", _SAME_TYPES)
+def test_core_compares_dtypes_by_kind_size_and_order(name: str) -> None:
+    x = (RNG.normal(size=(400, 2)) * 100).astype(name)
+    y = x.astype(_same_but_other_object(name))
+    little = x.astype(np.dtype(name).newbyteorder("<"))
+    for z in (y, little):
+        np.testing.assert_array_equal(_core.phase(z, "rate"), _core.phase(x, "rate"))
+        np.testing.assert_array_equal(_core.phase(z, "angle"), _core.phase(x, "angle"))
+        np.testing.assert_array_equal(
+            _core.lag1_acf(z, [1, 2, 4], "frequency", 2),
+            _core.lag1_acf(x, [1, 2, 4], "frequency", 2),
+        )
+    np.testing.assert_array_equal(allanite.avar(y, 1.0).var, allanite.avar(x, 1.0).var)
+
+
+@pytest.mark.parametrize("name", _SAME_TYPES)
+def test_chunked_phase_accepts_equal_dtype_objects(name: str) -> None:
+    from allanite.io.large import ArrayRecord
+    from allanite.phase_store import build_phase_store
+
+    x = (RNG.normal(size=(500, 2)) * 100).astype(name)
+    y = x.astype(_same_but_other_object(name))
+    for kind in ("rate", "angle"):
+        with build_phase_store(
+            ArrayRecord(y), kind, chunk_rows=128, max_memory_bytes=None
+        ) as store:
+            got = store.read(0, np.empty((store.rows, store.channels)))
+        np.testing.assert_array_equal(got, _core.phase(x, kind))
+
+
+def test_core_refuses_foreign_byte_order_with_the_fix() -> None:
+    swapped = ">f8" if np.little_endian else "<f8"
+    x = RNG.normal(size=(100, 1)).astype(swapped)
+    with pytest.raises(TypeError, match=r"not in native byte order.*newbyteorder\('='\)"):
+        _core.phase(x, "rate")
+    # the public API converts instead
+    np.testing.assert_array_equal(
+        allanite.avar(x, 1.0).var, allanite.avar(x.astype(np.float64), 1.0).var
+    )

@@ -113,6 +113,26 @@ def test_raw_binary_layout_errors(tmp_path: Path) -> None:
         read_record(path, fs=1.0)
 
 
+def test_raw_layout_options_imply_raw(tmp_path: Path) -> None:
+    counts = RNG.integers(-3000, 3000, size=(256, 2)).astype(np.int16)
+    path = tmp_path / "counts.i16"  # an unknown suffix would be read as text
+    path.write_bytes(counts.astype("<i2").tobytes())
+    record = read_record(path, fs=100.0, dtype="int16", n_channels=2)
+    np.testing.assert_array_equal(record.samples, counts)
+    big = tmp_path / "counts.dat"  # a text suffix, but binary content and a raw option
+    big.write_bytes(b"HDR!" + counts.astype(">i2").tobytes())
+    record = read_record(big, fs=100.0, dtype="int16", n_channels=2, byteorder="big", offset=4)
+    np.testing.assert_array_equal(record.samples, counts)
+    with pytest.raises(InputError, match=r"counts.i16: raw binary needs the sample type"):
+        read_record(path, fs=100.0, n_channels=2)
+    npy = tmp_path / "rec.npy"
+    np.save(npy, counts)
+    with pytest.raises(InputError, match=r"--dtype describe raw binary, but the file is npy"):
+        read_record(npy, fs=100.0, dtype="int16")
+    with pytest.raises(InputError, match=r"--offset describe raw binary, but the file is text;"):
+        read_record(path, fs=100.0, offset=4, format="text")
+
+
 def test_hdf5(tmp_path: Path) -> None:
     h5py = pytest.importorskip("h5py")
     path = tmp_path / "rec.h5"
@@ -178,7 +198,7 @@ def test_missing_optional_reader_names_the_extra(
     path = tmp_path / f"rec{suffix}"
     path.write_bytes(b"not really")
     monkeypatch.setitem(sys.modules, module, None)  # makes the import fail
-    with pytest.raises(ImportError, match=rf"pip install 'allanite\[{extra}\]'"):
+    with pytest.raises(ImportError, match=rf'pip install "allanite\[{extra}\]"'):
         read_record(path, fs=1.0)
 
 

@@ -114,3 +114,41 @@ def test_not_json_and_not_terms():
         NoiseModel.from_json("{units")
     with pytest.raises(TypeError, match="Term instances"):
         NoiseModel((1.0,), {"rate": "deg/s", "time": "s"})  # type: ignore[arg-type]
+
+
+def test_load_names_the_file_and_what_a_model_is(tmp_path, capsys):
+    """Regression: an .npy given as the model raised UnicodeDecodeError, a missing file a raw
+    '[Errno 2]'; both, and the other sample formats, are one clear InputError."""
+    from allanite.cli import main
+    from allanite.diagnosis import diagnose
+    from allanite.errors import InputError
+
+    samples = tmp_path / "rec.npy"
+    np.save(samples, np.zeros(10))
+    npz = tmp_path / "rec.npz"
+    np.savez(npz, a=np.zeros(3))
+    binary = tmp_path / "model.json"
+    binary.write_bytes(b"\xff\xfe\x00garbage")
+    broken = tmp_path / "broken.json"
+    broken.write_text('{"terms": [')
+    cases = [
+        (samples, r"rec.npy: this is a NumPy .npy array \(recorded or simulated samples\), not a "),
+        (npz, r"rec.npz: this is a NumPy .npz archive"),
+        (binary, r"model.json: not a text file, so not a noise model"),
+        (tmp_path / "nope.json", r"nope.json: no such model file; check the path"),
+        (tmp_path, r"is a directory, not a model file"),
+    ]
+    for path, match in cases:
+        with pytest.raises(InputError, match=match):
+            NoiseModel.load(path)
+    with pytest.raises(ValueError, match=r"broken.json: the noise model is not valid JSON"):
+        NoiseModel.load(broken)
+    # the API of diagnose and the simulate command go through the same load
+    with pytest.raises(InputError, match=r"rec.npy: this is a NumPy .npy array"):
+        diagnose(np.random.default_rng(0).standard_normal(2000), samples, 100.0)
+    argv = ["simulate", str(samples), "--fs", "100", "-n", "100", "-o", str(tmp_path / "s.npy")]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1
+    assert "not a noise model; a noise model is JSON text, as written by 'allanite fit" in err
+    assert not (tmp_path / "s.npy").exists()

@@ -71,14 +71,7 @@ void dispatch(const py::array& x, Fn&& fn) {
                        Strides(x.strides(0) / itemsize, x.strides(1) / itemsize));
     fn(view);
   };
-  // isinstance compares dtypes by equivalence (a '<f4' descriptor is float32 on little-endian)
-  if (py::isinstance<py::array_t<double>>(x)) return run(double{});
-  if (py::isinstance<py::array_t<float>>(x)) return run(float{});
-  if (py::isinstance<py::array_t<std::int16_t>>(x)) return run(std::int16_t{});
-  if (py::isinstance<py::array_t<std::int32_t>>(x)) return run(std::int32_t{});
-  if (py::isinstance<py::array_t<std::int64_t>>(x)) return run(std::int64_t{});
-  throw py::type_error("unsupported dtype " + std::string(py::str(x.dtype())) +
-                       "; use float64, float32, int16, int32 or int64");
+  dispatch_dtype(x, run);
 }
 
 void stream_sums(const py::array& x, std::int64_t k0, py::array& state,

@@ -35,14 +35,7 @@ RowMatrix phase(const py::array& x, const std::string& input) {
   if (x.ndim() != 2)
     throw py::value_error("phase() expects a 2-D (samples, channels) array, got " +
                           std::to_string(x.ndim()) + " dimensions");
-  const py::dtype dt = x.dtype();
-  if (dt.is(py::dtype::of<double>())) return phase_typed<double>(x, kind);
-  if (dt.is(py::dtype::of<float>())) return phase_typed<float>(x, kind);
-  if (dt.is(py::dtype::of<std::int16_t>())) return phase_typed<std::int16_t>(x, kind);
-  if (dt.is(py::dtype::of<std::int32_t>())) return phase_typed<std::int32_t>(x, kind);
-  if (dt.is(py::dtype::of<std::int64_t>())) return phase_typed<std::int64_t>(x, kind);
-  throw py::type_error("unsupported dtype " + std::string(py::str(dt)) +
-                       "; use float64, float32, int16, int32 or int64");
+  return dispatch_dtype(x, [&](auto tag) { return phase_typed<decltype(tag)>(x, kind); });
 }
 
 RowMatrix variance(const Eigen::Ref<const RowMatrix>& phase_ref, const std::vector<std::int64_t>& ms,
@@ -72,14 +65,7 @@ RowMatrix lag1_acf(const py::array& x, const std::vector<std::int64_t>& ms, cons
   if (x.ndim() != 2)
     throw py::value_error("lag1_acf() expects a 2-D (samples, channels) array, got " +
                           std::to_string(x.ndim()) + " dimensions");
-  const py::dtype dt = x.dtype();
-  if (dt.is(py::dtype::of<double>())) return lag1_acf_typed<double>(x, ms, s, levels, threads);
-  if (dt.is(py::dtype::of<float>())) return lag1_acf_typed<float>(x, ms, s, levels, threads);
-  if (dt.is(py::dtype::of<std::int16_t>())) return lag1_acf_typed<std::int16_t>(x, ms, s, levels, threads);
-  if (dt.is(py::dtype::of<std::int32_t>())) return lag1_acf_typed<std::int32_t>(x, ms, s, levels, threads);
-  if (dt.is(py::dtype::of<std::int64_t>())) return lag1_acf_typed<std::int64_t>(x, ms, s, levels, threads);
-  throw py::type_error("unsupported dtype " + std::string(py::str(dt)) +
-                       "; use float64, float32, int16, int32 or int64");
+  return dispatch_dtype(x, [&](auto tag) { return lag1_acf_typed<decltype(tag)>(x, ms, s, levels, threads); });
 }
 
 }  // namespace

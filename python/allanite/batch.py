@@ -40,6 +40,7 @@ from numpy.typing import NDArray
 
 from allanite.datasheet import Check, Datasheet, Limit, Measured, check_limits, verdict
 from allanite.errors import InputError
+from allanite.extras import require
 from allanite.units import record_rate_unit
 
 __all__ = ["BatchResult", "batch"]
@@ -111,10 +112,7 @@ class BatchResult:
 
     def to_frame(self) -> Any:
         """Return a :class:`pandas.DataFrame` of the table (needs the ``pandas`` extra)."""
-        try:
-            import pandas as pd
-        except ImportError as exc:  # pragma: no cover - pandas is in the dev env
-            raise ImportError("to_frame() needs pandas: pip install 'allanite[pandas]'") from exc
+        pd = require("pandas", extra="pandas", purpose="to_frame()")
         return pd.DataFrame(list(self.rows), columns=list(self.columns))
 
     def to_csv(self, path: str | os.PathLike[str]) -> None:
@@ -426,10 +424,7 @@ def batch(
 def _run_dask(
     client: Any, tasks: list[_Task], progress: Callable[[str, int, int], None] | None
 ) -> list[list[dict[str, Any]]]:
-    try:
-        from distributed import as_completed
-    except ImportError as exc:  # pragma: no cover - dask is in the dev env
-        raise ImportError("batch(client=...) needs dask: pip install 'allanite[dask]'") from exc
+    as_completed = require("distributed", extra="dask", purpose="batch(client=...)").as_completed
     futures = client.map(_analyse, tasks, pure=False)
     index = {f.key: i for i, f in enumerate(futures)}
     out: list[list[dict[str, Any]] | None] = [None] * len(tasks)

@@ -49,6 +49,7 @@ from typing import Any
 import numpy as np
 
 from allanite.errors import InputError
+from allanite.extras import require
 from allanite.units import convert, parse_unit, sensor_kind
 
 __all__ = [
@@ -59,6 +60,8 @@ __all__ = [
     "Measured",
     "adev_at",
     "check_limits",
+    "check_quantity",
+    "quantities",
     "verdict",
 ]
 
@@ -111,6 +114,58 @@ class Limit:
         return f"≥ {self.min:.4g}"
 
 
+def quantities() -> list[str]:
+    """The quantities a limit can name: ``adev`` and every noise-term parameter."""
+    from allanite.terms import TERM_TYPES
+
+    names = {spec.name for cls in TERM_TYPES.values() for spec in cls.params}
+    return ["adev", *sorted(names)]
+
+
+#: datasheet names of the IEEE coefficients -> their symbol (for the hint of a refusal)
+_ALIASES = {
+    "arw": "N",
+    "vrw": "N",
+    "angle_random_walk": "N",
+    "velocity_random_walk": "N",
+    "bi": "B",
+    "bias": "B",
+    "bias_instability": "B",
+    "bias_stability": "B",
+    "rrw": "K",
+    "rate_random_walk": "K",
+    "rate_ramp": "R",
+    "quantization": "Q",
+    "allan_deviation": "adev",
+}
+
+
+def check_quantity(quantity: str, where: str, source: str) -> None:
+    """Refuse a quantity no term has (a typo would otherwise be reported as never measured).
+
+    A parameter of a type that occurs more than once in a model carries a suffix (``sigma_1``,
+    ``sigma_2``, see :meth:`allanite.model.NoiseModel.labelled_parameters`).
+    """
+    import difflib
+    import re
+
+    known = quantities()
+    base = re.sub(r"_\d+$", "", quantity)
+    if quantity in known or base in known:
+        return
+    key = quantity.lower().replace(" ", "_")
+    close = [_ALIASES[key]] if key in _ALIASES else [k for k in known if k.lower() == key]
+    if not close:
+        close = difflib.get_close_matches(quantity, known, n=1, cutoff=0.6)
+    hint = f" (did you mean {close[0]!r}?)" if close else ""
+    raise InputError(
+        f"{where}: unknown quantity {quantity!r}{hint}; use adev or a noise coefficient: "
+        f"{', '.join(k for k in known if k != 'adev')} (with _1, _2, ... when a term type "
+        "occurs more than once)",
+        path=source,
+    )
+
+
 @dataclass(frozen=True)
 class Datasheet:
     """A named set of limits."""
@@ -131,6 +186,7 @@ class Datasheet:
                     '{"limits": [{"quantity": "adev", "tau": 1, "max": 0.01, "unit": "deg/s"}]}',
                     path=source,
                 )
+            check_quantity(str(name), f"entry {name!r}", source)
             if isinstance(spec, (int, float)) and not isinstance(spec, bool):
                 limits.append(Limit(quantity=str(name), unit="", max=float(spec)))
                 continue
@@ -184,6 +240,7 @@ class Datasheet:
                 )
             if item.get("max") is None and item.get("min") is None:
                 raise InputError(f"{where} needs a 'max' and/or a 'min'", path=source)
+            check_quantity(str(item["quantity"]), where, source)
             if item["quantity"] == "adev" and not isinstance(item.get("tau"), (int, float)):
                 raise InputError(f"{where}: an 'adev' limit needs 'tau' in seconds", path=source)
             try:
@@ -210,12 +267,9 @@ class Datasheet:
         except FileNotFoundError as exc:
             raise InputError("no such file; check the path", path=str(path)) from exc
         if path.suffix.lower() in (".yaml", ".yml"):
-            try:
-                import yaml
-            except ImportError as exc:  # pragma: no cover - pyyaml is in the dev env
-                raise ImportError(
-                    "YAML datasheets need pyyaml: pip install 'allanite[yaml]'"
-                ) from exc
+            yaml = require(
+                "yaml", extra="yaml", purpose="reading YAML datasheets", package="pyyaml"
+            )
             try:
                 data = yaml.safe_load(text)
             except yaml.YAMLError as exc:

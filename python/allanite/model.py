@@ -34,6 +34,14 @@ from numpy.typing import ArrayLike, NDArray
 from allanite.terms import TERM_TYPES, Term, term_from_dict
 from allanite.units import Unit, coefficient_unit, convert, rate_unit, sensor_kind
 
+#: file signatures of sample files a model path is sometimes confused with
+_SAMPLE_FILES = (
+    (b"\x93NUMPY", "a NumPy .npy array"),
+    (b"PK\x03\x04", "a NumPy .npz archive (or another zip file)"),
+    (b"\x89HDF", "an HDF5 file"),
+    (b"PAR1", "a Parquet file"),
+)
+
 __all__ = ["NoiseModel", "json_schema"]
 
 
@@ -294,8 +302,39 @@ class NoiseModel:
 
     @classmethod
     def load(cls, path: str | Path) -> NoiseModel:
-        """Read a JSON model written by :meth:`save` (or by hand)."""
-        return cls.from_json(Path(path).read_text(encoding="utf-8"))
+        """Read a JSON model written by :meth:`save` (or by hand).
+
+        Raises
+        ------
+        allanite.errors.InputError
+            If the file is missing, is a directory, holds samples (.npy, .npz, HDF5) or is
+            not UTF-8 JSON text; the message names the file and what a model file is.
+        """
+        from allanite.errors import InputError
+
+        p = Path(path)
+        what = "a noise model is JSON text, as written by 'allanite fit -o model.json'"
+        if not p.exists():
+            raise InputError(f"no such model file; check the path ({what})", path=str(p))
+        if p.is_dir():
+            raise InputError(f"is a directory, not a model file ({what})", path=str(p))
+        raw = p.read_bytes()
+        for magic, kind in _SAMPLE_FILES:
+            if raw.startswith(magic):
+                raise InputError(
+                    f"this is {kind} (recorded or simulated samples), not a noise model; {what}",
+                    path=str(p),
+                )
+        try:
+            text = raw.decode("utf-8")
+        except UnicodeDecodeError:
+            raise InputError(
+                f"not a text file, so not a noise model; {what}", path=str(p)
+            ) from None
+        try:
+            return cls.from_json(text)
+        except (ValueError, TypeError) as exc:
+            raise type(exc)(f"{p}: {exc}") from None
 
     # --- simulation -------------------------------------------------------------------------
     def simulate(

@@ -19,6 +19,8 @@ from scipy import stats
 
 from allanite import _core
 from allanite.edf import equivalent_dof, identify_alpha
+from allanite.extras import require
+from allanite.notebook import repr_html
 from allanite.taus import KERNEL_KIND, TauSpec, averaging_factors
 from allanite.units import record_rate_unit
 
@@ -89,6 +91,7 @@ class AllanResult:
     n_samples: int
     units: str | None = None
     meta: dict[str, Any] = field(default_factory=dict, compare=False)
+    _repr_html_ = repr_html  # Jupyter: a compact table and the plot (allanite.notebook)
 
     @property
     def dev(self) -> NDArray[np.float64]:
@@ -271,10 +274,7 @@ class AllanResult:
 
     def to_frame(self) -> Any:
         """Return a :class:`pandas.DataFrame` with one row per tau (needs the ``pandas`` extra)."""
-        try:
-            import pandas as pd
-        except ImportError as exc:  # pragma: no cover - exercised without pandas only
-            raise ImportError("to_frame() needs pandas: pip install 'allanite[pandas]'") from exc
+        pd = require("pandas", extra="pandas", purpose="to_frame()")
         return pd.DataFrame(self._columns())
 
     def to_csv(self, path: str | Path) -> None:

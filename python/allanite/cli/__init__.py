@@ -2,7 +2,8 @@
 
 Each subcommand module defines ``register(subparsers)`` which adds its parser and sets
 ``func=run`` (a callable ``run(args) -> int``). Errors the user can fix (:class:`ValueError`,
-:class:`TypeError`, :class:`OSError`, :class:`allanite.errors.InputError`) become one line on
+:class:`TypeError`, :class:`OSError`, :class:`allanite.errors.InputError`, a missing optional
+extra :class:`allanite.errors.MissingExtraError`) become one line on
 stderr and exit code 2; no partial output file is left behind (write through
 :func:`allanite.io.atomic.atomic_output`).
 """
@@ -61,7 +62,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``allanite`` console script; returns the exit code."""
-    from allanite.errors import InputError
+    from allanite.errors import InputError, MissingExtraError
 
     parser = build_parser()
     args = parser.parse_args(argv)
@@ -75,7 +76,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return EXIT_OK
-    except (InputError, ValueError, TypeError, OSError) as exc:
+    except (InputError, ValueError, TypeError, OSError, MissingExtraError) as exc:
         message = " ".join(str(exc).split())
         print(f"allanite {args.command}: error: {message}", file=sys.stderr)
         return EXIT_USAGE

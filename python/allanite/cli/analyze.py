@@ -15,9 +15,15 @@ from allanite.cli.record_options import (
     avar_from_args,
     dump_json,
     read_from_args,
+    record_command,
+    warn_implausible,
 )
+from allanite.fit.classic import ClassicReadout, classic_readout
 from allanite.io.atomic import atomic_output
 from allanite.io.record import Record
+from allanite.report.coefficients import customary_rate
+from allanite.report.slopes import MIN_EDF, SlopeRow, slope_table
+from allanite.units import coefficient_unit, convert, display_unit
 from allanite.variance import AllanResult
 
 __all__ = ["register", "run"]
@@ -63,13 +69,28 @@ def register(subparsers: Any) -> None:
     add_grid_arguments(parser)
     out = parser.add_argument_group("output")
     out.add_argument("--json", action="store_true", help="print machine-readable JSON")
+    shown = out.add_mutually_exclusive_group()
+    shown.add_argument(
+        "--summary",
+        action="store_true",
+        help="print only the summary (slope regions, slope-method readouts), not the table",
+    )
+    shown.add_argument(
+        "--table",
+        action="store_true",
+        help="print only the table of tau, deviation, interval and EDF (no summary)",
+    )
     out.add_argument("-o", "--output", help="write the table to FILE.csv or FILE.json")
     out.add_argument("--plot", help="save a plot to FILE.png, .svg or .pdf (needs matplotlib)")
     parser.set_defaults(func=run)
 
 
 def analysis_dict(record: Record, result: AllanResult, level: float) -> dict[str, Any]:
-    """JSON-ready analysis: the record summary and the result with intervals at ``level``."""
+    """JSON-ready analysis of a record.
+
+    The record summary (with its warnings), the result with intervals at ``level`` and, per
+    channel, the slope regions and slope-method readouts (:func:`summary_dict`).
+    """
     lo, hi = result.ci(level)
     allan = result.to_dict()
     allan.update(
@@ -80,11 +101,138 @@ def analysis_dict(record: Record, result: AllanResult, level: float) -> dict[str
             "dev_high": hi.tolist(),
         }
     )
-    return {"record": record.summary(), "allan": allan}
+    summary = [
+        {"channel": name, **(summary_dict(result.channel(c)) or {})}
+        for c, name in enumerate(record.channels)
+    ]
+    return {"record": record.summary(), "allan": allan, "summary": summary}
 
 
-def format_table(record: Record, result: AllanResult, level: float) -> str:
-    """Human-readable table: one block per channel of tau, deviation, interval and EDF."""
+_READOUT_UNITS = {"N": "*sqrt(s)", "B": "", "K": "/sqrt(s)"}
+
+
+def _readout_value(result: AllanResult, symbol: str, value: float) -> str:
+    """A slope-method readout in customary units (deg/sqrt(h), deg/h, ...) when known."""
+    powers = {"N": 0.5, "B": 0.0, "K": -0.5}
+    if result.units:
+        try:
+            show = customary_rate(result.units)
+            if show is not None:
+                unit = display_unit(show, symbol)
+                base = coefficient_unit(result.units, 1.0, powers[symbol])
+                return f"{convert(value, base, unit):.4g} {unit}"
+        except ValueError:
+            pass
+        return f"{value:.4g} ({result.units}){_READOUT_UNITS[symbol]}"
+    return f"{value:.4g} (rate unit){_READOUT_UNITS[symbol]}"
+
+
+#: estimators whose curve the slope table and the slope-method readouts are defined on
+_SUMMARY_KINDS = ("overlapping", "standard", "total")
+
+
+def summary_parts(result: AllanResult) -> tuple[list[SlopeRow], ClassicReadout] | None:
+    """Slope regions and slope-method readouts of one channel (None for other estimators).
+
+    Only points with at least ``MIN_EDF`` equivalent degrees of freedom are read, as in the
+    report's slope table, so the scatter of the last taus does not invent a segment.
+    """
+    if result.kind not in _SUMMARY_KINDS:
+        return None
+    dev = np.asarray(result.dev, dtype=np.float64)
+    reliable = np.asarray(result.edf) >= MIN_EDF
+    return (
+        slope_table(result.tau, dev, result.edf),
+        classic_readout(result.tau[reliable], dev[reliable]),
+    )
+
+
+def summary_dict(result: AllanResult) -> dict[str, Any] | None:
+    """JSON-ready summary of one channel: slope regions and readouts (rate units, seconds)."""
+    parts = summary_parts(result)
+    if parts is None:
+        return None
+    rows, readout = parts
+    return {
+        "slopes": [
+            {"tau_min": r.tau_min, "tau_max": r.tau_max, "slope": r.slope, "term": r.term}
+            for r in rows
+        ],
+        "readouts": {
+            "label": readout.label,
+            **{k: readout.values.get(k) for k in ("N", "B", "K")},
+            "tau": {k: readout.tau.get(k) for k in ("N", "B", "K")},
+        },
+    }
+
+
+def summary_lines(result: AllanResult, fit_command: str | None = None) -> list[str]:
+    """The first screen of one channel: slope regions and the classic readouts (N, B, K).
+
+    The readouts are those of :func:`allanite.fit.classic.classic_readout` (IEEE slope
+    method), labelled as readouts with no uncertainty; ``fit_command`` points to the fit.
+    """
+    lines = []
+    parts = summary_parts(result)
+    if parts is None:
+        lines.append(
+            f"  (slope regions and readouts are read off the Allan deviation; this is the "
+            f"{_DEV_NAMES.get(result.kind, result.kind)})"
+        )
+    else:
+        rows, readout = parts
+        if rows:
+            lines.append("  slope regions of the curve:")
+            lines.extend(
+                f"    {f'{r.tau_min:.3g} – {r.tau_max:.3g} s':<18} slope {r.slope:+.2f} "
+                f"({r.label:>4}): {r.term}"
+                for r in rows
+            )
+        else:
+            lines.append("  slope regions: too few reliable points to classify")
+        lines.append(
+            "  slope-method readouts (IEEE 952 graphical reading, no uncertainty; not a fit):"
+        )
+        for symbol in ("N", "B", "K"):
+            value = readout.values.get(symbol)
+            at = readout.tau.get(symbol)
+            if value is None or at is None:
+                what = {"N": "no -1/2 segment", "B": "no flat minimum", "K": "no +1/2 segment"}
+                lines.append(f"    {symbol}: —  ({what[symbol]} on the curve)")
+                continue
+            how = {
+                "N": f"-1/2 segment near tau = {at:.3g} s, read at tau = 1 s",
+                "B": f"flat minimum at tau = {at:.3g} s, divided by 0.664",
+                "K": f"+1/2 segment near tau = {at:.3g} s, read at tau = 3 s",
+            }
+            lines.append(f"    {symbol} = {_readout_value(result, symbol, value)}  ({how[symbol]})")
+    if fit_command:
+        lines.append(f"  fitted coefficients with intervals: {fit_command}")
+    return lines
+
+
+def format_table(
+    record: Record,
+    result: AllanResult,
+    level: float,
+    *,
+    summary: bool = False,
+    table: bool = True,
+    fit_command: str | None = None,
+) -> str:
+    """Human-readable output: the record, then per channel the summary and/or the table.
+
+    Parameters
+    ----------
+    record, result, level
+        The record, its analysis and the confidence level of the intervals.
+    summary : bool
+        Print each channel's slope regions and slope-method readouts (:func:`summary_lines`).
+    table : bool
+        Print each channel's table of tau, deviation, interval and EDF.
+    fit_command : str, optional
+        The ``allanite fit`` command the summary points to.
+    """
     unit = f" [{result.units}]" if result.units else ""
     dur = record.duration
     lines = [
@@ -110,6 +258,10 @@ def format_table(record: Record, result: AllanResult, level: float) -> str:
     edf = result.edf.reshape(dev.shape)
     for c in range(dev.shape[1]):
         lines.append(f"channel {record.channels[c]}:")
+        if summary:
+            lines.extend(summary_lines(result.channel(c), fit_command))
+        if not table:
+            continue
         lines.append(f"{'tau [s]':>12} {'deviation':>12} {'low':>12} {'high':>12} {'edf':>9}")
         for k in range(result.tau.size):
             lines.append(
@@ -145,13 +297,24 @@ def run(args: argparse.Namespace) -> int:
     result = avar_from_args(record, args)
     if not np.all(np.isfinite(result.var)):
         raise ValueError(f"{record.source}: the variance is not finite; check the samples")
+    checked = warn_implausible(record, args, result)
     if args.plot:
         save_plot(args.plot, record, result, args.level)
     if args.output:
-        write_output(args.output, record, result, args.level)
+        write_output(args.output, checked, result, args.level)
     if args.json:
-        print(dump_json(analysis_dict(record, result, args.level)))
+        print(dump_json(analysis_dict(checked, result, args.level)))
     else:
-        print(format_table(record, result, args.level))
+        fit_command = record_command("fit", args.file, args)
+        print(
+            format_table(
+                record,
+                result,
+                args.level,
+                summary=not args.table,
+                table=not args.summary,
+                fit_command=fit_command,
+            )
+        )
     sys.stdout.flush()
     return 0

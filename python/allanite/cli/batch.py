@@ -11,6 +11,7 @@ from typing import Any
 
 from allanite.cli.progress import progress_bars
 from allanite.cli.record_options import add_record_arguments, read_options
+from allanite.extras import require
 from allanite.io.atomic import atomic_output
 
 __all__ = ["register", "run"]
@@ -110,10 +111,7 @@ def _client(address: str | None) -> Iterator[Any]:
     if address is None:
         yield None
         return
-    try:
-        import distributed
-    except ImportError as exc:
-        raise ValueError("--dask needs dask: pip install 'allanite[dask]'") from exc
+    distributed = require("distributed", extra="dask", purpose="--dask")
     if address == "local" or address.startswith("local:"):
         workers = int(address.split(":", 1)[1]) if ":" in address else None
         with (

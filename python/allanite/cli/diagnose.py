@@ -3,11 +3,17 @@
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 from pathlib import Path
 from typing import Any
 
-from allanite.cli.record_options import add_record_arguments, rate_unit, read_from_args
+from allanite.cli.record_options import (
+    add_record_arguments,
+    rate_unit,
+    read_from_args,
+    warn_implausible,
+)
 from allanite.cli.sim_config import add_sim_config_arguments, load_sim_model, write_corrected
 from allanite.io.atomic import atomic_output
 from allanite.io.readers import read_record
@@ -168,6 +174,7 @@ def run(args: argparse.Namespace) -> int:
 
     record = read_from_args(args.real, args)
     real, part = _one_channel(record, "real")
+    warnings = warn_implausible(part, args).warnings[len(part.warnings) :]
     fs = part.require_fs()
     if args.write_corrected and not args.sim_model:
         raise ValueError(
@@ -202,7 +209,9 @@ def run(args: argparse.Namespace) -> int:
         channel = part.channels[0] if part.channels else Path(args.real).name
         _write_report(result, args.report, channel=channel, model_name=sim_name)
     if args.json:
-        sys.stdout.write(result.to_json(views=False) + "\n")
+        data = json.loads(result.to_json(views=False))
+        data["warnings"] = list(warnings)  # plausibility findings on the real record
+        sys.stdout.write(json.dumps(data) + "\n")
     else:
         print(_summary(result))
     return 0

@@ -12,6 +12,7 @@ from allanite.cli.record_options import (
     avar_from_args,
     dump_json,
     read_sensors,
+    warn_implausible,
 )
 from allanite.io.atomic import atomic_output
 from allanite.variance import AllanResult
@@ -99,7 +100,10 @@ def run(args: argparse.Namespace) -> int:
             f"--kind {args.kind}: the fit models the overlapping Allan variance; leave --kind out"
         )
     sensors = read_sensors(args.file, args)
-    analysed = [(record, avar_from_args(record, args)) for record in sensors]
+    analysed = []
+    for record in sensors:
+        result = avar_from_args(record, args)
+        analysed.append((warn_implausible(record, args, result), result))
     work = [(record, result, c) for record, result in analysed for c in range(record.n_channels)]
     channels = []
     fits = []

@@ -3,8 +3,9 @@
 One helper for every subcommand. :func:`progress_bars` yields the ``progress(stage, done,
 total)`` callback that the library's long-running functions accept
 (:func:`allanite.large.avar_large`, :func:`allanite.batch`); :func:`progress` wraps an
-iterable with the same bars for loops in the CLI itself. Without tqdm (the ``progress``
-extra) or when stderr is not a terminal nothing is drawn.
+iterable with the same bars for loops in the CLI itself. When stderr is not a terminal nothing
+is drawn; without tqdm (the ``progress`` extra) nothing is drawn either, unless bars were asked
+for explicitly, which is an error naming the extra.
 """
 
 from __future__ import annotations
@@ -13,6 +14,8 @@ import sys
 from collections.abc import Callable, Iterable, Iterator, Sized
 from contextlib import contextmanager
 from typing import Any, TypeVar
+
+from allanite.extras import require
 
 __all__ = ["ProgressCallback", "progress", "progress_bars"]
 
@@ -23,9 +26,15 @@ ProgressCallback = Callable[[str, int, int], None]
 
 
 def _tqdm(enabled: bool | None) -> Any:
-    """The tqdm class when bars are wanted and tqdm is installed, else None."""
+    """The tqdm class when bars are wanted, else None.
+
+    Asked for explicitly (``enabled=True``, e.g. ``--progress``) without tqdm installed is a
+    :class:`~allanite.errors.MissingExtraError`; by default (a terminal) no bar is drawn.
+    """
     if not (sys.stderr.isatty() if enabled is None else enabled):
         return None
+    if enabled:
+        return require("tqdm", extra="progress", purpose="--progress").tqdm
     try:
         from tqdm import tqdm
     except ImportError:

@@ -10,12 +10,16 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import sys
 from typing import Any
+
+import numpy as np
 
 from allanite.cli.progress import progress_bars
 from allanite.io.readers import FORMATS, read_record
 from allanite.io.record import INPUT_KINDS, Record
 from allanite.io.timebase import GAP_POLICIES
+from allanite.plausibility import check_allan, check_samples, refuse_constant
 from allanite.units import record_rate_unit
 from allanite.variance import KINDS, AllanResult, avar
 
@@ -27,7 +31,9 @@ __all__ = [
     "rate_unit",
     "read_from_args",
     "read_sensors",
+    "record_command",
     "unit_list",
+    "warn_implausible",
 ]
 
 
@@ -56,8 +62,8 @@ def add_record_arguments(parser: argparse.ArgumentParser) -> None:
     )
     group.add_argument(
         "--channels",
-        help="columns to analyse, by 0-based index or header name, comma separated (e.g. 1,2 or "
-        "gx,gy)",
+        help="columns to analyse, by 0-based index (no negative indices) or header name, comma "
+        "separated (e.g. 1,2 or gx,gy)",
     )
     group.add_argument(
         "--time-column", help="column of time stamps (index or name); fs is inferred from it"
@@ -89,19 +95,20 @@ def add_record_arguments(parser: argparse.ArgumentParser) -> None:
         help="ROS bag IMU topic (sensor_msgs/Imu), or ULog topic: sensor_combined (default), "
         "sensor_gyro[:instance], sensor_accel",
     )
-    group.add_argument("--dtype", help="raw binary sample type, e.g. int16, <f4, float64")
     group.add_argument(
-        "--n-channels", type=int, default=1, help="raw binary: interleaved channels (default 1)"
+        "--dtype",
+        help="raw binary sample type, e.g. int16, <f4, float64 (this and the next three "
+        "options mean raw binary whatever the file suffix)",
+    )
+    group.add_argument(
+        "--n-channels", type=int, help="raw binary: interleaved channels (default 1)"
     )
     group.add_argument(
         "--byte-order",
         choices=("little", "big", "native"),
-        default="little",
         help="raw binary byte order (default little)",
     )
-    group.add_argument(
-        "--offset", type=int, default=0, help="raw binary: bytes to skip at the start"
-    )
+    group.add_argument("--offset", type=int, help="raw binary: bytes to skip at the start")
 
 
 def add_grid_arguments(parser: argparse.ArgumentParser) -> None:
@@ -254,7 +261,9 @@ def _read(path: str | None, args: argparse.Namespace, **override: Any) -> Record
             record = record.select(chosen) if chosen else record
             return dataclasses.replace(record, units=override["units"]) if override else record
         raise ValueError("give a FILE to analyse, or --example for the built-in example record")
-    return read_record(path, fs=args.fs, **{**read_options(args), **override})
+    record = read_record(path, fs=args.fs, **{**read_options(args), **override})
+    refuse_constant(record.samples, record.channels, source=record.source)
+    return record
 
 
 def read_options(args: argparse.Namespace) -> dict[str, Any]:
@@ -277,6 +286,43 @@ def read_options(args: argparse.Namespace) -> dict[str, Any]:
         "offset": args.offset,
         "topic": getattr(args, "topic", None),
     }
+
+
+#: reader option -> (its flag, its default): what :func:`record_command` writes back
+_READER_FLAGS: dict[str, tuple[str, Any]] = {
+    "fs": ("--fs", None),
+    "input": ("--input", None),
+    "units": ("--units", None),
+    "scale": ("--scale", None),
+    "channels": ("--channels", None),
+    "time_column": ("--time-column", None),
+    "time_scale": ("--time-scale", 1.0),
+    "gaps": ("--gaps", "error"),
+    "format": ("--format", None),
+    "delimiter": ("--delimiter", None),
+    "header": ("--header", "auto"),
+    "key": ("--key", None),
+    "dtype": ("--dtype", None),
+    "n_channels": ("--n-channels", None),
+    "byte_order": ("--byte-order", None),
+    "offset": ("--offset", None),
+}
+
+
+def record_command(command: str, path: str | None, args: argparse.Namespace) -> str:
+    """The command line ``allanite COMMAND`` that reads the same record with the same options.
+
+    Used to point from one subcommand to the next (e.g. from ``analyze`` to ``fit``).
+    """
+    import shlex
+
+    words = ["allanite", command]
+    words += [path] if path is not None else ["--example"]
+    for name, (flag, default) in _READER_FLAGS.items():
+        value = getattr(args, name, default)
+        if value is not None and value != default:
+            words += [flag, f"{value:g}" if isinstance(value, float) else str(value)]
+    return " ".join(shlex.quote(w) for w in words)
 
 
 def rate_unit(record: Record) -> str | None:
@@ -315,6 +361,40 @@ def avar_from_args(record: Record, args: argparse.Namespace) -> AllanResult:
             progress=bar if large else None,
             **large,
         )
+
+
+def warn_implausible(
+    record: Record, args: argparse.Namespace, result: AllanResult | None = None
+) -> Record:
+    """Run the plausibility checks, print each finding on stderr, return the record with them.
+
+    The findings (:mod:`allanite.plausibility`: angle given as rate, rate given as angle,
+    counts without a scale, stuck segments) are appended to ``record.warnings``, so the JSON
+    summary and the report carry them too. ``result`` is the record's Allan analysis; without
+    it a quick one (50-point log grid) is computed for the slope checks.
+    """
+    part = record.longest_segment()
+    fs = part.require_fs()
+    if result is None:
+        samples = part.samples if part.n_channels > 1 else part.samples[:, 0]
+        result = avar(samples, fs, input=part.input, points=50)  # type: ignore[arg-type]
+    dev = np.asarray(result.dev, dtype=np.float64).reshape(result.tau.size, -1)
+    findings = check_samples(
+        part.samples,
+        fs,
+        input=part.input,
+        channels=part.channels,
+        scale=record.scale,
+        short_dev=dev[0],
+    ) + check_allan(result, part.channels)
+    command = getattr(args, "command", None) or "allanite"
+    for finding in findings:
+        print(f"allanite {command}: warning: {finding.message}", file=sys.stderr)
+    if not findings:
+        return record
+    return dataclasses.replace(
+        record, warnings=record.warnings + tuple(f.message for f in findings)
+    )
 
 
 def dump_json(data: Any) -> str:

@@ -15,6 +15,7 @@ from allanite.cli.record_options import (
     rate_unit,
     read_from_args,
     read_sensors,
+    warn_implausible,
 )
 from allanite.report import Datasheet, DeviceAnalysis, build_report
 
@@ -114,7 +115,8 @@ def run(args: argparse.Namespace) -> int:
             name = ""
             if len(sensors) > 1:  # one device per sensor of a six-axis record
                 name = f"{Path(record.source).name} ({_sensor_name(record)})"
-            device = DeviceAnalysis(record, avar_from_args(record, args), name=name)
+            result = avar_from_args(record, args)
+            device = DeviceAnalysis(warn_implausible(record, args, result), result, name=name)
             if not args.no_fit:
                 device = DeviceAnalysis(
                     device.record, device.result, fit_channels(device), name=name
@@ -123,7 +125,8 @@ def run(args: argparse.Namespace) -> int:
     reference = None
     if args.reference:
         ref_record = read_from_args(args.reference, args)
-        reference = DeviceAnalysis(ref_record, avar_from_args(ref_record, args))
+        ref_result = avar_from_args(ref_record, args)
+        reference = DeviceAnalysis(warn_implausible(ref_record, args, ref_result), ref_result)
         if not args.no_fit:
             reference = DeviceAnalysis(reference.record, reference.result, fit_channels(reference))
     diag_html = None

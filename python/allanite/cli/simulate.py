@@ -6,6 +6,7 @@ Example: ``allanite simulate model.json --fs 2000 --duration 24h -o out.npy --ou
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 from typing import Any
 
 __all__ = ["register", "run"]
@@ -24,7 +25,9 @@ def register(subparsers: Any) -> None:
     parser.add_argument("--fs", type=float, required=True, help="sampling frequency in Hz")
     length = parser.add_mutually_exclusive_group(required=True)
     length.add_argument("--duration", help="record length with unit s, min, h or d (e.g. 24h)")
-    length.add_argument("-n", "--samples", type=int, help="record length in samples")
+    length.add_argument(
+        "-n", "--samples", type=_count, help="record length in samples (e.g. 360000 or 3.6e5)"
+    )
     parser.add_argument("-o", "--out", required=True, help="output file (.npy, .csv, .bin)")
     parser.add_argument(
         "--output",
@@ -47,8 +50,28 @@ def register(subparsers: Any) -> None:
         "else a streaming Gauss-Markov bank), spectral, kasdin (Kasdin's fractional filter) "
         "or bank",
     )
-    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    parser.add_argument(
+        "--quiet", action="store_true", help="no progress bar and no line saying what was written"
+    )
     parser.set_defaults(func=run)
+
+
+def _count(text: str) -> int:
+    """A whole number of samples, also written as 1e6 (argparse type)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number of samples: {text!r}") from None
+    if not value.is_integer():
+        raise argparse.ArgumentTypeError(f"not a whole number of samples: {text!r}")
+    return int(value)
+
+
+def _duration(seconds: float) -> str:
+    for unit, size in (("d", 86400.0), ("h", 3600.0), ("min", 60.0)):
+        if seconds >= size:
+            return f"{seconds / size:.4g} {unit}"
+    return f"{seconds:.4g} s"
 
 
 def run(args: argparse.Namespace) -> int:
@@ -56,11 +79,20 @@ def run(args: argparse.Namespace) -> int:
     from allanite.cli.progress import progress_bars
     from allanite.model import NoiseModel
     from allanite.simulation import record_length
-    from allanite.simulation.writers import format_of, write_record
+    from allanite.simulation.writers import (
+        check_free_space,
+        format_of,
+        format_size,
+        output_size,
+        write_record,
+    )
 
     format_of(args.out)  # fail on a bad suffix before any work
     model = NoiseModel.load(args.model)
     n = record_length(args.fs, args.samples, args.duration)
+    if args.channels < 1:
+        raise ValueError(f"--channels must be at least 1, got {args.channels}")
+    check_free_space(args.out, output_size(args.out, n, args.channels))
     unit = model.units["rate"]
     what = unit if args.output == "rate" else f"{unit}*s"
     big = n * args.channels >= 10_000_000
@@ -77,5 +109,13 @@ def run(args: argparse.Namespace) -> int:
             flicker_method=args.flicker_method,
             units=what,
             progress=update,
+        )
+    if not args.quiet:
+        size = Path(args.out).stat().st_size
+        axes = f" x {args.channels} channels" if args.channels > 1 else ""
+        print(
+            f"wrote {args.out}: {n} samples{axes} of {args.output} [{what}] at {args.fs:g} Hz "
+            f"({_duration(n / args.fs)}, seed {args.seed if args.seed is not None else 'random'}"
+            f"), {format_size(size)}"
         )
     return 0

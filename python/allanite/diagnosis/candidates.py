@@ -32,7 +32,14 @@ import numpy as np
 
 from allanite.terms import TERM_TYPES, Term
 
-__all__ = ["EFFECTS", "EXPLAINS", "SIGNATURE", "Candidate", "candidate_library"]
+__all__ = [
+    "EFFECTS",
+    "EXPLAINS",
+    "SIGNATURE",
+    "Candidate",
+    "candidate_library",
+    "check_effects",
+]
 
 #: effect name -> Term ``type``
 EFFECTS: dict[str, str] = {
@@ -145,6 +152,36 @@ class Candidate:
 def _model_terms(model: Any) -> list[Term]:
     terms = getattr(model, "terms", None)
     return list(terms) if terms is not None else []
+
+
+def check_effects(effects: Any) -> list[str] | None:
+    """Validate a list of effect names (None: all); unknown names are refused with the list.
+
+    Known names are those of :data:`EFFECTS`, ``rescale`` (every rescale) and
+    ``rescale:<term type>`` (e.g. ``rescale:white``).
+    """
+    if effects is None:
+        return None
+    if isinstance(effects, str):
+        effects = [e.strip() for e in effects.split(",") if e.strip()]
+    names = list(effects)
+    bad = [
+        e
+        for e in names
+        if not isinstance(e, str)
+        or not (
+            e in EFFECTS
+            or e == "rescale"
+            or (e.startswith("rescale:") and e.split(":", 1)[1] in TERM_TYPES)
+        )
+    ]
+    if bad or not names:
+        what = f"unknown effect(s) {', '.join(map(repr, bad))}" if bad else "no effect given"
+        raise ValueError(
+            f"{what}; known effects: {', '.join(EFFECTS)}, rescale (every term of the model) "
+            f"or rescale:<term type> ({', '.join(sorted(TERM_TYPES))})"
+        )
+    return names
 
 
 def candidate_library(

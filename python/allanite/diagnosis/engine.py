@@ -9,7 +9,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from allanite.diagnosis.analysis import Analysis, analyze
 from allanite.diagnosis.attribution import rank
-from allanite.diagnosis.candidates import candidate_library
+from allanite.diagnosis.candidates import candidate_library, check_effects
 from allanite.diagnosis.holdout import holdout_check
 from allanite.diagnosis.inputs import MIN_SAMPLES, as_rate, check_units, make_source
 from allanite.diagnosis.level_shape import warmup_time_constant
@@ -126,6 +126,7 @@ def diagnose(
     P. Tavella, "The dynamic Allan variance" (2009).
     """
     rate = _check_fs(fs)
+    effects = check_effects(effects)
     if not 0.0 < alpha < 0.5:
         raise ValueError(f"alpha must lie in (0, 0.5), got {alpha}")
     if isinstance(n_mc, bool) or not isinstance(n_mc, (int, np.integer)) or n_mc < 20:

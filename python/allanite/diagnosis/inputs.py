@@ -113,11 +113,11 @@ def load_model(sim: Any) -> Any:
     except ImportError as exc:  # pragma: no cover - only before the model module exists
         raise TypeError("a noise model needs allanite.model.NoiseModel, which is missing") from exc
     if isinstance(sim, Path):
-        return NoiseModel.from_json(sim.read_text())
+        return NoiseModel.load(sim)
     if isinstance(sim, str):
         text = sim.strip()
         if not text.startswith("{"):
-            return NoiseModel.from_json(Path(text).read_text())
+            return NoiseModel.load(text)
         return NoiseModel.from_json(text)
     if isinstance(sim, dict):
         return NoiseModel.from_json(json.dumps(sim))

@@ -11,6 +11,7 @@ from allanite.diagnosis.attribution import Attribution
 from allanite.diagnosis.frequency_view import FrequencyView
 from allanite.diagnosis.tau_view import TauView
 from allanite.diagnosis.time_view import TimeView
+from allanite.notebook import repr_html
 
 __all__ = ["Diagnosis", "Holdout"]
 
@@ -100,6 +101,7 @@ class Diagnosis:
     attribution: list[Attribution]
     holdout: Holdout | None
     meta: dict[str, Any] = field(default_factory=dict)
+    _repr_html_ = repr_html  # Jupyter: a compact table and the plot (allanite.notebook)
 
     @property
     def where(self) -> dict[str, Any]:

@@ -5,6 +5,8 @@ from __future__ import annotations
 import re
 from typing import Any
 
+from allanite.extras import require
+
 __all__ = ["load_yaml", "number_text", "update_keys"]
 
 
@@ -15,12 +17,9 @@ def number_text(value: float) -> str:
 
 def load_yaml(text: str, what: str) -> dict[str, Any]:
     """Parse YAML as OpenCV-style configs write it (``%YAML:1.0``, ``!!opencv-matrix`` tags)."""
-    try:
-        import yaml
-    except ImportError as exc:  # pragma: no cover - pyyaml is in the [yaml] extra
-        raise ImportError(f"reading {what} needs PyYAML: pip install 'allanite[yaml]'") from exc
+    yaml = require("yaml", extra="yaml", purpose=f"reading {what}", package="pyyaml")
 
-    class Loader(yaml.SafeLoader):
+    class Loader(yaml.SafeLoader):  # type: ignore[name-defined]
         pass
 
     def any_tag(loader: Any, suffix: str, node: Any) -> Any:

@@ -8,17 +8,14 @@ from __future__ import annotations
 
 from typing import Any
 
+from allanite.extras import require
 from allanite.gui.session import DISPLAY_UNITS, Options, Session
 
 __all__ = ["DISPLAY_UNITS", "Options", "Session", "create_window", "launch"]
 
 
 def _qt() -> Any:
-    try:
-        from PySide6 import QtWidgets
-    except ImportError as exc:
-        raise ImportError("the GUI needs PySide6: pip install 'allanite[gui]'") from exc
-    return QtWidgets
+    return require("PySide6.QtWidgets", extra="gui", purpose="the GUI")
 
 
 def create_window(session: Session | None = None) -> Any:

@@ -17,6 +17,7 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from allanite.extras import require
 from allanite.impact.earth import Earth, resolve_earth
 from allanite.impact.ins_errors import (
     QUANTITIES,
@@ -182,13 +183,7 @@ def _row(sensor: str, label: str, quantity: str, t: float, sigma: float) -> dict
 
 
 def _pandas() -> Any:
-    try:
-        import pandas as pd
-    except ImportError as exc:  # pragma: no cover - depends on the environment
-        raise ImportError(
-            "tables as DataFrames need pandas: pip install 'allanite[pandas]'"
-        ) from exc
-    return pd
+    return require("pandas", extra="pandas", purpose="tables as DataFrames")
 
 
 def _rss(arr: NDArray[np.float64]) -> NDArray[np.float64]:

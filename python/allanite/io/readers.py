@@ -19,6 +19,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from allanite.errors import InputError
+from allanite.extras import require
 from allanite.io.record import Record
 from allanite.io.text import read_text_table
 from allanite.io.timebase import resolve_time
@@ -56,6 +57,44 @@ def detect_format(path: str | os.PathLike[str]) -> str:
     return "text"
 
 
+_RAW_OPTIONS = {
+    "dtype": "--dtype",
+    "n_channels": "--n-channels",
+    "byteorder": "--byte-order",
+    "offset": "--offset",
+}
+
+
+def _format_of(path: Path, format: str | None, raw_options: list[str]) -> str:
+    """The format to read ``path`` in.
+
+    ``format`` when given; else raw binary when a raw-layout option is given (unless the
+    suffix names a self-describing format, or the file is plainly text); else the suffix.
+    """
+    if format is not None and format not in FORMATS:
+        raise ValueError(f"unknown format {format!r}; use one of {', '.join(FORMATS)}")
+    fmt = format or detect_format(path)
+    if not raw_options or fmt == "raw":
+        return fmt
+    given = ", ".join(_RAW_OPTIONS[name] for name in raw_options)
+    if format is not None or fmt != "text":
+        raise InputError(
+            f"{given} describe raw binary, but the file is {fmt}"
+            + ("" if format is not None else " (from its suffix), which carries its own layout")
+            + "; drop the raw options, or give --format raw to read it as raw binary",
+            path=str(path),
+        )
+    with path.open("rb") as handle:
+        head = handle.read(4096)
+    if head and all(32 <= b < 127 or b in b"\t\r\n" for b in head):
+        raise InputError(
+            f"{given} describe raw binary, but the file is plain text; drop the raw options "
+            "(or give --format raw if it really is binary)",
+            path=str(path),
+        )
+    return "raw"
+
+
 def _as_list(columns: Column | Sequence[Column] | None) -> list[Column] | None:
     if columns is None:
         return None
@@ -73,13 +112,19 @@ def _as_list(columns: Column | Sequence[Column] | None) -> list[Column] | None:
 def _resolve(names: tuple[str, ...], key: Column, source: str, what: str) -> int:
     if isinstance(key, (int, np.integer)) and not isinstance(key, bool):
         i = int(key)
-        if not -len(names) <= i < len(names):
+        if i < 0:
+            raise InputError(
+                f"{what} {i}: columns are numbered from 0 to {len(names) - 1}; negative indices "
+                f"are not accepted (the last column is {len(names) - 1}, named {names[-1]!r})",
+                path=source,
+            )
+        if i >= len(names):
             raise InputError(
                 f"{what} {i} does not exist: the data has {len(names)} column(s) "
                 f"({', '.join(names)}); columns are numbered from 0",
                 path=source,
             )
-        return i % len(names)
+        return i
     if isinstance(key, str):
         if key in names:
             return names.index(key)
@@ -356,10 +401,7 @@ def _load_raw(
 
 
 def _load_hdf5(path: Path, key: str | None) -> Loaded:
-    try:
-        import h5py
-    except ImportError as exc:
-        raise ImportError("reading HDF5 needs h5py: pip install 'allanite[hdf5]'") from exc
+    h5py = require("h5py", extra="hdf5", purpose="reading HDF5")
     try:
         handle = h5py.File(path, "r")
     except OSError as exc:
@@ -395,10 +437,7 @@ def _load_hdf5(path: Path, key: str | None) -> Loaded:
 
 
 def _load_parquet(path: Path, columns: list[Column] | None, time_column: Column | None) -> Loaded:
-    try:
-        import pyarrow.parquet as pq
-    except ImportError as exc:
-        raise ImportError("reading Parquet needs pyarrow: pip install 'allanite[parquet]'") from exc
+    pq = require("pyarrow.parquet", extra="parquet", purpose="reading Parquet")
     try:
         table = pq.read_table(path)
     except Exception as exc:  # pyarrow raises its own ArrowInvalid / OSError types
@@ -427,10 +466,7 @@ def from_frame(frame: Any, *, source: str = "DataFrame", **options: Any) -> Reco
     A ``DatetimeIndex`` or ``TimedeltaIndex`` becomes the time column when ``time_column`` is
     ``"index"``. Other options are those of :func:`make_record`.
     """
-    try:
-        import pandas as pd
-    except ImportError as exc:
-        raise ImportError("DataFrames need pandas: pip install 'allanite[pandas]'") from exc
+    pd = require("pandas", extra="pandas", purpose="reading a DataFrame")
     if not isinstance(frame, pd.DataFrame):
         raise TypeError(f"expected a pandas DataFrame, got {type(frame).__name__}")
     if options.get("time_column") == "index":
@@ -479,9 +515,9 @@ def read_record(
     header: bool | None = None,
     key: str | None = None,
     dtype: str | None = None,
-    n_channels: int = 1,
-    byteorder: str = "little",
-    offset: int = 0,
+    n_channels: int | None = None,
+    byteorder: str | None = None,
+    offset: int | None = None,
     topic: str | None = None,
 ) -> Record:
     """Read a record from a file or a pandas DataFrame.
@@ -508,7 +544,9 @@ def read_record(
     scale : float, optional
         Counts-to-units factor.
     format : {"text", "npy", "npz", "raw", "hdf5", "parquet"}, optional
-        Override the suffix-based detection.
+        Override the suffix-based detection. Any raw-layout option (``dtype``,
+        ``n_channels``, ``byteorder``, ``offset``) means raw binary whatever the suffix,
+        except a self-describing one (.npy, .npz, HDF5, Parquet), which is refused.
     delimiter : str, optional
         Text field separator (detected when omitted).
     header : bool, optional
@@ -516,8 +554,9 @@ def read_record(
     key : str, optional
         Array in an .npz archive or dataset path in an HDF5 file.
     dtype, n_channels, byteorder, offset
-        Raw binary layout: sample type, interleaved channels, ``"little"``/``"big"``/
-        ``"native"``, bytes to skip at the start.
+        Raw binary layout: sample type, interleaved channels (default 1),
+        ``"little"`` (default), ``"big"`` or ``"native"``, bytes to skip at the start
+        (default 0).
     topic : str, optional
         ROS bag IMU topic, or ULog topic (``sensor_combined``, ``sensor_gyro[:instance]``,
         ``sensor_accel``); see :mod:`allanite.io.robot_logs`.
@@ -545,9 +584,9 @@ def read_record(
 
     if path.is_dir() and not is_ros2_bag_dir(path):
         raise InputError("is a directory; give a file (or a ROS 2 bag directory)", path=str(path))
-    fmt = format or ("rosbag" if path.is_dir() else detect_format(path))
-    if fmt not in FORMATS:
-        raise ValueError(f"unknown format {fmt!r}; use one of {', '.join(FORMATS)}")
+    raw = {"dtype": dtype, "n_channels": n_channels, "byteorder": byteorder, "offset": offset}
+    given = [name for name, value in raw.items() if value is not None]
+    fmt = "rosbag" if path.is_dir() else _format_of(path, format, given)
     if fmt in ("rosbag", "ulog"):
         return _read_robot_log(path, fmt, topic, options)
     if path.stat().st_size == 0:
@@ -560,7 +599,11 @@ def read_record(
         loaded = _load_npz(path, key)
     elif fmt == "raw":
         loaded = _load_raw(
-            path, dtype=dtype, n_channels=n_channels, byteorder=byteorder, offset=offset
+            path,
+            dtype=dtype,
+            n_channels=1 if n_channels is None else n_channels,
+            byteorder=byteorder or "little",
+            offset=offset or 0,
         )
     elif fmt == "hdf5":
         loaded = _load_hdf5(path, key)

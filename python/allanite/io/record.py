@@ -214,12 +214,18 @@ class Record:
 def _channel_index(names: tuple[str, ...], key: int | str, source: str) -> int:
     if isinstance(key, (int, np.integer)) and not isinstance(key, bool):
         i = int(key)
-        if not -len(names) <= i < len(names):
+        if i < 0:
+            raise ValueError(
+                f"{source}: channel {i}: channels are numbered from 0 to {len(names) - 1}; "
+                f"negative indices are not accepted (the last channel is {len(names) - 1}, "
+                f"named {names[-1]!r})"
+            )
+        if i >= len(names):
             raise ValueError(
                 f"{source}: channel {i} out of range; the record has {len(names)} channels "
                 f"({', '.join(names)})"
             )
-        return i % len(names)
+        return i
     if isinstance(key, str):
         if key in names:
             return names.index(key)

@@ -18,6 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from allanite.errors import InputError
+from allanite.extras import require
 
 __all__ = [
     "CHANNELS",
@@ -64,11 +65,9 @@ def load_rosbag(
 
     Returns ``(table, names, warnings)``: columns ``t`` and :data:`CHANNELS`.
     """
-    try:
-        from rosbags.highlevel import AnyReader
-        from rosbags.typesys import Stores, get_typestore
-    except ImportError as exc:
-        raise ImportError("reading ROS bags needs rosbags: pip install 'allanite[bags]'") from exc
+    highlevel = require("rosbags.highlevel", extra="bags", purpose="reading ROS bags")
+    typesys = require("rosbags.typesys", extra="bags", purpose="reading ROS bags")
+    AnyReader, Stores, get_typestore = highlevel.AnyReader, typesys.Stores, typesys.get_typestore
     try:
         reader = AnyReader([path], default_typestore=get_typestore(Stores.ROS2_HUMBLE))
         reader.open()
@@ -119,10 +118,7 @@ def load_ulog(
     ``topic`` may carry an instance, ``sensor_gyro:1`` (default instance 0). Returns
     ``(table, names, warnings)``: columns ``t`` and the axes the topic has.
     """
-    try:
-        from pyulog import ULog
-    except ImportError as exc:
-        raise ImportError("reading PX4 ULog needs pyulog: pip install 'allanite[ulog]'") from exc
+    ULog = require("pyulog", extra="ulog", purpose="reading PX4 ULog").ULog
     name, _, inst = (topic or "").partition(":")
     instance = int(inst) if inst.isdigit() else 0
     wanted = [name] if name else list(ULOG_TOPICS)

@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from allanite.extras import require
 from allanite.variance import AllanResult
 
 __all__ = ["SLOPE_LABELS", "allan_figure", "model_figure", "plot_allan", "plot_model", "slope_of"]
@@ -36,11 +37,7 @@ _DEV_LABELS = {
 
 
 def _matplotlib() -> Any:
-    try:
-        from matplotlib.figure import Figure
-    except ImportError as exc:
-        raise ImportError("plots need matplotlib: pip install 'allanite[plot]'") from exc
-    return Figure
+    return require("matplotlib.figure", extra="plot", purpose="plotting").Figure
 
 
 def _ylabel(result: AllanResult) -> str:

@@ -10,15 +10,13 @@ from typing import Any
 
 import numpy as np
 
+from allanite.extras import require
+
 __all__ = ["diagnosis_figure", "plot_frequency_view", "plot_tau_view", "plot_time_view"]
 
 
 def _figure_class() -> Any:
-    try:
-        from matplotlib.figure import Figure
-    except ImportError as exc:
-        raise ImportError("plots need matplotlib: pip install 'allanite[plot]'") from exc
-    return Figure
+    return require("matplotlib.figure", extra="plot", purpose="plotting").Figure
 
 
 def plot_tau_view(ax: Any, diagnosis: Any) -> None:

@@ -19,7 +19,15 @@ from numpy.typing import NDArray
 from allanite.io.atomic import atomic_output
 from allanite.simulation.record import record_length, simulate_chunks
 
-__all__ = ["FORMATS", "format_of", "write_chunks", "write_record"]
+__all__ = [
+    "FORMATS",
+    "check_free_space",
+    "format_of",
+    "format_size",
+    "output_size",
+    "write_chunks",
+    "write_record",
+]
 
 #: file suffix -> format name
 FORMATS = {".npy": "npy", ".csv": "csv", ".bin": "raw", ".raw": "raw", ".f64": "raw"}
@@ -34,6 +42,53 @@ def format_of(path: str | os.PathLike[str]) -> str:
             ".bin/.raw/.f64 (raw float64) file name"
         )
     return FORMATS[suffix]
+
+
+#: bytes per value of a CSV row at most: '%.17g' (up to 24 characters) and a separator
+CSV_BYTES_PER_VALUE = 25
+
+
+def output_size(path: str | os.PathLike[str], n_samples: int, n_channels: int) -> int:
+    """Size in bytes of the file :func:`write_chunks` writes.
+
+    Exact for .npy and raw binary, an upper bound for CSV.
+    """
+    kind = format_of(path)
+    values = n_samples * n_channels
+    if kind == "csv":
+        return values * CSV_BYTES_PER_VALUE + 64 * n_channels
+    if kind == "npy":
+        return values * 8 + 128  # the format pads the header to a multiple of 64 bytes
+    return values * 8
+
+
+def format_size(size: float) -> str:
+    """Bytes in words: ``2.9 MB``, ``8.0 TB`` (decimal units, as disk sizes are quoted)."""
+    for unit in ("B", "kB", "MB", "GB", "TB"):
+        if abs(size) < 1000 or unit == "TB":
+            return f"{size:.0f} {unit}" if unit == "B" else f"{size:.3g} {unit}"
+        size /= 1000
+    raise AssertionError("unreachable")  # pragma: no cover
+
+
+def check_free_space(path: str | os.PathLike[str], size: int) -> None:
+    """Raise an OSError before writing when ``size`` bytes do not fit beside ``path``.
+
+    The output is written to a temporary sibling and renamed, so the free space of its
+    directory is what counts (an existing file of that name is only replaced at the end).
+    """
+    import shutil
+
+    directory = Path(path).parent if str(Path(path).parent) else Path(".")
+    if not directory.is_dir():
+        return  # atomic_output names the missing directory
+    free = shutil.disk_usage(directory).free
+    if size > free:
+        raise OSError(
+            f"cannot write {os.fspath(path)}: the record needs {format_size(size)} but "
+            f"{directory} has {format_size(free)} free; write fewer samples (-n, --duration) "
+            "or choose another disk"
+        )
 
 
 def write_chunks(
@@ -109,10 +164,15 @@ def write_record(
 
     Parameters as in :func:`allanite.simulation.simulate`; ``path`` picks the format
     (:data:`FORMATS`), ``units`` labels the CSV columns, ``progress("simulate", done, total)``
-    is called after each written chunk. The file appears only when complete.
+    is called after each written chunk. The file appears only when complete; an output that
+    would not fit on its disk (:func:`output_size`, :func:`check_free_space`) is refused
+    before anything is simulated.
     """
     format_of(path)  # fail on a bad suffix before any work
     total = record_length(fs, n, duration)
+    if isinstance(channels, bool) or not isinstance(channels, (int, np.integer)) or channels < 1:
+        raise ValueError(f"channels must be a positive integer, got {channels!r}")
+    check_free_space(path, output_size(path, total, int(channels)))
     chunks = simulate_chunks(
         model,
         fs,

@@ -1,0 +1,319 @@
+r"""Plausibility checks: records that look like a mistaken input, said out loud.
+
+A wrong ``input`` kind, counts without a scale factor or a stuck sensor all give an Allan
+deviation that looks like an answer. These checks look for the signature of each mistake and
+return one warning line per finding (the CLI prints them on stderr and keeps them in the
+record's ``warnings``, so they reach the JSON and the report); a record whose samples are
+all equal is refused, since it has no noise to analyse.
+
+* **angle given as rate?** An angle record read as rate is a ramp (the bias) plus a random
+  walk, whose Allan deviation rises as :math:`\tau^{+1}` (or :math:`\tau^{+1/2}` without
+  a bias) from the shortest tau over a decade or more. A rate sensor shows white noise, a
+  falling curve, at its shortest averaging times.
+* **rate given as angle?** Rate samples read as angle are differenced into white angle noise,
+  whose deviation falls as :math:`\tau^{-1}` over the whole range (a real angle record
+  flattens into angle random walk, -1/2, and bias instability, 0).
+* **counts without a scale?** Whole-number samples whose mean lies many short-tau deviations
+  away from zero: raw ADC counts with an offset.
+* **stuck segments.** A value repeated for far longer than the record's own runs of equal
+  samples (ten times their 99.9th percentile, and at least 20 samples).
+
+The slopes come from :mod:`allanite.report.slopes` (half-decade windows, points with at least
+20 EDF), so the checks read the curve the way the report's slope table does.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from allanite.report.slopes import MIN_EDF, local_slopes, slope_table
+
+__all__ = [
+    "Finding",
+    "check_allan",
+    "check_samples",
+    "refuse_constant",
+    "stuck_segments",
+]
+
+#: kinds whose power-law slopes are those of the Allan deviation (-1, -1/2, 0, +1/2, +1)
+_ADEV_SLOPE_KINDS = ("overlapping", "standard", "hadamard", "standard_hadamard", "total")
+#: slope rows at least this steep (+1/2 random walk, +1 ramp) from the shortest tau over a
+#: decade read as "angle given as rate"
+RISING_SLOPE = 0.35
+#: ... when the rise begins at most this many shortest taus in
+RISING_START = 5.0
+#: a falling slope at least this steep over the whole range reads as "rate given as angle"
+FALLING_SLOPE = -0.8
+#: |mean| / short-tau deviation above which whole-number samples look like offset counts
+COUNTS_RATIO = 100.0
+#: shortest run of equal samples ever reported as stuck
+MIN_STUCK = 20
+#: ... and at least this many times the 99.9th percentile of the record's own run lengths
+STUCK_FACTOR = 10.0
+#: at most this many stuck segments are listed per channel
+MAX_LISTED = 3
+
+
+@dataclass(frozen=True)
+class Finding:
+    """One plausibility warning.
+
+    Attributes
+    ----------
+    code : str
+        ``"angle_as_rate"``, ``"rate_as_angle"``, ``"counts_without_scale"`` or ``"stuck"``.
+    channel : str
+        The channel it concerns.
+    message : str
+        One line naming the channel, what was seen and what to do.
+    """
+
+    code: str
+    channel: str
+    message: str
+
+    def __str__(self) -> str:
+        return self.message
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready form."""
+        return {"code": self.code, "channel": self.channel, "message": self.message}
+
+
+def _columns(samples: NDArray[Any]) -> NDArray[Any]:
+    arr = np.asarray(samples)
+    return arr.reshape(-1, 1) if arr.ndim == 1 else arr
+
+
+def refuse_constant(
+    samples: NDArray[Any], channels: Sequence[str] = (), *, source: str = "record"
+) -> None:
+    """Raise a ValueError if any channel's samples are all equal.
+
+    A constant record has an Allan deviation of zero at every tau; that is not a measurement
+    of noise but a dead channel, a wrong column or a sensor that was not running.
+    """
+    x = _columns(samples)
+    if x.shape[0] < 2:
+        return
+    names = list(channels) or [f"ch{i}" for i in range(x.shape[1])]
+    dead = [c for c in range(x.shape[1]) if x[:, c].min() == x[:, c].max()]
+    if not dead:
+        return
+    which = ", ".join(f"{names[c]} (all {x.shape[0]} samples equal {x[0, c]:.6g})" for c in dead)
+    hint = (
+        "leave it out with --channels"
+        if len(dead) < x.shape[1]
+        else "check the column (--channels), the file and that the sensor was running"
+    )
+    raise ValueError(
+        f"{source}: channel {which} is constant; a constant record has no noise to analyse "
+        f"(its Allan deviation is zero at every tau): {hint}"
+    )
+
+
+def _runs(v: NDArray[Any], chunk: int = 1 << 18) -> Iterator[tuple[NDArray[Any], NDArray[Any]]]:
+    """Runs of equal consecutive samples as ``(starts, lengths)`` arrays, chunk by chunk.
+
+    Memory is O(chunk) whatever the record's length; a run crossing a chunk border is carried
+    over and reported once, whole.
+    """
+    n = v.size
+    open_start = 0  # start of the run still open at the end of the previous chunk
+    for lo in range(0, n, chunk):
+        hi = min(n, lo + chunk)
+        block = v[lo:hi]
+        change = np.flatnonzero(block[1:] != block[:-1]) + 1 + lo
+        if lo > 0 and v[lo] != v[lo - 1]:
+            change = np.concatenate(([lo], change))
+        if change.size == 0:
+            continue
+        starts = np.concatenate(([open_start], change[:-1]))
+        yield starts, change - starts
+        open_start = int(change[-1])
+    yield np.array([open_start]), np.array([n - open_start])
+
+
+def stuck_segments(x: NDArray[Any]) -> list[tuple[int, int]]:
+    """Runs of equal consecutive samples too long for the record, as ``(start, stop)`` indices.
+
+    A run is stuck when it holds at least ``MIN_STUCK`` samples and ``STUCK_FACTOR`` times the
+    99.9th percentile of the record's own run lengths. The record is its own reference: float
+    samples almost never repeat, so 20 equal ones are stuck; quantized or slowly varying
+    samples repeat naturally (noise below the step, a resting angle), and only a run far
+    longer than their longest ordinary dwell is reported. One streaming pass, O(1) memory.
+    """
+    v = np.asarray(x).ravel()
+    if v.size < 2 * MIN_STUCK:
+        return []
+    cap = 1 << 16  # run lengths are counted exactly up to cap; longer ones are kept
+    counts = np.zeros(cap + 1, dtype=np.int64)
+    long_starts: list[NDArray[Any]] = []
+    long_lengths: list[NDArray[Any]] = []
+    for starts, lengths in _runs(v):
+        counts += np.bincount(np.minimum(lengths, cap), minlength=cap + 1)
+        keep = lengths >= MIN_STUCK
+        long_starts.append(starts[keep])
+        long_lengths.append(lengths[keep])
+    starts = np.concatenate(long_starts)
+    lengths = np.concatenate(long_lengths)
+    if lengths.size == 0:
+        return []
+    # 99.9th percentile of the run lengths from their histogram (lengths above cap only
+    # matter when they are that common, and then the record is not judged run by run anyway)
+    rank = int(np.searchsorted(np.cumsum(counts), 0.999 * counts.sum()))
+    longest = max(MIN_STUCK, STUCK_FACTOR * rank)
+    keep = lengths >= longest
+    return [(int(a), int(a + n)) for a, n in zip(starts[keep], lengths[keep], strict=True)]
+
+
+def check_samples(
+    samples: NDArray[Any],
+    fs: float,
+    *,
+    input: str = "rate",
+    channels: Sequence[str] = (),
+    scale: float | None = None,
+    short_dev: NDArray[np.float64] | None = None,
+) -> list[Finding]:
+    """Checks on the samples themselves: stuck segments and counts without a scale.
+
+    Parameters
+    ----------
+    samples : numpy.ndarray
+        ``(N,)`` or ``(N, C)`` record.
+    fs : float
+        Sampling frequency in Hz (for the times of stuck segments).
+    input : {"rate", "increment", "angle"}
+        What the samples are; the counts check applies to rate and increment records.
+    channels : sequence of str
+        Channel names for the messages.
+    scale : float, optional
+        The counts-to-units factor already applied (no counts check when given).
+    short_dev : numpy.ndarray, optional
+        Deviation at the shortest tau per channel (the counts check needs it).
+
+    Returns
+    -------
+    list of Finding
+    """
+    x = _columns(samples)
+    names = list(channels) or [f"ch{i}" for i in range(x.shape[1])]
+    out: list[Finding] = []
+    for c in range(x.shape[1]):
+        col = x[:, c]
+        runs = stuck_segments(col)
+        if runs:
+            listed = "; ".join(
+                f"at {col[a]:.6g} for {b - a} samples ({(b - a) / fs:.4g} s) from t = "
+                f"{a / fs:.6g} s"
+                for a, b in runs[:MAX_LISTED]
+            )
+            more = f"; and {len(runs) - MAX_LISTED} more" if len(runs) > MAX_LISTED else ""
+            out.append(
+                Finding(
+                    "stuck",
+                    names[c],
+                    f"channel {names[c]}: stuck {listed}{more} (far longer than the record's "
+                    "other runs of equal samples); check the sensor or the logger, or analyse "
+                    "a stretch without it",
+                )
+            )
+        if scale is None and input != "angle" and short_dev is not None:
+            dev = float(short_dev[c])
+            step = max(1, col.size // 1_000_000)
+            sub = col[::step]
+            whole = np.issubdtype(sub.dtype, np.integer) or bool(np.all(sub == np.round(sub)))
+            mean = float(np.mean(col, dtype=np.float64))
+            if whole and dev > 0 and abs(mean) > COUNTS_RATIO * dev:
+                out.append(
+                    Finding(
+                        "counts_without_scale",
+                        names[c],
+                        f"channel {names[c]}: every sample is a whole number and the mean "
+                        f"({mean:.6g}) is {abs(mean) / dev:.3g} times the deviation at the "
+                        f"shortest tau ({dev:.3g}): raw counts without a scale factor? give "
+                        "the units per count (--scale) and --units",
+                    )
+                )
+    return out
+
+
+def check_allan(result: Any, channels: Sequence[str] = ()) -> list[Finding]:
+    """Checks on the Allan curve: slopes that betray a wrong ``input`` kind.
+
+    Parameters
+    ----------
+    result : AllanResult
+        The analysis (an Allan/Hadamard/total deviation; other kinds are not judged).
+    channels : sequence of str
+        Channel names for the messages.
+
+    Returns
+    -------
+    list of Finding
+    """
+    if result.kind not in _ADEV_SLOPE_KINDS:
+        return []
+    dev = np.asarray(result.dev, dtype=np.float64).reshape(result.tau.size, -1)
+    edf = np.asarray(result.edf, dtype=np.float64).reshape(dev.shape)
+    names = list(channels) or [f"ch{i}" for i in range(dev.shape[1])]
+    tau0 = float(result.tau[0])
+    out: list[Finding] = []
+    for c in range(dev.shape[1]):
+        if result.input != "angle":
+            rows = slope_table(result.tau, dev[:, c], edf[:, c])
+            # skip what precedes the rise within the first RISING_START * tau0 (white angle
+            # noise read as rate is flat there), then collect the rising rows
+            k = 0
+            while k < len(rows) and rows[k].slope < RISING_SLOPE:
+                k += 1
+            rising = []
+            for row in rows[k:]:
+                if row.slope < RISING_SLOPE:
+                    break
+                rising.append(row)
+            if (
+                rising
+                and rising[0].tau_min <= RISING_START * tau0
+                and rising[-1].tau_max >= 10.0 * rising[0].tau_min
+            ):
+                sel = (result.tau >= rising[0].tau_min) & (result.tau <= rising[-1].tau_max)
+                slope = float(np.polyfit(np.log10(result.tau[sel]), np.log10(dev[sel, c]), 1)[0])
+                out.append(
+                    Finding(
+                        "angle_as_rate",
+                        names[c],
+                        f"channel {names[c]}: the Allan deviation rises (as tau^{slope:+.2f}) "
+                        f"from the shortest tau to {rising[-1].tau_max:.4g} s, as an angle "
+                        f"record read as {result.input} does (a rate sensor shows white noise, "
+                        "a falling curve, at short tau): angle given as rate? if the samples "
+                        "are angles, give --input angle",
+                    )
+                )
+            continue
+        good = np.isfinite(dev[:, c]) & (dev[:, c] > 0) & (edf[:, c] >= MIN_EDF)
+        tau, d = result.tau[good], dev[good, c]
+        if tau.size < 3 or tau[0] > 2.0 * tau0 or np.log10(tau[-1] / tau[0]) < 1.0:
+            continue
+        whole = float(np.polyfit(np.log10(tau), np.log10(d), 1)[0])
+        flattest = float(np.max(local_slopes(tau, d)))
+        if whole <= FALLING_SLOPE and flattest <= FALLING_SLOPE + 0.1:
+            out.append(
+                Finding(
+                    "rate_as_angle",
+                    names[c],
+                    f"channel {names[c]}: the Allan deviation falls as tau^{whole:+.2f} over "
+                    f"the whole range ({tau[0]:.4g} to {tau[-1]:.4g} s), never flatter than "
+                    f"tau^{flattest:+.2f}, as rate samples read as angle do (or an angle "
+                    "sensor whose quantization dominates everywhere): rate given as angle? "
+                    "if the samples are rates, give --input rate",
+                )
+            )
+    return out

@@ -1,0 +1,234 @@
+"""Plausibility checks: mistaken inputs are said out loud (stderr, JSON, report), never silent."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.signal import lfilter
+
+import allanite
+from allanite.cli import main
+from allanite.model import NoiseModel
+from allanite.plausibility import check_allan, check_samples, refuse_constant, stuck_segments
+from allanite.terms import Flicker, GaussMarkov, Quantization, RateRandomWalk, White
+from fit_generator import simulate
+
+FS = 100.0
+
+
+def _random_model(rng: np.random.Generator) -> NoiseModel:
+    """A gyro nobody picked: white noise plus, at random, flicker, RRW, quantization, GM."""
+    n = 10 ** rng.uniform(-4, -2)
+    terms: list = [White(n)]
+    if rng.random() < 0.7:
+        terms.append(Flicker(n * 10 ** rng.uniform(-1.5, 0.5)))
+    if rng.random() < 0.5:
+        terms.append(RateRandomWalk(n * 10 ** rng.uniform(-3, -0.5)))
+    if rng.random() < 0.4:
+        terms.append(Quantization(n * 10 ** rng.uniform(-2, 0.3)))
+    if rng.random() < 0.3:
+        terms.append(GaussMarkov(n * 10 ** rng.uniform(0, 1.5), 10 ** rng.uniform(0, 2)))
+    return NoiseModel(terms)
+
+
+def _gyro(seed: int, n: int = 60_000) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    bias = rng.uniform(-1, 1) * 10 ** rng.uniform(-3, 0)
+    return simulate(_random_model(rng), n, 1 / FS, seed=seed)[:, 0] + bias
+
+
+def _codes(findings: list) -> set[str]:
+    return {f.code for f in findings}
+
+
+def test_default_path_on_generated_gyros_no_false_alarm_and_wrong_input_caught() -> None:
+    """30 random gyros: read correctly, nothing is flagged; read as the other kind, 28 of 30
+    are flagged as angle-given-as-rate and 25 of 30 as rate-given-as-angle (measured with these
+    seeds). The misses of the second check have a long-tau end flatter than -0.7 (the rate's
+    own flicker or random walk, differenced), which a real angle record dominated by
+    quantization also shows: there the check stays silent rather than cry wolf."""
+    caught = {"angle_as_rate": 0, "rate_as_angle": 0}
+    seeds = range(30)
+    for seed in seeds:
+        rate = _gyro(seed)
+        angle = np.cumsum(rate) / FS
+        right = allanite.avar(rate, FS), allanite.avar(angle, FS, input="angle")
+        for res, x in zip(right, (rate, angle), strict=True):
+            dev0 = np.atleast_1d(res.dev[0])
+            found = check_allan(res) + check_samples(x, FS, input=res.input, short_dev=dev0)
+            assert found == [], (seed, [f.message for f in found])
+        caught["angle_as_rate"] += "angle_as_rate" in _codes(check_allan(allanite.avar(angle, FS)))
+        wrong = allanite.avar(rate, FS, input="angle")
+        caught["rate_as_angle"] += "rate_as_angle" in _codes(check_allan(wrong))
+    assert caught["angle_as_rate"] >= 27, caught
+    assert caught["rate_as_angle"] >= 24, caught
+
+
+def test_pure_cases_are_named_with_their_slope() -> None:
+    rng = np.random.default_rng(1)
+    w = rng.standard_normal(100_000) * 0.01
+    angle_as_rate = check_allan(allanite.avar(np.cumsum(w + 0.004) / FS, FS), ["gx"])
+    assert [f.code for f in angle_as_rate] == ["angle_as_rate"]
+    assert "channel gx: the Allan deviation rises (as tau^+0.9" in angle_as_rate[0].message
+    assert "give --input angle" in angle_as_rate[0].message
+    rate_as_angle = check_allan(allanite.avar(w, FS, input="angle"))
+    assert [f.code for f in rate_as_angle] == ["rate_as_angle"]
+    assert "falls as tau^-1.0" in rate_as_angle[0].message
+    assert "give --input rate" in rate_as_angle[0].message
+    # the modified deviation has other slopes: not judged
+    assert check_allan(allanite.avar(w, FS, input="angle", kind="modified")) == []
+
+
+def test_counts_without_scale() -> None:
+    rng = np.random.default_rng(2)
+    counts = np.round(rng.standard_normal(50_000) * 3 + 5000).astype(np.int16)
+    dev0 = np.atleast_1d(allanite.avar(counts, FS).dev[0])
+    found = check_samples(counts, FS, short_dev=dev0)
+    assert [f.code for f in found] == ["counts_without_scale"]
+    assert "raw counts without a scale factor? give the units per count (--scale)" in str(found[0])
+    assert check_samples(counts, FS, short_dev=dev0, scale=0.01) == []
+    assert check_samples(counts - 5000, FS, short_dev=dev0) == []  # centred: plausible
+    floats = counts + rng.uniform(-0.5, 0.5, counts.size)  # not whole numbers
+    assert check_samples(floats, FS, short_dev=dev0) == []
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_stuck_segments_no_false_alarm_on_quantized_and_correlated_records(seed: int) -> None:
+    """Quantized white noise (sigma 0.05 to 2 LSB), a quantized Gauss-Markov process and a
+    quantized resting angle repeat values naturally: none of it is reported as stuck."""
+    rng = np.random.default_rng(seed)
+    n = 100_000
+    for sigma in (0.05, 0.2, 0.3, 0.5, 1.0, 2.0):
+        white = np.round(rng.standard_normal(n) * sigma)
+        phi = 0.99
+        gm = np.round(
+            lfilter([1], [1, -phi], rng.standard_normal(n) * sigma * math.sqrt(1 - phi**2))
+        )
+        angle = np.round(np.cumsum(rng.standard_normal(n) * sigma * 0.1))
+        for x in (white, gm, angle, rng.standard_normal(n) * sigma):
+            assert stuck_segments(x) == [], sigma
+
+
+@pytest.mark.parametrize(("sigma", "length"), [(None, 20), (None, 500), (1.0, 300), (0.3, 2000)])
+def test_stuck_segments_found_where_they_are(sigma: float | None, length: int) -> None:
+    rng = np.random.default_rng(7)
+    x = rng.standard_normal(100_000)
+    if sigma is not None:
+        x = np.round(x * sigma)
+    x[40_000 : 40_000 + length] = x[40_000]
+    (found,) = stuck_segments(x)
+    # the run may extend by the neighbours that happen to equal the stuck value
+    assert found[0] <= 40_000 < 40_000 + length <= found[1]
+    assert found[1] - found[0] < length + 50
+
+
+def test_constant_channel_is_refused_by_name() -> None:
+    x = np.column_stack([np.random.default_rng(0).standard_normal(100), np.full(100, 7.0)])
+    with pytest.raises(ValueError, match=r"rec.npy: channel gy \(all 100 samples equal 7\) is "):
+        refuse_constant(x, ["gx", "gy"], source="rec.npy")
+    refuse_constant(x[:, :1], ["gx"])
+
+
+def _cli(argv: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str, str]:
+    code = main(argv)
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+@pytest.mark.parametrize("command", ["analyze", "fit", "report", "diagnose"])
+def test_constant_record_refused_by_every_command(
+    command: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = tmp_path / "dead.npy"
+    np.save(path, np.full(5000, 0.25))
+    extra = {
+        "report": ["-o", str(tmp_path / "r.html")],
+        "diagnose": ["--sim-model", str(tmp_path / "model.json")],
+    }.get(command, [])
+    code, out, err = _cli([command, str(path), "--fs", "100", *extra], capsys)
+    assert code == 2
+    assert out == ""
+    lines = err.strip().splitlines()
+    assert len(lines) == 1
+    assert "dead.npy: channel col0 (all 5000 samples equal 0.25) is constant" in lines[0]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["dead.npy"]
+
+
+def test_warnings_reach_stderr_json_and_report(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    rng = np.random.default_rng(4)
+    x = rng.standard_normal(60_000) * 0.01
+    x[20_000:23_000] = x[20_000]
+    path = tmp_path / "stuck.npy"
+    np.save(path, x)
+    code, out, err = _cli(["analyze", str(path), "--fs", "100", "--json"], capsys)
+    assert code == 0
+    assert "allanite analyze: warning: channel col0: stuck at" in err
+    assert "for 3000 samples (30 s) from t = 200 s" in err
+    warnings = json.loads(out)["record"]["warnings"]
+    assert len(warnings) == 1
+    assert "from t = 200 s" in warnings[0]
+    # text mode: on stderr, not mixed into the summary
+    code, out, err = _cli(["analyze", str(path), "--fs", "100"], capsys)
+    assert "stuck at" in err
+    assert "stuck at" not in out
+    html = tmp_path / "r.html"
+    code, out, err = _cli(["report", str(path), "--fs", "100", "-o", str(html), "--no-fit"], capsys)
+    assert code == 0
+    assert "stuck at" in err
+    assert "for 3000 samples (30 s) from t = 200 s" in html.read_text()
+    code, out, err = _cli(["fit", str(path), "--fs", "100", "--json"], capsys)
+    assert "stuck at" in err
+    assert "from t = 200 s" in json.loads(out)["record"]["warnings"][0]
+
+
+def test_angle_read_as_rate_warns_in_the_cli(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    w = np.random.default_rng(5).standard_normal(60_000) * 0.01
+    path = tmp_path / "angle.npy"
+    np.save(path, np.cumsum(w + 0.01) / FS)
+    code, _, err = _cli(["analyze", str(path), "--fs", "100", "--summary"], capsys)
+    assert code == 0
+    assert "angle given as rate? if the samples are angles, give --input angle" in err
+    code, _out, err = _cli(["analyze", str(path), "--fs", "100", "--input", "angle"], capsys)
+    assert code == 0
+    assert err == ""
+
+
+def test_runs_are_the_same_whatever_the_chunk() -> None:
+    from allanite.plausibility import _runs
+
+    rng = np.random.default_rng(9)
+    for _ in range(100):
+        n = int(rng.integers(1, 400))
+        v = np.round(rng.standard_normal(n) * rng.uniform(0.05, 2))
+        change = np.flatnonzero(v[1:] != v[:-1]) + 1
+        starts = np.concatenate(([0], change))
+        expected = list(zip(starts, np.diff(np.concatenate((starts, [n]))), strict=True))
+        for chunk in (1, 2, 7, 64, 1000):
+            got = [
+                (a, k) for s, lengths in _runs(v, chunk) for a, k in zip(s, lengths, strict=True)
+            ]
+            assert got == expected
+
+
+def test_stuck_search_memory_does_not_grow_with_the_record() -> None:
+    """One streaming pass: the working memory is a few chunks, not several record copies."""
+    import tracemalloc
+
+    x = np.random.default_rng(3).standard_normal(4_000_000)  # 32 MB
+    x[1_000_000:1_000_100] = x[1_000_000]
+    tracemalloc.start()
+    try:
+        found = stuck_segments(x)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert found == [(1_000_000, 1_000_100)]
+    assert peak < 20e6, peak  # one copy of the change indices alone would be 32 MB
