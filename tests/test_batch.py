@@ -143,7 +143,9 @@ def test_paths_and_datasheet_files(tmp_path):
     out = tmp_path / "table.csv"
     res.to_csv(out)
     head = out.read_text().splitlines()[0]
-    assert head.startswith("record,channel,n_samples,fs,units,p_value,rejected,Q,Q_low,Q_high,N,N_low")
+    assert head.startswith(
+        "record,channel,n_samples,fs,units,p_value,rejected,Q,Q_low,Q_high,N,N_low"
+    )
     assert head.endswith("check_N,check_B,status,pass,error")
     assert json.loads(res.to_json())["columns"] == list(res.columns)
 

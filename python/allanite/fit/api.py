@@ -97,9 +97,7 @@ def _n_params(specs: Sequence[TermSpec]) -> int:
     return n_params(specs)
 
 
-def _slope_start(
-    classic: ClassicReadout, data: GLSData, units: str
-) -> NDArray[np.float64] | None:
+def _slope_start(classic: ClassicReadout, data: GLSData, units: str) -> NDArray[np.float64] | None:
     """Covariance of the estimates under the model read off the curve by the slope method."""
     terms: list[Term] = []
     for symbol, cls in (

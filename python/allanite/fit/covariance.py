@@ -109,10 +109,7 @@ def _cosines(
     out = [(1.0, 0.0)]
     for factor in factors:
         out = [
-            (0.5 * c1 * c2, w)
-            for c1, w1 in out
-            for c2, w2 in factor
-            for w in (w1 - w2, w1 + w2)
+            (0.5 * c1 * c2, w) for c1, w1 in out for c2, w2 in factor for w in (w1 - w2, w1 + w2)
         ]
     return out
 
@@ -243,6 +240,41 @@ def _piecewise(
     return np.where(inside, value[np.clip(idx, 0, value.size - 1)], 0.0)
 
 
+@lru_cache(maxsize=256)
+def _whittle_block(
+    a: Term, b: Term, m: tuple[float, ...], dt: float, n_samples: int, ratio: float
+) -> NDArray[np.float64]:
+    """Whittle covariance block of the unit stationary terms ``a`` and ``b`` (cached)."""
+    mm = np.asarray(m)
+    n = float(n_samples)
+    centre, integrals = _oscillation_integrals(m, dt, ratio)
+    # |H_i|^2 |H_j|^2 = 4 sin^4 sin^4 / (m_i m_j sin^2(pi f dt))^2
+    envelope = 4.0 / np.sin(np.pi * centre * dt) ** 4
+    weight = envelope * a.psd_sampled(centre, dt) * b.psd_sampled(centre, dt)
+    block = np.tensordot(weight, integrals, axes=(0, 0)) / np.outer(mm, mm) ** 2
+    # two means over nested spans share only the shorter one: Cov ~ W_ij / max(L_i, L_j)
+    eff = n - 2.0 * mm
+    block /= dt * np.maximum.outer(eff, eff)
+    block.setflags(write=False)
+    return block
+
+
+@lru_cache(maxsize=32)
+def _fourth_cumulant_cached(m: tuple[float, ...], dt: float, n_samples: int) -> NDArray[np.float64]:
+    out = _fourth_cumulant(np.asarray(m), dt, float(n_samples))
+    out.setflags(write=False)
+    return out
+
+
+@lru_cache(maxsize=256)
+def _ramp_block(
+    term: Term, m: tuple[float, ...], dt: float, n_samples: int, ratio: float
+) -> NDArray[np.float64]:
+    out = ramp_cross_basis(term, np.asarray(m), dt, n_samples, ratio=ratio)
+    out.setflags(write=False)
+    return out
+
+
 class CovarianceBasis:
     r"""The covariance of the AVAR estimates as a quadratic form in the term weights.
 
@@ -279,30 +311,24 @@ class CovarianceBasis:
         ratio: float = 1.01,
     ) -> None:
         mm = np.asarray(m, dtype=np.float64)
+        key = (tuple(mm.tolist()), float(dt), int(n_samples), float(ratio))
         n = float(n_samples)
         T = n * dt
-        centre, integrals = _oscillation_integrals(tuple(mm.tolist()), float(dt), float(ratio))
         k = len(terms)
         basis = np.zeros((k, k, mm.size, mm.size))
         stationary = [a for a, t in enumerate(terms) if t.stationary and not isinstance(t, Sine)]
-        # |H_i|^2 |H_j|^2 = 4 sin^4 sin^4 / (m_i m_j sin^2(pi f dt))^2
-        envelope = 4.0 / np.sin(np.pi * centre * dt) ** 4
-        spectra = {a: terms[a].psd_sampled(centre, dt) for a in stationary}
         for a in stationary:
             for b in stationary:
                 if b >= a:
-                    weight = envelope * spectra[a] * spectra[b]
-                    basis[a, b] = basis[b, a] = np.tensordot(weight, integrals, axes=(0, 0))
-        basis /= np.outer(mm, mm) ** 2
-        # two means over nested spans share only the shorter one: Cov ~ W_ij / max(L_i, L_j)
-        eff = n - 2.0 * mm
-        basis /= dt * np.maximum.outer(eff, eff)
+                    basis[a, b] = basis[b, a] = _whittle_block(terms[a], terms[b], *key)
         for a, term in enumerate(terms):
             if isinstance(term, Quantization):
-                basis[a, a] += UNIFORM_EXCESS_KURTOSIS * term.Q**4 * _fourth_cumulant(mm, dt, n)
+                basis[a, a] += (
+                    UNIFORM_EXCESS_KURTOSIS * term.Q**4 * _fourth_cumulant_cached(*key[:3])
+                )
             if isinstance(term, RateRamp):
                 for b in stationary:
-                    cross = 0.5 * term.R**2 * ramp_cross_basis(terms[b], mm, dt, n_samples)
+                    cross = 0.5 * term.R**2 * _ramp_block(terms[b], *key)
                     basis[a, b] += cross
                     basis[b, a] += cross
             if isinstance(term, Sine):

@@ -124,9 +124,7 @@ def _search(
             ]
             if smaller:  # a superset fits worse than its subset: restart from the subset's fit
                 better = min(smaller, key=lambda c: c.solution.chi2_fit)
-                again = _evaluate(
-                    subset, data, edf, penalty, misfit_level, [better.solution.cov]
-                )
+                again = _evaluate(subset, data, edf, penalty, misfit_level, [better.solution.cov])
                 if again.score < cand.score:
                     cand = again
             found[subset] = cand
