@@ -1,7 +1,8 @@
 r"""Automatic term selection (``terms="auto"``): an exhaustive search over the candidate subsets.
 
 The candidates are the five power-law terms Q, N, B, K, R, so there are only 31 non-empty
-subsets, and every one is fitted (a stepwise search can stop in a poor local optimum: on a
+subsets (30 with a noise term: a ramp alone would predict estimates without spread), and
+every one is fitted (a stepwise search can stop in a poor local optimum: on a
 30-minute example record it kept white noise alone, p = 0, while quantization + white + rate
 random walk fits with p = 0.6). Each subset is scored by the penalized Gaussian
 -2 log-likelihood of the Allan variance estimates,
@@ -116,6 +117,8 @@ def _search(
         for subset in itertools.combinations(specs, size):
             if n_params(subset) >= data.y.size:
                 continue
+            if not any(s.cls.stationary for s in subset):
+                continue  # a ramp alone has no noise: its estimates would have no spread
             cand = _evaluate(subset, data, edf, penalty, misfit_level, starts)
             smaller = [
                 found[sub]
