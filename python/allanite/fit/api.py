@@ -310,9 +310,15 @@ def fit(
         An overlapping Allan variance (one channel) or a 1-D record (then ``fs`` is needed and
         the octave grid is used).
     terms : "auto" or list
-        ``"auto"``: Q, N, B, K, R by stepwise selection on the penalized Gaussian likelihood
-        of the estimates, ``chi2 + log det C + penalty * parameters`` (so absent terms are not
-        invented; see ``FitResult.selection``).
+        ``"auto"``: Q, N, B, K, R chosen by an exhaustive search over their 31 subsets
+        (:mod:`allanite.fit.select`): every subset with a noise term is fitted from several
+        starts (diagonal EDF weights, the slope-method readouts, a better subset's fit);
+        among the subsets the goodness-of-fit test does not reject, the lowest penalized
+        Gaussian -2 log-likelihood ``chi2 + log det C + penalty * parameters`` wins (so absent
+        terms are not invented); only when every subset is rejected is the best one with a
+        model discrepancy returned, and ``FitResult.rejected`` says so. Every evaluated
+        subset is in ``FitResult.meta["subsets"]``, the per-term gains in
+        ``FitResult.selection``.
         Or a list of names (``"white"``/``"N"``, ``"quantization"``/``"Q"``, ``"flicker"``/
         ``"B"``, ``"rrw"``/``"K"``, ``"ramp"``/``"R"``, ``"markov"``, ``"sine"``), Term classes,
         or Term instances (starting values; a Flicker's ``f0`` is kept).

@@ -123,9 +123,11 @@ class FitResult:
     classic : ClassicReadout
         The IEEE slope-method readouts of the same curve (labelled, no uncertainty).
     selection : tuple of dict
-        For ``terms="auto"``: each candidate with the score gain of its last step (the
-        penalized -2 log-likelihood decrease when it was, or would have been, added) and
-        whether it was kept.
+        For ``terms="auto"``: each candidate with ``score_gain``, how much the penalized
+        -2 log-likelihood drops when the term is added to the chosen terms without it
+        (positive for a kept term), and whether it was kept. ``meta["subsets"]`` lists every
+        subset evaluated by the search (:mod:`allanite.fit.select`) with its score, chi2,
+        p-value and whether it is rejected.
     discrepancy : float
         Relative model discrepancy :math:`\delta` per tau (Paule-Mandel, see
         :func:`allanite.fit.gls.solve`): 0 when the terms fit the curve; otherwise the
