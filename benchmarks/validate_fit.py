@@ -1,7 +1,8 @@
 """Validation of the default fit (``terms="auto"``) on a designed grid of clean records.
 
 Each record is a sum of IEEE terms simulated by the library's own simulator with known
-coefficients (flicker by spectral synthesis of its exact sampled PSD, see FLICKER_METHOD). The magnitudes are designed from the crossing taus: the terms, ordered by their
+coefficients (flicker by spectral synthesis of its exact sampled PSD, see FLICKER_METHOD).
+The magnitudes are designed from the crossing taus: the terms, ordered by their
 Allan-variance slope (Q -2, N -1, B 0, K +1, R +2), each dominate the curve over a span drawn
 between 0.5 and 3 decades inside the usable tau range. The grid varies the term subset, the
 spans, the record length (1e5 to 1e7 samples), the sampling rate (10 Hz to 10 kHz), the tau
