@@ -275,13 +275,14 @@ def summarise(rows: list[dict[str, Any]]) -> dict[str, Any]:
             "all": _rate(sum(e["covered"] for e in every), len(every)),
         }
     extra = [r for r in rows if r["extra_terms"]]
+    # intervals that miss the truth although the term was fitted, worst first
     misses = [
-        (abs(e.get("z", math.inf)) if e.get("value") is not None else math.inf, r["case"], s, e)
+        (abs(e["z"]), r["case"], s, e)
         for r in rows
         for s, e in r["terms"].items()
-        if e["dominant"] and not e["covered"]
+        if e["dominant"] and not e["covered"] and e["value"] is not None
     ]
-    misses.sort(key=lambda m: -m[0] if math.isfinite(m[0]) else -1e300)
+    misses.sort(key=lambda m: -m[0])
     return {
         "records": n,
         "rejected": _rate(len(rejected), n),
@@ -299,8 +300,20 @@ def summarise(rows: list[dict[str, Any]]) -> dict[str, Any]:
                 for r in sorted(rejected, key=lambda r: r["p_value"])[:10]
             ],
             "missing_dominant": [
-                {"case": r["case"], "missing": r["missing_dominant"], "fitted": r["fitted_terms"]}
-                for r in missing[:10]
+                {
+                    "case": r["case"],
+                    "missing": r["missing_dominant"],
+                    "fitted": r["fitted_terms"],
+                    "dominant_decades": {
+                        s: r["terms"][s]["dominant_decades"] for s in r["missing_dominant"]
+                    },
+                }
+                for r in sorted(
+                    missing,
+                    key=lambda r: (
+                        -max(r["terms"][s]["dominant_decades"] for s in r["missing_dominant"])
+                    ),
+                )[:10]
             ],
             "coverage_misses": [
                 {"case": c, "term": s, "z": z, "value": e.get("value"), "truth": e["truth"]}
