@@ -143,7 +143,9 @@ def test_paths_and_datasheet_files(tmp_path):
     out = tmp_path / "table.csv"
     res.to_csv(out)
     head = out.read_text().splitlines()[0]
-    assert head.startswith("record,channel,n_samples,fs,units,p_value,Q,Q_low,Q_high,N,N_low")
+    assert head.startswith(
+        "record,channel,n_samples,fs,units,p_value,rejected,Q,Q_low,Q_high,N,N_low"
+    )
     assert head.endswith("check_N,check_B,status,pass,error")
     assert json.loads(res.to_json())["columns"] == list(res.columns)
 
@@ -179,6 +181,7 @@ def test_explicit_terms_and_progress():
     )
     assert [c for c in res.columns if not c.endswith(("_low", "_high"))][5:] == [
         "p_value",
+        "rejected",
         "N",
         "K",
         "check_K",
@@ -253,7 +256,7 @@ def test_cli_batch_glob_datasheet_and_exit_codes(tmp_path, capsys):
     )
     assert code == 0
     header = capsys.readouterr().out.splitlines()[0].split()
-    assert header == ["record", "channel", "p", "N", "K", "check_N", "status"]
+    assert header == ["record", "channel", "p", "rejected", "N", "K", "check_N", "status"]
 
 
 def test_cli_batch_bad_input(tmp_path, capsys):

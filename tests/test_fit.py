@@ -158,7 +158,7 @@ def test_well_specified_fit_has_no_discrepancy_and_reports_it():
     out = fitted.to_dict()
     assert out["discrepancy"] == 0
     assert out["misfit"] == [False] * fitted.tau.size
-    assert "misspecified" not in fitted.format_table()
+    assert "REJECTED" not in fitted.format_table()
 
 
 @pytest.mark.parametrize(

@@ -50,7 +50,7 @@ def test_misfit_is_flagged_and_carried_by_a_discrepancy(fits, key):
     assert fitted.misspecified
     assert fitted.discrepancy > 0
     assert fitted.misfit[0]  # the shortest tau, inside the sensor's filter, is missed
-    assert "misspecified" in fitted.format_table()
+    assert "model REJECTED" in fitted.format_table()
 
 
 @pytest.mark.parametrize("key", CHANNELS, ids=_ids)

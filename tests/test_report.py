@@ -362,7 +362,9 @@ def test_goodness_of_fit_is_reported_and_misfits_are_flagged() -> None:
     html_good = build_report([DeviceAnalysis(record, result, (good,))]).html
     html_bad = build_report([DeviceAnalysis(record, result, (bad,))]).html
     assert f"for {good.dof} degrees of freedom" in html_good
-    assert "does not describe" not in html_good
+    assert "REJECTED" not in html_good
+    assert "Model not rejected" in html_good
     assert good.p_value >= 0.001
     assert bad.p_value < 0.001
-    assert "does not describe this Allan curve" in html_bad
+    assert "Model REJECTED" in html_bad
+    assert 'class="rejected"' in html_bad

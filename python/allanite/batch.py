@@ -14,7 +14,8 @@ coefficient is reported as its estimate and its two-sided ``level`` confidence i
 (``<name>``, ``<name>_low``, ``<name>_high``), in the record's rate unit times seconds to
 the term's power (``N`` in unit*sqrt(s), ``B`` in unit, ``K`` in unit/sqrt(s)), together
 with the fit's goodness-of-fit ``p_value`` (generalized chi-square; below ``0.001`` the
-model misses the curve and the intervals include a model discrepancy).
+model misses the curve and the intervals include a model discrepancy) and ``rejected``
+(True when that test rejects the model: do not use its coefficients without looking at it).
 
 Datasheet. Either form of :mod:`allanite.datasheet`: the compact ``{"N": 0.01, "B":
 {"max": 0.003}}`` in the record's units, or the full ``{"limits": [{"quantity": "N", "max":
@@ -57,7 +58,8 @@ class BatchResult:
     Attributes
     ----------
     columns : tuple of str
-        ``record, channel, n_samples, fs, units, p_value``; per coefficient ``<name>,
+        ``record, channel, n_samples, fs, units, p_value, rejected`` (the goodness-of-fit
+        test rejects the fitted model); per coefficient ``<name>,
         <name>_low, <name>_high`` (estimate and ``level`` interval); ``check_<quantity>`` per
         datasheet limit (``pass``/``marginal``/``fail``/``missing``); ``status`` (the worst
         check, ``pass`` without a datasheet, ``error`` when the record or channel could not be
@@ -224,6 +226,7 @@ def _fit_row(single: Any, task: _Task, rate: str | None) -> dict[str, Any]:
     return {
         "coefficients": coefficients,
         "p_value": _finite(result.p_value),
+        "rejected": bool(result.rejected),
         # one status per limit, None where a limit is for another sensor (left out)
         "checks": [
             next((c.status for c in checks if c.limit is limit), None)
@@ -290,7 +293,7 @@ def _table(per_record: Sequence[list[dict[str, Any]]], task: _Task) -> BatchResu
     if any("coefficients" in row for rows in per_record for row in rows):
         _check_names(task.sheet, names)
     checks = _limit_columns(task.sheet)
-    columns = ["record", "channel", "n_samples", "fs", "units", "p_value"]
+    columns = ["record", "channel", "n_samples", "fs", "units", "p_value", "rejected"]
     for name in names:
         columns += [name, f"{name}_low", f"{name}_high"]
     columns += [*checks, "status", "pass", "error"]
@@ -308,6 +311,7 @@ def _table(per_record: Sequence[list[dict[str, Any]]], task: _Task) -> BatchResu
                     row.get("fs"),
                     row.get("units"),
                     row.get("p_value"),
+                    row.get("rejected"),
                     *[v for name in names for v in values.get(name, (None, None, None))],
                     *statuses,
                     status,

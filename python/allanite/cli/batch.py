@@ -147,6 +147,9 @@ def _text_table(result: Any) -> str:
         values = dict(zip(columns, row, strict=True))
         line = []
         for c in shown:
+            if c == "rejected":  # flag a rejected model plainly, leave the others blank
+                line.append("REJECTED" if values[c] else "-")
+                continue
             text = _cell(values[c])
             if f"{c}_low" in values and values[c] is not None:
                 text += f" [{_cell(values[c + '_low'])}, {_cell(values[c + '_high'])}]"

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from typing import Any
 
 from allanite.cli.progress import progress
@@ -17,7 +18,7 @@ from allanite.cli.record_options import (
 from allanite.io.atomic import atomic_output
 from allanite.variance import AllanResult
 
-__all__ = ["fit_result", "register", "run"]
+__all__ = ["fit_lines", "fit_result", "goodness", "register", "run"]
 
 EXAMPLES = """examples:
   allanite fit --example
@@ -87,6 +88,31 @@ def _model_of(fit: Any) -> Any:
     return getattr(fit, "model", fit)
 
 
+def fit_lines(fit: Any, level: float) -> list[str]:
+    """The text lines under the coefficients: interval level, chi-square, p, rejection."""
+    if getattr(fit, "method", None) != "gls":
+        return [f"brackets: {100 * level:g} % intervals"]
+    return fit.goodness_line(level).splitlines()
+
+
+def goodness(fit: Any, level: float) -> dict[str, Any]:
+    """Interval level and goodness of fit of one channel's fit, for the text and JSON output.
+
+    ``rejected`` is True when the generalized chi-square test rejects the fitted model
+    (p below the fit's ``misfit_level``); ``missed_taus`` are the taus it misses.
+    """
+    if getattr(fit, "method", None) != "gls":
+        return {"level": level}
+    return {
+        "level": level,
+        "chi2": fit.chi2,
+        "dof": fit.dof,
+        "p_value": fit.p_value,
+        "rejected": fit.rejected,
+        "missed_taus": fit.missed_taus.tolist(),
+    }
+
+
 def run(args: argparse.Namespace) -> int:
     """Run ``allanite fit``."""
     from allanite.datasheet import Datasheet, check_limits
@@ -125,6 +151,7 @@ def run(args: argparse.Namespace) -> int:
                 "units": result.units,
                 "checks": [k.to_dict() for k in checks],
                 "model": _model_of(fit).to_dict(),
+                **goodness(fit, args.level),
                 "coefficients": [
                     {
                         "term": r.term,
@@ -155,6 +182,13 @@ def run(args: argparse.Namespace) -> int:
     if args.output:
         with atomic_output(args.output) as tmp:
             tmp.write_text(_model_of(fits[0]).to_json(), encoding="utf-8")
+        if getattr(fits[0], "rejected", False):
+            print(
+                f"allanite fit: warning: wrote {args.output}, but the model of channel "
+                f"{record.channels[0]} is REJECTED by its goodness-of-fit test "
+                f"(p = {fits[0].p_value:.3g}); check it before use",
+                file=sys.stderr,
+            )
     failed = [k for item in channels for k in item["checks"] if k["status"] == "fail"]
     if args.json:
         summary = record.summary()
@@ -173,6 +207,8 @@ def run(args: argparse.Namespace) -> int:
                     f"  {row['quantity'] or row['term']:>26} {row['symbol']:>6} = "
                     f"{row['value']:.4g} {row['unit']}{interval}"
                 )
+            for line in fit_lines(fits[channels.index(item)], args.level):
+                print(f"  {line}")
             for check in item["checks"]:
                 value = "not measured" if check["value"] is None else f"{check['value']:.4g}"
                 print(f"  datasheet {check['quantity']}: {value} -> {check['status'].upper()}")

@@ -10,13 +10,15 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy import stats
 
-from allanite.fit.classic import classic_readout
+from allanite.fit.classic import ClassicReadout, classic_readout
+from allanite.fit.covariance import avar_covariance
 from allanite.fit.gls import GLSData, GLSSolution, score_interval, solve
 from allanite.fit.result import Coefficient, FitResult
 from allanite.fit.seed import SCALE, coefficient_bounds, seed_fit
+from allanite.fit.select import n_params, select_terms
 from allanite.fit.spec import TermSpec, resolve_terms
 from allanite.model import NoiseModel
-from allanite.terms import Flicker, Quantization, RateRamp, RateRandomWalk, White
+from allanite.terms import Flicker, Quantization, RateRamp, RateRandomWalk, Term, White
 from allanite.units import RECORD_UNIT, SYMBOL_POWERS, coefficient_unit, rate_unit
 from allanite.variance import AllanResult, avar
 
@@ -92,77 +94,28 @@ def _check_count(n_points: int, n_params: int, what: str) -> None:
 
 
 def _n_params(specs: Sequence[TermSpec]) -> int:
-    return sum(1 + (s.nonlinear_name is not None) for s in specs)
+    return n_params(specs)
 
 
-def _score(sol: GLSSolution, penalty: float) -> float:
-    """Return ``chi2 + log det C + penalty * parameters``.
-
-    The -2 log-likelihood of the Gaussian approximation under the covariance ``C`` the fit
-    used, plus the penalty, so that models with different covariances stay comparable. A
-    model that needed a model discrepancy (see :func:`allanite.fit.gls.solve`) pays for it
-    as one more parameter.
-    """
-    _, logdet = np.linalg.slogdet(sol.cov)
-    n_params = _n_params(sol.specs) + (sol.discrepancy > 0)
-    return float(sol.chi2_fit + logdet + penalty * n_params)
-
-
-def _select(
-    specs: list[TermSpec],
-    data: GLSData,
-    edf: NDArray[np.float64],
-    penalty: float,
-    misfit_level: float,
-) -> tuple[GLSSolution, tuple[dict[str, Any], ...]]:
-    """Stepwise selection by a penalized Gaussian likelihood of the Allan variance estimates.
-
-    Each model is scored by ``chi2 + log det C + penalty * p`` with its own fitted covariance
-    ``C`` (the Gaussian -2 log-likelihood of the estimates plus ``penalty`` per parameter).
-    Starting from the best single noise term, the term that lowers the score most is added
-    while it lowers it at all, and after each addition a term whose removal lowers the score
-    is dropped again (dropped terms do not return). An absent term lowers ``chi2`` by about a
-    one-sided chi-square with one degree of freedom, so with ``penalty = 9`` it enters with
-    probability of order 0.1 %.
-    """
-    starters = [s for s in specs if s.cls.stationary] or list(specs)
-    singles = [solve([s], data, edf, misfit_level=misfit_level) for s in starters]
-    best = int(np.argmin([_score(sol, penalty) for sol in singles]))
-    current, sol = [starters[best]], singles[best]
-    score = _score(sol, penalty)
-    records: dict[str, dict[str, Any]] = {}
-    dropped: list[TermSpec] = []
-    while True:
-        candidates = [s for s in specs if s not in current and s not in dropped]
-        if not candidates:
-            break
-        bigger = [solve([*current, c], data, edf, misfit_level=misfit_level) for c in candidates]
-        gains = [score - _score(big, penalty) for big in bigger]
-        for c, g in zip(candidates, gains, strict=True):
-            records[c.cls.type] = {"term": c.cls.type, "score_gain": float(g)}
-        j = int(np.argmax(gains))
-        if gains[j] <= 0:
-            break
-        current.append(candidates[j])
-        sol, score = bigger[j], score - gains[j]
-        while len(current) > 1:
-            smaller = [
-                solve(current[:i] + current[i + 1 :], data, edf, misfit_level=misfit_level)
-                for i in range(len(current))
-            ]
-            gains = [score - _score(small, penalty) for small in smaller]
-            i = int(np.argmax(gains))
-            if gains[i] <= 0:
-                break
-            records[current[i].cls.type] = {"term": current[i].cls.type, "score_gain": -gains[i]}
-            dropped.append(current.pop(i))
-            sol, score = smaller[i], score - gains[i]
-    kept = {s.cls.type for s in current}
-    order = [s.cls.type for s in specs]
-    return sol, tuple(
-        {"term": t, "score_gain": records.get(t, {}).get("score_gain", math.inf), "kept": t in kept}
-        for t in order
-    )
+def _slope_start(classic: ClassicReadout, data: GLSData, units: str) -> NDArray[np.float64] | None:
+    """Covariance of the estimates under the model read off the curve by the slope method."""
+    terms: list[Term] = []
+    for symbol, cls in (
+        ("Q", Quantization),
+        ("N", White),
+        ("B", Flicker),
+        ("K", RateRandomWalk),
+    ):
+        value = classic.values.get(symbol)
+        if value is not None and math.isfinite(value) and value > 0:
+            terms.append(cls(value))
+    if not terms:
+        return None
+    model = NoiseModel(tuple(terms), {"rate": units, "time": "s"})
+    cov = avar_covariance(model, data.m, data.dt, data.n_samples)
+    if not np.all(np.isfinite(cov)) or np.any(np.diag(cov) <= 0):
+        return None
+    return cov
 
 
 def _coefficients(sol: GLSSolution, model: NoiseModel) -> dict[str, Coefficient]:
@@ -240,9 +193,17 @@ def _fit_gls(
         units=units,
     )
     edf = np.asarray(result.edf, dtype=np.float64)[keep]
+    # read on the taus with enough independent differences, like the fit (the last
+    # octaves scatter and would otherwise set the "flat minimum")
+    classic = classic_readout(
+        result.tau[enough], np.sqrt(np.asarray(result.var, dtype=np.float64)[enough])
+    )
+    subsets: list[dict[str, Any]] = []
     if auto:
         usable = [s for s in specs if _n_params([s]) < int(keep.sum())]
-        sol, selection = _select(usable, data, edf, penalty, misfit_level)
+        slope = _slope_start(classic, data, units)
+        starts = [None] if slope is None else [None, slope]
+        sol, selection, subsets = select_terms(usable, data, edf, penalty, misfit_level, starts)
     else:
         sol, selection = solve(specs, data, edf, misfit_level=misfit_level), ()
     model = sol.model(units)
@@ -264,11 +225,14 @@ def _fit_gls(
         method="gls",
         # read on the taus with enough independent differences, like the fit (the last
         # octaves scatter and would otherwise set the "flat minimum")
-        classic=classic_readout(
-            result.tau[enough], np.sqrt(np.asarray(result.var, dtype=np.float64)[enough])
-        ),
+        classic=classic,
         selection=selection,
-        meta={"iterations": sol.iterations, "n_samples": result.n_samples, "fs": result.fs},
+        meta={
+            "iterations": sol.iterations,
+            "n_samples": result.n_samples,
+            "fs": result.fs,
+            "subsets": subsets,
+        },
         discrepancy=sol.discrepancy,
         misfit_level=misfit_level,
     )
@@ -355,9 +319,15 @@ def fit(
         An overlapping Allan variance (one channel) or a 1-D record (then ``fs`` is needed and
         the octave grid is used).
     terms : "auto" or list
-        ``"auto"``: Q, N, B, K, R by stepwise selection on the penalized Gaussian likelihood
-        of the estimates, ``chi2 + log det C + penalty * parameters`` (so absent terms are not
-        invented; see ``FitResult.selection``).
+        ``"auto"``: Q, N, B, K, R chosen by an exhaustive search over their 31 subsets
+        (:mod:`allanite.fit.select`): every subset with a noise term is fitted from several
+        starts (diagonal EDF weights, the slope-method readouts, a better subset's fit);
+        among the subsets the goodness-of-fit test does not reject, the lowest penalized
+        Gaussian -2 log-likelihood ``chi2 + log det C + penalty * parameters`` wins (so absent
+        terms are not invented); only when every subset is rejected is the best one with a
+        model discrepancy returned, and ``FitResult.rejected`` says so. Every evaluated
+        subset is in ``FitResult.meta["subsets"]``, the per-term gains in
+        ``FitResult.selection``.
         Or a list of names (``"white"``/``"N"``, ``"quantization"``/``"Q"``, ``"flicker"``/
         ``"B"``, ``"rrw"``/``"K"``, ``"ramp"``/``"R"``, ``"markov"``, ``"sine"``), Term classes,
         or Term instances (starting values; a Flicker's ``f0`` is kept).
@@ -392,8 +362,13 @@ def fit(
     min_ratio : float
         The GLS fit uses, from the shortest tau up, only taus at least this factor above the
         previous one used (2: octave spacing; a 100-point log grid is fitted on its
-        octave-like subset, in seconds, with the same result as the octave grid). 1 uses
-        every tau.
+        octave-like subset, in seconds, with the same result as the octave grid; the same
+        terms and a covariance with condition number below 1e6 for 10 to 1000 points). 1 uses
+        every tau: then neighbouring estimates correlate almost perfectly, the covariance is
+        nearly singular and the fit leans on the differences between neighbours, which the
+        approximation of the covariance does not capture (on a 1e6-sample Q + N + K record
+        with 85 log points it chose B + R instead of K); values below about 1.5 are not
+        recommended.
 
     Returns
     -------

@@ -17,7 +17,13 @@ record length and the span of the overlapping differences; calibrated against Mo
 * a sinusoid (a spectral line of power :math:`P = A^2/2`) adds the signal-times-noise term
   :math:`(2P/T)\,|H_i(f_0)|^2|H_j(f_0)|^2 S(f_0)`.
 
-The deterministic rate ramp does not add to the covariance.
+* a rate ramp ``R t`` adds the ramp-times-noise term. The ramp's differences are the
+  constant :math:`R\tau/\sqrt2`, so the estimate holds :math:`(R\tau\sqrt2/M)\sum_k d_k`
+  of the noise differences, and that sum telescopes to the record's ends:
+  :math:`(R\tau m/M)\,\Delta`, :math:`\Delta` = (triangular average of the last
+  :math:`2m-1` samples) - (same of the first), :math:`M = n + 1 - 2m`. It does not average
+  out with the record length like the noise's own term; on ramp-dominated records it is
+  the main uncertainty of ``R`` (see :func:`_end_difference_integrals`).
 
 References
 ----------
@@ -35,10 +41,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from allanite.model import NoiseModel
-from allanite.terms import Quantization, Sine, Term
+from allanite.terms import Quantization, RateRamp, Sine, Term
 from allanite.transfer import avar_transfer
 
-__all__ = ["CovarianceBasis", "avar_covariance", "avar_transfer"]
+__all__ = ["CovarianceBasis", "avar_covariance", "avar_transfer", "ramp_cross_basis"]
 
 #: excess kurtosis of a uniform quantization error
 UNIFORM_EXCESS_KURTOSIS = -1.2
@@ -96,6 +102,104 @@ def _oscillation_integrals(
     return centre, out
 
 
+def _cosines(
+    factors: Sequence[tuple[tuple[float, float], ...]],
+) -> list[tuple[float, float]]:
+    """Expand a product of sums of cosines ``sum c cos(2 pi w f)`` into one such sum."""
+    out = [(1.0, 0.0)]
+    for factor in factors:
+        out = [
+            (0.5 * c1 * c2, w) for c1, w1 in out for c2, w2 in factor for w in (w1 - w2, w1 + w2)
+        ]
+    return out
+
+
+@lru_cache(maxsize=8)
+def _end_difference_integrals(
+    m: tuple[float, ...], dt: float, n: float, ratio: float
+) -> tuple[NDArray[np.float64], ...]:
+    r"""Bin integrals of the covariance of the end differences :math:`\Delta_i` (model free).
+
+    With :math:`A_i(f) = \sin^2(\pi f\tau_i)/(m_i\sin\pi f\Delta t)^2` the triangular
+    window's transfer and one-sided PSD :math:`S`,
+
+    .. math:: \mathrm{Cov}(\Delta_i, \Delta_j) = 2\int_0^{f_s/2} S A_i A_j
+              [\cos 2\pi f c - \cos 2\pi f d]\,df
+              = \int_0^{f_s/2} \frac{S}{2 m_i^2 m_j^2 \sin^4 \pi f\Delta t}
+              P_i P_j P_{ij}\,df,
+
+    :math:`c = (m_i - m_j)\Delta t`, :math:`d = (n + 1 - m_i - m_j)\Delta t` (the distance
+    between the first and the last windows), :math:`P_i = 1 - \cos 2\pi f\tau_i`,
+    :math:`P_{ij} = \cos 2\pi f c - \cos 2\pi f d` (finite for a random walk: its
+    increments are stationary). In each geometric bin a factor that barely changes is taken at
+    the centre (in a cancellation-free product form); the others are expanded into cosines
+    and integrated exactly. Returns the bin centres and the ``(bins, T, T)`` integrals of
+    :math:`P_i P_j P_{ij}`.
+    """
+    tau = np.asarray(m) * dt
+    _, centre, width = _frequency_bins(float(tau.max()), dt, ratio)
+    size = tau.size
+    out = np.zeros((centre.size, size, size))
+    mm = np.asarray(m)
+    for i in range(size):
+        for j in range(i, size):
+            c = (mm[i] - mm[j]) * dt
+            d = (n + 1.0 - mm[i] - mm[j]) * dt
+            factors = (
+                (((1.0, 0.0), (-1.0, tau[i])), 2.0 * np.sin(np.pi * centre * tau[i]) ** 2, tau[i]),
+                (((1.0, 0.0), (-1.0, tau[j])), 2.0 * np.sin(np.pi * centre * tau[j]) ** 2, tau[j]),
+                (
+                    ((1.0, c), (-1.0, d)),
+                    2.0 * np.sin(np.pi * (d + c) * centre) * np.sin(np.pi * (d - c) * centre),
+                    max(abs(c), abs(d)),
+                ),
+            )
+            oscillates = [width * top >= 0.05 for _, _, top in factors]
+            acc = np.zeros(centre.size)
+            for pattern in range(8):
+                chosen = [bool(pattern >> k & 1) for k in range(3)]
+                mask = np.ones(centre.size, dtype=bool)
+                for k in range(3):
+                    mask &= oscillates[k] if chosen[k] else ~oscillates[k]
+                if not np.any(mask):
+                    continue
+                fc, wc = centre[mask], width[mask]
+                value = wc.copy()
+                for k in range(3):
+                    if not chosen[k]:
+                        value *= factors[k][1][mask]
+                expanded = _cosines([factors[k][0] for k in range(3) if chosen[k]])
+                if len(expanded) > 1 or expanded[0][1] != 0.0:
+                    value *= sum(
+                        coef * np.cos(2 * np.pi * w * fc) * np.sinc(w * wc) for coef, w in expanded
+                    )
+                acc[mask] = value
+            out[:, i, j] = out[:, j, i] = acc
+    out.setflags(write=False)
+    centre.setflags(write=False)
+    return centre, out
+
+
+def ramp_cross_basis(
+    term: Term, m: NDArray[np.float64], dt: float, n_samples: int, *, ratio: float = 1.01
+) -> NDArray[np.float64]:
+    r"""Covariance added by a unit rate ramp (``R = 1``) times the unit noise ``term``.
+
+    :math:`\mathrm{Cov} = \tau_i\tau_j\,m_i m_j/(M_i M_j)\,\mathrm{Cov}(\Delta_i,
+    \Delta_j)` under ``term`` (see the module and :func:`_end_difference_integrals`);
+    scale by ``R**2`` times the term's weight.
+    """
+    mm = np.asarray(m, dtype=np.float64)
+    n = float(n_samples)
+    centre, integrals = _end_difference_integrals(tuple(mm.tolist()), float(dt), n, float(ratio))
+    weight = term.psd_sampled(centre, dt) / (2.0 * np.sin(np.pi * centre * dt) ** 4)
+    cov_delta = np.tensordot(weight, integrals, axes=(0, 0)) / np.outer(mm, mm) ** 2
+    tau = mm * dt
+    big_m = np.maximum(n + 1.0 - 2.0 * mm, 1.0)
+    factor = tau * mm / big_m
+    return np.asarray(np.outer(factor, factor) * cov_delta, dtype=np.float64)
+
+
 def _fourth_cumulant(m: NDArray[np.float64], dt: float, n: float) -> NDArray[np.float64]:
     """``sum_p A_i(p) A_j(p) / (M_i M_j)`` for the quantization fourth-cumulant term.
 
@@ -136,6 +240,41 @@ def _piecewise(
     return np.where(inside, value[np.clip(idx, 0, value.size - 1)], 0.0)
 
 
+@lru_cache(maxsize=256)
+def _whittle_block(
+    a: Term, b: Term, m: tuple[float, ...], dt: float, n_samples: int, ratio: float
+) -> NDArray[np.float64]:
+    """Whittle covariance block of the unit stationary terms ``a`` and ``b`` (cached)."""
+    mm = np.asarray(m)
+    n = float(n_samples)
+    centre, integrals = _oscillation_integrals(m, dt, ratio)
+    # |H_i|^2 |H_j|^2 = 4 sin^4 sin^4 / (m_i m_j sin^2(pi f dt))^2
+    envelope = 4.0 / np.sin(np.pi * centre * dt) ** 4
+    weight = envelope * a.psd_sampled(centre, dt) * b.psd_sampled(centre, dt)
+    block = np.tensordot(weight, integrals, axes=(0, 0)) / np.outer(mm, mm) ** 2
+    # two means over nested spans share only the shorter one: Cov ~ W_ij / max(L_i, L_j)
+    eff = n - 2.0 * mm
+    block /= dt * np.maximum.outer(eff, eff)
+    block.setflags(write=False)
+    return block
+
+
+@lru_cache(maxsize=32)
+def _fourth_cumulant_cached(m: tuple[float, ...], dt: float, n_samples: int) -> NDArray[np.float64]:
+    out = _fourth_cumulant(np.asarray(m), dt, float(n_samples))
+    out.setflags(write=False)
+    return out
+
+
+@lru_cache(maxsize=256)
+def _ramp_block(
+    term: Term, m: tuple[float, ...], dt: float, n_samples: int, ratio: float
+) -> NDArray[np.float64]:
+    out = ramp_cross_basis(term, np.asarray(m), dt, n_samples, ratio=ratio)
+    out.setflags(write=False)
+    return out
+
+
 class CovarianceBasis:
     r"""The covariance of the AVAR estimates as a quadratic form in the term weights.
 
@@ -172,27 +311,26 @@ class CovarianceBasis:
         ratio: float = 1.01,
     ) -> None:
         mm = np.asarray(m, dtype=np.float64)
+        key = (tuple(mm.tolist()), float(dt), int(n_samples), float(ratio))
         n = float(n_samples)
         T = n * dt
-        centre, integrals = _oscillation_integrals(tuple(mm.tolist()), float(dt), float(ratio))
         k = len(terms)
         basis = np.zeros((k, k, mm.size, mm.size))
         stationary = [a for a, t in enumerate(terms) if t.stationary and not isinstance(t, Sine)]
-        # |H_i|^2 |H_j|^2 = 4 sin^4 sin^4 / (m_i m_j sin^2(pi f dt))^2
-        envelope = 4.0 / np.sin(np.pi * centre * dt) ** 4
-        spectra = {a: terms[a].psd_sampled(centre, dt) for a in stationary}
         for a in stationary:
             for b in stationary:
                 if b >= a:
-                    weight = envelope * spectra[a] * spectra[b]
-                    basis[a, b] = basis[b, a] = np.tensordot(weight, integrals, axes=(0, 0))
-        basis /= np.outer(mm, mm) ** 2
-        # two means over nested spans share only the shorter one: Cov ~ W_ij / max(L_i, L_j)
-        eff = n - 2.0 * mm
-        basis /= dt * np.maximum.outer(eff, eff)
+                    basis[a, b] = basis[b, a] = _whittle_block(terms[a], terms[b], *key)
         for a, term in enumerate(terms):
             if isinstance(term, Quantization):
-                basis[a, a] += UNIFORM_EXCESS_KURTOSIS * term.Q**4 * _fourth_cumulant(mm, dt, n)
+                basis[a, a] += (
+                    UNIFORM_EXCESS_KURTOSIS * term.Q**4 * _fourth_cumulant_cached(*key[:3])
+                )
+            if isinstance(term, RateRamp):
+                for b in stationary:
+                    cross = 0.5 * term.R**2 * _ramp_block(terms[b], *key)
+                    basis[a, b] += cross
+                    basis[b, a] += cross
             if isinstance(term, Sine):
                 f0 = float(term.frequency) % (1.0 / dt)
                 f0 = min(f0, 1.0 / dt - f0)

@@ -297,6 +297,7 @@ def solve(
     edf: NDArray[np.float64],
     *,
     cov: NDArray[np.float64] | None = None,
+    start: NDArray[np.float64] | None = None,
     iterations: int = 10,
     rtol: float = 1e-4,
     misfit_level: float = 0.001,
@@ -329,6 +330,9 @@ def solve(
         Equivalent degrees of freedom of the points (for the first, diagonal weights only).
     cov : numpy.ndarray, optional
         A fixed covariance of the estimates (then no reweighting and no discrepancy).
+    start : numpy.ndarray, optional
+        Covariance of the estimates to start the reweighting from (default: diagonal, from
+        ``edf``). The reweighted fit is not convex; :func:`allanite.fit` tries several starts.
     iterations : int
         Maximum number of covariance updates.
     rtol : float
@@ -345,9 +349,14 @@ def solve(
     """
     specs = tuple(specs)
     fixed = cov is not None
-    start = cov if cov is not None else _initial_cov(data, edf)
+    if cov is not None:
+        first = cov
+    elif start is not None:
+        first = start
+    else:
+        first = _initial_cov(data, edf)
     theta, log_phi, current, basis, done = _model_fit(
-        specs, data, start, None, fixed, iterations, rtol
+        specs, data, first, None, fixed, iterations, rtol
     )
     model_cov = current
     n_params = len(specs) + log_phi.size

@@ -124,9 +124,11 @@ class FitResult:
     classic : ClassicReadout
         The IEEE slope-method readouts of the same curve (labelled, no uncertainty).
     selection : tuple of dict
-        For ``terms="auto"``: each candidate with the score gain of its last step (the
-        penalized -2 log-likelihood decrease when it was, or would have been, added) and
-        whether it was kept.
+        For ``terms="auto"``: each candidate with ``score_gain``, how much the penalized
+        -2 log-likelihood drops when the term is added to the chosen terms without it
+        (positive for a kept term), and whether it was kept. ``meta["subsets"]`` lists every
+        subset evaluated by the search (:mod:`allanite.fit.select`) with its score, chi2,
+        p-value and whether it is rejected.
     discrepancy : float
         Relative model discrepancy :math:`\delta` per tau (Paule-Mandel, see
         :func:`allanite.fit.gls.solve`): 0 when the terms fit the curve; otherwise the
@@ -159,6 +161,53 @@ class FitResult:
     def misspecified(self) -> bool:
         """True when the goodness-of-fit test rejects the model at ``misfit_level``."""
         return self.method == "gls" and bool(self.p_value < self.misfit_level)
+
+    @property
+    def rejected(self) -> bool:
+        """True when the fitted model is rejected by its goodness-of-fit test.
+
+        The generalized chi-square p-value is below ``misfit_level`` (0.001 by default):
+        the model does not describe the Allan curve within the estimates' uncertainty, and
+        the coefficients should not be used without looking at :attr:`missed_taus`. With
+        ``terms="auto"`` this happens only when no subset of the candidate terms fits.
+        """
+        return self.misspecified
+
+    @property
+    def missed_taus(self) -> NDArray[np.float64]:
+        """The taus (seconds) the model misses singly (see :attr:`misfit`)."""
+        return np.asarray(self.tau[self.misfit], dtype=np.float64)
+
+    def goodness_line(self, level: float = 0.95) -> str:
+        """One line: interval level, generalized chi-square, p, and whether rejected.
+
+        Empty for ``method="seed"`` (no goodness-of-fit test).
+        """
+        if self.method != "gls":
+            return ""
+        text = (
+            f"brackets: {100 * level:g} % intervals; chi2 = {self.chi2:.3g} for {self.dof} dof "
+            f"(correlated GLS), p = {self.p_value:.3g}"
+        )
+        if not self.rejected:
+            return text + ": model not rejected"
+        return text + "\n" + self.rejection_warning()
+
+    def rejection_warning(self) -> str:
+        """The plain warning of a rejected fit (empty when the fit is not rejected)."""
+        if not self.rejected:
+            return ""
+        missed = self.missed_taus
+        where = ", ".join(f"{t:.3g}" for t in missed) if missed.size else "none singly"
+        text = (
+            f"WARNING: model REJECTED (p = {self.p_value:.3g} < {self.misfit_level:g}): the "
+            f"terms do not describe the Allan curve; missed at tau [s] = {where}"
+        )
+        if self.discrepancy > 0:
+            text += (
+                f"; intervals include a model discrepancy of {100 * self.discrepancy:.3g} % per tau"
+            )
+        return text
 
     @property
     def misfit(self) -> NDArray[np.bool_]:
@@ -257,18 +306,7 @@ class FitResult:
                 f"{row['high']:>12.4g}  {row['unit']}"
             )
         if self.method == "gls":
-            lines.append(
-                f"chi2 = {self.chi2:.3g} for {self.dof} dof (correlated GLS), "
-                f"p = {self.p_value:.3g}"
-            )
-            if self.discrepancy > 0:
-                bad = self.tau[self.misfit]
-                where = ", ".join(f"{t:.3g}" for t in bad) if bad.size else "none singly"
-                lines.append(
-                    f"model misspecified (p < {self.misfit_level:g}): intervals include a "
-                    f"model discrepancy of {100 * self.discrepancy:.3g} % per tau; "
-                    f"missed at tau [s] = {where}"
-                )
+            lines.append(self.goodness_line(level))
         return "\n".join(lines)
 
     def to_dict(self, level: float = 0.95) -> dict[str, Any]:
@@ -286,6 +324,9 @@ class FitResult:
             "fitted": self.fitted.tolist(),
             "residuals": self.residuals.tolist(),
             "misfit": self.misfit.tolist(),
+            "rejected": self.rejected,
+            "missed_taus": self.missed_taus.tolist(),
+            "misfit_level": self.misfit_level,
             "discrepancy": self.discrepancy,
             "good_range": self.good_range,
             "classic": {"label": self.classic.label, **self.classic.values},

@@ -287,7 +287,7 @@ MISFIT_P = 0.001
 
 
 def _goodness(fit: Any) -> str:
-    """Goodness of fit of a FitResult, with a warning when the model misses the curve."""
+    """Goodness of fit of a FitResult; a rejected model is said plainly, in red."""
     chi2, dof, p = (getattr(fit, k, None) for k in ("chi2", "dof", "p_value"))
     if chi2 is None or dof is None or p is None or p != p:
         return ""
@@ -295,13 +295,20 @@ def _goodness(fit: Any) -> str:
         f"Generalised χ² = {chi2:.4g} for {dof} degrees of freedom (correlations between τ "
         f"accounted for), p = {p:.2g}."
     )
-    if p < MISFIT_P:
-        return (
-            f'<div class="warn">{h.escape(text)} The fitted model does not describe this '
-            "Allan curve within its uncertainty: look at the model plot before using the "
-            "coefficients (a term may be missing, e.g. quantisation of a coarse sensor).</div>"
+    rejected = getattr(fit, "rejected", p < MISFIT_P)
+    if rejected:
+        missed = getattr(fit, "missed_taus", None)
+        where = (
+            ""
+            if missed is None or len(missed) == 0
+            else " Missed at τ = " + ", ".join(f"{t:.3g}" for t in missed) + " s."
         )
-    return f'<p class="note">{h.escape(text)}</p>'
+        return (
+            f'<div class="rejected">Model REJECTED: {h.escape(text)} The fitted terms do not '
+            "describe this Allan curve within its uncertainty, so its coefficients are not "
+            f"trustworthy; look at the model plot before using them.{h.escape(where)}</div>"
+        )
+    return f'<p class="note">{h.escape(text)} Model not rejected.</p>'
 
 
 def _rate_adev(device: DeviceAnalysis, channel: int, level: float) -> tuple[Any, ...]:

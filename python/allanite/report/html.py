@@ -38,6 +38,8 @@ figcaption { color: #5b6773; font-size: 0.88em; margin-top: 4px; }
 .verdict { font-size: 1.1em; margin: 8px 0 14px; }
 .warn { background: #fff6e0; border-left: 4px solid #d68910; padding: 6px 10px; margin: 6px 0; }
 .note { color: #5b6773; font-size: 0.88em; }
+.rejected { background: #fdecea; border-left: 4px solid #c0392b; color: #c0392b;
+            padding: 6px 10px; margin: 6px 0; font-weight: 600; }
 """
 
 

@@ -1,0 +1,85 @@
+"""Coverage of the 95 % intervals of deterministic components: rate ramp R and sine amplitude.
+
+* ramp: white N = 0.01 deg/sqrt(s) + ramp R = 1e-5 deg/s^2, 200 Hz, 1e4 s (issue 12), default
+  fit (``terms="auto"``); the interval must carry the ramp x noise cross term;
+* sine: white N = 0.01 deg/sqrt(s) + sine 0.02 deg/s at 0.05 Hz, 100 Hz, 2000 s,
+  ``terms=["white", "sine"]``.
+
+Usage: ``nice python benchmarks/fit_deterministic_coverage.py [--seeds 100]``; results in
+``benchmarks/results/fit_deterministic_coverage.json``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+import allanite
+from allanite.fit import fit
+from allanite.model import NoiseModel
+from allanite.terms import Sine, White
+
+RESULTS = Path(__file__).resolve().parent / "results" / "fit_deterministic_coverage.json"
+
+
+def ramp(seeds: int) -> dict[str, float]:
+    """Coverage of R and the spread of its standardised error."""
+    fs, n, big_r, big_n = 200.0, 2_000_000, 1e-5, 0.01
+    covered, z, half = 0, [], []
+    for seed in range(seeds):
+        rng = np.random.default_rng(100 + seed)
+        x = big_n * math.sqrt(fs) * rng.standard_normal(n) + big_r * np.arange(n) / fs
+        f = fit(allanite.avar(x, fs, units="deg/s"))
+        lo, hi = f["R"].ci(0.95)
+        covered += lo <= big_r <= hi
+        z.append((f["R"].value - big_r) / f["R"].stderr)
+        half.append((hi - lo) / 2 / big_r)
+    return {
+        "seeds": seeds,
+        "covered": covered,
+        "z_mean": float(np.mean(z)),
+        "z_sd": float(np.std(z)),
+        "relative_half_width": float(np.median(half)),
+    }
+
+
+def sine(seeds: int) -> dict[str, float]:
+    """Coverage of the sine amplitude."""
+    amplitude, f0, fs, n = 0.02, 0.05, 100.0, 200_000
+    model = NoiseModel(
+        (White(N=0.01), Sine(amplitude=amplitude, frequency=f0)), {"rate": "deg/s", "time": "s"}
+    )
+    covered, z = 0, []
+    for seed in range(seeds):
+        x = np.asarray(model.simulate(n, fs, seed=seed)).ravel()
+        f = fit(allanite.avar(x, fs, units="deg/s"), ["white", "sine"])
+        name = next(k for k in f.coefficients if k.startswith("amp"))
+        lo, hi = f[name].ci(0.95)
+        covered += lo <= amplitude <= hi
+        z.append((f[name].value - amplitude) / f[name].stderr)
+    return {
+        "seeds": seeds,
+        "covered": covered,
+        "z_mean": float(np.mean(z)),
+        "z_sd": float(np.std(z)),
+    }
+
+
+def main() -> int:
+    """Run both and write the results."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seeds", type=int, default=100)
+    args = parser.parse_args()
+    out = {"ramp": ramp(args.seeds), "sine": sine(args.seeds)}
+    RESULTS.parent.mkdir(parents=True, exist_ok=True)
+    RESULTS.write_text(json.dumps(out, indent=1), encoding="utf-8")
+    print(json.dumps(out, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,447 @@
+"""Validation of the default fit (``terms="auto"``) on a designed grid of clean records.
+
+Each record is a sum of IEEE terms simulated by the library's own simulator with known
+coefficients (flicker by spectral synthesis of its exact sampled PSD, see FLICKER_METHOD).
+The magnitudes are designed from the crossing taus: the terms, ordered by their
+Allan-variance slope (Q -2, N -1, B 0, K +1, R +2), each dominate the curve over a span drawn
+between 0.5 and 3 decades inside the usable tau range. The grid varies the term subset, the
+spans, the record length (1e5 to 1e7 samples), the sampling rate (10 Hz to 10 kHz), the tau
+grid (log, the default, and octave), the input (rate or angle) and the rate unit (deg/s or
+rad/s). Every record is fitted with the defaults and scored:
+
+* rejected: the fitted model's goodness-of-fit p-value is below 0.001 (goal <= 0.5 %);
+* dominant term missing: a true term that carries more than half of the Allan variance at
+  some fitted tau is absent from the model (goal <= 1 %); also counted for terms that do so
+  over at least half a decade of the fitted taus (a term dominating only the last one or two
+  points, with a few degrees of freedom, cannot be told from its neighbour);
+* coverage: per term, how often the 95 % interval contains the truth, over the records where
+  that term dominates somewhere (goal 93-97 %); also over all records containing the term;
+* the worst cases (rejections, misses, the largest coverage misses in standard errors).
+
+Usage::
+
+    nice python benchmarks/validate_fit.py --quick            # 48 records, about 2 min
+    nice python benchmarks/validate_fit.py                    # 336 records
+    nice python benchmarks/validate_fit.py --limit 100        # the first 100 of the full grid
+
+Results: ``benchmarks/results/validate_fit_{quick,full}.json`` and ``.md``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+import allanite
+from allanite.fit import fit
+from allanite.model import NoiseModel
+from allanite.terms import Flicker, Quantization, RateRamp, RateRandomWalk, Term, White
+from allanite.terms.flicker import PLATEAU
+
+RESULTS = Path(__file__).resolve().parent / "results"
+
+#: the candidate terms by their Allan-variance slope in tau
+ORDER = ("Q", "N", "B", "K", "R")
+SUBSETS = (
+    ("N",),
+    ("Q", "N"),
+    ("N", "K"),
+    ("N", "B"),
+    ("Q", "N", "K"),
+    ("N", "B", "K"),
+    ("N", "R"),
+    ("N", "K", "R"),
+    ("Q", "N", "B", "K"),
+    ("Q", "N", "B", "K", "R"),
+    ("B", "K"),
+    ("Q", "N", "B"),
+)
+LEVEL = 0.95
+#: flicker by spectral synthesis of the Flicker term's exact sampled PSD at every length: the
+#: streaming bank that "auto" uses above 2**21 samples misses the term's Allan variance at the
+#: first taus by tens of standard errors on long records (results/validate_fit_bank_flicker.md)
+FLICKER_METHOD = "spectral"
+#: a term "clearly dominates" when it carries most of the variance over this many decades
+CLEAR_DECADES = 0.5
+
+
+@dataclass(frozen=True)
+class Case:
+    """One record of the grid."""
+
+    index: int
+    terms: tuple[str, ...]
+    n: int
+    fs: float
+    taus: str
+    input: str
+    unit: str
+    seed: int
+
+
+def _avar_unit(symbol: str, tau: float) -> float:
+    """Allan variance of the unit-coefficient asymptote of ``symbol`` at ``tau``."""
+    return {
+        "Q": 3.0 / tau**2,
+        "N": 1.0 / tau,
+        "B": PLATEAU,
+        "K": tau / 3.0,
+        "R": tau**2 / 2.0,
+    }[symbol]
+
+
+def design(case: Case) -> NoiseModel:
+    """Coefficients such that each term dominates over a span of 0.5-3 decades.
+
+    The first term's coefficient is 1e-2 (rate unit); its span starts at the shortest tau
+    (or later, for a term rising with tau), and each following term takes over at the end
+    of the previous span (equal asymptotes there). Spans are drawn from the seed.
+    """
+    rng = np.random.default_rng([case.seed, 7])
+    dt = 1.0 / case.fs
+    tau_hi = case.n * dt / 8.0
+    decades = math.log10(tau_hi / dt)
+    k = len(case.terms)
+    spans = rng.uniform(0.5, 3.0, size=k)
+    # the middle terms must fit inside the usable range; the outer ones may extend beyond it
+    inner = spans[1:-1].sum() if k > 2 else 0.0
+    if inner > decades - 0.6:
+        spans[1:-1] *= (decades - 0.6) / inner
+    # the first crossing: somewhere such that the whole chain is centred in the range
+    total_inner = spans[1:-1].sum() if k > 2 else 0.0
+    slack = max(decades - total_inner, 0.3)
+    first_cross = math.log10(dt) + rng.uniform(0.3, max(slack - 0.3, 0.31))
+    if k == 1:
+        first_cross = math.log10(tau_hi)
+    coef = {case.terms[0]: 1e-2}
+    log_tau = first_cross
+    for j in range(1, k):
+        prev, cur = case.terms[j - 1], case.terms[j]
+        tau = 10.0**log_tau
+        level = coef[prev] ** 2 * _avar_unit(prev, tau)
+        coef[cur] = math.sqrt(level / _avar_unit(cur, tau))
+        log_tau += spans[j] if j < k - 1 else 0.0
+    factor = 1.0 if case.unit == "deg/s" else math.pi / 180.0
+    build: dict[str, type[Term]] = {
+        "Q": Quantization,
+        "N": White,
+        "B": Flicker,
+        "K": RateRandomWalk,
+        "R": RateRamp,
+    }
+    terms = tuple(build[s](coef[s] * factor) for s in case.terms)
+    return NoiseModel(terms, {"rate": case.unit, "time": "s"})
+
+
+def grid(quick: bool) -> list[Case]:
+    """The designed grid (deterministic)."""
+    rng = np.random.default_rng(12)
+    cases: list[Case] = []
+    if quick:
+        lengths, rates, reps = (100_000, 300_000), (10.0, 100.0, 1000.0, 10_000.0), 1
+    else:
+        lengths, rates, reps = (100_000, 1_000_000, 10_000_000), (10.0, 100.0, 1000.0, 10_000.0), 1
+    for subset in SUBSETS:
+        for n in lengths:
+            for fs in rates if not quick else rng.choice(rates, size=2, replace=False):
+                for _ in range(reps):
+                    if n >= 10_000_000 and rng.uniform() > 0.35:
+                        continue  # a sample of the long records (they dominate the run time)
+                    cases.append(
+                        Case(
+                            index=len(cases),
+                            terms=subset,
+                            n=int(n),
+                            fs=float(fs),
+                            taus=str(rng.choice(["log", "octave"], p=[0.6, 0.4])),
+                            input=str(rng.choice(["rate", "angle"])),
+                            unit=str(rng.choice(["deg/s", "rad/s"], p=[0.7, 0.3])),
+                            seed=int(rng.integers(1 << 31)),
+                        )
+                    )
+    if not quick:  # more medium records so that the grid has >= 300 records
+        extra = []
+        for j in range(200):
+            subset = SUBSETS[j % len(SUBSETS)]
+            extra.append(
+                Case(
+                    index=len(cases) + j,
+                    terms=subset,
+                    n=int(rng.choice([100_000, 300_000, 1_000_000, 3_000_000])),
+                    fs=float(rng.choice([10.0, 100.0, 400.0, 1000.0, 2000.0, 10_000.0])),
+                    taus=str(rng.choice(["log", "octave"], p=[0.6, 0.4])),
+                    input=str(rng.choice(["rate", "angle"])),
+                    unit=str(rng.choice(["deg/s", "rad/s"], p=[0.7, 0.3])),
+                    seed=int(rng.integers(1 << 31)),
+                )
+            )
+        cases += extra
+    return cases
+
+
+def run_case(case: Case) -> dict[str, Any]:
+    """Simulate, fit with the defaults, score."""
+    model = design(case)
+    dt = 1.0 / case.fs
+    t0 = time.perf_counter()
+    x = np.asarray(
+        model.simulate(
+            case.n, case.fs, output=case.input, seed=case.seed, flicker_method=FLICKER_METHOD
+        ),
+        dtype=np.float64,
+    ).ravel()
+    t1 = time.perf_counter()
+    res = allanite.avar(x, case.fs, input=case.input, taus=case.taus, units=case.unit)
+    f = fit(res)
+    t2 = time.perf_counter()
+    truth = model.coefficients()
+    symbols = dict(zip(case.terms, model.terms, strict=True))
+    comp = {s: np.asarray(term.avar(f.tau, dt), dtype=np.float64) for s, term in symbols.items()}
+    total = sum(comp.values())
+    dominant = {s: bool(np.any(c > 0.5 * total)) for s, c in comp.items()}
+    # the span (decades) of fitted taus over which the term carries most of the variance
+    span = {
+        s: float(np.log10(f.tau[c > 0.5 * total].max() / f.tau[c > 0.5 * total].min()))
+        if dominant[s]
+        else -1.0
+        for s, c in comp.items()
+    }
+    terms: dict[str, Any] = {}
+    for s in case.terms:
+        entry: dict[str, Any] = {
+            "truth": truth[s],
+            "dominant": dominant[s],
+            "dominant_decades": span[s],
+        }
+        if s in f.coefficients:
+            c = f.coefficients[s]
+            lo, hi = c.ci(LEVEL)
+            entry.update(
+                value=c.value,
+                low=lo,
+                high=hi,
+                covered=bool(lo <= truth[s] <= hi),
+                z=(c.value - truth[s]) / c.stderr if c.stderr > 0 else math.inf,
+            )
+        else:
+            entry.update(value=None, covered=False)
+        terms[s] = entry
+    extra = [s for s in f.coefficients if s not in case.terms]
+    return {
+        "case": case.__dict__,
+        "fitted_terms": list(f.coefficients),
+        "extra_terms": extra,
+        "p_value": f.p_value,
+        "rejected": bool(f.rejected),
+        "missing_dominant": [s for s in case.terms if dominant[s] and s not in f.coefficients],
+        "missing_clear": [
+            s for s in case.terms if span[s] >= CLEAR_DECADES and s not in f.coefficients
+        ],
+        "terms": terms,
+        "n_points": int(f.tau.size),
+        "simulate_s": t1 - t0,
+        "fit_s": t2 - t1,
+    }
+
+
+def _rate(k: int, n: int) -> dict[str, Any]:
+    return {"count": k, "of": n, "fraction": k / n if n else math.nan}
+
+
+def summarise(rows: list[dict[str, Any]]) -> dict[str, Any]:
+    """Fractions, per-term coverage and the worst cases."""
+    n = len(rows)
+    rejected = [r for r in rows if r["rejected"]]
+    missing = [r for r in rows if r["missing_dominant"]]
+    missing_clear = [r for r in rows if r["missing_clear"]]
+    coverage: dict[str, Any] = {}
+    for s in ORDER:
+        dom = [r["terms"][s] for r in rows if s in r["terms"] and r["terms"][s]["dominant"]]
+        every = [r["terms"][s] for r in rows if s in r["terms"]]
+        clear = [e for e in every if e["dominant_decades"] >= CLEAR_DECADES]
+        fitted = [e for e in every if e["value"] is not None]
+        coverage[s] = {
+            "dominant": _rate(sum(e["covered"] for e in dom), len(dom)),
+            "clear": _rate(sum(e["covered"] for e in clear), len(clear)),
+            "fitted": _rate(sum(e["covered"] for e in fitted), len(fitted)),
+            "all": _rate(sum(e["covered"] for e in every), len(every)),
+        }
+    extra = [r for r in rows if r["extra_terms"]]
+    # intervals that miss the truth although the term was fitted, worst first
+    misses = [
+        (abs(e["z"]), r["case"], s, e)
+        for r in rows
+        for s, e in r["terms"].items()
+        if e["dominant"] and not e["covered"] and e["value"] is not None
+    ]
+    misses.sort(key=lambda m: -m[0])
+    return {
+        "records": n,
+        "rejected": _rate(len(rejected), n),
+        "missing_dominant": _rate(len(missing), n),
+        "missing_clear": _rate(len(missing_clear), n),
+        "extra_terms": _rate(len(extra), n),
+        "coverage_95": coverage,
+        "fit_seconds": {
+            "median": float(np.median([r["fit_s"] for r in rows])),
+            "max": float(np.max([r["fit_s"] for r in rows])),
+        },
+        "worst": {
+            "rejected": [
+                {"case": r["case"], "p_value": r["p_value"], "fitted": r["fitted_terms"]}
+                for r in sorted(rejected, key=lambda r: r["p_value"])[:10]
+            ],
+            "missing_dominant": [
+                {
+                    "case": r["case"],
+                    "missing": r["missing_dominant"],
+                    "fitted": r["fitted_terms"],
+                    "dominant_decades": {
+                        s: r["terms"][s]["dominant_decades"] for s in r["missing_dominant"]
+                    },
+                }
+                for r in sorted(
+                    missing,
+                    key=lambda r: (
+                        -max(r["terms"][s]["dominant_decades"] for s in r["missing_dominant"])
+                    ),
+                )[:10]
+            ],
+            "coverage_misses": [
+                {"case": c, "term": s, "z": z, "value": e.get("value"), "truth": e["truth"]}
+                for z, c, s, e in misses[:10]
+            ],
+        },
+    }
+
+
+def markdown(summary: dict[str, Any], command: str) -> str:
+    """The README-style summary table."""
+    s = summary
+    lines = [
+        f"# validate_fit ({s['records']} records)",
+        "",
+        f"`{command}`",
+        "",
+        "| measure | result | goal |",
+        "|---|---|---|",
+        f"| rejected (p < 0.001) | {s['rejected']['count']}/{s['records']} "
+        f"({100 * s['rejected']['fraction']:.1f} %) | <= 0.5 % |",
+        f"| a term dominating at >= 1 fitted tau missing | "
+        f"{s['missing_dominant']['count']}/{s['records']} "
+        f"({100 * s['missing_dominant']['fraction']:.1f} %) | <= 1 % |",
+        f"| a term dominating over >= {CLEAR_DECADES} decade missing | "
+        f"{s['missing_clear']['count']}/{s['records']} "
+        f"({100 * s['missing_clear']['fraction']:.1f} %) | <= 1 % |",
+        f"| a term added that is not in the truth | {s['extra_terms']['count']}/{s['records']} "
+        f"({100 * s['extra_terms']['fraction']:.1f} %) | - |",
+    ]
+    lines += [
+        "",
+        "95 % interval coverage per term (goal 93-97 %), over the records where the term "
+        "dominates at >= 1 fitted tau (a missing term counts as not covered), where it "
+        f"dominates over >= {CLEAR_DECADES} decade, where it was fitted, and all records "
+        "with the term:",
+        "",
+        "| term | dominant | clearly dominant | fitted | all |",
+        "|---|---|---|---|---|",
+    ]
+    for sym, cov in s["coverage_95"].items():
+        if cov["all"]["of"] == 0:
+            continue
+        cells = [
+            f"{cov[k]['count']}/{cov[k]['of']} ({100 * cov[k]['fraction']:.1f} %)"
+            for k in ("dominant", "clear", "fitted", "all")
+        ]
+        lines.append(f"| {sym} | " + " | ".join(cells) + " |")
+    lines += [
+        "",
+        f"fit time: median {s['fit_seconds']['median']:.2f} s, max {s['fit_seconds']['max']:.1f} s",
+        "",
+        "## worst cases",
+        "",
+    ]
+    for key, items in s["worst"].items():
+        lines.append(f"### {key}")
+        if not items:
+            lines.append("none")
+        for item in items:
+            lines.append(f"- {json.dumps(item, default=str)}")
+        lines.append("")
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the grid and write the results."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="the small grid (CI-size)")
+    parser.add_argument("--limit", type=int, help="only the first LIMIT records")
+    parser.add_argument("--output", help="results stem (default results/validate_fit_<mode>)")
+    parser.add_argument(
+        "--summarise", metavar="JSON", help="only rewrite the summary of a stored run's rows"
+    )
+    args = parser.parse_args(argv)
+    if args.summarise:
+        path = Path(args.summarise)
+        stored = json.loads(path.read_text(encoding="utf-8"))
+        summary = summarise(stored["rows"])
+        summary["elapsed_s"] = stored["summary"].get("elapsed_s")
+        summary["complete"] = stored["summary"].get("complete")
+        path.write_text(
+            json.dumps({"summary": summary, "rows": stored["rows"]}, indent=1, default=str),
+            encoding="utf-8",
+        )
+        path.with_suffix(".md").write_text(
+            markdown(summary, "python benchmarks/validate_fit.py"), encoding="utf-8"
+        )
+        return 0
+    cases = grid(args.quick)
+    # a fixed shuffle, so that a partial run (--limit, or interrupted) samples the whole grid
+    order = np.random.default_rng(2026).permutation(len(cases))
+    cases = [cases[i] for i in order]
+    if args.limit:
+        cases = cases[: args.limit]
+    mode = "quick" if args.quick else "full"
+    stem = Path(args.output) if args.output else RESULTS / f"validate_fit_{mode}"
+    rows = []
+    start = time.perf_counter()
+    for case in cases:
+        row = run_case(case)
+        rows.append(row)
+        flag = "REJECTED " if row["rejected"] else ""
+        flag += f"missing {row['missing_dominant']} " if row["missing_dominant"] else ""
+        print(
+            f"[{len(rows)}/{len(cases)}] {'+'.join(case.terms):<10} n={case.n:<9} "
+            f"fs={case.fs:<7g} {case.taus:<6} {case.input:<5} {case.unit:<5} -> "
+            f"{','.join(row['fitted_terms']):<10} p={row['p_value']:.3g} "
+            f"fit {row['fit_s']:.1f}s {flag}",
+            flush=True,
+        )
+        # keep partial results on disk so that an interrupted run still reports
+        if len(rows) % 10 == 0 or len(rows) == len(cases):
+            summary = summarise(rows)
+            summary["elapsed_s"] = time.perf_counter() - start
+            summary["complete"] = len(rows) == len(cases)
+            command = "python benchmarks/validate_fit.py" + " ".join(
+                [""] + (argv if argv is not None else sys.argv[1:])
+            )
+            stem.parent.mkdir(parents=True, exist_ok=True)
+            stem.with_suffix(".json").write_text(
+                json.dumps({"summary": summary, "rows": rows}, indent=1, default=str),
+                encoding="utf-8",
+            )
+            stem.with_suffix(".md").write_text(markdown(summary, command), encoding="utf-8")
+    print(markdown(summarise(rows), "validate_fit"))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,199 @@
+r"""Automatic term selection (``terms="auto"``): an exhaustive search over the candidate subsets.
+
+The candidates are the five power-law terms Q, N, B, K, R, so there are only 31 non-empty
+subsets (30 with a noise term: a ramp alone would predict estimates without spread), and
+every one is fitted (a stepwise search can stop in a poor local optimum: on a
+30-minute example record it kept white noise alone, p = 0, while quantization + white + rate
+random walk fits with p = 0.6). Each subset is scored by the penalized Gaussian
+-2 log-likelihood of the Allan variance estimates,
+
+.. math:: S = \chi^2 + \log\det C + \text{penalty}\cdot p,
+
+with :math:`C` the covariance of the estimates under that subset's own fitted model, ``p`` its
+number of parameters. The choice is lexicographic:
+
+1. among the subsets the goodness-of-fit test does not reject (generalized chi-square
+   p-value at least ``misfit_level``), the one with the lowest score;
+2. only when every subset is rejected, all subsets are refitted with the relative model
+   discrepancy of :func:`allanite.fit.gls.solve` (one more parameter) and the lowest score
+   wins; the fit then reports itself as rejected.
+
+So the result is never rejected when a subset that is not rejected exists, and it never has
+a worse score than any subset evaluated, simpler ones included.
+
+The reweighted fit of one subset is not convex (the covariance depends on the estimate), so
+each subset is fitted from several starting covariances and the best score is kept: the
+diagonal one from the estimates' EDF, the covariance of the model read off the curve by the
+IEEE slope method (:mod:`allanite.fit.classic`), and, when a subset fits worse than one of
+its subsets with one term fewer (a superset can always reproduce its subsets' curves), the
+covariance of that better subset's fit.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy import stats
+
+from allanite.fit.gls import GLSData, GLSSolution, solve
+from allanite.fit.spec import TermSpec
+
+__all__ = ["Candidate", "n_params", "score", "select_terms"]
+
+
+def n_params(specs: Sequence[TermSpec]) -> int:
+    """Number of fitted parameters of ``specs`` (amplitudes and nonlinear parameters)."""
+    return sum(1 + (s.nonlinear_name is not None) for s in specs)
+
+
+def score(sol: GLSSolution, penalty: float) -> float:
+    """Return ``chi2 + log det C + penalty * parameters`` of a solution.
+
+    The -2 log-likelihood of the Gaussian approximation under the covariance ``C`` the fit
+    used, plus the penalty, so that models with different covariances stay comparable. A
+    model that needed a model discrepancy (see :func:`allanite.fit.gls.solve`) pays for it
+    as one more parameter.
+    """
+    _, logdet = np.linalg.slogdet(sol.cov)
+    count = n_params(sol.specs) + (sol.discrepancy > 0)
+    return float(sol.chi2_fit + logdet + penalty * count)
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """One evaluated subset: its solution, score, generalized chi-square and p-value."""
+
+    solution: GLSSolution
+    score: float
+    chi2: float
+    p_value: float
+
+    @property
+    def names(self) -> frozenset[str]:
+        """Term types of the subset."""
+        return frozenset(s.cls.type for s in self.solution.specs)
+
+
+def _p_value(sol: GLSSolution, n_points: int) -> float:
+    dof = n_points - n_params(sol.specs)
+    return float(stats.chi2.sf(sol.chi2, dof)) if dof > 0 else math.nan
+
+
+def _evaluate(
+    subset: tuple[TermSpec, ...],
+    data: GLSData,
+    edf: NDArray[np.float64],
+    penalty: float,
+    misfit_level: float,
+    starts: Sequence[NDArray[np.float64] | None],
+) -> Candidate:
+    best: Candidate | None = None
+    for start in starts:
+        sol = solve(subset, data, edf, start=start, misfit_level=misfit_level)
+        cand = Candidate(sol, score(sol, penalty), sol.chi2, _p_value(sol, data.y.size))
+        if best is None or cand.score < best.score:
+            best = cand
+    assert best is not None
+    return best
+
+
+def _search(
+    specs: Sequence[TermSpec],
+    data: GLSData,
+    edf: NDArray[np.float64],
+    penalty: float,
+    misfit_level: float,
+    starts: Sequence[NDArray[np.float64] | None],
+) -> dict[tuple[TermSpec, ...], Candidate]:
+    """Fit every subset of ``specs`` (smallest first), with the starts described above."""
+    found: dict[tuple[TermSpec, ...], Candidate] = {}
+    for size in range(1, len(specs) + 1):
+        for subset in itertools.combinations(specs, size):
+            if n_params(subset) >= data.y.size:
+                continue
+            if not any(s.cls.stationary for s in subset):
+                continue  # a ramp alone has no noise: its estimates would have no spread
+            cand = _evaluate(subset, data, edf, penalty, misfit_level, starts)
+            smaller = [
+                found[sub]
+                for sub in itertools.combinations(subset, size - 1)
+                if sub in found and found[sub].solution.chi2_fit < cand.solution.chi2_fit
+            ]
+            if smaller:  # a superset fits worse than its subset: restart from the subset's fit
+                better = min(smaller, key=lambda c: c.solution.chi2_fit)
+                again = _evaluate(subset, data, edf, penalty, misfit_level, [better.solution.cov])
+                if again.score < cand.score:
+                    cand = again
+            found[subset] = cand
+    return found
+
+
+def select_terms(
+    specs: Sequence[TermSpec],
+    data: GLSData,
+    edf: NDArray[np.float64],
+    penalty: float,
+    misfit_level: float,
+    starts: Sequence[NDArray[np.float64] | None] = (None,),
+) -> tuple[GLSSolution, tuple[dict[str, Any], ...], list[dict[str, Any]]]:
+    """Choose the terms by the exhaustive, lexicographic search described in the module.
+
+    Parameters
+    ----------
+    specs : sequence of TermSpec
+        The candidate terms.
+    data : GLSData
+        The curve.
+    edf : numpy.ndarray
+        EDF of the points (diagonal starting covariance).
+    penalty : float
+        Penalty per parameter.
+    misfit_level : float
+        Significance level of the goodness-of-fit test.
+    starts : sequence
+        Starting covariances (None: the diagonal one from ``edf``).
+
+    Returns
+    -------
+    solution : GLSSolution
+        The chosen fit.
+    selection : tuple of dict
+        Per candidate term: ``score_gain`` (how much the score drops when the term is added
+        to the best evaluated subset without it, given the other chosen terms; positive
+        for a kept term) and ``kept``.
+    subsets : list of dict
+        Every subset evaluated: ``terms``, ``score``, ``chi2``, ``p_value``, ``rejected``.
+    """
+    found = _search(specs, data, edf, penalty, 0.0, starts)
+    accepted = {k: c for k, c in found.items() if not c.p_value < misfit_level}
+    pool = accepted
+    if not pool and misfit_level > 0:  # every subset rejected: allow the model discrepancy
+        found = _search(specs, data, edf, penalty, misfit_level, starts)
+        pool = found
+    chosen = min(pool.values(), key=lambda c: c.score)
+    by_names = {c.names: c for c in found.values()}
+    kept = chosen.names
+    selection = []
+    for spec in specs:
+        name = spec.cls.type
+        with_term, without = (kept, kept - {name}) if name in kept else (kept | {name}, kept)
+        a, b = by_names.get(with_term), by_names.get(without)
+        gain = math.inf if b is None else (-math.inf if a is None else b.score - a.score)
+        selection.append({"term": name, "score_gain": float(gain), "kept": name in kept})
+    subsets = [
+        {
+            "terms": [s.cls.type for s in key],
+            "score": c.score,
+            "chi2": c.chi2,
+            "p_value": c.p_value,
+            "rejected": bool(c.p_value < misfit_level),
+        }
+        for key, c in sorted(found.items(), key=lambda kv: kv[1].score)
+    ]
+    return chosen.solution, tuple(selection), subsets
