@@ -79,6 +79,38 @@ class Case:
     extra: Any = None  # the added effect Term (simulated separately, for the truth)
     truth_param: tuple[str, float] | None = None
     truth: dict[str, Any] = field(default_factory=dict)
+    transform: str | None = None  # out-of-vocabulary effect applied to the real record
+
+
+def bursts(x: np.ndarray, fs: float, rng: np.random.Generator) -> np.ndarray:
+    """White noise x2.5 (N 0.05 -> 0.125) in four bursts of 1/20 of the record each."""
+    out = x.copy()
+    n = x.size // 2  # bursts in both halves: two in the fitted half, two held out
+    width = max(n // 10, 1)
+    sigma = np.sqrt(2.5**2 - 1.0) * 0.05 * np.sqrt(fs)
+    for start in (n // 8, n // 2, n + n // 8, n + n // 2):
+        out[start : start + width] += sigma * rng.standard_normal(width)
+    return out
+
+
+def clipping(x: np.ndarray, fs: float, rng: np.random.Generator) -> np.ndarray:
+    """Saturation at 1.5 standard deviations of the record."""
+    lim = 1.5 * float(np.std(x))
+    return np.clip(x, -lim, lim)
+
+
+def held_samples(x: np.ndarray, fs: float, rng: np.random.Generator) -> np.ndarray:
+    """Dropped samples replaced by the previous value (sample-and-hold), 20 % of them."""
+    out = x.copy()
+    idx = np.flatnonzero(rng.random(x.size) < 0.2)
+    idx = idx[idx > 0]
+    for k in idx:  # sequential: runs of drops hold the last good value
+        out[k] = out[k - 1]
+    return out
+
+
+#: out-of-vocabulary effects: no candidate describes them, the diagnosis must not say "closed"
+OOV = {"bursts": bursts, "clipping": clipping, "held": held_samples}
 
 
 def base_model(fs: float) -> NoiseModel:
@@ -170,6 +202,11 @@ def make_cases(
                 Case(f"rescale-flicker-{label}-fs{fs:g}", "rescale:flicker", label, fs, n, base,
                      real_fl, None, ("B", b_real))
             )  # fmt: skip
+        for name in OOV:
+            cases.append(
+                Case(f"oov-{name}-fs{fs:g}", f"oov:{name}", "oov", fs, n, base, None,
+                     transform=name)
+            )  # fmt: skip
     if n_null is None:
         n_null = 20 if quick else 60
     for i in range(n_null):
@@ -188,6 +225,9 @@ def simulate_case(case: Case, seed: int) -> tuple[np.ndarray, np.ndarray | None]
             case.n, case.fs, seed=seed + 7, allow_aliasing=True
         )
         real = real + effect
+    if case.transform is not None:
+        real = OOV[case.transform](np.asarray(real, dtype=float), case.fs,
+                                   np.random.default_rng(seed + 11))  # fmt: skip
     return real, effect
 
 
@@ -238,8 +278,10 @@ def evaluate(case: Case, seed: int, n_mc: int) -> dict[str, Any]:
         "p_value": d.p_value,
         "G": d.statistic,
         "top1": d.best.effect if d.best else None,
+        "closed": d.closed,
+        "unexplained_views": sorted({u.view for u in d.unexplained}),
     }
-    if case.effect is None:
+    if case.effect is None or case.transform is not None:
         return row
     truth = truth_locations(case, effect)
     # true gap: tau-view noncentrality of the true effect against the same null
@@ -308,7 +350,8 @@ def evaluate(case: Case, seed: int, n_mc: int) -> dict[str, Any]:
 
 def summarize(rows: list[dict[str, Any]]) -> dict[str, Any]:
     nulls = [r for r in rows if r["effect"] is None]
-    eff = [r for r in rows if r["effect"] is not None]
+    oov = [r for r in rows if str(r["effect"]).startswith("oov:")]
+    eff = [r for r in rows if r["effect"] is not None and r not in oov]
     clear = [r for r in eff if r.get("clear") and r["significant"]]
     clear_all = [r for r in eff if r.get("clear")]
     clear_exp = [r for r in eff if r.get("clear_expected") and r["significant"]]
@@ -385,6 +428,14 @@ def summarize(rows: list[dict[str, Any]]) -> dict[str, Any]:
         "holdout_cases": len(hold),
         "per_effect": per_effect,
         "confusion": confusion,
+        # the headline: "closed" only when all three views are consistent after the effect
+        "oov_not_closed_rate": float(np.mean([not r["closed"] for r in oov])) if oov else None,
+        "oov_cases": len(oov),
+        "oov_false_closed": int(sum(bool(r["closed"]) for r in oov)),
+        "oov_per_case": {
+            r["case"]: {"closed": r["closed"], "views": r["unexplained_views"]} for r in oov
+        },
+        "closed_rate_correct_clear": float(np.mean([r["closed"] for r in good])) if good else None,
     }
 
 
@@ -394,6 +445,7 @@ TARGETS = [
     ("median_shrinkage", ">=", 0.80),
     ("consistent_after_rate", ">=", 0.90),
     ("holdout_within_15_points", ">=", 0.90),
+    ("oov_not_closed_rate", ">=", 0.90),
 ]
 
 
@@ -416,6 +468,16 @@ def table(summary: dict[str, Any]) -> str:
         f"| detection rate, clearly significant | {fmt(summary['detection_rate_clear'])} | | |"
     )
     lines.append(f"| median held-out shrinkage | {fmt(summary['median_holdout_shrinkage'])} | | |")
+    lines.append(
+        f"| closed (all three views) after the correct effect, clear | "
+        f"{fmt(summary['closed_rate_correct_clear'])} | | |"
+    )
+    lines.append(
+        f"| out-of-vocabulary cases read as closed | {summary['oov_false_closed']} of "
+        f"{summary['oov_cases']} | 0 | |"
+    )
+    for name, v in summary["oov_per_case"].items():
+        lines.append(f"| {name} | closed={v['closed']}, unexplained in {v['views']} | | |")
     lines.append(
         f"| top-1, clear judged on the expected AVAR | "
         f"{fmt(summary['top1_accuracy_clear_expected'])} "

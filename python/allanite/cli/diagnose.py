@@ -110,11 +110,21 @@ def _holdout(args: argparse.Namespace) -> Any:
 
 
 def _summary(d: Any) -> str:
-    lines = [
+    from allanite.diagnosis.verdict import format_params
+
+    units = d.meta.get("units")
+    status = "CLOSED" if d.closed else "NOT FULLY EXPLAINED"
+    if not d.significant:
+        status = "NO GAP"
+    lines = [f"{status}: {d.headline}"]
+    if d.unexplained:
+        lines.append("unexplained:")
+        lines.extend(f"  - {u.text}" for u in d.unexplained)
+    lines.append(
         f"gap G = {d.statistic:.4g}  (T = {d.tau.statistic:.4g}, chance level T0 = "
         f"{d.tau.t0:.3g}), p = {d.p_value:.3g}: "
         + ("SIGNIFICANT" if d.significant else "consistent with chance"),
-    ]
+    )
     where = d.where
     if where["tau_bands_s"]:
         bands = ", ".join(f"{a:.3g}-{b:.3g} s" for a, b in where["tau_bands_s"])
@@ -132,7 +142,7 @@ def _summary(d: Any) -> str:
     if d.attribution:
         lines.append("attribution (best first):")
         for a in d.attribution:
-            params = ", ".join(f"{k}={v:.4g}" for k, v in a.params.items())
+            params = format_params(a, units)
             lines.append(
                 f"  {a.effect:<22} {params}  gap {a.gap_before:.4g} -> {a.gap_after:.4g} "
                 f"(shrinkage {100 * a.shrinkage:.0f} %, "

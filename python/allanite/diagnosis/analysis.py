@@ -57,7 +57,7 @@ def record_features(x: NDArray[np.float64], plan: Plan) -> Features:
     """All features of one rate record (the same function for real and simulated records)."""
     log_avar = tau_features(x, plan.fs, plan.m)
     feats: Features = {"log_avar": log_avar, "avar_lin": np.exp(log_avar)}
-    feats["log_psd"] = frequency_features(x, plan.fs, plan.nperseg)
+    feats.update(frequency_features(x, plan.fs, plan.nperseg))
     feats.update(time_features(x, plan.time))
     return feats
 

@@ -248,6 +248,11 @@ def fit_candidate(
     if cand.free and (best is None or best.fun >= 1e299):
         return None
     logp = np.asarray(best.x if cand.free else [], dtype=np.float64)
+    if cand.base is None and np.any((logp - lo < 0.01) & (lo > -700.0)):
+        # a time or rate parameter at its bound (a correlation time of dt/4 is white noise, a
+        # correlation time of 4 record lengths a random walk): the effect is not identified,
+        # a simpler candidate describes the same curve
+        return None
     extra = _extra(cand, logp, tm)
     if extra is None:
         return None

@@ -14,6 +14,7 @@ from allanite.diagnosis.holdout import holdout_check
 from allanite.diagnosis.inputs import MIN_SAMPLES, as_rate, check_units, make_source
 from allanite.diagnosis.level_shape import warmup_time_constant
 from allanite.diagnosis.result import Diagnosis, Holdout
+from allanite.diagnosis.verdict import verdict
 from allanite.variance import _check_fs
 
 __all__ = ["diagnose"]
@@ -144,6 +145,7 @@ def diagnose(
     significant = bool(p < alpha)
     attribution = []
     unavailable: list[str] = []
+    by_effect: dict[str, Any] = {}
     ev_p = _evidence(analysis)
     if significant:
         sig = {k: v < alpha / len(ev_p) for k, v in ev_p.items()}
@@ -172,6 +174,20 @@ def diagnose(
             duration=x_fit.size / rate,
         )
         by_effect = {c.effect: c for c in cands}
+    best_cand = by_effect.get(attribution[0].effect) if attribution else None
+    head = verdict(
+        significant=significant,
+        p_value=p,
+        alpha=alpha,
+        tau_model=analysis.tau_model,
+        tau=analysis.tau,
+        frequency=analysis.frequency,
+        time=analysis.time,
+        evidence_p=ev_p,
+        best=attribution[0] if attribution else None,
+        candidate=best_cand,
+        units=common_units,
+    )
     held: Holdout | None = None
     if x_hold is not None and attribution and attribution[0].effect not in START_EFFECTS:
         best = attribution[0]
@@ -194,6 +210,9 @@ def diagnose(
         time=analysis.time,
         attribution=attribution,
         holdout=held,
+        closed=head.closed,
+        unexplained=head.unexplained,
+        headline=head.headline,
         meta={
             "fs": rate,
             "n_samples": int(x.size),

@@ -11,6 +11,7 @@ from allanite.diagnosis.attribution import Attribution
 from allanite.diagnosis.frequency_view import FrequencyView
 from allanite.diagnosis.tau_view import TauView
 from allanite.diagnosis.time_view import TimeView
+from allanite.diagnosis.verdict import Unexplained
 
 __all__ = ["Diagnosis", "Holdout"]
 
@@ -89,6 +90,14 @@ class Diagnosis:
     meta : dict
         fs, sample counts, units, kind of simulated input, Monte Carlo size, seed, alpha,
         unavailable effects.
+    closed : bool
+        True only when the tau, frequency and time views are all consistent with chance after
+        the best effect is added (or no gap is significant).
+    unexplained : list of Unexplained
+        What the best effect leaves unexplained: view, evidence, where and how large.
+    headline : str
+        One plain sentence: the effect with its parameters and units, and whether the records
+        then agree in all three views or what remains.
     """
 
     statistic: float
@@ -100,6 +109,9 @@ class Diagnosis:
     attribution: list[Attribution]
     holdout: Holdout | None
     meta: dict[str, Any] = field(default_factory=dict)
+    closed: bool = False
+    unexplained: list[Unexplained] = field(default_factory=list)
+    headline: str = ""
 
     @property
     def where(self) -> dict[str, Any]:
@@ -130,6 +142,9 @@ class Diagnosis:
     def to_dict(self, *, views: bool = True) -> dict[str, Any]:
         """JSON-ready dictionary; ``views=False`` leaves out the plotting arrays."""
         out: dict[str, Any] = {
+            "headline": self.headline,
+            "closed": self.closed,
+            "unexplained": [u.to_dict() for u in self.unexplained],
             "gap": {
                 "statistic": self.statistic,
                 "p_value": self.p_value,

@@ -1,0 +1,368 @@
+r"""The headline: is the gap closed in all three views, and if not, what remains and where.
+
+A diagnosis is **closed** only when, after the best effect is added to the simulated sensor,
+every view is consistent with chance:
+
+* tau view: the remaining statistic ``T_after`` is consistent with chance (``consistent_after``
+  of the attribution, level ``alpha``);
+* frequency view: the broadband test, re-run with the effect's PSD added to the simulated
+  PSD (:meth:`FrequencyView.band_test`), and the line detector (unless the effect explains the
+  line) are not significant;
+* time view: no significant evidence (level, jump, bursts ``hf``/``dyn``, spikes, kurtosis) is
+  left unexplained by the effect.
+
+Every piece of evidence is judged at the level the attribution uses (``alpha`` over the number
+of evidence statistics, Bonferroni). Whatever is left is reported as an :class:`Unexplained`
+item: its view, the evidence, *where* (taus, frequency band or lines, time segments) and *how
+large* (the remaining gap, the noise-level ratio in the flagged windows, the line amplitude, the
+excess kurtosis). Non-stationary effects (ramp, warm-up, bias step, spikes) have no PSD: for
+them the broadband re-test is skipped and the frequency view's broadband evidence counts as
+explained only if the tau view is consistent after the effect.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from allanite.diagnosis.attribution import Attribution
+from allanite.diagnosis.candidates import Candidate
+from allanite.diagnosis.frequency_view import FrequencyView
+from allanite.diagnosis.null import runs
+from allanite.diagnosis.tau_view import TauModel, TauView
+from allanite.diagnosis.time_view import TimeView
+
+__all__ = ["Unexplained", "Verdict", "effect_psd", "param_unit", "verdict"]
+
+#: plain names of the term types (the headline's vocabulary)
+TERM_NAMES = {
+    "white": "white noise",
+    "quantization": "quantization noise",
+    "flicker": "bias instability (flicker)",
+    "rrw": "rate random walk",
+    "ramp": "rate ramp",
+    "markov": "Gauss-Markov noise",
+    "sine": "sinusoid",
+    "warmup": "warm-up transient",
+    "step": "bias steps",
+    "spikes": "spikes",
+    "telegraph": "random telegraph noise",
+    "lowpass": "low-pass filter on the white noise",
+}
+
+#: what each piece of time/frequency evidence means, in words
+EVIDENCE_TEXT = {
+    "line": "a spectral line",
+    "jump": "level jumps",
+    "level": "a wandering or drifting level",
+    "hf": "the short-term noise level changes over the record (bursts)",
+    "dyn": "the mid-tau noise level changes over the record",
+    "spike": "spikes",
+    "kurt_hf": "heavy-tailed sample-to-sample changes (excess kurtosis)",
+    "kurt_lf": "a two-level (platykurtic) amplitude distribution",
+}
+
+
+@dataclass(frozen=True)
+class Unexplained:
+    """One part of the gap that the best effect leaves unexplained.
+
+    Attributes
+    ----------
+    view : str
+        ``"tau"``, ``"frequency"`` or ``"time"``.
+    evidence : str
+        The statistic: ``tau`` (the Mahalanobis statistic), ``band`` (broadband PSD), ``line``,
+        ``level``, ``jump``, ``hf``, ``dyn``, ``spike``, ``kurt_hf``, ``kurt_lf``.
+    where : dict
+        ``tau_bands_s``, ``frequency_bands_hz``, ``frequency_lines_hz`` or ``time_segments_s``.
+    size : dict
+        How large: e.g. ``gap_after``; ``noise_level_ratio`` (rms ratio to the record's typical
+        level in the flagged windows); ``amplitude``; ``excess_kurtosis``.
+    p_value : float
+        p-value of the evidence (after the effect, where it can be re-tested).
+    text : str
+        One plain sentence.
+    """
+
+    view: str
+    evidence: str
+    where: dict[str, Any]
+    size: dict[str, float]
+    p_value: float
+    text: str
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary."""
+        return {
+            "view": self.view,
+            "evidence": self.evidence,
+            "where": self.where,
+            "size": self.size,
+            "p_value": self.p_value,
+            "text": self.text,
+        }
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """The headline of a diagnosis.
+
+    Attributes
+    ----------
+    closed : bool
+        True when no gap is significant, or when the best effect leaves every view
+        consistent with chance.
+    unexplained : list of Unexplained
+        What remains (empty when closed).
+    headline : str
+        The plain sentence that leads the CLI text and the report.
+    """
+
+    closed: bool
+    unexplained: list[Unexplained]
+    headline: str
+
+
+def param_unit(rate: str | None, rate_power: float, time_power: float) -> str:
+    """Readable unit ``rate^rate_power * s^time_power`` (``N`` in ``deg/s`` -> ``deg/sqrt(s)``)."""
+    if rate_power == 0:
+        return {1.0: "s", -1.0: "Hz", 0.0: ""}.get(float(time_power), f"s^{time_power:g}")
+    if rate is None:
+        rate = "rate"
+    if rate_power == 1 and rate.endswith("/s"):
+        angle = rate[:-2]
+        e = float(time_power) - 1.0
+        names = {0.0: angle, -1.0: f"{angle}/s", -0.5: f"{angle}/sqrt(s)"}
+        names.update({-1.5: f"{angle}/s/sqrt(s)", -2.0: f"{angle}/s^2", 0.5: f"{angle}*sqrt(s)"})
+        return names.get(e, f"{angle}*s^{e:g}")
+    text = rate if rate_power == 1 else f"({rate})^{rate_power:g}"
+    return text if time_power == 0 else f"{text}*s^{time_power:g}"
+
+
+def format_params(a: Attribution, units: str | None, *, skip: tuple[str, ...] = ()) -> str:
+    """``N = 0.014 deg/sqrt(s)``-style text of an attribution's parameters."""
+    specs = {}
+    cls = _term_class(a)
+    if cls is not None:
+        specs = {p.name: p for p in cls.params + cls.optional}
+    parts = []
+    for name, value in a.params.items():
+        if name in skip:
+            continue
+        if name == "scale":
+            parts.append(f"x{value:.3g}")
+            continue
+        spec = specs.get(name)
+        unit = param_unit(units, spec.rate, spec.time) if spec is not None else ""
+        parts.append(f"{name} = {value:.4g}" + (f" {unit}" if unit else ""))
+    return ", ".join(parts)
+
+
+def _term_class(a: Attribution) -> Any:
+    from allanite.terms import TERM_TYPES
+
+    return TERM_TYPES.get(str(a.term.get("type", "")))
+
+
+def describe_effect(a: Attribution, units: str | None) -> str:
+    """The effect in words, with its parameters and units."""
+    if a.effect.startswith("rescale:"):
+        kind = a.effect.split(":", 1)[1]
+        name = TERM_NAMES.get(kind, f"{kind} term")
+        return (
+            f"the real sensor's {name} is {a.params.get('scale', float('nan')):.2f}x the "
+            f"simulated one ({format_params(a, units, skip=('scale',))})"
+        )
+    name = TERM_NAMES.get(a.effect, a.effect)
+    verb = "is missing" if a.effect != "lowpass" else "is missing in the simulation"
+    return f"{name} {verb} ({format_params(a, units)})"
+
+
+def effect_psd(cand: Candidate, values: dict[str, float], f: Any, dt: float) -> Any:
+    """One-sided PSD the effect adds to the simulated sensor, or None (non-stationary)."""
+    try:
+        if cand.base is not None:
+            return (values["scale"] ** 2 - 1.0) * cand.base.psd_sampled(f, dt)
+        psd = cand.term(values).psd_sampled(f, dt)
+        if cand.replaces is not None:
+            psd = psd - cand.replaces.psd_sampled(f, dt)
+    except (NotImplementedError, ValueError, ZeroDivisionError, OverflowError):
+        return None
+    psd = np.asarray(psd, dtype=np.float64)
+    return psd if np.all(np.isfinite(psd)) else None
+
+
+def _segments(tv: TimeView, mask: NDArray[np.bool_]) -> list[list[float]]:
+    return [[a * tv.window_s, (b + 1) * tv.window_s] for a, b in runs(mask)]
+
+
+def _segments_text(segs: list[list[float]], limit: int = 4) -> str:
+    text = ", ".join(f"{a:.4g}-{b:.4g} s" for a, b in segs[:limit])
+    return text + (f" (+{len(segs) - limit} more)" if len(segs) > limit else "")
+
+
+def _time_item(name: str, tv: TimeView, p: float) -> Unexplained:
+    what = EVIDENCE_TEXT.get(name, name)
+    size: dict[str, float] = {}
+    where: dict[str, Any] = {"time_segments_s": []}
+    if name in ("hf", "dyn", "level") and name in tv.z:
+        flagged = np.abs(tv.z[name]) > tv.thresholds[name]
+        where["time_segments_s"] = _segments(tv, flagged)
+        if name in ("hf", "dyn") and name in tv.residual and flagged.any():
+            ratio = np.exp(0.5 * tv.residual[name][flagged])
+            size["noise_level_ratio_max"] = float(ratio.max())
+            size["noise_level_ratio_min"] = float(ratio.min())
+    elif name == "jump":
+        where["change_points_s"] = list(tv.change_points_s)
+        where["time_segments_s"] = [
+            [t - tv.window_s / 4, t + tv.window_s / 4] for t in tv.change_points_s
+        ]
+    elif name == "spike":
+        where["time_segments_s"] = [[t, t] for t in tv.spike_times_s[:50]]
+        size["count"] = float(len(tv.spike_times_s))
+        if tv.spike_amplitudes:
+            size["rms_height"] = float(np.sqrt(np.mean(np.square(tv.spike_amplitudes))))
+    elif name in ("kurt_hf", "kurt_lf"):
+        key = name.split("_")[1]
+        size["excess_kurtosis_real"] = tv.kurtosis.get(f"{key}_real", float("nan"))
+        size["excess_kurtosis_sim"] = tv.kurtosis.get(f"{key}_sim", float("nan"))
+    segs = where["time_segments_s"]
+    text = f"time view: {what}"
+    if "noise_level_ratio_max" in size:
+        text += f" (rms x{size['noise_level_ratio_max']:.2g} of the typical level"
+        text += f" at {_segments_text(segs)})" if segs else ")"
+    elif segs and name != "spike":
+        text += f" at {_segments_text(segs)}"
+    elif name == "spike":
+        text += f" ({int(size['count'])} found)"
+    elif name.startswith("kurt"):
+        text += (
+            f" (real {size['excess_kurtosis_real']:.3g} vs simulated "
+            f"{size['excess_kurtosis_sim']:.3g})"
+        )
+    return Unexplained("time", name, where, size, float(p), text + f", p = {p:.2g}")
+
+
+def _line_item(fv: FrequencyView, p: float) -> Unexplained:
+    lines = [ln.frequency_hz for ln in fv.lines]
+    amps = [ln.amplitude for ln in fv.lines]
+    text = "frequency view: " + (
+        "spectral line(s) at " + ", ".join(f"{f:.5g} Hz" for f in lines[:4])
+        if lines
+        else "a line-like peak"
+    )
+    size = {"amplitude_max": float(max(amps))} if amps else {}
+    return Unexplained(
+        "frequency", "line", {"frequency_lines_hz": lines}, size, float(p), text + f", p = {p:.2g}"
+    )
+
+
+def _band_item(bands: list[tuple[float, float]], z: NDArray[np.float64], p: float) -> Unexplained:
+    text = "frequency view: broadband PSD departs from the simulation"
+    if bands:
+        text += " at " + ", ".join(f"{a:.3g}-{b:.3g} Hz" for a, b in bands[:4])
+    size = {"max_abs_band_z": float(np.abs(z).max())} if z.size else {}
+    return Unexplained(
+        "frequency",
+        "band",
+        {"frequency_bands_hz": [list(b) for b in bands]},
+        size,
+        float(p),
+        text + f", p = {p:.2g}",
+    )
+
+
+def _tau_item(tm: TauModel, tv: TauView, extra: NDArray[np.float64] | None, a: Any) -> Unexplained:
+    r = tm.residual(extra)
+    sd = tm.null_sd if tm.null_sd is not None else np.ones_like(r)
+    z = r / sd
+    bands = [
+        [float(tm.tau[i] / np.sqrt(2.0)), float(tm.tau[j] * np.sqrt(2.0))]
+        for i, j in runs(np.abs(z) > tv.z_threshold)
+    ]
+    gap = tm.gap(extra)
+    p = a.p_after if a is not None else tv.p_value
+    ratio = float(np.exp(np.max(np.abs(r))))
+    text = f"tau view: a gap G = {gap:.4g} remains (chance level T0 = {tm.t0:.3g})"
+    if bands:
+        text += " at tau " + ", ".join(f"{x:.3g}-{y:.3g} s" for x, y in bands[:4])
+    return Unexplained(
+        "tau",
+        "tau",
+        {"tau_bands_s": bands},
+        {"gap_after": gap, "max_avar_ratio": ratio},
+        float(p),
+        text + f", p = {p:.2g}",
+    )
+
+
+def verdict(
+    *,
+    significant: bool,
+    p_value: float,
+    alpha: float,
+    tau_model: TauModel,
+    tau: TauView,
+    frequency: FrequencyView,
+    time: TimeView,
+    evidence_p: dict[str, float],
+    best: Attribution | None,
+    candidate: Candidate | None,
+    units: str | None,
+) -> Verdict:
+    """Decide whether the gap is closed in all three views and list what remains."""
+    if not significant:
+        return Verdict(
+            True,
+            [],
+            f"the real record agrees with the simulated sensor in all three views "
+            f"(p = {p_value:.2g}): no gap",
+        )
+    n_ev = max(len(evidence_p) + 1, 1)  # the evidence statistics and the broadband test
+    level = alpha / n_ev
+    items: list[Unexplained] = []
+    extra = None
+    if best is not None:
+        extra = np.asarray(best.sim_avar_after - tau_model.sim_avar, dtype=np.float64)
+        if not best.consistent_after:
+            items.append(_tau_item(tau_model, tau, extra, best))
+        pending = [e for e in best.evidence.get("unexplained", [])]
+    else:
+        if tau.p_value < alpha / 3.0:
+            items.append(_tau_item(tau_model, tau, None, None))
+        pending = [e for e, p in evidence_p.items() if p < level]
+    # broadband frequency view, re-tested with the effect's PSD
+    band_p, bands, band_z = frequency.band_p_value, frequency.bands_hz, frequency.band_z
+    if best is not None and candidate is not None and frequency.band_sd.size:
+        values = {k: v for k, v in best.params.items() if k in candidate.free}
+        psd = effect_psd(candidate, values, frequency.f, tau_model.dt)
+        if psd is not None:
+            band_p, bands, band_z = frequency.band_test(psd)
+        elif best.consistent_after:
+            band_p = 1.0
+    if band_p < level:
+        items.append(_band_item(bands, band_z, band_p))
+    for e in pending:
+        if e == "line":
+            items.append(_line_item(frequency, evidence_p[e]))
+        else:
+            items.append(_time_item(e, time, evidence_p[e]))
+    closed = best is not None and not items
+    if best is not None:
+        effect = describe_effect(best, units)
+        if closed:
+            headline = f"{effect}; after adding it, the records agree in all three views"
+        else:
+            closed_tau = "the tau view is closed by it, but " if best.consistent_after else ""
+            headline = f"{effect}; {closed_tau}not everything is explained: " + "; ".join(
+                i.text for i in items
+            )
+    else:
+        headline = "there is a significant gap that no candidate effect explains: " + "; ".join(
+            i.text for i in items
+        )
+    return Verdict(closed, items, headline)
