@@ -16,7 +16,7 @@ from allanite.cli import main
 from allanite.diagnosis import diagnose
 from allanite.diagnosis.verdict import param_unit
 from allanite.model import NoiseModel
-from allanite.terms import RateRandomWalk, White
+from allanite.terms import TERM_TYPES, RateRandomWalk, White, term_from_dict
 
 FS = 100.0
 MODEL = NoiseModel((White(N=0.01), RateRandomWalk(K=1e-5)), {"rate": "deg/s", "time": "s"})
@@ -138,3 +138,39 @@ def test_cli_text_leads_with_the_headline(tmp_path, capsys):
     assert out[0].startswith("NOT FULLY EXPLAINED: ")
     assert out[1] == "unexplained:"
     assert any("deg/sqrt(s)" in line for line in out)
+
+
+def test_joint_attribution_names_both_effects():
+    """White noise 1.5x and a 7.3 Hz sine: the set holds both, closes all three views, its
+    term list is ready for the model JSON and its held-out check is reported."""
+    sine = TERM_TYPES["sine"](amplitude=0.03, frequency=7.3)
+    real = MODEL.without("white").plus(White(N=0.015), sine)
+    x = real.simulate(2**16, FS, seed=1)
+    d = diagnose(x, MODEL, FS, units="deg/s", n_mc=60, seed=1, holdout=0.5)
+    e = d.explanation
+    assert e is not None
+    names = {a.effect for a in e.effects}
+    assert names & {"white", "rescale:white"}
+    assert "sine" in names
+    assert e.consistent_after
+    assert d.closed
+    assert "after adding them, the records agree in all three views" in d.headline
+    assert sum(e.share.values()) == pytest.approx(1.0, abs=1e-9)
+    types = [t["type"] for t in e.terms]
+    assert types.count("sine") == 1
+    assert "rrw" in types
+    model = NoiseModel(tuple(term_from_dict(t) for t in e.terms), MODEL.units)
+    white = sum(t.values()["N"] ** 2 for t in model.terms if t.type == "white") ** 0.5
+    assert white == pytest.approx(0.015, rel=0.05)
+    assert e.holdout is not None
+    assert e.holdout["shrinkage"] > 0.9
+    data = json.loads(d.to_json(views=False))
+    assert data["explanation"]["effects"][0]["effect"] == d.best.effect
+    assert set(data["explanation"]) >= {"effects", "gap_after", "consistent_after", "share"}
+
+
+def test_joint_attribution_stops_at_one_effect_when_one_suffices():
+    real = MODEL.without("white").plus(White(N=0.015))
+    d = diagnose(real.simulate(2**16, FS, seed=3), MODEL, FS, units="deg/s", n_mc=60, seed=3)
+    assert d.explanation is not None
+    assert [a.effect for a in d.explanation.effects] == [d.best.effect]

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -10,11 +11,19 @@ from numpy.typing import ArrayLike, NDArray
 from allanite.diagnosis.analysis import Analysis, analyze
 from allanite.diagnosis.attribution import rank
 from allanite.diagnosis.candidates import candidate_library
-from allanite.diagnosis.holdout import holdout_check
-from allanite.diagnosis.inputs import MIN_SAMPLES, as_rate, check_units, make_source
+from allanite.diagnosis.holdout import holdout_check, holdout_set, tau_model_for
+from allanite.diagnosis.inputs import (
+    MIN_SAMPLES,
+    SimSource,
+    as_rate,
+    check_units,
+    make_source,
+)
+from allanite.diagnosis.joint import Explanation, combined_terms, explain
 from allanite.diagnosis.level_shape import warmup_time_constant
 from allanite.diagnosis.result import Diagnosis, Holdout
 from allanite.diagnosis.verdict import verdict
+from allanite.terms import term_from_dict
 from allanite.variance import _check_fs
 
 __all__ = ["diagnose"]
@@ -146,7 +155,9 @@ def diagnose(
     attribution = []
     unavailable: list[str] = []
     by_effect: dict[str, Any] = {}
+    explanation: Explanation | None = None
     ev_p = _evidence(analysis)
+    sig: dict[str, bool] = {}
     if significant:
         sig = {k: v < alpha / len(ev_p) for k, v in ev_p.items()}
         spikes = None
@@ -174,7 +185,33 @@ def diagnose(
             duration=x_fit.size / rate,
         )
         by_effect = {c.effect: c for c in cands}
-    best_cand = by_effect.get(attribution[0].effect) if attribution else None
+        if attribution:
+            explanation = explain(
+                attribution[0],
+                cands,
+                analysis.tau_model,
+                alpha=alpha,
+                evidence_p=ev_p,
+                significant=sig,
+                time_view=analysis.time,
+                duration=x_fit.size / rate,
+            )
+    after: Analysis | None = None
+    if explanation is not None and source.model is not None:
+        # the frequency and time views re-run against the simulated sensor WITH the effects:
+        # their statistics (bursts, kurtosis, band levels) depend on the whole noise, so only
+        # a null of the augmented model says whether they are consistent after the effects
+        combined = replace(
+            source.model,
+            terms=tuple(term_from_dict(t) for t in combined_terms(explanation, source.model)),
+        )
+        after = analyze(
+            x_fit,
+            SimSource(fs=rate, model=combined, units=source.units),
+            n_mc=int(n_mc),
+            seed=seed + 2_000_003,
+            alpha=alpha,
+        )
     head = verdict(
         significant=significant,
         p_value=p,
@@ -184,23 +221,37 @@ def diagnose(
         frequency=analysis.frequency,
         time=analysis.time,
         evidence_p=ev_p,
-        best=attribution[0] if attribution else None,
-        candidate=best_cand,
+        evidence_significant=sig,
+        explanation=explanation,
         units=common_units,
+        after=after,
     )
     held: Holdout | None = None
-    if x_hold is not None and attribution and attribution[0].effect not in START_EFFECTS:
+    if explanation is not None:
+        explanation = replace(explanation, terms=combined_terms(explanation, source.model))
+    starts_only = explanation is not None and any(
+        a.effect in START_EFFECTS for a in explanation.effects
+    )
+    if x_hold is not None and attribution and not starts_only:
+        tm_hold = tau_model_for(x_hold, source, n_mc=int(n_mc), seed=seed + 1_000_003)
         best = attribution[0]
-        held = holdout_check(
-            best,
-            by_effect[best.effect],
-            x_hold,
-            source,
-            n_mc=int(n_mc),
-            seed=seed + 1_000_003,
-            alpha=alpha,
-            kind=hold_kind,
-        )
+        if best.effect not in START_EFFECTS:
+            held = holdout_check(
+                best,
+                by_effect[best.effect],
+                x_hold,
+                source,
+                n_mc=int(n_mc),
+                seed=seed + 1_000_003,
+                alpha=alpha,
+                kind=hold_kind,
+                tm=tm_hold,
+            )
+        if explanation is not None:
+            pairs = list(zip(explanation.effects, explanation.candidates, strict=True))
+            explanation = replace(
+                explanation, holdout=holdout_set(pairs, tm_hold, alpha=alpha, kind=hold_kind)
+            )
     return Diagnosis(
         statistic=analysis.tau.gap,
         p_value=p,
@@ -210,6 +261,7 @@ def diagnose(
         time=analysis.time,
         attribution=attribution,
         holdout=held,
+        explanation=explanation,
         closed=head.closed,
         unexplained=head.unexplained,
         headline=head.headline,

@@ -9,6 +9,7 @@ from typing import Any
 
 from allanite.diagnosis.attribution import Attribution
 from allanite.diagnosis.frequency_view import FrequencyView
+from allanite.diagnosis.joint import Explanation
 from allanite.diagnosis.tau_view import TauView
 from allanite.diagnosis.time_view import TimeView
 from allanite.diagnosis.verdict import Unexplained
@@ -90,6 +91,10 @@ class Diagnosis:
     meta : dict
         fs, sample counts, units, kind of simulated input, Monte Carlo size, seed, alpha,
         unavailable effects.
+    explanation : Explanation or None
+        The joint attribution: the set of effects (forward selection from the best single
+        effect, backward check), its remaining gap, shares, combined model terms and held-out
+        check.
     closed : bool
         True only when the tau, frequency and time views are all consistent with chance after
         the best effect is added (or no gap is significant).
@@ -109,6 +114,7 @@ class Diagnosis:
     attribution: list[Attribution]
     holdout: Holdout | None
     meta: dict[str, Any] = field(default_factory=dict)
+    explanation: Explanation | None = None
     closed: bool = False
     unexplained: list[Unexplained] = field(default_factory=list)
     headline: str = ""
@@ -159,6 +165,7 @@ class Diagnosis:
             },
             "where": self.where,
             "attribution": [a.to_dict() for a in self.attribution],
+            "explanation": self.explanation.to_dict() if self.explanation is not None else None,
             "holdout": self.holdout.to_dict() if self.holdout is not None else None,
             "meta": dict(self.meta),
         }

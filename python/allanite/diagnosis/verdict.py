@@ -31,6 +31,7 @@ from numpy.typing import NDArray
 from allanite.diagnosis.attribution import Attribution
 from allanite.diagnosis.candidates import Candidate
 from allanite.diagnosis.frequency_view import FrequencyView
+from allanite.diagnosis.joint import Explanation
 from allanite.diagnosis.null import runs
 from allanite.diagnosis.tau_view import TauModel, TauView
 from allanite.diagnosis.time_view import TimeView
@@ -276,7 +277,9 @@ def _band_item(bands: list[tuple[float, float]], z: NDArray[np.float64], p: floa
     )
 
 
-def _tau_item(tm: TauModel, tv: TauView, extra: NDArray[np.float64] | None, a: Any) -> Unexplained:
+def _tau_item(
+    tm: TauModel, tv: TauView, extra: NDArray[np.float64] | None, p: float
+) -> Unexplained:
     r = tm.residual(extra)
     sd = tm.null_sd if tm.null_sd is not None else np.ones_like(r)
     z = r / sd
@@ -285,7 +288,6 @@ def _tau_item(tm: TauModel, tv: TauView, extra: NDArray[np.float64] | None, a: A
         for i, j in runs(np.abs(z) > tv.z_threshold)
     ]
     gap = tm.gap(extra)
-    p = a.p_after if a is not None else tv.p_value
     ratio = float(np.exp(np.max(np.abs(r))))
     text = f"tau view: a gap G = {gap:.4g} remains (chance level T0 = {tm.t0:.3g})"
     if bands:
@@ -310,11 +312,20 @@ def verdict(
     frequency: FrequencyView,
     time: TimeView,
     evidence_p: dict[str, float],
-    best: Attribution | None,
-    candidate: Candidate | None,
+    evidence_significant: dict[str, bool],
+    explanation: Explanation | None,
     units: str | None,
+    after: Any = None,
 ) -> Verdict:
-    """Decide whether the gap is closed in all three views and list what remains."""
+    """Decide whether the gap is closed in all three views and list what remains.
+
+    ``explanation`` is the set of effects (the joint attribution, or the best single effect
+    alone); ``evidence_significant`` marks the significant evidence statistics (the
+    attribution's Bonferroni level). ``after`` is the analysis of the record against the
+    simulated sensor with the effects added (a model): then the frequency and time views are
+    judged on it; otherwise the broadband test is re-run with the effects' PSD and the evidence
+    the effects do not explain remains.
+    """
     if not significant:
         return Verdict(
             True,
@@ -322,27 +333,38 @@ def verdict(
             f"the real record agrees with the simulated sensor in all three views "
             f"(p = {p_value:.2g}): no gap",
         )
-    n_ev = max(len(evidence_p) + 1, 1)  # the evidence statistics and the broadband test
-    level = alpha / n_ev
+    level = alpha / max(len(evidence_p) + 1, 1)  # the evidence statistics and the broadband test
     items: list[Unexplained] = []
-    extra = None
-    if best is not None:
-        extra = np.asarray(best.sim_avar_after - tau_model.sim_avar, dtype=np.float64)
-        if not best.consistent_after:
-            items.append(_tau_item(tau_model, tau, extra, best))
-        pending = [e for e in best.evidence.get("unexplained", [])]
-    else:
-        if tau.p_value < alpha / 3.0:
-            items.append(_tau_item(tau_model, tau, None, None))
-        pending = [e for e, p in evidence_p.items() if p < level]
-    # broadband frequency view, re-tested with the effect's PSD
+    explained = set(explanation.explained) if explanation is not None else set()
+    if explanation is not None:
+        if not explanation.consistent_after:
+            items.append(_tau_item(tau_model, tau, explanation.extra_avar, explanation.p_after))
+    elif tau.p_value < alpha / 3.0:
+        items.append(_tau_item(tau_model, tau, None, tau.p_value))
+    pending = [e for e, s in evidence_significant.items() if s and e not in explained]
+    # broadband frequency view, re-tested with the effects' PSD
     band_p, bands, band_z = frequency.band_p_value, frequency.bands_hz, frequency.band_z
-    if best is not None and candidate is not None and frequency.band_sd.size:
-        values = {k: v for k, v in best.params.items() if k in candidate.free}
-        psd = effect_psd(candidate, values, frequency.f, tau_model.dt)
-        if psd is not None:
-            band_p, bands, band_z = frequency.band_test(psd)
-        elif best.consistent_after:
+    if after is not None:
+        # re-analysis against the simulated sensor with the effects (a model): every
+        # frequency/time statistic has the null of the augmented model
+        frequency, time = after.frequency, after.time
+        band_p, bands, band_z = frequency.band_p_value, frequency.bands_hz, frequency.band_z
+        ev_after = {"line": frequency.line_p_value}
+        ev_after.update({k: time.family_p[k] for k in evidence_p if k in time.family_p})
+        evidence_p = ev_after
+        pending = [e for e, p in ev_after.items() if p < level]
+    elif explanation is not None and frequency.band_sd.size:
+        total: Any = np.zeros_like(frequency.f)
+        for a, c in zip(explanation.effects, explanation.candidates, strict=True):
+            values = {k: a.params[k] for k in c.free}
+            psd = effect_psd(c, values, frequency.f, tau_model.dt)
+            if psd is None:
+                total = None
+                break
+            total = total + psd
+        if total is not None:
+            band_p, bands, band_z = frequency.band_test(total)
+        elif explanation.consistent_after:
             band_p = 1.0
     if band_p < level:
         items.append(_band_item(bands, band_z, band_p))
@@ -351,13 +373,16 @@ def verdict(
             items.append(_line_item(frequency, evidence_p[e]))
         else:
             items.append(_time_item(e, time, evidence_p[e]))
-    closed = best is not None and not items
-    if best is not None:
-        effect = describe_effect(best, units)
+    closed = explanation is not None and not items
+    if explanation is not None:
+        effect = "; and ".join(describe_effect(a, units) for a in explanation.effects)
+        it = "them" if len(explanation.effects) > 1 else "it"
         if closed:
-            headline = f"{effect}; after adding it, the records agree in all three views"
+            headline = f"{effect}; after adding {it}, the records agree in all three views"
         else:
-            closed_tau = "the tau view is closed by it, but " if best.consistent_after else ""
+            closed_tau = (
+                f"the tau view is closed by {it}, but " if explanation.consistent_after else ""
+            )
             headline = f"{effect}; {closed_tau}not everything is explained: " + "; ".join(
                 i.text for i in items
             )
