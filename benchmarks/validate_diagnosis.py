@@ -80,6 +80,8 @@ class Case:
     truth_param: tuple[str, float] | None = None
     truth: dict[str, Any] = field(default_factory=dict)
     transform: str | None = None  # out-of-vocabulary effect applied to the real record
+    extra2: Any = None  # a second added effect (two-effect cases)
+    effect2: str | None = None
 
 
 def bursts(x: np.ndarray, fs: float, rng: np.random.Generator) -> np.ndarray:
@@ -215,6 +217,53 @@ def make_cases(
     return cases
 
 
+#: two-effect cases: every pair that makes sense (stationary + stationary, level + stationary,
+#: line + stationary); both terms medium strength (AVAR peak 2x the base's)
+PAIRS = [
+    ("white", "sine"),
+    ("white", "markov"),
+    ("quantization", "rrw"),
+    ("markov", "sine"),
+    ("flicker", "sine"),
+    ("step", "white"),
+    ("warmup", "white"),
+    ("ramp", "markov"),
+    ("spikes", "rrw"),
+    ("telegraph", "white"),
+]
+
+
+def pair_cases(fs: float, n: int, rho: float = 2.0) -> list[Case]:
+    """Two withheld effects at once (the base lacks both)."""
+    base = base_model(fs)
+    half = n // 2
+    duration = half / fs
+    shapes = {
+        "white": T("white", N=0.05),
+        "quantization": T("quantization", Q=0.5 / fs),
+        "flicker": T("flicker", B=0.01),
+        "rrw": T("rrw", K=0.001),
+        "ramp": T("ramp", R=1e-5),
+        "markov": T("markov", sigma=0.03, tau_c=2.0),
+        "sine": T("sine", amplitude=0.03, frequency=0.137 * fs),
+        "warmup": T("warmup", amplitude=0.1, tau_w=0.05 * duration, duration=n / fs),
+        "step": T("bias_steps", size=0.1, interval=duration),
+        "telegraph": T("telegraph", amplitude=0.03, tau_c=3.0),
+    }
+    out = []
+    for a, b in PAIRS:
+        if a == "spikes":
+            ta = T("spikes", amplitude=7.0 * 0.05 * np.sqrt(fs), rate=0.02)
+        else:
+            ta = scaled(shapes[a], base, fs, half, rho)
+        tb = scaled(shapes[b], base, fs, half, rho)
+        out.append(
+            Case(f"pair-{a}+{b}-fs{fs:g}", f"pair:{a}+{b}", "pair", fs, n, base, None, ta,
+                 extra2=tb, effect2=b)
+        )  # fmt: skip
+    return out
+
+
 def simulate_case(case: Case, seed: int) -> tuple[np.ndarray, np.ndarray | None]:
     """The real record and the effect's own samples (for the truth)."""
     model = case.real_model or case.base
@@ -225,6 +274,10 @@ def simulate_case(case: Case, seed: int) -> tuple[np.ndarray, np.ndarray | None]
             case.n, case.fs, seed=seed + 7, allow_aliasing=True
         )
         real = real + effect
+    if case.extra2 is not None:
+        real = real + NoiseModel((case.extra2,), UNITS).simulate(
+            case.n, case.fs, seed=seed + 13, allow_aliasing=True
+        )
     if case.transform is not None:
         real = OOV[case.transform](np.asarray(real, dtype=float), case.fs,
                                    np.random.default_rng(seed + 11))  # fmt: skip
@@ -281,6 +334,12 @@ def evaluate(case: Case, seed: int, n_mc: int) -> dict[str, Any]:
         "closed": d.closed,
         "unexplained_views": sorted({u.view for u in d.unexplained}),
     }
+    if str(case.effect).startswith("pair:"):
+        a, b = str(case.effect)[5:].split("+")
+        named = {x.effect for x in d.explanation.effects} if d.explanation else set()
+        row["both_named"] = bool(named & EQUIVALENT.get(a, {a}) and named & EQUIVALENT.get(b, {b}))
+        row["explanation"] = sorted(named)
+        return row
     if case.effect is None or case.transform is not None:
         return row
     truth = truth_locations(case, effect)
@@ -351,7 +410,8 @@ def evaluate(case: Case, seed: int, n_mc: int) -> dict[str, Any]:
 def summarize(rows: list[dict[str, Any]]) -> dict[str, Any]:
     nulls = [r for r in rows if r["effect"] is None]
     oov = [r for r in rows if str(r["effect"]).startswith("oov:")]
-    eff = [r for r in rows if r["effect"] is not None and r not in oov]
+    pairs = [r for r in rows if str(r["effect"]).startswith("pair:")]
+    eff = [r for r in rows if r["effect"] is not None and r not in oov and r not in pairs]
     clear = [r for r in eff if r.get("clear") and r["significant"]]
     clear_all = [r for r in eff if r.get("clear")]
     clear_exp = [r for r in eff if r.get("clear_expected") and r["significant"]]
@@ -435,6 +495,16 @@ def summarize(rows: list[dict[str, Any]]) -> dict[str, Any]:
         "oov_per_case": {
             r["case"]: {"closed": r["closed"], "views": r["unexplained_views"]} for r in oov
         },
+        "pair_both_named_rate": float(np.mean([r["both_named"] for r in pairs])) if pairs else None,
+        "pair_cases": len(pairs),
+        "pair_per_case": {
+            r["case"]: {
+                "both_named": r["both_named"],
+                "explanation": r["explanation"],
+                "closed": r["closed"],
+            }
+            for r in pairs
+        },
         "closed_rate_correct_clear": float(np.mean([r["closed"] for r in good])) if good else None,
     }
 
@@ -446,6 +516,7 @@ TARGETS = [
     ("consistent_after_rate", ">=", 0.90),
     ("holdout_within_15_points", ">=", 0.90),
     ("oov_not_closed_rate", ">=", 0.90),
+    ("pair_both_named_rate", ">=", 0.90),
 ]
 
 
@@ -476,6 +547,11 @@ def table(summary: dict[str, Any]) -> str:
         f"| out-of-vocabulary cases read as closed | {summary['oov_false_closed']} of "
         f"{summary['oov_cases']} | 0 | |"
     )
+    for name, v in summary.get("pair_per_case", {}).items():
+        lines.append(
+            f"| {name} | both named={v['both_named']}, set {v['explanation']}, "
+            f"closed={v['closed']} | | |"
+        )
     for name, v in summary["oov_per_case"].items():
         lines.append(f"| {name} | closed={v['closed']}, unexplained in {v['views']} | | |")
     lines.append(
@@ -515,6 +591,11 @@ def main() -> None:
     parser.add_argument("--nulls", type=int, help="number of null cases")
     parser.add_argument("--tag", default="", help="suffix of the result files")
     parser.add_argument(
+        "--pairs",
+        action="store_true",
+        help="two-effect and out-of-vocabulary cases only (fs from --configs, default 100)",
+    )
+    parser.add_argument(
         "--combine",
         nargs="+",
         metavar="JSON",
@@ -544,6 +625,10 @@ def main() -> None:
         args.strengths.split(",") if args.strengths else None,
         args.nulls,
     )
+    if args.pairs:
+        names = args.configs.split(",") if args.configs else ["100"]
+        cases = [c for name in names for c in pair_cases(*CONFIGS[name])]
+        cases += [c for c in make_cases(True, names, ["none"], 0) if c.transform is not None]
     rows = []
     t0 = time.perf_counter()
     for i, case in enumerate(cases):
@@ -563,14 +648,13 @@ def main() -> None:
     print()
     print(text)
     RESULTS.mkdir(parents=True, exist_ok=True)
-    stem = RESULTS / (
-        ("validate_diagnosis_quick" if args.quick else "validate_diagnosis") + args.tag
-    )
+    kind = "_pairs" if args.pairs else ("_quick" if args.quick else "")
+    stem = RESULTS / ("validate_diagnosis" + kind + args.tag)
     stem.with_suffix(".json").write_text(
         json.dumps({"summary": summary, "cases": rows}, indent=1, default=float)
     )
     stem.with_suffix(".md").write_text(
-        f"# Sim-to-real diagnosis validation{' (quick)' if args.quick else ''}\n\n"
+        f"# Sim-to-real diagnosis validation{kind.replace('_', ' ')}\n\n"
         f"`python benchmarks/validate_diagnosis.py {' '.join(sys.argv[1:])}`, "
         f"n_mc = {n_mc}, {len(cases)} cases, {summary['seconds']:.0f} s.\n\n{text}\n"
     )

@@ -174,3 +174,18 @@ def test_joint_attribution_stops_at_one_effect_when_one_suffices():
     d = diagnose(real.simulate(2**16, FS, seed=3), MODEL, FS, units="deg/s", n_mc=60, seed=3)
     assert d.explanation is not None
     assert [a.effect for a in d.explanation.effects] == [d.best.effect]
+
+
+def test_cli_progress_goes_to_stderr(tmp_path, capsys):
+    model = tmp_path / "model.json"
+    MODEL.save(model)
+    real = tmp_path / "real.npy"
+    np.save(real, MODEL.simulate(2**14, FS, seed=4))
+    rc = main(
+        ["diagnose", str(real), "--fs", "100", "--units", "deg/s", "--sim-model", str(model),
+         "--n-mc", "20", "--json", "--progress", "on"]
+    )  # fmt: skip
+    captured = capsys.readouterr()
+    assert rc == 0
+    json.loads(captured.out)  # stdout stays exactly one JSON object
+    assert "diagnose: null replicates 20/20" in captured.err

@@ -69,6 +69,12 @@ def register(subparsers: Any) -> None:
     )
     diag.add_argument("--alpha", type=float, default=0.05, help="significance level (0.05)")
     diag.add_argument("--seed", type=int, default=0, help="Monte Carlo seed (default 0)")
+    diag.add_argument(
+        "--progress",
+        choices=("auto", "on", "off"),
+        default="auto",
+        help="progress on stderr (auto: for records of 2^20 samples or more)",
+    )
     out = parser.add_argument_group("output")
     out.add_argument("--json", action="store_true", help="print one JSON object to stdout")
     out.add_argument(
@@ -165,6 +171,21 @@ def _summary(d: Any) -> str:
     return "\n".join(lines)
 
 
+def _progress_printer() -> Any:
+    """Progress callback writing one line per step to stderr (stdout stays clean)."""
+    import time
+
+    start = time.perf_counter()
+
+    def show(stage: str, done: int, total: int) -> None:
+        sys.stderr.write(
+            f"diagnose: {stage} {done}/{total} ({time.perf_counter() - start:.0f} s)\n"
+        )
+        sys.stderr.flush()
+
+    return show
+
+
 def run(args: argparse.Namespace) -> int:
     """Run ``allanite diagnose``."""
     from allanite.diagnosis import diagnose
@@ -174,6 +195,7 @@ def run(args: argparse.Namespace) -> int:
     fs = part.require_fs()
     sim: Any = Path(args.sim_model) if args.sim_model else _sim_record(args, fs)
     effects = [e.strip() for e in args.effects.split(",") if e.strip()] if args.effects else None
+    show = args.progress == "on" or (args.progress == "auto" and real.size >= 2**20)
     result = diagnose(
         real,
         sim,
@@ -188,6 +210,7 @@ def run(args: argparse.Namespace) -> int:
         n_mc=args.n_mc,
         alpha=args.alpha,
         seed=args.seed,
+        progress=_progress_printer() if show else None,
     )
     if args.output:
         with atomic_output(args.output) as tmp:

@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from allanite.diagnosis.analysis import Analysis, analyze
+from allanite.diagnosis.analysis import Analysis, Progress, analyze
 from allanite.diagnosis.attribution import rank
 from allanite.diagnosis.candidates import candidate_library
 from allanite.diagnosis.holdout import holdout_check, holdout_set, tau_model_for
@@ -77,6 +77,7 @@ def diagnose(
     n_mc: int = 200,
     alpha: float = 0.05,
     seed: int = 0,
+    progress: Progress | None = None,
 ) -> Diagnosis:
     r"""Where and why a simulated sensor differs from a real record.
 
@@ -124,6 +125,10 @@ def diagnose(
         Significance level of every test.
     seed : int
         Seed of the Monte Carlo replicates (results are reproducible).
+    progress : callable, optional
+        Called as ``progress(stage, done, total)`` while replicates are simulated (about ten
+        times per stage: the null, the re-analysis with the effects, the fits) -- the CLI
+        prints it on long records.
 
     Returns
     -------
@@ -149,7 +154,7 @@ def diagnose(
     source = make_source(sim, rate, x.size, sim_units=sim_units, sim_input=sim_input)
     common_units = check_units(units, source.units)
     x_fit, x_hold, hold_kind = _split(x, holdout, rate, input)
-    analysis = analyze(x_fit, source, n_mc=int(n_mc), seed=seed, alpha=alpha)
+    analysis = analyze(x_fit, source, n_mc=int(n_mc), seed=seed, alpha=alpha, progress=progress)
     p = analysis.p_value
     significant = bool(p < alpha)
     attribution = []
@@ -165,6 +170,8 @@ def diagnose(
             duration = x_fit.size / rate
             height = float(np.sqrt(np.mean(np.square(analysis.time.spike_amplitudes))))
             spikes = (len(analysis.time.spike_times_s) / duration, height)
+        if progress is not None:
+            progress("fitting candidate effects", 0, 1)
         cands, unavailable = candidate_library(
             sig,
             duration=x_fit.size / rate,
@@ -211,6 +218,8 @@ def diagnose(
             n_mc=int(n_mc),
             seed=seed + 2_000_003,
             alpha=alpha,
+            progress=progress,
+            stage="re-analysis with the effects",
         )
     head = verdict(
         significant=significant,
@@ -233,6 +242,8 @@ def diagnose(
         a.effect in START_EFFECTS for a in explanation.effects
     )
     if x_hold is not None and attribution and not starts_only:
+        if progress is not None:
+            progress("held-out null", 0, 1)
         tm_hold = tau_model_for(x_hold, source, n_mc=int(n_mc), seed=seed + 1_000_003)
         best = attribution[0]
         if best.effect not in START_EFFECTS:
