@@ -112,9 +112,12 @@ def _extra(a: Attribution, tm: TauModel) -> NDArray[np.float64]:
 
 
 def _same_slot(c: Candidate, chosen: list[Candidate]) -> bool:
-    """Whether ``c`` would change a model term already changed (or the same effect twice)."""
+    """Whether ``c`` changes a model term already changed or adds a type already chosen.
+
+    Adding white noise after rescaling it (or rescaling it twice) is the same effect.
+    """
     for d in chosen:
-        if c.effect == d.effect:
+        if c.effect == d.effect or c.term_cls is d.term_cls:  # white and rescale:white alike
             return True
         for t in (c.base, c.replaces):
             if t is not None and t in (d.base, d.replaces):

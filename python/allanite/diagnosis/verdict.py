@@ -1,23 +1,22 @@
 r"""The headline: is the gap closed in all three views, and if not, what remains and where.
 
-A diagnosis is **closed** only when, after the best effect is added to the simulated sensor,
-every view is consistent with chance:
+A diagnosis is **closed** only when no gap is significant, or when, after the effects of the
+joint attribution (:mod:`allanite.diagnosis.joint`) are added to the simulated sensor, every
+view is consistent with chance:
 
-* tau view: the remaining statistic ``T_after`` is consistent with chance (``consistent_after``
-  of the attribution, level ``alpha``);
-* frequency view: the broadband test, re-run with the effect's PSD added to the simulated
-  PSD (:meth:`FrequencyView.band_test`), and the line detector (unless the effect explains the
-  line) are not significant;
-* time view: no significant evidence (level, jump, bursts ``hf``/``dyn``, spikes, kurtosis) is
-  left unexplained by the effect.
+* tau view: the remaining statistic ``T_after`` (all fitted parameters taken off the degrees
+  of freedom) is consistent with chance at level ``alpha``;
+* frequency and time views: for a model, the record is re-analysed against the model *with*
+  the effects (its own Monte Carlo null), and every statistic of these views (line,
+  broadband bands, level, jump, ``hf``, ``dyn``, spikes, kurtosis) lies above ``alpha / 9``
+  (Bonferroni over the nine). For a simulated record there is no model to augment: the
+  broadband test is re-run with the effects' PSD added (:meth:`FrequencyView.band_test`) and
+  the significant evidence the effects do not explain remains; non-stationary effects have no
+  PSD, and then the broadband evidence counts as explained when the tau view is consistent.
 
-Every piece of evidence is judged at the level the attribution uses (``alpha`` over the number
-of evidence statistics, Bonferroni). Whatever is left is reported as an :class:`Unexplained`
-item: its view, the evidence, *where* (taus, frequency band or lines, time segments) and *how
-large* (the remaining gap, the noise-level ratio in the flagged windows, the line amplitude, the
-excess kurtosis). Non-stationary effects (ramp, warm-up, bias step, spikes) have no PSD: for
-them the broadband re-test is skipped and the frequency view's broadband evidence counts as
-explained only if the tau view is consistent after the effect.
+Whatever is left is reported as an :class:`Unexplained` item: its view, the evidence, *where*
+(taus, frequency band or lines, time segments) and *how large* (the remaining gap, the rms
+noise-level ratio in the flagged windows, the line amplitude, the excess kurtosis).
 """
 
 from __future__ import annotations
