@@ -528,7 +528,8 @@ def table(summary: dict[str, Any]) -> str:
     for key, op, target in TARGETS:
         v = summary[key]
         met = v is not None and (v <= target if op == "<=" else v >= target)
-        lines.append(f"| {key} | {fmt(v)} | {op} {target} | {'yes' if met else 'NO'} |")
+        verdict = "n/a" if v is None else ("yes" if met else "NO")
+        lines.append(f"| {key} | {fmt(v)} | {op} {target} | {verdict} |")
     for label, loc in (("", summary["localisation"]), (", clear", summary["localisation_clear"])):
         for k, v in loc.items():
             lines.append(
