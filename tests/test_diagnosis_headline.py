@@ -189,3 +189,12 @@ def test_cli_progress_goes_to_stderr(tmp_path, capsys):
     assert rc == 0
     json.loads(captured.out)  # stdout stays exactly one JSON object
     assert "diagnose: null replicates 20/20" in captured.err
+
+
+def test_report_leads_with_the_headline(bursty):
+    from allanite.report.diagnosis import diagnosis_html
+
+    html = diagnosis_html(bursty, channel="gyro x", model_name="model.json")
+    assert html.index("not fully explained") < html.index("Channel")
+    assert "What no candidate explains" in html
+    assert "short-term noise level changes" in html
