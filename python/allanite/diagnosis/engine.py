@@ -21,6 +21,7 @@ from allanite.diagnosis.inputs import (
 )
 from allanite.diagnosis.joint import Explanation, combined_terms, explain
 from allanite.diagnosis.level_shape import warmup_time_constant
+from allanite.diagnosis.null import runs
 from allanite.diagnosis.result import Diagnosis, Holdout
 from allanite.diagnosis.verdict import verdict
 from allanite.terms import term_from_dict
@@ -53,6 +54,20 @@ def _split(
             )
         return x[:n_fit], x[n_fit:], "fraction"
     return x, as_rate(holdout, fs, input, name="held-out"), "record"
+
+
+def _bursts(tv: Any) -> tuple[float, float] | None:
+    """Duty and mean length (s) of the windows whose short-term noise level is raised."""
+    z = tv.z.get("hf")
+    if z is None or z.size == 0:
+        return None
+    raised = z > tv.thresholds["hf"]
+    spans = runs(raised)
+    if not spans or raised.all():
+        return None
+    duty = float(raised.mean())
+    length = float(np.mean([b - a + 1 for a, b in spans])) * tv.window_s
+    return duty, length
 
 
 def _evidence(analysis: Analysis) -> dict[str, float]:
@@ -181,6 +196,7 @@ def diagnose(
             lines=[(ln.frequency_hz, ln.amplitude) for ln in analysis.frequency.lines],
             spikes=spikes,
             effects=effects,
+            bursts=_bursts(analysis.time),
         )
         attribution = rank(
             cands,

@@ -51,6 +51,7 @@ TERM_NAMES = {
     "spikes": "spikes",
     "telegraph": "random telegraph noise",
     "lowpass": "low-pass filter on the white noise",
+    "bursts": "white noise in bursts (a time-varying noise level)",
 }
 
 #: what each piece of time/frequency evidence means, in words
