@@ -48,12 +48,18 @@ def main_() -> None:
     parser.add_argument("--n", type=int, default=1_000_000)
     parser.add_argument("--fs", type=float, default=1000.0)
     parser.add_argument("--n-mc", type=int, default=200)
+    parser.add_argument(
+        "--gap", action="store_true", help="real record with white noise x1.5 (a gap to explain)"
+    )
     args = parser.parse_args()
     m = model()
     with tempfile.TemporaryDirectory() as tmp:
         real = Path(tmp) / "real.npy"
         path = Path(tmp) / "model.json"
-        x = np.asarray(m.simulate(args.n, args.fs, seed=1), dtype=np.float64).ravel()
+        real_model = m
+        if args.gap:
+            real_model = m.without("white").plus(TERM_TYPES["white"](N=0.075))
+        x = np.asarray(real_model.simulate(args.n, args.fs, seed=1), dtype=np.float64).ravel()
         np.save(real, x)
         m.save(path)
         common = [str(real), "--fs", str(args.fs), "--units", "deg/s"]
@@ -79,7 +85,9 @@ def main_() -> None:
         "ratio": t_diag / t_analyze,
         "one_replicate_simulation_s": t_sim,
         "one_replicate_features_s": t_feat,
+        "gap": bool(args.gap),
         "significant": verdict["gap"]["significant"],
+        "closed": verdict["closed"],
     }
     print(json.dumps(row, indent=1))
     old = json.loads(RESULTS.read_text()) if RESULTS.exists() else []
