@@ -82,6 +82,12 @@ def register(subparsers: Any) -> None:
     )
     diag.add_argument("--alpha", type=float, default=0.05, help="significance level (0.05)")
     diag.add_argument("--seed", type=int, default=0, help="Monte Carlo seed (default 0)")
+    diag.add_argument(
+        "--progress",
+        choices=("auto", "on", "off"),
+        default="auto",
+        help="progress on stderr (auto: for records of 2^20 samples or more)",
+    )
     out = parser.add_argument_group("output")
     out.add_argument("--json", action="store_true", help="print one JSON object to stdout")
     out.add_argument(
@@ -123,11 +129,21 @@ def _holdout(args: argparse.Namespace) -> Any:
 
 
 def _summary(d: Any) -> str:
-    lines = [
+    from allanite.diagnosis.verdict import format_params
+
+    units = d.meta.get("units")
+    status = "CLOSED" if d.closed else "NOT FULLY EXPLAINED"
+    if not d.significant:
+        status = "NO GAP"
+    lines = [f"{status}: {d.headline}"]
+    if d.unexplained:
+        lines.append("unexplained:")
+        lines.extend(f"  - {u.text}" for u in d.unexplained)
+    lines.append(
         f"gap G = {d.statistic:.4g}  (T = {d.tau.statistic:.4g}, chance level T0 = "
         f"{d.tau.t0:.3g}), p = {d.p_value:.3g}: "
         + ("SIGNIFICANT" if d.significant else "consistent with chance"),
-    ]
+    )
     where = d.where
     if where["tau_bands_s"]:
         bands = ", ".join(f"{a:.3g}-{b:.3g} s" for a, b in where["tau_bands_s"])
@@ -145,7 +161,7 @@ def _summary(d: Any) -> str:
     if d.attribution:
         lines.append("attribution (best first):")
         for a in d.attribution:
-            params = ", ".join(f"{k}={v:.4g}" for k, v in a.params.items())
+            params = format_params(a, units)
             lines.append(
                 f"  {a.effect:<22} {params}  gap {a.gap_before:.4g} -> {a.gap_after:.4g} "
                 f"(shrinkage {100 * a.shrinkage:.0f} %, "
@@ -168,6 +184,21 @@ def _summary(d: Any) -> str:
     return "\n".join(lines)
 
 
+def _progress_printer() -> Any:
+    """Progress callback writing one line per step to stderr (stdout stays clean)."""
+    import time
+
+    start = time.perf_counter()
+
+    def show(stage: str, done: int, total: int) -> None:
+        sys.stderr.write(
+            f"diagnose: {stage} {done}/{total} ({time.perf_counter() - start:.0f} s)\n"
+        )
+        sys.stderr.flush()
+
+    return show
+
+
 def run(args: argparse.Namespace) -> int:
     """Run ``allanite diagnose``."""
     from allanite.diagnosis import diagnose
@@ -184,6 +215,7 @@ def run(args: argparse.Namespace) -> int:
     loaded = load_sim_model(args, fs, rate_unit(part)) if args.sim_model else None
     sim: Any = loaded.model if loaded is not None else _sim_record(args, fs)
     effects = [e.strip() for e in args.effects.split(",") if e.strip()] if args.effects else None
+    show = args.progress == "on" or (args.progress == "auto" and real.size >= 2**20)
     result = diagnose(
         real,
         sim,
@@ -198,6 +230,7 @@ def run(args: argparse.Namespace) -> int:
         n_mc=args.n_mc,
         alpha=args.alpha,
         seed=args.seed,
+        progress=_progress_printer() if show else None,
     )
     if loaded is not None and args.write_corrected:
         write_corrected(args, loaded, result)

@@ -9,6 +9,7 @@ rate on a correctly simulated sensor is at most ``alpha``.
 
 from __future__ import annotations
 
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 
 import numpy as np
@@ -32,7 +33,7 @@ from allanite.diagnosis.tau_view import (
 )
 from allanite.diagnosis.time_view import TimePlan, TimeView, time_features, time_plan, time_view
 
-__all__ = ["Analysis", "Plan", "analyze", "record_features"]
+__all__ = ["Analysis", "Plan", "Progress", "analyze", "record_features"]
 
 Features = dict[str, NDArray[np.float64]]
 
@@ -57,7 +58,7 @@ def record_features(x: NDArray[np.float64], plan: Plan) -> Features:
     """All features of one rate record (the same function for real and simulated records)."""
     log_avar = tau_features(x, plan.fs, plan.m)
     feats: Features = {"log_avar": log_avar, "avar_lin": np.exp(log_avar)}
-    feats["log_psd"] = frequency_features(x, plan.fs, plan.nperseg)
+    feats.update(frequency_features(x, plan.fs, plan.nperseg))
     feats.update(time_features(x, plan.time))
     return feats
 
@@ -78,23 +79,57 @@ class Analysis:
         return min(1.0, 3.0 * min(self.tau.p_value, self.frequency.p_value, self.time.p_value))
 
 
-def ensemble(source: SimSource, plan: Plan, n_mc: int, seed: int) -> NullEnsemble:
+#: a progress callback receives (stage, done, total)
+Progress = Callable[[str, int, int], None]
+
+
+def _features_of(
+    records: Iterator[NDArray[np.float64]],
+    plan: Plan,
+    total: int,
+    progress: Progress | None,
+    stage: str,
+) -> list[Features]:
+    out = []
+    step = max(1, total // 10)
+    for i, r in enumerate(records, start=1):
+        out.append(record_features(r, plan))
+        if progress is not None and (i % step == 0 or i == total):
+            progress(stage, i, total)
+    return out
+
+
+def ensemble(
+    source: SimSource,
+    plan: Plan,
+    n_mc: int,
+    seed: int,
+    progress: Progress | None = None,
+    stage: str = "null replicates",
+) -> NullEnsemble:
     """Null ensemble of ``n_mc`` replicates (``2 n_mc`` for a simulated record)."""
     if source.kind == "model":
-        reps = [record_features(r, plan) for r in source.replicates(plan.n, n_mc, seed)]
+        reps = _features_of(source.replicates(plan.n, n_mc, seed), plan, n_mc, progress, stage)
         return NullEnsemble.from_model(reps)
     assert source.record is not None
     sim = record_features(source.record[: plan.n], plan)
-    reps = [record_features(r, plan) for r in source.replicates(plan.n, 2 * n_mc, seed)]
+    reps = _features_of(source.replicates(plan.n, 2 * n_mc, seed), plan, 2 * n_mc, progress, stage)
     return NullEnsemble.from_record(sim, reps)
 
 
 def analyze(
-    x: NDArray[np.float64], source: SimSource, *, n_mc: int, seed: int, alpha: float
+    x: NDArray[np.float64],
+    source: SimSource,
+    *,
+    n_mc: int,
+    seed: int,
+    alpha: float,
+    progress: Progress | None = None,
+    stage: str = "null replicates",
 ) -> Analysis:
-    """Run the three views on the rate record ``x``."""
+    """Run the three views on the rate record ``x`` (``progress`` reports the replicates)."""
     plan = Plan.for_length(x.size, source.fs)
-    ens = ensemble(source, plan, n_mc, seed)
+    ens = ensemble(source, plan, n_mc, seed, progress, stage)
     real = record_features(x, plan)
     tau = plan.m / plan.fs
     tmodel = build_tau_model(real, ens, tau, 1.0 / plan.fs, ens.ref["avar_lin"], x.size / plan.fs)

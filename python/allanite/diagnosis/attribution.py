@@ -190,6 +190,25 @@ def _bounds(cand: Candidate, tm: TauModel) -> tuple[NDArray[np.float64], NDArray
     return arr[:, 0], arr[:, 1]
 
 
+def _degenerate(
+    cand: Candidate, logp: NDArray[np.float64], lo: NDArray[np.float64], dt: float
+) -> bool:
+    """Whether the fit sits where the effect is not identified.
+
+    A parameter at its lower bound, or a correlation time shorter than one sample (a
+    Gauss-Markov or telegraph process with ``tau_c < dt`` is white noise at this sample rate):
+    a simpler candidate describes the same curve.
+    """
+    if np.any((logp - lo < 0.01) & (lo > -700.0)):
+        return True
+    specs = {p.name: p for p in cand.term_cls.params}
+    for name, v in zip(cand.free, logp, strict=True):
+        spec = specs.get(name)
+        if spec is not None and spec.rate == 0 and spec.time == 1 and np.exp(v) < dt:
+            return True
+    return False
+
+
 def _objective(cand: Candidate, tm: TauModel) -> Any:
     lo, hi = _bounds(cand, tm)
 
@@ -248,6 +267,8 @@ def fit_candidate(
     if cand.free and (best is None or best.fun >= 1e299):
         return None
     logp = np.asarray(best.x if cand.free else [], dtype=np.float64)
+    if cand.base is None and _degenerate(cand, logp, lo, tm.dt):
+        return None
     extra = _extra(cand, logp, tm)
     if extra is None:
         return None

@@ -17,6 +17,7 @@ step           level jump, level, kurtosis of block means      a level jump
 warmup         level, level jump, kurtosis of block means      level or jump
 spikes         spike statistic, kurtosis of differences, hf    the spike statistic
 telegraph      kurtosis of block means, dyn, jump, level       kurtosis of block means
+bursts         hf, kurtosis of differences, spike statistic    hf (noise-level changes)
 =============  ==============================================  ==========================
 
 An effect whose signature is absent is not proposed (a telegraph without a non-Gaussian
@@ -55,6 +56,7 @@ EFFECTS: dict[str, str] = {
     "spikes": "spikes",
     "telegraph": "telegraph",
     "lowpass": "lowpass_white",
+    "bursts": "white_bursts",
 }
 
 #: evidence (non-tau statistics) each effect can explain
@@ -67,6 +69,7 @@ EXPLAINS: dict[str, frozenset[str]] = {
     "warmup": frozenset({"level", "jump", "kurt_lf"}),
     "spikes": frozenset({"spike", "kurt_hf", "hf"}),
     "telegraph": frozenset({"kurt_lf", "dyn", "jump", "level"}),
+    "bursts": frozenset({"hf", "kurt_hf", "spike"}),
 }
 
 #: evidence an effect needs before it is proposed (any of)
@@ -76,6 +79,7 @@ SIGNATURE: dict[str, frozenset[str]] = {
     "warmup": frozenset({"level", "jump"}),
     "spikes": frozenset({"spike"}),
     "telegraph": frozenset({"kurt_lf"}),
+    "bursts": frozenset({"hf"}),
 }
 
 
@@ -194,6 +198,7 @@ def candidate_library(
     n_changes: int = 0,
     warmup_tau: float | None = None,
     effects: list[str] | None = None,
+    bursts: tuple[float, float] | None = None,
 ) -> tuple[list[Candidate], list[str]]:
     """Candidates to fit, and the effects that cannot be tried (no Term class, no model term).
 
@@ -211,6 +216,9 @@ def candidate_library(
         Detected spectral lines, strongest first (the sine takes the strongest's frequency).
     spikes : (rate per second, rms height), optional
         Detected spikes (both parameters are then fixed from the time view).
+    bursts : (duty, mean burst length in s), optional
+        Windows of raised short-term noise level found by the time view (``bursts`` is only
+        proposed with them; both parameters are then fixed, the level ``N`` is fitted).
     n_changes : int
         Number of detected level jumps (bias steps: ``interval = duration / n_changes``).
     warmup_tau : float, optional
@@ -251,6 +259,11 @@ def candidate_library(
             fixed["duration"] = duration
             if warmup_tau is not None:
                 fixed["tau_w"] = warmup_tau
+        elif effect == "bursts":
+            if bursts is None:
+                continue
+            # the time view locates the bursts: their share of the time and mean length
+            fixed["duty"], fixed["burst_s"] = bursts
         elif effect == "lowpass":
             replaces = whites[0]
             fixed["N"] = float(replaces.values()["N"])

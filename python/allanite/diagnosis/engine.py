@@ -2,18 +2,29 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from allanite.diagnosis.analysis import Analysis, analyze
+from allanite.diagnosis.analysis import Analysis, Progress, analyze
 from allanite.diagnosis.attribution import rank
 from allanite.diagnosis.candidates import candidate_library, check_effects
-from allanite.diagnosis.holdout import holdout_check
-from allanite.diagnosis.inputs import MIN_SAMPLES, as_rate, check_units, make_source
+from allanite.diagnosis.holdout import holdout_check, holdout_set, tau_model_for
+from allanite.diagnosis.inputs import (
+    MIN_SAMPLES,
+    SimSource,
+    as_rate,
+    check_units,
+    make_source,
+)
+from allanite.diagnosis.joint import Explanation, combined_terms, explain
 from allanite.diagnosis.level_shape import warmup_time_constant
+from allanite.diagnosis.null import runs
 from allanite.diagnosis.result import Diagnosis, Holdout
+from allanite.diagnosis.verdict import verdict
+from allanite.terms import term_from_dict
 from allanite.variance import _check_fs
 
 __all__ = ["diagnose"]
@@ -45,6 +56,20 @@ def _split(
     return x, as_rate(holdout, fs, input, name="held-out"), "record"
 
 
+def _bursts(tv: Any) -> tuple[float, float] | None:
+    """Duty and mean length (s) of the windows whose short-term noise level is raised."""
+    z = tv.z.get("hf")
+    if z is None or z.size == 0:
+        return None
+    raised = z > tv.thresholds["hf"]
+    spans = runs(raised)
+    if not spans or raised.all():
+        return None
+    duty = float(raised.mean())
+    length = float(np.mean([b - a + 1 for a, b in spans])) * tv.window_s
+    return duty, length
+
+
 def _evidence(analysis: Analysis) -> dict[str, float]:
     fam = analysis.time.family_p
     out = {"line": analysis.frequency.line_p_value}
@@ -67,6 +92,7 @@ def diagnose(
     n_mc: int = 200,
     alpha: float = 0.05,
     seed: int = 0,
+    progress: Progress | None = None,
 ) -> Diagnosis:
     r"""Where and why a simulated sensor differs from a real record.
 
@@ -114,6 +140,10 @@ def diagnose(
         Significance level of every test.
     seed : int
         Seed of the Monte Carlo replicates (results are reproducible).
+    progress : callable, optional
+        Called as ``progress(stage, done, total)`` while replicates are simulated (about ten
+        times per stage: the null, the re-analysis with the effects, the fits) -- the CLI
+        prints it on long records.
 
     Returns
     -------
@@ -140,12 +170,15 @@ def diagnose(
     source = make_source(sim, rate, x.size, sim_units=sim_units, sim_input=sim_input)
     common_units = check_units(units, source.units)
     x_fit, x_hold, hold_kind = _split(x, holdout, rate, input)
-    analysis = analyze(x_fit, source, n_mc=int(n_mc), seed=seed, alpha=alpha)
+    analysis = analyze(x_fit, source, n_mc=int(n_mc), seed=seed, alpha=alpha, progress=progress)
     p = analysis.p_value
     significant = bool(p < alpha)
     attribution = []
     unavailable: list[str] = []
+    by_effect: dict[str, Any] = {}
+    explanation: Explanation | None = None
     ev_p = _evidence(analysis)
+    sig: dict[str, bool] = {}
     if significant:
         sig = {k: v < alpha / len(ev_p) for k, v in ev_p.items()}
         spikes = None
@@ -153,6 +186,8 @@ def diagnose(
             duration = x_fit.size / rate
             height = float(np.sqrt(np.mean(np.square(analysis.time.spike_amplitudes))))
             spikes = (len(analysis.time.spike_times_s) / duration, height)
+        if progress is not None:
+            progress("fitting candidate effects", 0, 1)
         cands, unavailable = candidate_library(
             sig,
             duration=x_fit.size / rate,
@@ -162,6 +197,7 @@ def diagnose(
             lines=[(ln.frequency_hz, ln.amplitude) for ln in analysis.frequency.lines],
             spikes=spikes,
             effects=effects,
+            bursts=_bursts(analysis.time),
         )
         attribution = rank(
             cands,
@@ -173,19 +209,77 @@ def diagnose(
             duration=x_fit.size / rate,
         )
         by_effect = {c.effect: c for c in cands}
-    held: Holdout | None = None
-    if x_hold is not None and attribution and attribution[0].effect not in START_EFFECTS:
-        best = attribution[0]
-        held = holdout_check(
-            best,
-            by_effect[best.effect],
-            x_hold,
-            source,
-            n_mc=int(n_mc),
-            seed=seed + 1_000_003,
-            alpha=alpha,
-            kind=hold_kind,
+        if attribution:
+            explanation = explain(
+                attribution[0],
+                cands,
+                analysis.tau_model,
+                alpha=alpha,
+                evidence_p=ev_p,
+                significant=sig,
+                time_view=analysis.time,
+                duration=x_fit.size / rate,
+            )
+    after: Analysis | None = None
+    if explanation is not None and source.model is not None:
+        # the frequency and time views re-run against the simulated sensor WITH the effects:
+        # their statistics (bursts, kurtosis, band levels) depend on the whole noise, so only
+        # a null of the augmented model says whether they are consistent after the effects
+        combined = replace(
+            source.model,
+            terms=tuple(term_from_dict(t) for t in combined_terms(explanation, source.model)),
         )
+        after = analyze(
+            x_fit,
+            SimSource(fs=rate, model=combined, units=source.units),
+            n_mc=int(n_mc),
+            seed=seed + 2_000_003,
+            alpha=alpha,
+            progress=progress,
+            stage="re-analysis with the effects",
+        )
+    head = verdict(
+        significant=significant,
+        p_value=p,
+        alpha=alpha,
+        tau_model=analysis.tau_model,
+        tau=analysis.tau,
+        frequency=analysis.frequency,
+        time=analysis.time,
+        evidence_p=ev_p,
+        evidence_significant=sig,
+        explanation=explanation,
+        units=common_units,
+        after=after,
+    )
+    held: Holdout | None = None
+    if explanation is not None:
+        explanation = replace(explanation, terms=combined_terms(explanation, source.model))
+    starts_only = explanation is not None and any(
+        a.effect in START_EFFECTS for a in explanation.effects
+    )
+    if x_hold is not None and attribution and not starts_only:
+        if progress is not None:
+            progress("held-out null", 0, 1)
+        tm_hold = tau_model_for(x_hold, source, n_mc=int(n_mc), seed=seed + 1_000_003)
+        best = attribution[0]
+        if best.effect not in START_EFFECTS:
+            held = holdout_check(
+                best,
+                by_effect[best.effect],
+                x_hold,
+                source,
+                n_mc=int(n_mc),
+                seed=seed + 1_000_003,
+                alpha=alpha,
+                kind=hold_kind,
+                tm=tm_hold,
+            )
+        if explanation is not None:
+            pairs = list(zip(explanation.effects, explanation.candidates, strict=True))
+            explanation = replace(
+                explanation, holdout=holdout_set(pairs, tm_hold, alpha=alpha, kind=hold_kind)
+            )
     return Diagnosis(
         statistic=analysis.tau.gap,
         p_value=p,
@@ -195,6 +289,10 @@ def diagnose(
         time=analysis.time,
         attribution=attribution,
         holdout=held,
+        explanation=explanation,
+        closed=head.closed,
+        unexplained=head.unexplained,
+        headline=head.headline,
         meta={
             "fs": rate,
             "n_samples": int(x.size),

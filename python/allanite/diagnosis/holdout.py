@@ -19,7 +19,7 @@ from allanite.diagnosis.null import NullEnsemble
 from allanite.diagnosis.result import Holdout
 from allanite.diagnosis.tau_view import TauModel, build_tau_model, octave_factors, tau_features
 
-__all__ = ["holdout_check", "tau_model_for"]
+__all__ = ["holdout_check", "holdout_set", "tau_model_for"]
 
 
 def tau_model_for(x: NDArray[np.float64], source: SimSource, *, n_mc: int, seed: int) -> TauModel:
@@ -50,9 +50,14 @@ def holdout_check(
     seed: int,
     alpha: float,
     kind: str,
+    tm: TauModel | None = None,
 ) -> Holdout:
-    """Shrinkage of ``best`` (fitted in-sample) on the held-out record ``x_hold``."""
-    tm = tau_model_for(x_hold, source, n_mc=n_mc, seed=seed)
+    """Shrinkage of ``best`` (fitted in-sample) on the held-out record ``x_hold``.
+
+    ``tm`` is the held-out tau model when already built (:func:`tau_model_for`).
+    """
+    if tm is None:
+        tm = tau_model_for(x_hold, source, n_mc=n_mc, seed=seed)
     values = {n: best.params[n] for n in cand.free}
     extra = np.asarray(cand.extra_avar(values, tm.tau, tm.dt), dtype=np.float64)
     g_before, g_after = tm.gap(), tm.gap(extra)
@@ -65,3 +70,25 @@ def holdout_check(
         n_samples=int(x_hold.size),
         source=kind,
     )
+
+
+def holdout_set(
+    effects: list[tuple[Attribution, Candidate]], tm: TauModel, *, alpha: float, kind: str
+) -> dict[str, float | bool | str | int | list[str]]:
+    """Held-out check of a set of effects: their Allan variances add on the held-out data."""
+    extra = np.zeros_like(tm.tau)
+    k = 0
+    for a, c in effects:
+        values = {n: a.params[n] for n in c.free}
+        extra = extra + np.asarray(c.extra_avar(values, tm.tau, tm.dt), dtype=np.float64)
+        k += len(c.free)
+    g_before, g_after = tm.gap(), tm.gap(extra)
+    return {
+        "effects": [a.effect for a, _ in effects],
+        "shrinkage": float(1.0 - g_after / g_before) if g_before > 0 else 0.0,
+        "gap_before": g_before,
+        "gap_after": g_after,
+        "consistent_after": bool(tm.p_value(extra) > alpha),
+        "n_samples": round(tm.duration / tm.dt),
+        "source": kind,
+    }

@@ -9,8 +9,10 @@ from typing import Any
 
 from allanite.diagnosis.attribution import Attribution
 from allanite.diagnosis.frequency_view import FrequencyView
+from allanite.diagnosis.joint import Explanation
 from allanite.diagnosis.tau_view import TauView
 from allanite.diagnosis.time_view import TimeView
+from allanite.diagnosis.verdict import Unexplained
 from allanite.notebook import repr_html
 
 __all__ = ["Diagnosis", "Holdout"]
@@ -90,6 +92,18 @@ class Diagnosis:
     meta : dict
         fs, sample counts, units, kind of simulated input, Monte Carlo size, seed, alpha,
         unavailable effects.
+    explanation : Explanation or None
+        The joint attribution: the set of effects (forward selection from the best single
+        effect, backward check), its remaining gap, shares, combined model terms and held-out
+        check.
+    closed : bool
+        True only when the tau, frequency and time views are all consistent with chance after
+        the best effect is added (or no gap is significant).
+    unexplained : list of Unexplained
+        What the best effect leaves unexplained: view, evidence, where and how large.
+    headline : str
+        One plain sentence: the effect with its parameters and units, and whether the records
+        then agree in all three views or what remains.
     """
 
     statistic: float
@@ -101,6 +115,11 @@ class Diagnosis:
     attribution: list[Attribution]
     holdout: Holdout | None
     meta: dict[str, Any] = field(default_factory=dict)
+    explanation: Explanation | None = None
+    closed: bool = False
+    unexplained: list[Unexplained] = field(default_factory=list)
+    headline: str = ""
+
     _repr_html_ = repr_html  # Jupyter: a compact table and the plot (allanite.notebook)
 
     @property
@@ -132,6 +151,9 @@ class Diagnosis:
     def to_dict(self, *, views: bool = True) -> dict[str, Any]:
         """JSON-ready dictionary; ``views=False`` leaves out the plotting arrays."""
         out: dict[str, Any] = {
+            "headline": self.headline,
+            "closed": self.closed,
+            "unexplained": [u.to_dict() for u in self.unexplained],
             "gap": {
                 "statistic": self.statistic,
                 "p_value": self.p_value,
@@ -146,6 +168,7 @@ class Diagnosis:
             },
             "where": self.where,
             "attribution": [a.to_dict() for a in self.attribution],
+            "explanation": self.explanation.to_dict() if self.explanation is not None else None,
             "holdout": self.holdout.to_dict() if self.holdout is not None else None,
             "meta": dict(self.meta),
         }

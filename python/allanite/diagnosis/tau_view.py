@@ -86,6 +86,7 @@ class TauModel:
     cov_inv: NDArray[np.float64]
     real_scale: float
     null_t: NDArray[np.float64]
+    null_sd: NDArray[np.float64] | None = None
 
     @property
     def t0(self) -> float:
@@ -218,6 +219,7 @@ def build_tau_model(
         cov_inv=cov_inv,
         real_scale=ens.real_scale,
         null_t=null_t,
+        null_sd=null.std(axis=0, ddof=1),
     )
 
 

@@ -10,8 +10,8 @@ Per window it computes, for the real record and for every Monte Carlo replicate:
 * ``dyn``: the log non-overlapping Allan variance at ``m = max(2, L/16)`` (dynamic Allan
   variance at a mid tau: bursts of correlated noise, telegraph episodes);
 
-(for ``hf`` and ``dyn`` the mean residual over the windows is removed: a uniform change of the
-noise level belongs to the tau view, the time view looks for changes in time)
+(for ``hf`` and ``dyn`` the median residual over the windows is removed: a uniform change of
+the noise level belongs to the tau view, the time view looks for changes in time)
 
 plus three record-wide statistics: the largest deviation from a 9-sample running median in
 units of its robust spread (``max |h| / (1.4826 MAD(h))``, spikes), the excess kurtosis of the
@@ -305,12 +305,19 @@ def time_view(
         r = ens.residual(real, fam)
         if fam in ("hf", "dyn"):
             # a uniform change of the noise level is the tau view's business; the time view
-            # looks for changes *in time*, so the across-window mean residual is removed
-            r = r - r.mean()
-            null = null - null.mean(axis=1, keepdims=True)
+            # looks for changes *in time*, so the across-window median residual is removed
+            # (the median: with bursts in a minority of the windows the quiet windows keep
+            # z ~ 0 and only the bursts are flagged)
+            r = r - np.median(r)
+            null = null - np.median(null, axis=1, keepdims=True)
             sd = null.std(axis=0, ddof=1)
         zf = r / sd
-        zmax_null = np.abs(null / sd).max(axis=1)
+        # each null value normalised by the spread of the OTHER replicates (leave-one-out):
+        # the real record is not part of the spread estimate either, so with few replicates
+        # its z has heavier tails than in-sample null z's; this keeps max |z| calibrated
+        n_rep = null.shape[0]
+        loo = np.sqrt(np.maximum((np.sum(null**2, axis=0) - null**2) / max(n_rep - 2, 1), 1e-300))
+        zmax_null = np.abs(null / np.where(np.isfinite(sd), loo, np.inf)).max(axis=1)
         thr[fam] = gumbel_isf(alpha, zmax_null)
         fam_p[fam] = gumbel_sf(float(np.abs(zf).max()), zmax_null)
         z[fam] = zf

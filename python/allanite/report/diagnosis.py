@@ -81,7 +81,23 @@ def diagnosis_html(diagnosis: Any, *, channel: str, model_name: str) -> str:
             _ranges(where["time_segments_s"], "s"),
         ],
     ]
-    parts = [
+    headline = getattr(diagnosis, "headline", "")
+    closed = getattr(diagnosis, "closed", False)
+    parts = []
+    if headline:
+        label = (
+            "closed" if closed else ("not fully explained" if diagnosis.significant else "no gap")
+        )
+        parts.append(
+            f'<p class="verdict">{h.badge("pass" if closed else "fail")} <b>{h.escape(label)}</b>: '
+            f"{h.escape(headline)}</p>"
+        )
+    if getattr(diagnosis, "unexplained", None):
+        rows_u = [[u.view, u.evidence, u.text, _p(u.p_value, None)] for u in diagnosis.unexplained]
+        parts.append("<h3>What no candidate explains</h3>")
+        parts.append(h.table(["view", "evidence", "where and how large", "p-value"], rows_u,
+                             text_columns=3))  # fmt: skip
+    parts += [
         f'<p class="verdict">Channel <b>{h.escape(channel)}</b> against model '
         f"<b>{h.escape(model_name)}</b>: {h.badge(verdict)} — {h.escape(text)} "
         f"(combined p = {_p(diagnosis.p_value, n_mc)}, "

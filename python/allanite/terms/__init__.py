@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from allanite.terms.base import TERM_TYPES, ParamSpec, Term, term_from_dict
+from allanite.terms.bursts import WhiteBursts
 from allanite.terms.flicker import Flicker
 from allanite.terms.markov import GaussMarkov
 from allanite.terms.quantization import Quantization
@@ -40,5 +41,6 @@ __all__ = [
     "TurnOnBias",
     "WarmUp",
     "White",
+    "WhiteBursts",
     "term_from_dict",
 ]

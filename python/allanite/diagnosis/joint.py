@@ -1,0 +1,223 @@
+r"""Joint attribution: a set of effects that together explain the gap.
+
+Forward selection with the same calibrated, penalised test as the single-effect ranking
+(:func:`allanite.diagnosis.attribution.rank`): starting from the best single effect, every
+remaining candidate is fitted on top of the simulated sensor *plus the effects chosen so far*
+(their Allan variances add: the reference becomes ``log(S + E_chosen + E_new)``), only
+against the evidence the chosen effects leave unexplained; the best kept candidate (likelihood
+ratio test ``Delta T > chi2_{1-alpha}(k)`` or significant evidence explained, without raising
+``T`` by more than ``chi2_{1-alpha}(1)``) joins the set.
+Selection stops when the tau view is consistent with chance and no significant evidence is
+left, when no candidate passes the test, or after :data:`MAX_EFFECTS` effects.
+
+Backward check: an effect is dropped again when removing it (the others kept) raises ``T`` by
+less than the ``chi2_{1-alpha}(k)`` quantile and it is the only one to explain none of the
+evidence, i.e. it no longer earns its parameters in the presence of the later effects.
+
+``share`` splits the gap: effect ``i`` (in selection order) gets ``(G_{i-1} - G_i) / G_0``
+with ``G_i`` the gap after the first ``i`` effects; what remains is ``G_final / G_0``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy import stats
+
+from allanite.diagnosis.attribution import Attribution, rank
+from allanite.diagnosis.candidates import Candidate
+from allanite.diagnosis.tau_view import TauModel
+from allanite.diagnosis.time_view import TimeView
+
+__all__ = ["MAX_EFFECTS", "Explanation", "combined_terms", "explain", "with_background"]
+
+#: at most this many effects in one explanation
+MAX_EFFECTS = 4
+
+
+@dataclass(frozen=True)
+class Explanation:
+    """A set of effects that together explain the gap.
+
+    Attributes
+    ----------
+    effects : list of Attribution
+        The effects in selection order, each fitted on top of the previous ones.
+    candidates : list of Candidate
+        Their candidate definitions (same order).
+    gap_before, gap_after : float
+        ``G`` without and with all the effects.
+    consistent_after : bool
+        Tau view consistent with chance after all the effects (``k`` = all their parameters).
+    p_after : float
+        p-value of the remaining tau-view statistic.
+    share : dict
+        Fraction of the gap per effect and ``"remainder"``.
+    explained : list of str
+        Evidence of the frequency/time views the set explains.
+    extra_avar : numpy.ndarray
+        Combined Allan variance the effects add on the tau grid.
+    terms : list of dict
+        Combined model term list (model JSON ``terms``), when the simulated sensor is a model.
+    holdout : dict or None
+        Held-out check of the whole set.
+    """
+
+    effects: list[Attribution]
+    candidates: list[Candidate]
+    gap_before: float
+    gap_after: float
+    consistent_after: bool
+    p_after: float
+    share: dict[str, float]
+    explained: list[str]
+    extra_avar: NDArray[np.float64]
+    terms: list[dict[str, Any]] = field(default_factory=list)
+    holdout: dict[str, Any] | None = None
+
+    @property
+    def n_params(self) -> int:
+        """Free parameters of the set."""
+        return sum(len(c.free) for c in self.candidates)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary."""
+        return {
+            "effects": [
+                {"effect": a.effect, "params": dict(a.params), "term": dict(a.term)}
+                for a in self.effects
+            ],
+            "gap_before": self.gap_before,
+            "gap_after": self.gap_after,
+            "consistent_after": self.consistent_after,
+            "p_after": self.p_after,
+            "share": dict(self.share),
+            "explained": list(self.explained),
+            "terms": list(self.terms),
+            "holdout": self.holdout,
+        }
+
+
+def with_background(tm: TauModel, extra: NDArray[np.float64]) -> TauModel:
+    """The tau model of the simulated sensor plus an Allan variance ``extra`` (additive)."""
+    ratio = np.maximum(1.0 + extra / tm.sim_avar, 1e-12)
+    return replace(tm, ref=tm.ref + np.log(ratio), sim_avar=tm.sim_avar * ratio)
+
+
+def _extra(a: Attribution, tm: TauModel) -> NDArray[np.float64]:
+    return np.asarray(a.sim_avar_after, dtype=np.float64) - tm.sim_avar
+
+
+def _same_slot(c: Candidate, chosen: list[Candidate]) -> bool:
+    """Whether ``c`` changes a model term already changed or adds a type already chosen.
+
+    Adding white noise after rescaling it (or rescaling it twice) is the same effect.
+    """
+    for d in chosen:
+        if c.effect == d.effect or c.term_cls is d.term_cls:  # white and rescale:white alike
+            return True
+        for t in (c.base, c.replaces):
+            if t is not None and t in (d.base, d.replaces):
+                return True
+    return False
+
+
+def explain(
+    best: Attribution,
+    candidates: list[Candidate],
+    tm: TauModel,
+    *,
+    alpha: float,
+    evidence_p: dict[str, float],
+    significant: dict[str, bool],
+    time_view: TimeView | None,
+    duration: float,
+) -> Explanation:
+    """Forward selection from ``best``, then the backward check (see the module docstring)."""
+    by_effect = {c.effect: c for c in candidates}
+    chosen = [best]
+    chosen_c = [by_effect[best.effect]]
+    extras = [best.sim_avar_after - tm.sim_avar]
+    explained = set(best.evidence.get("explained", []))
+    gaps = [tm.gap(), tm.gap(extras[0])]
+    while len(chosen) < MAX_EFFECTS:
+        total = np.sum(extras, axis=0)
+        k_total = sum(len(c.free) for c in chosen_c)
+        left = {e: bool(s) and e not in explained for e, s in significant.items()}
+        if tm.p_value(total, n_params=k_total) > alpha and not any(left.values()):
+            break
+        tm_bg = with_background(tm, total)
+        pool = [c for c in candidates if not _same_slot(c, chosen_c)]
+        kept = rank(
+            pool,
+            tm_bg,
+            alpha=alpha,
+            evidence_p=evidence_p,
+            significant=left,
+            time_view=time_view,
+            duration=duration,
+        )
+        # an effect that explains time/frequency evidence but makes the tau view significantly
+        # worse is not an explanation of this record
+        worse = float(stats.chi2.isf(alpha, 1))
+        kept = [a for a in kept if a.evidence["tau"]["delta_T"] > -worse]
+        if not kept:
+            break
+        nxt = kept[0]
+        chosen.append(nxt)
+        chosen_c.append(by_effect[nxt.effect])
+        extras.append(_extra(nxt, tm_bg))
+        explained |= set(nxt.evidence.get("explained", []))
+        gaps.append(tm.gap(np.sum(extras, axis=0)))
+    # backward check
+    i = 0
+    while len(chosen) > 1 and i < len(chosen):
+        others = [e for j, e in enumerate(extras) if j != i]
+        t_without = tm.statistic(np.sum(others, axis=0))
+        t_with = tm.statistic(np.sum(extras, axis=0))
+        k = len(chosen_c[i].free)
+        own = set(chosen[i].evidence.get("explained", []))
+        rest = set().union(
+            *(set(a.evidence.get("explained", [])) for a in chosen if a is not chosen[i])
+        )
+        if stats.chi2.sf(max(t_without - t_with, 0.0), max(k, 1)) >= alpha and own <= rest:
+            del chosen[i], chosen_c[i], extras[i]
+            gaps = [gaps[0]] + [tm.gap(np.sum(extras[: j + 1], axis=0)) for j in range(len(extras))]
+            continue
+        i += 1
+    total = np.asarray(np.sum(extras, axis=0), dtype=np.float64)
+    k_total = sum(len(c.free) for c in chosen_c)
+    p_after = tm.p_value(total, n_params=k_total)
+    g0 = gaps[0]
+    share = {}
+    for j, a in enumerate(chosen):
+        share[a.effect] = float((gaps[j] - gaps[j + 1]) / g0) if g0 > 0 else 0.0
+    share["remainder"] = float(gaps[-1] / g0) if g0 > 0 else 0.0
+    explained = set().union(*(set(a.evidence.get("explained", [])) for a in chosen))
+    return Explanation(
+        effects=chosen,
+        candidates=chosen_c,
+        gap_before=g0,
+        gap_after=gaps[-1],
+        consistent_after=bool(p_after > alpha),
+        p_after=p_after,
+        share=share,
+        explained=sorted(explained),
+        extra_avar=total,
+    )
+
+
+def combined_terms(explanation: Explanation, model: Any) -> list[dict[str, Any]]:
+    """Model JSON ``terms`` of the simulated sensor with the effects added (or rescaled)."""
+    terms = list(model.terms) if model is not None else []
+    out: list[Any] = list(terms)
+    for a, c in zip(explanation.effects, explanation.candidates, strict=True):
+        target = c.base if c.base is not None else c.replaces
+        if target is not None and target in out:
+            out[out.index(target)] = a.term
+        else:
+            out.append(a.term)
+    return [t if isinstance(t, dict) else t.to_dict() for t in out]

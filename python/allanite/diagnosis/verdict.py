@@ -1,0 +1,393 @@
+r"""The headline: is the gap closed in all three views, and if not, what remains and where.
+
+A diagnosis is **closed** only when no gap is significant, or when, after the effects of the
+joint attribution (:mod:`allanite.diagnosis.joint`) are added to the simulated sensor, every
+view is consistent with chance:
+
+* tau view: the remaining statistic ``T_after`` (all fitted parameters taken off the degrees
+  of freedom) is consistent with chance at level ``alpha``;
+* frequency and time views: for a model, the record is re-analysed against the model *with*
+  the effects (its own Monte Carlo null), and every statistic of these views (line,
+  broadband bands, level, jump, ``hf``, ``dyn``, spikes, kurtosis) lies above ``alpha / 9``
+  (Bonferroni over the nine). For a simulated record there is no model to augment: the
+  broadband test is re-run with the effects' PSD added (:meth:`FrequencyView.band_test`) and
+  the significant evidence the effects do not explain remains; non-stationary effects have no
+  PSD, and then the broadband evidence counts as explained when the tau view is consistent.
+
+Whatever is left is reported as an :class:`Unexplained` item: its view, the evidence, *where*
+(taus, frequency band or lines, time segments) and *how large* (the remaining gap, the rms
+noise-level ratio in the flagged windows, the line amplitude, the excess kurtosis).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from allanite.diagnosis.attribution import Attribution
+from allanite.diagnosis.candidates import Candidate
+from allanite.diagnosis.frequency_view import FrequencyView
+from allanite.diagnosis.joint import Explanation
+from allanite.diagnosis.null import runs
+from allanite.diagnosis.tau_view import TauModel, TauView
+from allanite.diagnosis.time_view import TimeView
+
+__all__ = ["Unexplained", "Verdict", "effect_psd", "param_unit", "verdict"]
+
+#: plain names of the term types (the headline's vocabulary)
+TERM_NAMES = {
+    "white": "white noise",
+    "quantization": "quantization noise",
+    "flicker": "bias instability (flicker)",
+    "rrw": "rate random walk",
+    "ramp": "rate ramp",
+    "markov": "Gauss-Markov noise",
+    "sine": "sinusoid",
+    "warmup": "warm-up transient",
+    "step": "bias steps",
+    "spikes": "spikes",
+    "telegraph": "random telegraph noise",
+    "lowpass": "low-pass filter on the white noise",
+    "bursts": "white noise in bursts (a time-varying noise level)",
+}
+
+#: what each piece of time/frequency evidence means, in words
+EVIDENCE_TEXT = {
+    "line": "a spectral line",
+    "jump": "level jumps",
+    "level": "a wandering or drifting level",
+    "hf": "the short-term noise level changes over the record (bursts)",
+    "dyn": "the mid-tau noise level changes over the record",
+    "spike": "spikes",
+    "kurt_hf": "heavy-tailed sample-to-sample changes (excess kurtosis)",
+    "kurt_lf": "a two-level (platykurtic) amplitude distribution",
+}
+
+
+@dataclass(frozen=True)
+class Unexplained:
+    """One part of the gap that the best effect leaves unexplained.
+
+    Attributes
+    ----------
+    view : str
+        ``"tau"``, ``"frequency"`` or ``"time"``.
+    evidence : str
+        The statistic: ``tau`` (the Mahalanobis statistic), ``band`` (broadband PSD), ``line``,
+        ``level``, ``jump``, ``hf``, ``dyn``, ``spike``, ``kurt_hf``, ``kurt_lf``.
+    where : dict
+        ``tau_bands_s``, ``frequency_bands_hz``, ``frequency_lines_hz`` or ``time_segments_s``.
+    size : dict
+        How large: e.g. ``gap_after``; ``noise_level_ratio`` (rms ratio to the record's typical
+        level in the flagged windows); ``amplitude``; ``excess_kurtosis``.
+    p_value : float
+        p-value of the evidence (after the effect, where it can be re-tested).
+    text : str
+        One plain sentence.
+    """
+
+    view: str
+    evidence: str
+    where: dict[str, Any]
+    size: dict[str, float]
+    p_value: float
+    text: str
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary."""
+        return {
+            "view": self.view,
+            "evidence": self.evidence,
+            "where": self.where,
+            "size": self.size,
+            "p_value": self.p_value,
+            "text": self.text,
+        }
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """The headline of a diagnosis.
+
+    Attributes
+    ----------
+    closed : bool
+        True when no gap is significant, or when the best effect leaves every view
+        consistent with chance.
+    unexplained : list of Unexplained
+        What remains (empty when closed).
+    headline : str
+        The plain sentence that leads the CLI text and the report.
+    """
+
+    closed: bool
+    unexplained: list[Unexplained]
+    headline: str
+
+
+def param_unit(rate: str | None, rate_power: float, time_power: float) -> str:
+    """Readable unit ``rate^rate_power * s^time_power`` (``N`` in ``deg/s`` -> ``deg/sqrt(s)``)."""
+    if rate_power == 0:
+        return {1.0: "s", -1.0: "Hz", 0.0: ""}.get(float(time_power), f"s^{time_power:g}")
+    if rate is None:
+        rate = "rate"
+    if rate_power == 1 and rate.endswith("/s"):
+        angle = rate[:-2]
+        e = float(time_power) - 1.0
+        names = {0.0: angle, -1.0: f"{angle}/s", -0.5: f"{angle}/sqrt(s)"}
+        names.update({-1.5: f"{angle}/s/sqrt(s)", -2.0: f"{angle}/s^2", 0.5: f"{angle}*sqrt(s)"})
+        return names.get(e, f"{angle}*s^{e:g}")
+    text = rate if rate_power == 1 else f"({rate})^{rate_power:g}"
+    return text if time_power == 0 else f"{text}*s^{time_power:g}"
+
+
+def format_params(a: Attribution, units: str | None, *, skip: tuple[str, ...] = ()) -> str:
+    """``N = 0.014 deg/sqrt(s)``-style text of an attribution's parameters."""
+    specs = {}
+    cls = _term_class(a)
+    if cls is not None:
+        specs = {p.name: p for p in cls.params + cls.optional}
+    parts = []
+    for name, value in a.params.items():
+        if name in skip:
+            continue
+        if name == "scale":
+            parts.append(f"x{value:.3g}")
+            continue
+        spec = specs.get(name)
+        unit = param_unit(units, spec.rate, spec.time) if spec is not None else ""
+        parts.append(f"{name} = {value:.4g}" + (f" {unit}" if unit else ""))
+    return ", ".join(parts)
+
+
+def _term_class(a: Attribution) -> Any:
+    from allanite.terms import TERM_TYPES
+
+    return TERM_TYPES.get(str(a.term.get("type", "")))
+
+
+def describe_effect(a: Attribution, units: str | None) -> str:
+    """The effect in words, with its parameters and units."""
+    if a.effect.startswith("rescale:"):
+        kind = a.effect.split(":", 1)[1]
+        name = TERM_NAMES.get(kind, f"{kind} term")
+        return (
+            f"the real sensor's {name} is {a.params.get('scale', float('nan')):.2f}x the "
+            f"simulated one ({format_params(a, units, skip=('scale',))})"
+        )
+    name = TERM_NAMES.get(a.effect, a.effect)
+    verb = "is missing" if a.effect != "lowpass" else "is missing in the simulation"
+    return f"{name} {verb} ({format_params(a, units)})"
+
+
+def effect_psd(cand: Candidate, values: dict[str, float], f: Any, dt: float) -> Any:
+    """One-sided PSD the effect adds to the simulated sensor, or None (non-stationary)."""
+    try:
+        if cand.base is not None:
+            return (values["scale"] ** 2 - 1.0) * cand.base.psd_sampled(f, dt)
+        psd = cand.term(values).psd_sampled(f, dt)
+        if cand.replaces is not None:
+            psd = psd - cand.replaces.psd_sampled(f, dt)
+    except (NotImplementedError, ValueError, ZeroDivisionError, OverflowError):
+        return None
+    psd = np.asarray(psd, dtype=np.float64)
+    return psd if np.all(np.isfinite(psd)) else None
+
+
+def _segments(tv: TimeView, mask: NDArray[np.bool_]) -> list[list[float]]:
+    return [[a * tv.window_s, (b + 1) * tv.window_s] for a, b in runs(mask)]
+
+
+def _segments_text(segs: list[list[float]], limit: int = 4) -> str:
+    text = ", ".join(f"{a:.4g}-{b:.4g} s" for a, b in segs[:limit])
+    return text + (f" (+{len(segs) - limit} more)" if len(segs) > limit else "")
+
+
+def _time_item(name: str, tv: TimeView, p: float) -> Unexplained:
+    what = EVIDENCE_TEXT.get(name, name)
+    size: dict[str, float] = {}
+    where: dict[str, Any] = {"time_segments_s": []}
+    if name in ("hf", "dyn", "level") and name in tv.z:
+        flagged = np.abs(tv.z[name]) > tv.thresholds[name]
+        where["time_segments_s"] = _segments(tv, flagged)
+        if name in ("hf", "dyn") and name in tv.residual and flagged.any():
+            ratio = np.exp(0.5 * tv.residual[name][flagged])
+            size["noise_level_ratio_max"] = float(ratio.max())
+            size["noise_level_ratio_min"] = float(ratio.min())
+    elif name == "jump":
+        where["change_points_s"] = list(tv.change_points_s)
+        where["time_segments_s"] = [
+            [t - tv.window_s / 4, t + tv.window_s / 4] for t in tv.change_points_s
+        ]
+    elif name == "spike":
+        where["time_segments_s"] = [[t, t] for t in tv.spike_times_s[:50]]
+        size["count"] = float(len(tv.spike_times_s))
+        if tv.spike_amplitudes:
+            size["rms_height"] = float(np.sqrt(np.mean(np.square(tv.spike_amplitudes))))
+    elif name in ("kurt_hf", "kurt_lf"):
+        key = name.split("_")[1]
+        size["excess_kurtosis_real"] = tv.kurtosis.get(f"{key}_real", float("nan"))
+        size["excess_kurtosis_sim"] = tv.kurtosis.get(f"{key}_sim", float("nan"))
+    segs = where["time_segments_s"]
+    text = f"time view: {what}"
+    if "noise_level_ratio_max" in size:
+        text += f" (rms x{size['noise_level_ratio_max']:.2g} of the typical level"
+        text += f" at {_segments_text(segs)})" if segs else ")"
+    elif segs and name != "spike":
+        text += f" at {_segments_text(segs)}"
+    elif name == "spike":
+        text += f" ({int(size['count'])} found)"
+    elif name.startswith("kurt"):
+        text += (
+            f" (real {size['excess_kurtosis_real']:.3g} vs simulated "
+            f"{size['excess_kurtosis_sim']:.3g})"
+        )
+    return Unexplained("time", name, where, size, float(p), text + f", p = {p:.2g}")
+
+
+def _line_item(fv: FrequencyView, p: float) -> Unexplained:
+    lines = [ln.frequency_hz for ln in fv.lines]
+    amps = [ln.amplitude for ln in fv.lines]
+    text = "frequency view: " + (
+        "spectral line(s) at " + ", ".join(f"{f:.5g} Hz" for f in lines[:4])
+        if lines
+        else "a line-like peak"
+    )
+    size = {"amplitude_max": float(max(amps))} if amps else {}
+    return Unexplained(
+        "frequency", "line", {"frequency_lines_hz": lines}, size, float(p), text + f", p = {p:.2g}"
+    )
+
+
+def _band_item(bands: list[tuple[float, float]], z: NDArray[np.float64], p: float) -> Unexplained:
+    text = "frequency view: broadband PSD departs from the simulation"
+    if bands:
+        text += " at " + ", ".join(f"{a:.3g}-{b:.3g} Hz" for a, b in bands[:4])
+    size = {"max_abs_band_z": float(np.abs(z).max())} if z.size else {}
+    return Unexplained(
+        "frequency",
+        "band",
+        {"frequency_bands_hz": [list(b) for b in bands]},
+        size,
+        float(p),
+        text + f", p = {p:.2g}",
+    )
+
+
+def _tau_item(
+    tm: TauModel, tv: TauView, extra: NDArray[np.float64] | None, p: float
+) -> Unexplained:
+    r = tm.residual(extra)
+    sd = tm.null_sd if tm.null_sd is not None else np.ones_like(r)
+    z = r / sd
+    bands = [
+        [float(tm.tau[i] / np.sqrt(2.0)), float(tm.tau[j] * np.sqrt(2.0))]
+        for i, j in runs(np.abs(z) > tv.z_threshold)
+    ]
+    gap = tm.gap(extra)
+    ratio = float(np.exp(np.max(np.abs(r))))
+    text = f"tau view: a gap G = {gap:.4g} remains (chance level T0 = {tm.t0:.3g})"
+    if bands:
+        text += " at tau " + ", ".join(f"{x:.3g}-{y:.3g} s" for x, y in bands[:4])
+    return Unexplained(
+        "tau",
+        "tau",
+        {"tau_bands_s": bands},
+        {"gap_after": gap, "max_avar_ratio": ratio},
+        float(p),
+        text + f", p = {p:.2g}",
+    )
+
+
+def verdict(
+    *,
+    significant: bool,
+    p_value: float,
+    alpha: float,
+    tau_model: TauModel,
+    tau: TauView,
+    frequency: FrequencyView,
+    time: TimeView,
+    evidence_p: dict[str, float],
+    evidence_significant: dict[str, bool],
+    explanation: Explanation | None,
+    units: str | None,
+    after: Any = None,
+) -> Verdict:
+    """Decide whether the gap is closed in all three views and list what remains.
+
+    ``explanation`` is the set of effects (the joint attribution, or the best single effect
+    alone); ``evidence_significant`` marks the significant evidence statistics (the
+    attribution's Bonferroni level). ``after`` is the analysis of the record against the
+    simulated sensor with the effects added (a model): then the frequency and time views are
+    judged on it; otherwise the broadband test is re-run with the effects' PSD and the evidence
+    the effects do not explain remains.
+    """
+    if not significant:
+        return Verdict(
+            True,
+            [],
+            f"the real record agrees with the simulated sensor in all three views "
+            f"(p = {p_value:.2g}): no gap",
+        )
+    level = alpha / max(len(evidence_p) + 1, 1)  # the evidence statistics and the broadband test
+    items: list[Unexplained] = []
+    explained = set(explanation.explained) if explanation is not None else set()
+    if explanation is not None:
+        if not explanation.consistent_after:
+            items.append(_tau_item(tau_model, tau, explanation.extra_avar, explanation.p_after))
+    elif tau.p_value < alpha / 3.0:
+        items.append(_tau_item(tau_model, tau, None, tau.p_value))
+    pending = [e for e, s in evidence_significant.items() if s and e not in explained]
+    # broadband frequency view, re-tested with the effects' PSD
+    band_p, bands, band_z = frequency.band_p_value, frequency.bands_hz, frequency.band_z
+    if after is not None:
+        # re-analysis against the simulated sensor with the effects (a model): every
+        # frequency/time statistic has the null of the augmented model
+        frequency, time = after.frequency, after.time
+        band_p, bands, band_z = frequency.band_p_value, frequency.bands_hz, frequency.band_z
+        ev_after = {"line": frequency.line_p_value}
+        ev_after.update({k: time.family_p[k] for k in evidence_p if k in time.family_p})
+        evidence_p = ev_after
+        pending = [e for e, p in ev_after.items() if p < level]
+    elif explanation is not None and frequency.band_sd.size:
+        total: Any = np.zeros_like(frequency.f)
+        for a, c in zip(explanation.effects, explanation.candidates, strict=True):
+            values = {k: a.params[k] for k in c.free}
+            psd = effect_psd(c, values, frequency.f, tau_model.dt)
+            if psd is None:
+                total = None
+                break
+            total = total + psd
+        if total is not None:
+            band_p, bands, band_z = frequency.band_test(total)
+        elif explanation.consistent_after:
+            band_p = 1.0
+    if band_p < level:
+        items.append(_band_item(bands, band_z, band_p))
+    for e in pending:
+        if e == "line":
+            items.append(_line_item(frequency, evidence_p[e]))
+        else:
+            items.append(_time_item(e, time, evidence_p[e]))
+    closed = explanation is not None and not items
+    if explanation is not None:
+        effect = "; and ".join(describe_effect(a, units) for a in explanation.effects)
+        it = "them" if len(explanation.effects) > 1 else "it"
+        if closed:
+            headline = f"{effect}; after adding {it}, the records agree in all three views"
+        else:
+            closed_tau = (
+                f"the tau view is closed by {it}, but " if explanation.consistent_after else ""
+            )
+            headline = f"{effect}; {closed_tau}not everything is explained: " + "; ".join(
+                i.text for i in items
+            )
+    else:
+        headline = "there is a significant gap that no candidate effect explains: " + "; ".join(
+            i.text for i in items
+        )
+    return Verdict(closed, items, headline)
