@@ -449,3 +449,54 @@ def test_large_records_never_use_the_reference_oracle(
     want = 0 if input_kind == "rate" else 2
     n_series = (200_000 - 1) // res.m
     assert np.mean(res.alpha[n_series >= 1000] == want) > 0.95
+
+
+# --- isolated flips of the identified noise type (issue: EDF 3801 -> 13196 -> 3031) -------------
+
+
+def test_smooth_isolated_alpha_replaces_single_flips_only():
+    from allanite.edf import smooth_isolated_alpha
+
+    alpha = np.array([[0], [0], [1], [0], [-1], [-1], [-2], [-1], [-1], [-2]])
+    factors = np.arange(1, alpha.shape[0] + 1)
+    smoothed = smooth_isolated_alpha(alpha, factors)
+    # the flips at index 2 and 6 go; the step 0 -> -1 and the last value stay
+    assert smoothed[:, 0].tolist() == [0, 0, 0, 0, -1, -1, -1, -1, -1, -2]
+    # order of the factors does not matter
+    perm = np.array([3, 0, 9, 5, 1, 8, 2, 7, 4, 6])
+    np.testing.assert_array_equal(smooth_isolated_alpha(alpha[perm], factors[perm]), smoothed[perm])
+
+
+def test_example_record_edf_does_not_jump_at_one_tau():
+    from allanite.examples import example_record
+
+    x, fs = example_record()
+    smoothed = allanite.avar(x, fs, input="angle")
+    stable32 = allanite.avar(x, fs, input="angle", alpha="stable32")
+    flips = np.flatnonzero(smoothed.alpha != stable32.alpha)
+    # Stable32's rule flips at one tau near 0.79 s in this record; the default smooths it
+    assert flips.size >= 1
+    assert np.any(np.isclose(stable32.tau[flips], 0.79, rtol=0.05))
+    # no EDF in the default result is more than twice both its neighbours'
+    edf = smoothed.edf
+    inner = edf[1:-1]
+    assert not np.any((inner > 2 * edf[:-2]) & (inner > 2 * edf[2:]))
+    # with Stable32's rule the jump is there (the regression this guards)
+    e32 = stable32.edf
+    assert np.any((e32[1:-1] > 2 * e32[:-2]) & (e32[1:-1] > 2 * e32[2:]))
+
+
+def test_out_of_core_smooths_like_in_memory(tmp_path):
+    from allanite.examples import example_record
+
+    x, fs = example_record()
+    path = tmp_path / "x.npy"
+    np.save(path, x)
+    mem = allanite.avar(x, fs, input="angle")
+    big = allanite.avar_large(str(path), fs, input="angle")
+    np.testing.assert_array_equal(mem.alpha, big.alpha)
+
+
+def test_unknown_alpha_string_is_refused():
+    with pytest.raises(TypeError, match="stable32"):
+        allanite.avar(np.random.default_rng(0).standard_normal(1000), 1.0, alpha="stable")

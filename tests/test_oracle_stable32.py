@@ -214,9 +214,13 @@ def _compute(shared_data: Path, ds: DataSet, table: Table, **kwargs: Any) -> all
 
 @functools.cache
 def _identified(root: str, ds: DataSet, name: str) -> tuple[Table, allanite.AllanResult]:
-    """The table and allanite's result with the noise type identified from the data (cached)."""
+    """The table and allanite's result with Stable32's per-tau noise identification (cached).
+
+    ``alpha="stable32"``: the identification as Stable32 makes it, without the smoothing of
+    isolated flips that :func:`allanite.avar` applies by default.
+    """
     table = _table(Path(root), ds, name)
-    return table, _compute(Path(root), ds, table)
+    return table, _compute(Path(root), ds, table, alpha="stable32")
 
 
 def _decimated_points(ds: DataSet, n_record: int, m: np.ndarray) -> np.ndarray:

@@ -16,6 +16,11 @@ the averaging factor, the record length and the dominant power-law noise
   (e.g. 127 between 9 and 7); beyond the longest tau the lag-1 method identified, the exponent
   is therefore capped at that tau's (:func:`cap_few_point_alpha`: noise moves toward lower
   ``alpha`` as tau grows, and the cap can only lower the EDF, widening the interval).
+  An exponent that differs from both of its neighbours in tau while they agree (one flip of
+  the identification, e.g. 3801 -> 13196 -> 3031 in the example record) is replaced by theirs
+  (:func:`smooth_isolated_alpha`, applied by :func:`allanite.avar` unless Stable32's per-tau
+  identification is asked for with ``alpha="stable32"``): the noise type of a power-law
+  spectrum changes over decades, not at one averaging time.
 
 References
 ----------
@@ -54,7 +59,9 @@ __all__ = [
     "greenhall_edf",
     "identify_alpha",
     "lag1_acf",
+    "smooth_isolated_alpha",
     "totvar_edf",
+    "wants_identification",
 ]
 
 #: Fewest decimated points for the lag-1 autocorrelation method (Stable32's rule).
@@ -617,6 +624,65 @@ def cap_few_point_alpha(
     return out
 
 
+#: the ``alpha`` value that asks for Stable32's per-tau identification, without smoothing
+STABLE32_ALPHA = "stable32"
+
+
+def wants_identification(alpha: object) -> bool:
+    """Whether ``alpha`` asks for identification from the data (None or ``"stable32"``).
+
+    Raises
+    ------
+    TypeError
+        If ``alpha`` is a string other than ``"stable32"`` (as for any other non-integer).
+    """
+    if isinstance(alpha, str):
+        if alpha != STABLE32_ALPHA:
+            raise TypeError(
+                f"alpha={alpha!r}: give a power-law exponent, None (identified, isolated flips "
+                f"smoothed) or {STABLE32_ALPHA!r} (Stable32's per-tau identification)"
+            )
+        return True
+    return alpha is None
+
+
+def smooth_isolated_alpha(
+    alpha: NDArray[np.int64], factors: NDArray[np.int64]
+) -> NDArray[np.int64]:
+    """Replace isolated flips of the identified exponent by the value of their neighbours.
+
+    In the order of increasing averaging factor, an exponent that differs from both the previous
+    and the next one while these two agree is set to theirs (per channel; the comparison uses
+    the unsmoothed values, so the result does not depend on the order of evaluation). The
+    dominant noise type of a power-law spectrum changes over decades of tau; a single tau whose
+    noise type differs from both neighbours is an identification error of that tau's estimate,
+    and would make its EDF, hence its interval, jump (e.g. 3801 -> 13196 -> 3031). Runs of two or
+    more equal exponents and the first and last factors are kept as identified.
+
+    Parameters
+    ----------
+    alpha : numpy.ndarray
+        Identified exponents, shape ``(T, C)``.
+    factors : numpy.ndarray
+        Averaging factors, shape ``(T,)`` (any order).
+
+    Returns
+    -------
+    numpy.ndarray
+        A smoothed copy of ``alpha``.
+    """
+    out = np.array(alpha, dtype=np.int64, copy=True)
+    order = np.argsort(np.asarray(factors).reshape(-1), kind="stable")
+    if order.size < 3:
+        return out
+    a = out[order]
+    prev, mid, nxt = a[:-2], a[1:-1], a[2:]
+    flip = (prev == nxt) & (mid != prev)
+    mid[flip] = prev[flip]
+    out[order] = a
+    return out
+
+
 def identify_alpha(
     phase: NDArray[np.generic],
     m: NDArray[np.int64],
@@ -633,7 +699,8 @@ def identify_alpha(
     phase), then the lag-1 autocorrelation method (:func:`acf_noise_id`, ``dmax`` = 2 for the
     Allan family and 3 for Hadamard) is applied when at least :data:`ACF_MIN_POINTS` values
     remain, the B1/R(n) method (:func:`b1_noise_id`) otherwise, capped beyond the longest
-    lag-1 factor by :func:`cap_few_point_alpha`. The result is clipped to the exponents the
+    lag-1 factor by :func:`cap_few_point_alpha`. The result
+    is clipped to the exponents the
     estimator can measure (``alpha + 2d > 1``).
 
     Cost and memory: the lag-1 statistics of all difference levels come from the compiled

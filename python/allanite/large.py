@@ -34,7 +34,12 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from allanite import _core
-from allanite.edf import cap_few_point_alpha, identify_alpha
+from allanite.edf import (
+    cap_few_point_alpha,
+    identify_alpha,
+    smooth_isolated_alpha,
+    wants_identification,
+)
 from allanite.io.large import ChunkedRecord, as_chunked
 from allanite.phase_store import PhaseStore, ProgressCallback, build_phase_store
 from allanite.taus import KERNEL_KIND, TauSpec, averaging_factors
@@ -360,7 +365,7 @@ def avar_large(
     taus: TauSpec = "log",
     m: ArrayLike | None = None,
     points: int = 100,
-    alpha: int | ArrayLike | None = None,
+    alpha: int | ArrayLike | str | None = None,
     threads: int | None = None,
     units: str | None = None,
     memory_limit: int | float | str | None = None,
@@ -445,7 +450,9 @@ def avar_large(
         factors = averaging_factors(
             taus, fs=rate, n_samples=n_samples, n_phase=n_phase, kind=kind, m=m, points=points
         )
-        identify = None if alpha is not None else ("phase" if input == "angle" else "frequency")
+        identify = (
+            ("phase" if input == "angle" else "frequency") if wants_identification(alpha) else None
+        )
         window_bytes = None if limit is None else limit // 2
         alpha_rows = None if limit is None else max(1024, limit // (16 * 8 * workers * nc))
         meta: dict[str, Any] = {"phase_in_memory": store.in_memory, "phase_bytes": store.nbytes}
@@ -465,9 +472,11 @@ def avar_large(
                 progress=progress,
             )
     if alphas is None:
-        if alpha is None:  # pragma: no cover - identify was requested above
+        if identify is not None:  # pragma: no cover - identify was requested above
             raise RuntimeError("noise identification returned nothing")
         alphas = _given_alpha(alpha, var.shape)
+    elif alpha is None:  # identified: isolated flips smoothed as in allanite.avar
+        alphas = smooth_isolated_alpha(alphas, factors)
     return assemble_result(
         var,
         factors,

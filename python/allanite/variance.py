@@ -18,7 +18,12 @@ from numpy.typing import ArrayLike, NDArray
 from scipy import stats
 
 from allanite import _core
-from allanite.edf import equivalent_dof, identify_alpha
+from allanite.edf import (
+    equivalent_dof,
+    identify_alpha,
+    smooth_isolated_alpha,
+    wants_identification,
+)
 from allanite.extras import require
 from allanite.notebook import repr_html
 from allanite.taus import KERNEL_KIND, TauSpec, averaging_factors
@@ -351,7 +356,7 @@ def _check_threads(threads: int | None) -> int:
     return int(threads)
 
 
-def _given_alpha(alpha: int | ArrayLike, shape: tuple[int, ...]) -> NDArray[np.int64]:
+def _given_alpha(alpha: int | ArrayLike | str | None, shape: tuple[int, ...]) -> NDArray[np.int64]:
     """Caller's noise exponents broadcast to ``(T, C)``: a scalar, one per tau, or per channel."""
     given = np.asarray(alpha)
     if given.dtype.kind not in "iuf" or not np.all(np.isfinite(given)):
@@ -382,7 +387,7 @@ def avar(
     taus: TauSpec = "log",
     m: ArrayLike | None = None,
     points: int = 100,
-    alpha: int | ArrayLike | None = None,
+    alpha: int | ArrayLike | str | None = None,
     threads: int | None = None,
     units: str | None = None,
     memory_limit: int | float | str | None = None,
@@ -423,7 +428,10 @@ def avar(
         Power-law noise exponent (2 white PM ... -2 random walk FM, down to -4 for the Hadamard
         kinds) for the EDF: a scalar, one per tau, or ``(taus, channels)``. When omitted it is
         identified from the data at every tau as Stable32 does (lag-1 autocorrelation with at
-        least 30 decimated points, else the B1 ratio and R(n); :func:`allanite.edf.identify_alpha`).
+        least 30 decimated points, else the B1 ratio and R(n); :func:`allanite.edf.identify_alpha`),
+        then an isolated flip between two agreeing neighbours is replaced by their exponent
+        (:func:`allanite.edf.smooth_isolated_alpha`) so the intervals do not jump at one tau.
+        ``alpha="stable32"`` keeps Stable32's per-tau identification, flips included.
         The EDF follows Greenhall & Riley (2003) for every kind but ``total``, which uses the
         SP1065 formulas (:mod:`allanite.edf`).
     threads : int, optional
@@ -482,7 +490,7 @@ def avar(
     )
     kernel_kind = KERNEL_KIND[kind]
     var = np.asarray(_core.variance(phase, factors, kernel_kind, nthreads))
-    if alpha is None:
+    if wants_identification(alpha):
         # Stable32 identifies phase data on the phase as recorded (its frequency offset makes
         # the lag-1 method difference at least once); frequency data on the averaged rates
         if input == "angle":
@@ -491,6 +499,8 @@ def avar(
             )
         else:
             alphas = identify_alpha(phase, factors, kernel_kind, data="frequency", threads=nthreads)
+        if alpha is None:
+            alphas = smooth_isolated_alpha(alphas, factors)
     else:
         alphas = _given_alpha(alpha, var.shape)
     return assemble_result(
