@@ -49,6 +49,21 @@ def test_convert_errors_are_one_line_rc2(tmp_path, capsys):
     assert main(["model", "convert", str(sdf), str(tmp_path / "o.json"), "--rate", "100"]) == 0
 
 
+def test_samples_given_as_a_config_are_named_not_decoded(tmp_path, capsys):
+    np.save(tmp_path / "rec.npy", np.zeros(10))
+    (tmp_path / "rec.bin").write_bytes(bytes(range(256)))
+    for bad, said in (("rec.npy", "NumPy .npy array"), ("rec.bin", "not a text file")):
+        out = tmp_path / "o.yaml"
+        assert main(["model", "convert", str(tmp_path / bad), str(out)]) == 2
+        err = capsys.readouterr().err
+        assert said in err
+        assert "codec" not in err
+        assert err.count("\n") == 1
+        assert not out.exists()
+    assert main(["model", "convert", str(tmp_path / "missing.yaml"), str(out)]) == 2
+    assert "no such model file" in capsys.readouterr().err
+
+
 @pytest.fixture(scope="module")
 def loop(tmp_path_factory):
     root = tmp_path_factory.mktemp("loop")
@@ -172,3 +187,12 @@ def test_a_ros_bag_against_a_gazebo_sdf(loop, tmp_path, capsys):
     (gm,) = fixed.terms_of_type("markov")
     assert gm.tau_c > 10.0
     assert "projected gyro: rrw" in captured.err
+
+
+def test_diagnose_sim_model_given_samples_is_refused(loop, capsys):
+    real = str(loop / "real.npy")
+    args = ["diagnose", real, "--fs", str(FS), "--units", "deg/s", "--sim-model", real]
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert "NumPy .npy array" in err
+    assert "codec" not in err

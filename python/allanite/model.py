@@ -42,7 +42,43 @@ _SAMPLE_FILES = (
     (b"PAR1", "a Parquet file"),
 )
 
-__all__ = ["NoiseModel", "json_schema"]
+__all__ = ["NoiseModel", "json_schema", "read_text_file"]
+
+
+def read_text_file(path: str | Path, what: str) -> str:
+    """The UTF-8 text of a model or config file, or an InputError saying what it is instead.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The file.
+    what : str
+        What the file should be, for the message (``"a noise model is JSON text, ..."``).
+
+    Raises
+    ------
+    allanite.errors.InputError
+        If the file is missing, is a directory, holds samples (.npy, .npz, HDF5, Parquet) or is
+        not UTF-8 text; the message names the file and ``what``.
+    """
+    from allanite.errors import InputError
+
+    p = Path(path)
+    if not p.exists():
+        raise InputError(f"no such model file; check the path ({what})", path=str(p))
+    if p.is_dir():
+        raise InputError(f"is a directory, not a model file ({what})", path=str(p))
+    raw = p.read_bytes()
+    for magic, kind in _SAMPLE_FILES:
+        if raw.startswith(magic):
+            raise InputError(
+                f"this is {kind} (recorded or simulated samples), not a noise model; {what}",
+                path=str(p),
+            )
+    try:
+        return raw.decode("utf-8")
+    except UnicodeDecodeError:
+        raise InputError(f"not a text file, so not a noise model; {what}", path=str(p)) from None
 
 
 def _check_units(units: dict[str, str]) -> dict[str, str]:
@@ -310,27 +346,10 @@ class NoiseModel:
             If the file is missing, is a directory, holds samples (.npy, .npz, HDF5) or is
             not UTF-8 JSON text; the message names the file and what a model file is.
         """
-        from allanite.errors import InputError
-
         p = Path(path)
-        what = "a noise model is JSON text, as written by 'allanite fit -o model.json'"
-        if not p.exists():
-            raise InputError(f"no such model file; check the path ({what})", path=str(p))
-        if p.is_dir():
-            raise InputError(f"is a directory, not a model file ({what})", path=str(p))
-        raw = p.read_bytes()
-        for magic, kind in _SAMPLE_FILES:
-            if raw.startswith(magic):
-                raise InputError(
-                    f"this is {kind} (recorded or simulated samples), not a noise model; {what}",
-                    path=str(p),
-                )
-        try:
-            text = raw.decode("utf-8")
-        except UnicodeDecodeError:
-            raise InputError(
-                f"not a text file, so not a noise model; {what}", path=str(p)
-            ) from None
+        text = read_text_file(
+            p, "a noise model is JSON text, as written by 'allanite fit -o model.json'"
+        )
         try:
             return cls.from_json(text)
         except (ValueError, TypeError) as exc:

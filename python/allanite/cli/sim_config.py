@@ -15,8 +15,15 @@ import sys
 from dataclasses import dataclass
 from typing import Any
 
-from allanite.formats import FORMATS, ImuConfig, detect_format, read_config, write_config
-from allanite.model import NoiseModel
+from allanite.formats import (
+    CONFIG_TEXT,
+    FORMATS,
+    ImuConfig,
+    detect_format,
+    read_config,
+    write_config,
+)
+from allanite.model import NoiseModel, read_text_file
 
 __all__ = ["LoadedSim", "add_sim_config_arguments", "load_sim_model", "write_corrected"]
 
@@ -64,9 +71,7 @@ def load_sim_model(args: argparse.Namespace, fs: float, units: str | None) -> Lo
     from pathlib import Path
 
     path = Path(args.sim_model)
-    if not path.is_file():
-        raise ValueError(f"--sim-model {path}: no such file")
-    fmt = args.sim_format or detect_format(path, path.read_text(encoding="utf-8"))
+    fmt = args.sim_format or detect_format(path, read_text_file(path, CONFIG_TEXT))
     rate = args.sim_rate
     try:
         config = read_config(path, format=fmt, rate=rate)

@@ -32,8 +32,16 @@ from allanite.formats import (
 )
 from allanite.formats.base import ImuConfig, Written
 from allanite.formats.projection import Projection, project
+from allanite.model import read_text_file
+
+#: what a simulator config file is, for the messages of :func:`read_config`
+CONFIG_TEXT = (
+    "a simulator IMU config is text (YAML, SDF/XML, JSON, a MATLAB script) or an allanite "
+    "model JSON"
+)
 
 __all__ = [
+    "CONFIG_TEXT",
     "FORMATS",
     "ImuConfig",
     "Projection",
@@ -118,9 +126,7 @@ def read_config(
 ) -> ImuConfig:
     """Read a simulator/estimator IMU config (format from content and suffix unless given)."""
     path = Path(path)
-    if not path.is_file():
-        raise ValueError(f"config file {path} not found")
-    text = path.read_text(encoding="utf-8")
+    text = read_text_file(path, CONFIG_TEXT)
     name = format or detect_format(path, text)
     try:
         return format_module(name).read(text, rate=rate)
