@@ -138,3 +138,38 @@ def test_without_yaml(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
         MissingExtraError, match=r'reading YAML datasheets needs pyyaml.*"allanite\[yaml\]"'
     ):
         Datasheet.load(path)
+
+
+@pytest.mark.parametrize(
+    ("suffix", "package", "extra", "said"),
+    [
+        (".bag", "rosbags", "bags", "reading ROS bags needs rosbags"),
+        (".ulg", "pyulog", "ulog", "reading PX4 ULog needs pyulog"),
+    ],
+)
+def test_without_robot_log_readers(
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+    suffix: str,
+    package: str,
+    extra: str,
+    said: str,
+) -> None:
+    path = tmp_path / f"flight{suffix}"
+    path.write_bytes(bytes(200))
+    _hide(monkeypatch, package)
+    line = _one_line_rc2(["analyze", str(path)], capsys, extra, "analyze")
+    assert said in line
+
+
+def test_without_yaml_for_a_simulator_config(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = tmp_path / "imu.yaml"
+    path.write_text("gyroscope_noise_density: 1.0e-4\ngyroscope_random_walk: 1.0e-6\n")
+    _hide(monkeypatch, "yaml")
+    out = tmp_path / "model.json"
+    line = _one_line_rc2(["model", "convert", str(path), str(out)], capsys, "yaml", "model")
+    assert "needs pyyaml" in line
+    assert not out.exists()
