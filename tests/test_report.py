@@ -16,6 +16,7 @@ from allanite.cli import main
 from allanite.datasheet import Measured
 from allanite.errors import InputError
 from allanite.io import Record
+from allanite.model import NoiseModel
 from allanite.report import (
     Datasheet,
     DeviceAnalysis,
@@ -25,6 +26,7 @@ from allanite.report import (
     customary_rate,
     slope_table,
 )
+from allanite.terms import RateRandomWalk, White
 
 FS = 100.0
 RNG = np.random.default_rng(3)
@@ -368,3 +370,22 @@ def test_goodness_of_fit_is_reported_and_misfits_are_flagged() -> None:
     assert bad.p_value < 0.001
     assert "Model REJECTED" in html_bad
     assert 'class="rejected"' in html_bad
+
+
+def test_slope_table_says_why_a_bias_instability_band_is_not_in_the_model() -> None:
+    # white + random walk only: the bottom of the curve has slope ~0 over a few points, but the
+    # fitted model has no B term; the table must say so next to that band
+    model = NoiseModel((White(N=0.5 / np.sqrt(FS)), RateRandomWalk(K=0.002 * np.sqrt(FS))),
+                       {"rate": "deg/s", "time": "s"})  # fmt: skip
+    samples = model.simulate(200_000, FS, channels=1, seed=4)
+    record = Record(samples=samples, fs=FS, units="deg/s", channels=("gx",), source="dut.npy")
+    result = allanite.avar(samples, FS, units="deg/s")
+    bands = slope_table(result.tau, result.dev, result.edf)
+    assert any(r.symbol == "B" for r in bands)  # the flat bottom is there
+    fit = allanite.fit(result)
+    assert "B" not in {t.symbol for t in fit.model.terms}
+    html = build_report([DeviceAnalysis(record, result, (fit,))]).html
+    assert "in the fitted model" in html
+    assert "so its selection found no B term" in html
+    # without a fit the column is not shown
+    assert "in the fitted model" not in build_report([DeviceAnalysis(record, result)]).html

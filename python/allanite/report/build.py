@@ -213,6 +213,21 @@ def _adev_table(device: DeviceAnalysis, level: float) -> str:
     return h.table(header, rows, text_columns=0)
 
 
+def _fit_column(symbol: str, fitted: set[str] | None) -> list[str]:
+    """The slope table's "in the fitted model" cell: yes, or why the term is absent."""
+    if fitted is None:
+        return []
+    if symbol in fitted:
+        return ["yes"]
+    if symbol == "B":
+        return [
+            "no: the fitted model follows this flat stretch with its neighbouring terms (the "
+            "bottom of the curve between the N and K slopes), so its selection found no B term "
+            "significant; the minimum is not a bias-instability plateau"
+        ]
+    return [f"no: the fit's term selection found no significant {symbol} term"]
+
+
 def _slope_section(device: DeviceAnalysis) -> str:
     res = device.result
     dev = res.dev.reshape(res.tau.size, -1)
@@ -220,6 +235,9 @@ def _slope_section(device: DeviceAnalysis) -> str:
     parts = []
     sensor = _sensor_of(res.units)
     for c, name in enumerate(device.record.channels):
+        fit = device.fit(c)
+        model = getattr(fit, "model", fit)  # a FitResult or a NoiseModel
+        fitted = None if model is None else {t.symbol for t in model.terms}
         rows = [
             [
                 f"{r.tau_min:.3g} … {r.tau_max:.4g}",
@@ -228,13 +246,15 @@ def _slope_section(device: DeviceAnalysis) -> str:
                 r.label,
                 f"{r.slope:+.2f}",
                 str(r.n_points),
+                *_fit_column(r.symbol, fitted),
             ]
             for r in slope_table(res.tau, dev[:, c], edf[:, c], sensor=sensor)
         ]
+        header = ["τ range [s]", "dominant term", "symbol", "slope", "measured slope", "points"]
         parts.append(f"<h3>{h.escape(device.label)} — {h.escape(name)}</h3>")
         parts.append(
             h.table(
-                ["τ range [s]", "dominant term", "symbol", "slope", "measured slope", "points"],
+                header + ([] if fitted is None else ["in the fitted model"]),
                 rows,
                 text_columns=3,
             )
