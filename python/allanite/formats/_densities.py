@@ -11,10 +11,11 @@ from __future__ import annotations
 from typing import Any
 
 from allanite.formats.base import ImuConfig, number, sensor_model
+from allanite.formats.projection import project_config
 from allanite.model import NoiseModel
 from allanite.terms import RateRandomWalk, Term, White
 
-__all__ = ["HOLDS", "from_densities", "to_densities"]
+__all__ = ["HOLDS", "density_entries", "from_densities", "to_densities"]
 
 HOLDS = frozenset({"white", "rrw"})
 
@@ -53,3 +54,23 @@ def to_densities(model: NoiseModel) -> tuple[float, float]:
     n = sum(t.values()["N"] ** 2 for t in model.terms_of_type("white")) ** 0.5
     w = sum(t.values()["K"] ** 2 for t in model.terms_of_type("rrw")) ** 0.5
     return float(n), float(w)
+
+
+def density_entries(
+    config: ImuConfig,
+    keys: dict[str, tuple[str, str]],
+    rate: float | None,
+    tau_range: tuple[float, float] | None,
+) -> tuple[dict[str, float], list[str], list[str]]:
+    """``(values by key, dropped, projections)``: the config projected onto white + rrw.
+
+    ``keys`` is ``{sensor: (density key, random-walk key)}`` of the target format; what the
+    format cannot hold is projected or dropped by
+    :func:`allanite.formats.projection.project_config`, which says so.
+    """
+    models, dropped, projections = project_config(config, HOLDS, rate=rate, tau_range=tau_range)
+    values: dict[str, float] = {}
+    for sensor, (n_key, w_key) in keys.items():
+        if sensor in models:
+            values[n_key], values[w_key] = to_densities(models[sensor])
+    return values, dropped, projections

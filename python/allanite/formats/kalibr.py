@@ -21,10 +21,10 @@ ETH ASL, Kalibr wiki "IMU Noise Model"; ``kalibr_common/ConfigReader.py``.
 
 from __future__ import annotations
 
-from allanite.formats._densities import HOLDS, from_densities, to_densities
+from allanite.formats._densities import HOLDS as HOLDS  # the format protocol: what it holds
+from allanite.formats._densities import density_entries, from_densities
 from allanite.formats._text import load_yaml, number_text, update_keys
 from allanite.formats.base import ImuConfig, Written, number
-from allanite.formats.projection import project_config
 
 NAME = "kalibr"
 TITLE = "Kalibr imu.yaml"
@@ -59,12 +59,7 @@ def entries(
     config: ImuConfig, rate: float | None, tau_range: tuple[float, float] | None
 ) -> tuple[dict[str, float], list[str], list[str]]:
     """``(values by key, dropped, projections)`` of the config (shared by OpenVINS)."""
-    models, dropped, projections = project_config(config, HOLDS, rate=rate, tau_range=tau_range)
-    values: dict[str, float] = {}
-    for sensor, (n_key, w_key) in KEYS.items():
-        if sensor in models:
-            values[n_key], values[w_key] = to_densities(models[sensor])
-    return values, dropped, projections
+    return density_entries(config, KEYS, rate, tau_range)
 
 
 def write(

@@ -6,10 +6,10 @@ Continuous densities (``src/Tracking.cc`` converts them to discrete as ``Ng sqrt
 
 from __future__ import annotations
 
-from allanite.formats._densities import HOLDS, from_densities, to_densities
+from allanite.formats._densities import HOLDS as HOLDS  # the format protocol: what it holds
+from allanite.formats._densities import density_entries, from_densities
 from allanite.formats._text import load_yaml, number_text, update_keys
 from allanite.formats.base import ImuConfig, Written, number
-from allanite.formats.projection import project_config
 
 NAME = "orbslam3"
 TITLE = "ORB-SLAM3 settings (IMU.*)"
@@ -39,12 +39,8 @@ def write(
 ) -> Written:
     """ORB-SLAM3 IMU lines (into ``template`` when given)."""
     rate = rate or config.rate
-    models, dropped, projections = project_config(config, HOLDS, rate=rate, tau_range=tau_range)
-    values: dict[str, str] = {}
-    for sensor, (n_key, w_key) in KEYS.items():
-        if sensor in models:
-            n, w = to_densities(models[sensor])
-            values[n_key], values[w_key] = number_text(n), number_text(w)
+    densities, dropped, projections = density_entries(config, KEYS, rate, tau_range)
+    values = {key: number_text(value) for key, value in densities.items()}
     if rate:
         values["IMU.Frequency"] = number_text(rate)
     if template is not None:

@@ -7,10 +7,10 @@ undocumented there): White N = gyr_n (rad/s/sqrt(Hz)), RateRandomWalk K = gyr_w
 
 from __future__ import annotations
 
-from allanite.formats._densities import HOLDS, from_densities, to_densities
+from allanite.formats._densities import HOLDS as HOLDS  # the format protocol: what it holds
+from allanite.formats._densities import density_entries, from_densities
 from allanite.formats._text import load_yaml, number_text, update_keys
 from allanite.formats.base import ImuConfig, Written
-from allanite.formats.projection import project_config
 
 NAME = "vins"
 TITLE = "VINS-Mono / VINS-Fusion config (gyr_n, ...)"
@@ -38,12 +38,8 @@ def write(
 ) -> Written:
     """VINS IMU lines (into ``template`` when given)."""
     rate = rate or config.rate
-    models, dropped, projections = project_config(config, HOLDS, rate=rate, tau_range=tau_range)
-    values: dict[str, str] = {}
-    for sensor, (n_key, w_key) in KEYS.items():
-        if sensor in models:
-            n, w = to_densities(models[sensor])
-            values[n_key], values[w_key] = number_text(n), number_text(w)
+    densities, dropped, projections = density_entries(config, KEYS, rate, tau_range)
+    values = {key: number_text(value) for key, value in densities.items()}
     if template is not None:
         return Written(update_keys(template, values), dropped, projections)
     lines = ["%YAML:1.0", "# IMU noise (continuous densities, SI units) written by allanite"]
