@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-__all__ = ["InputError", "MissingExtraError"]
+__all__ = ["InputError", "MissingExtraError", "choose_one"]
 
 
 class InputError(ValueError):
@@ -34,3 +34,43 @@ class MissingExtraError(ImportError):
     def __init__(self, message: str, *, extra: str) -> None:
         super().__init__(message)
         self.extra = extra
+
+
+def choose_one(
+    given: str | None, available: list[str], *, what: str, option: str, path: str
+) -> str:
+    """The one of ``available`` the user asked for, or the only one there is.
+
+    Used where a file holds several items (arrays of an .npz, IMU topics of a bag).
+
+    Parameters
+    ----------
+    given : str or None
+        The user's choice (None: take the only item).
+    available : list of str
+        The items the file holds (at least one).
+    what : str
+        Their name in messages: ``"array"``, ``"IMU topic"``.
+    option : str
+        How to choose: ``"key= (CLI: --key NAME)"``.
+    path : str
+        The file, for the message.
+
+    Raises
+    ------
+    InputError
+        If ``given`` is None and there are several items, or ``given`` is not among them.
+    """
+    if given is None:
+        if len(available) > 1:
+            raise InputError(
+                f"the file holds several {what}s ({', '.join(available)}); choose one with "
+                f"{option}",
+                path=path,
+            )
+        return available[0]
+    if given not in available:
+        raise InputError(
+            f"no {what} {given!r} in the file; available: {', '.join(available)}", path=path
+        )
+    return given

@@ -18,7 +18,7 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import NDArray
 
-from allanite.errors import InputError
+from allanite.errors import InputError, choose_one
 from allanite.extras import require
 from allanite.io.record import Record
 from allanite.io.text import read_text_table
@@ -329,18 +329,7 @@ def _from_archive(path: Path, archive: Any, key: str | None) -> Loaded:
         keys = list(archive.files)
         if not keys:
             raise InputError("the archive holds no arrays", path=str(path))
-        if key is None:
-            if len(keys) > 1:
-                raise InputError(
-                    f"the archive holds several arrays ({', '.join(keys)}); choose one with "
-                    "key= (CLI: --key NAME)",
-                    path=str(path),
-                )
-            key = keys[0]
-        if key not in keys:
-            raise InputError(
-                f"no array {key!r} in the archive; available: {', '.join(keys)}", path=str(path)
-            )
+        key = choose_one(key, keys, what="array", option="key= (CLI: --key NAME)", path=str(path))
         try:
             arr = archive[key]
         except (ValueError, zipfile.BadZipFile, EOFError, OSError) as exc:

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from allanite.errors import InputError
+from allanite.errors import InputError, choose_one
 from allanite.extras import require
 
 __all__ = [
@@ -82,18 +82,9 @@ def load_rosbag(
                 f"no sensor_msgs/Imu topic in the bag; it has {found or 'no topics'}",
                 path=str(path),
             )
-        if topic is None:
-            if len(topics) > 1:
-                raise InputError(
-                    f"the bag has several IMU topics ({', '.join(topics)}); choose one with "
-                    "topic= (CLI: --topic NAME)",
-                    path=str(path),
-                )
-            topic = topics[0]
-        if topic not in topics:
-            raise InputError(
-                f"no IMU topic {topic!r}; IMU topics: {', '.join(topics)}", path=str(path)
-            )
+        topic = choose_one(
+            topic, topics, what="IMU topic", option="topic= (CLI: --topic NAME)", path=str(path)
+        )
         chosen = [c for c in imu if c.topic == topic]
         stamps: list[float] = []
         rows: list[tuple[float, ...]] = []
