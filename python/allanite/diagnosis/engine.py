@@ -199,27 +199,18 @@ def diagnose(
             effects=effects,
             bursts=_bursts(analysis.time),
         )
-        attribution = rank(
-            cands,
-            analysis.tau_model,
-            alpha=alpha,
-            evidence_p=ev_p,
-            significant=sig,
-            time_view=analysis.time,
-            duration=x_fit.size / rate,
-        )
+        # the same calibrated test ranks single effects and selects the joint set
+        test: dict[str, Any] = {
+            "alpha": alpha,
+            "evidence_p": ev_p,
+            "significant": sig,
+            "time_view": analysis.time,
+            "duration": x_fit.size / rate,
+        }
+        attribution = rank(cands, analysis.tau_model, **test)
         by_effect = {c.effect: c for c in cands}
         if attribution:
-            explanation = explain(
-                attribution[0],
-                cands,
-                analysis.tau_model,
-                alpha=alpha,
-                evidence_p=ev_p,
-                significant=sig,
-                time_view=analysis.time,
-                duration=x_fit.size / rate,
-            )
+            explanation = explain(attribution[0], cands, analysis.tau_model, **test)
     after: Analysis | None = None
     if explanation is not None and source.model is not None:
         # the frequency and time views re-run against the simulated sensor WITH the effects:
