@@ -438,3 +438,23 @@ def test_first_screen_summary_above_the_table(
     assert "tau [s]" not in out
     assert "N = " in out
     assert "(rate unit)*sqrt(s)" in out
+
+
+def test_flat_minimum_readout_is_an_upper_bound(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """White + rate random walk, no flicker: the flat minimum is the N-K crossover, so the
+    slope-method B is printed as an upper bound, never as B = (the fit has no B there)."""
+    rng = np.random.default_rng(21)
+    n, k = 0.01, 1e-3  # deg/sqrt(s), deg/s/sqrt(s)
+    dt = 1 / FS
+    x = rng.standard_normal(400_000) * n / np.sqrt(dt)
+    x += np.cumsum(rng.standard_normal(x.size)) * k * np.sqrt(dt)
+    path = tmp_path / "white_rrw.npy"
+    np.save(path, x)
+    code, out, err = _run(["analyze", str(path), "--fs", "100", "--units", "deg/s"], capsys)
+    assert code == 0, err
+    (b_line,) = [line for line in out.splitlines() if line.startswith("    B ")]
+    assert b_line.startswith("    B <= ")
+    assert "upper bound" in b_line
+    assert not any(line.startswith("    B = ") for line in out.splitlines())

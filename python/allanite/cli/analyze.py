@@ -202,10 +202,15 @@ def summary_lines(result: AllanResult, fit_command: str | None = None) -> list[s
                 continue
             how = {
                 "N": f"-1/2 segment near tau = {at:.3g} s, read at tau = 1 s",
-                "B": f"flat minimum at tau = {at:.3g} s, divided by 0.664",
+                "B": (
+                    f"upper bound: flat minimum at tau = {at:.3g} s divided by 0.664; "
+                    "white and random-walk noise there add to it"
+                ),
                 "K": f"+1/2 segment near tau = {at:.3g} s, read at tau = 3 s",
             }
-            lines.append(f"    {symbol} = {_readout_value(result, symbol, value)}  ({how[symbol]})")
+            relation = "<=" if symbol == "B" else "="
+            text = _readout_value(result, symbol, value)
+            lines.append(f"    {symbol} {relation} {text}  ({how[symbol]})")
     if fit_command:
         lines.append(f"  fitted coefficients with intervals: {fit_command}")
     return lines
