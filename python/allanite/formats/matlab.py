@@ -33,9 +33,11 @@ BiasInstability BI, default coeffs  GaussMarkov AR(1) phi = 0.5 (Tc = dt/ln 2), 
 BI, ``[b] / [1 -phi]``, 0<phi<1     GaussMarkov (exact), innovation std BI b
 BI, ``[b] / [1 -1]``                RateRandomWalk K = BI b / sqrt(dt) (exact)
 BI, ``[b] / [a0]``                  White N = BI b / a0 sqrt(dt) (exact)
-BI, ``fractalcoef(K)``, K >= 2      Flicker B = BI b: the K-pole filter's ADEV is within 5 % of
-                                    flicker only from 3 to ~4.5 K samples (said in the notes);
-                                    below, 9-31 % above it; beyond, it falls as white noise
+BI, ``fractalcoef(K)``, K >= 2      Flicker B = BI b, approximately (said in the notes): the
+                                    K-pole filter's ADEV is within 5 % of flicker from 3 to
+                                    0.85 K samples, within 11 % to 6.5 K samples (+10.6 %
+                                    near 2 K), 9-31 % above it at 1-2 samples, and falls as
+                                    white noise beyond
 ConstantBias                        constant offset
 ==================================  ============================================================
 
@@ -93,8 +95,10 @@ FIELDS = {"NoiseDensity": "white", "BiasInstability": "markov", "RandomWalk": "r
 NOISE_TYPES = ("double-sided", "single-sided")
 #: imuSensor's SampleRate when the script does not set one
 DEFAULT_RATE = 100.0
-#: Kasdin's K-pole filter follows flicker (ADEV within 5 %) from 3 to about this many K samples
-FRACTAL_REACH = 4.5
+#: Kasdin's K-pole filter follows flicker (ADEV) within 5 % from 3 to 0.85 K samples and within
+#: 11 % to 6.5 K samples (computed exactly, checked in tests/test_formats.py)
+FRACTAL_WITHIN_5 = 0.85
+FRACTAL_WITHIN_11 = 6.5
 UNITS = {
     "gyro": {
         "NoiseDensity": "(rad/s)/sqrt(Hz)",
@@ -111,7 +115,7 @@ UNITS = {
 }
 FUNCTION = {"gyro": "gyroparams", "accel": "accelparams"}
 _NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
-_COEFS = "BiasInstabilityCoefficients"
+COEFFICIENTS = _COEFS = "BiasInstabilityCoefficients"
 
 
 def sniff(text: str) -> bool:
@@ -307,12 +311,13 @@ def _bias_term(
         return GaussMarkov.from_ar1(-a[1], drive**2, dt)
     _, kasdin = fractal_coefficients(len(a) - 1, 1.0)
     if np.allclose(a, kasdin, rtol=1e-9, atol=1e-12):
-        reach = FRACTAL_REACH * (len(a) - 1) * dt
+        poles = len(a) - 1
         notes.append(
-            f"{where} {how} is read as flicker B = BiasInstability: MATLAB's {len(a) - 1}-"
-            f"pole filter follows flicker (ADEV within 5 %) from {3 * dt:.3g} s to about "
-            f"{reach:.3g} s at {rate:g} Hz; at 1-2 samples its ADEV is 9-31 % "
-            "higher, beyond it falls as white noise"
+            f"{where} {how} is read as flicker B = BiasInstability: MATLAB's {poles}-pole "
+            f"filter follows flicker within 5 % of the ADEV from {3 * dt:.3g} to "
+            f"{FRACTAL_WITHIN_5 * poles * dt:.3g} s and within 11 % to "
+            f"{FRACTAL_WITHIN_11 * poles * dt:.3g} s at {rate:g} Hz (9-31 % higher at 1-2 "
+            "samples); beyond, its ADEV falls as white noise"
         )
         return Flicker(B=float(drive))
     raise ValueError(
