@@ -351,6 +351,14 @@ def test_matlab_without_a_sample_rate_uses_imusensors_default_and_says_so():
     cfg = format_module("matlab").read("g = gyroparams('BiasInstability', 1e-3);")
     assert any("default 100 Hz" in note for note in cfg.notes)
     assert math.isclose(cfg.model("gyro").terms[0].tau_c, 0.01 / math.log(2.0))
+    text = (
+        "imu = imuSensor('accel-gyro');\nimu.SampleRate = 250;\ntraj.SampleRate = 50;\n"
+        "imu.Gyroscope = gyroparams('BiasInstability', 1e-3);\n"
+    )
+    cfg = format_module("matlab").read(text)
+    assert cfg.rate == 250.0
+    assert cfg.notes == ()
+    assert format_module("matlab").read(text.replace("imu.SampleRate = 250;", "")).rate == 100.0
 
 
 # --- round trips --------------------------------------------------------------------------

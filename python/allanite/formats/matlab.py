@@ -225,10 +225,11 @@ class _Script:
 
     def sample_rate(self) -> float | None:
         """``SampleRate`` given to ``imuSensor`` (argument or property), or None."""
-        found = []
-        for _, args in _calls(self.code, "imuSensor"):
-            found.append(_pairs(args).get("SampleRate"))
-        found += [m.group(1) for m in re.finditer(r"\.SampleRate\s*=\s*([^;\n]+)", self.code)]
+        calls = _calls(self.code, "imuSensor")
+        found = [_pairs(args).get("SampleRate") for _, args in calls]
+        for name in {name for name, _ in calls if name}:
+            pattern = rf"(?<![\w.]){re.escape(name)}\.SampleRate\s*=\s*([^;\n]+)"
+            found += [m.group(1) for m in re.finditer(pattern, self.code)]
         values = [v for v in found if v is not None]
         if not values:
             return DEFAULT_RATE if found else None
