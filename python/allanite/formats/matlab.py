@@ -41,20 +41,27 @@ BI, ``fractalcoef(K)``, K >= 2      Flicker B = BI b, approximately (said in the
 ConstantBias                        constant offset
 ==================================  ============================================================
 
-Consequence (the "sqrt(2) gotcha", MATLAB Answers 2006792 "Why doesn't the noise density of the
-Allan deviation plot match the noise density of imuSensor?", 2023): with the default
-double-sided NoiseType, ``NoiseDensity`` 0.1 reads 0.1/sqrt(2) = 0.0707 on the Allan deviation
-at tau = 1 s, and ``RandomWalk`` reads sqrt(2) times larger; MathWorks' own Allan-variance
-example sets ``'NoiseType', 'single-sided'`` "to match the parameter scaling". The
-``BiasInstability`` of the default filter is a 1.44-sample Gauss-Markov process, which adds
-white noise, not a bias-instability floor; only ``fractalcoef(K)`` with many poles makes it
-flicker (B = BiasInstability, IEEE convention: ADEV floor 0.664 B).
+Consequence (the "sqrt(2) gotcha"; MATLAB Answers 2006792, "Why doesn't the noise density of
+the Allan deviation plot match the noise density of imuSensor?", Aug 2023: ``NoiseDensity`` 0.1
+at 100 Hz "indicates a noise density of 0.07"): with the default double-sided NoiseType the
+Allan deviation at tau = 1 s is NoiseDensity/sqrt(2), and ``RandomWalk`` reads sqrt(2) times
+larger. The code of MathWorks' example "Inertial Sensor Noise Analysis Using Allan Variance"
+sets ``'NoiseType', 'single-sided'`` "to match the parameter scaling" and
+``fractalcoef(500)`` for the bias instability. With the default filter ``BiasInstability`` is
+a 1.44-sample Gauss-Markov process, i.e. extra white noise, not a bias-instability floor; only
+``fractalcoef(K)`` with many poles makes it flicker (B = BiasInstability in the IEEE
+convention, ADEV floor 0.664 B, as the fractalcoef filter's 1/f PSD gives).
 
-Sources: MathWorks, imuSensor and gyroparams reference pages (``NoiseType``,
-``BiasInstabilityCoefficients``), fractalcoef reference page ("filter coefficients for
-generating fractal noise with a power spectral density of 1/f"), example "Inertial Sensor Noise
-Analysis Using Allan Variance". Not checked against a running MATLAB (none here): the law was
-read from the toolbox source text, and the 0.0707 of the Answers thread is reproduced.
+Sources: the toolbox class text quoted above (``setupBandwidth``, ``setupBiasInstabilityDrift``,
+``setStdDev*``, ``step*Drift``; ``fractalcoef.m``: "poles are from equation 116" of N. J.
+Kasdin, Proc. IEEE 83(5), 1995), found in public copies of the toolbox files and in Simulink
+Coder output of the IMU block; the gyroparams reference page ("See the Algorithms section of
+imuSensor"), the fractalcoef reference page ("Filter coefficients for fractal noise generation
+... power spectral density of 1/f", since R2023b) and the example "Introduction to Simulating
+IMU Measurements" (``NoiseType: "double-sided"`` in the default display). Not run against
+MATLAB itself (none here); the 0.0707 of the Answers thread is reproduced by the law.
+Releases before R2023b have no NoiseType/BiasInstabilityCoefficients; whether their fixed
+filter and bandwidth were the same defaults is not established here.
 
 Reading
 -------
@@ -71,7 +78,8 @@ Writing
 Gauss-Markov bias as ``BiasInstability`` with its exact first-order ``struct`` coefficients
 at the rate, and ``ConstantBias``. Flicker and other slow terms are projected onto that
 Gauss-Markov bias over the stated tau range (:mod:`allanite.formats.projection`), never
-silently.
+silently. For MATLAB's own 1/f filter set ``'BiasInstabilityCoefficients', fractalcoef(K)``
+with ``K`` >= tau_max * fs / 6.5 by hand: it is read back as flicker.
 """
 
 from __future__ import annotations
