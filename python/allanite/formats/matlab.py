@@ -422,7 +422,7 @@ def fields(
             gm = markov[0]
             phi = float(_exact(math.exp(-dt / gm.values()["tau_c"])))
             drive = gm.values()["sigma"] * math.sqrt(1.0 - phi**2)
-            values["BiasInstability"] = _exact(drive)
+            values["BiasInstability"] = number_text(drive)
             values[_COEFS] = f"struct('Numerator', 1, 'Denominator', [1 {_exact(-phi)}])"
         else:
             values["BiasInstability"] = "0"
