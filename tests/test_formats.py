@@ -173,7 +173,7 @@ def test_gnss_ins_sim_law(corr):
 
 
 # --- MATLAB imuSensor (fusion.internal.IMUSensorSimulator) ---------------------------------
-def _matlab_text(p: dict, rate: float | None = 100.0) -> str:
+def _matlab_text(p: dict, rate: float | None = 100.0, func: str = "gyroparams") -> str:
     args = [
         f"'{k}', " + (f"'{v}'" if isinstance(v, str) else repr(v))
         for k, v in p.items()
@@ -185,7 +185,7 @@ def _matlab_text(p: dict, rate: float | None = 100.0) -> str:
             f"'BiasInstabilityCoefficients', struct('Numerator', {p.get('Numerator', 1.0)!r}, "
             f"'Denominator', [{den}])"
         )
-    text = "g = gyroparams( ...\n    " + ", ...\n    ".join(args) + ");  % gyro\n"
+    text = f"g = {func}( ...\n    " + ", ...\n    ".join(args) + ");  % sensor\n"
     if rate is not None:
         text += f"fs = {rate};\nimu = imuSensor('accel-gyro', 'SampleRate', fs, 'Gyroscope', g);\n"
     return text
@@ -222,6 +222,15 @@ def test_matlab_imusensor_law(case):
     assert cfg.rate == rate
     x = sim_laws.matlab_imu(p, n, rate, np.random.default_rng(7))
     _inside_bands(x, rate, cfg.model("gyro"))
+
+
+def test_matlab_accelparams_follow_the_same_law():
+    p = {"NoiseDensity": 2e-2, "BiasInstability": 5e-2, "RandomWalk": 4e-4}
+    cfg = format_module("matlab").read(_matlab_text(p, 200.0, "accelparams"))
+    model = cfg.model("accel")
+    assert model.units["rate"] == "m/s^2"
+    x = sim_laws.matlab_imu(p, 2**18, 200.0, np.random.default_rng(11))
+    _inside_bands(x, 200.0, model)
 
 
 def test_matlab_default_noise_density_reads_as_n_over_sqrt2():
@@ -323,6 +332,7 @@ def test_matlab_written_values_reproduce_the_model_under_its_law():
     assert written.projections == []
     p = _written_fields(written.text)
     assert p["NoiseType"] == "single-sided"
+    assert "imuSensor('SampleRate', 100)" in written.text
     x = sim_laws.matlab_imu(p, 2**18, rate, np.random.default_rng(10))
     _inside_bands(x, rate, model)
 
