@@ -123,7 +123,7 @@ UNITS = {
 }
 FUNCTION = {"gyro": "gyroparams", "accel": "accelparams"}
 _NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
-COEFFICIENTS = _COEFS = "BiasInstabilityCoefficients"
+COEFFICIENTS = "BiasInstabilityCoefficients"
 
 
 def sniff(text: str) -> bool:
@@ -221,7 +221,7 @@ class _Script:
                 if not path.startswith(owner + "."):
                     continue
                 field = path[len(owner) + 1 :]
-                sub = (f"{_COEFS}.Numerator", f"{_COEFS}.Denominator")
+                sub = (f"{COEFFICIENTS}.Numerator", f"{COEFFICIENTS}.Denominator")
                 if re.fullmatch(r"\w+", field) or field in sub:
                     self.fields[sensor][field] = value
 
@@ -272,7 +272,7 @@ def _noise_type(text: str, where: str) -> str:
 def _coefficients(script: _Script, values: dict[str, str], where: str) -> tuple[list, list, str]:
     """Numerator, denominator and a description of ``BiasInstabilityCoefficients``."""
     num, den, how = [1.0], [1.0, -0.5], "the default fractalcoef (Denominator [1 -0.5])"
-    text = script.resolve(values.get(_COEFS, "")).strip()
+    text = script.resolve(values.get(COEFFICIENTS, "")).strip()
     call = re.fullmatch(r"fractalcoef\s*(?:\((.*)\))?", text, flags=re.S)
     if call:
         args = [script.resolve(a) for a in _split_top(call.group(1) or "")]
@@ -292,11 +292,13 @@ def _coefficients(script: _Script, values: dict[str, str], where: str) -> tuple[
             f"{where}: cannot read {text!r}; give fractalcoef(K, alpha) or "
             "struct('Numerator', b, 'Denominator', [1 -phi])"
         )
-    for sub in ("Numerator", "Denominator"):
-        if f"{_COEFS}.{sub}" in values:
-            vec = _vector(script.resolve(values[f"{_COEFS}.{sub}"]), f"{where}.{sub}")
-            num, den, how = (vec, den, how) if sub == "Numerator" else (num, vec, how)
-            how = "coefficients set by field"
+    if f"{COEFFICIENTS}.Numerator" in values:
+        num = _vector(script.resolve(values[f"{COEFFICIENTS}.Numerator"]), f"{where}.Numerator")
+        how = "coefficients set by field"
+    if f"{COEFFICIENTS}.Denominator" in values:
+        key = f"{COEFFICIENTS}.Denominator"
+        den = _vector(script.resolve(values[key]), f"{where}.Denominator")
+        how = "coefficients set by field"
     return num, den, how
 
 
@@ -363,7 +365,7 @@ def read(text: str, *, rate: float | None = None) -> ImuConfig:
         if get.get("NoiseDensity", 0.0) > 0:
             terms.append(White(N=get["NoiseDensity"] * math.sqrt(bw_dt)))
         if get.get("BiasInstability", 0.0) > 0:
-            num, den, how = _coefficients(script, values, f"{func} {_COEFS}")
+            num, den, how = _coefficients(script, values, f"{func} {COEFFICIENTS}")
             if rate is None:
                 notes.append(
                     f"{func} BiasInstability: no SampleRate in the script, imuSensor's default "
@@ -378,8 +380,8 @@ def read(text: str, *, rate: float | None = None) -> ImuConfig:
             offsets[sensor] = _scalar(
                 script.resolve(values["ConstantBias"]), where, notes, signed=True
             )
-        known = {*FIELDS, "ConstantBias", "NoiseType", _COEFS}
-        ignored = sorted(v for v in values if v not in known and not v.startswith(_COEFS))
+        known = {*FIELDS, "ConstantBias", "NoiseType", COEFFICIENTS}
+        ignored = sorted(v for v in values if v not in known and not v.startswith(COEFFICIENTS))
         if ignored:
             notes.append(f"{func}: {', '.join(ignored)} not part of the noise model")
         models[sensor] = merge_same(sensor_model(terms, sensor))
@@ -423,7 +425,7 @@ def fields(
             phi = float(_exact(math.exp(-dt / gm.values()["tau_c"])))
             drive = gm.values()["sigma"] * math.sqrt(1.0 - phi**2)
             values["BiasInstability"] = number_text(drive)
-            values[_COEFS] = f"struct('Numerator', 1, 'Denominator', [1 {_exact(-phi)}])"
+            values[COEFFICIENTS] = f"struct('Numerator', 1, 'Denominator', [1 {_exact(-phi)}])"
         else:
             values["BiasInstability"] = "0"
         rrw = model.terms_of_type("rrw")
