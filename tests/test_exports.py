@@ -31,12 +31,17 @@ MODEL = NoiseModel(
 
 def test_matlab_fields_are_si():
     p = matlab_gyroparams(MODEL)
-    assert math.isclose(p["NoiseDensity"], 0.005 * D2R)
-    assert math.isclose(p["BiasInstability"], 0.001 * D2R)
+    assert math.isclose(p["NoiseDensity"], 0.005 * D2R)  # single-sided: NoiseDensity = N
     assert math.isclose(p["RandomWalk"], 1e-4 * D2R)
+    assert p["NoiseType"] == "single-sided"
+    # imuSensor's bias instability is a filtered white noise, not flicker: B is projected onto
+    # its first-order (Gauss-Markov) filter, and said
+    assert 0 < p["BiasInstability"] < 0.001 * D2R
+    assert "'Denominator', [1 -0.99" in p["BiasInstabilityCoefficients"]
     assert p["units"] == MATLAB_UNITS
-    assert len(p["not_exported"]) == 1
+    assert len(p["not_exported"]) == 2
     assert p["not_exported"][0].startswith("gyro: quantization")
+    assert p["not_exported"][1].startswith("gyro: flicker")
 
 
 def test_matlab_from_a_deg_per_hour_model_gives_the_same_numbers():

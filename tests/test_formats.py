@@ -9,6 +9,7 @@ is the identity on the terms each format holds.
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -171,6 +172,205 @@ def test_gnss_ins_sim_law(corr):
     _inside_bands(x, 100.0, cfg.model("gyro"))
 
 
+# --- MATLAB imuSensor (fusion.internal.IMUSensorSimulator) ---------------------------------
+def _matlab_text(p: dict, rate: float | None = 100.0, func: str = "gyroparams") -> str:
+    args = [
+        f"'{k}', " + (f"'{v}'" if isinstance(v, str) else repr(v))
+        for k, v in p.items()
+        if k not in ("Numerator", "Denominator")
+    ]
+    if "Denominator" in p:
+        den = " ".join(repr(d) for d in p["Denominator"])
+        args.append(
+            f"'BiasInstabilityCoefficients', struct('Numerator', {p.get('Numerator', 1.0)!r}, "
+            f"'Denominator', [{den}])"
+        )
+    text = f"g = {func}( ...\n    " + ", ...\n    ".join(args) + ");  % sensor\n"
+    if rate is not None:
+        text += f"fs = {rate};\nimu = imuSensor('accel-gyro', 'SampleRate', fs, 'Gyroscope', g);\n"
+    return text
+
+
+MATLAB_CASES = {
+    # the default NoiseType (double-sided) and the default fractalcoef filter [1 -0.5]
+    "default": {"NoiseDensity": 3e-3, "BiasInstability": 1e-2, "RandomWalk": 1e-4},
+    "single-sided": {
+        "NoiseDensity": 3e-3,
+        "BiasInstability": 1e-2,
+        "RandomWalk": 1e-4,
+        "NoiseType": "single-sided",
+    },
+    "first-order filter": {
+        "NoiseDensity": 1e-3,
+        "BiasInstability": 2e-4,
+        "RandomWalk": 2e-5,
+        "Denominator": [1.0, -0.995],
+    },
+    "integrator filter": {
+        "NoiseDensity": 1e-3,
+        "BiasInstability": 1e-5,
+        "Denominator": [1.0, -1.0],
+    },
+}
+
+
+@pytest.mark.parametrize("case", sorted(MATLAB_CASES))
+def test_matlab_imusensor_law(case):
+    p = MATLAB_CASES[case]
+    rate, n = 100.0, 2**18
+    cfg = format_module("matlab").read(_matlab_text(p, rate))
+    assert cfg.rate == rate
+    x = sim_laws.matlab_imu(p, n, rate, np.random.default_rng(7))
+    _inside_bands(x, rate, cfg.model("gyro"))
+
+
+def test_matlab_accelparams_follow_the_same_law():
+    p = {"NoiseDensity": 2e-2, "BiasInstability": 5e-2, "RandomWalk": 4e-4}
+    cfg = format_module("matlab").read(_matlab_text(p, 200.0, "accelparams"))
+    model = cfg.model("accel")
+    assert model.units["rate"] == "m/s^2"
+    x = sim_laws.matlab_imu(p, 2**18, 200.0, np.random.default_rng(11))
+    _inside_bands(x, 200.0, model)
+
+
+def test_matlab_default_noise_density_reads_as_n_over_sqrt2():
+    # MATLAB Answers 2006792: NoiseDensity 0.1 at 100 Hz shows 0.07 on the Allan deviation
+    text = (
+        "fs = 100;\nIMU = imuSensor('accel-gyro','SampleRate',fs);\n"
+        "IMU.Gyroscope = gyroparams('NoiseDensity', 0.1);\n"
+    )
+    cfg = format_module("matlab").read(text)
+    (white,) = cfg.model("gyro").terms
+    assert math.isclose(white.N, 0.1 / math.sqrt(2.0))  # 0.0707
+    x = sim_laws.matlab_imu({"NoiseDensity": 0.1}, 10**5, 100.0, np.random.default_rng(8))
+    res = allanite.avar(x, 100.0, taus="octave")
+    i = int(np.argmin(np.abs(res.tau - 1.0)))
+    lo, hi = res.var_ci(LEVEL)
+    assert lo[i] < white.N**2 / res.tau[i] < hi[i]
+    assert 0.1**2 / res.tau[i] > hi[i]  # the one-to-one reading is outside the band
+    single = format_module("matlab").read(text.replace("0.1)", "0.1, 'NoiseType', 'single')"))
+    assert single.model("gyro").terms[0].N == 0.1
+
+
+def test_matlab_default_bias_instability_is_a_fast_gauss_markov_not_flicker():
+    cfg = format_module("matlab").read(_matlab_text({"BiasInstability": 1e-3}, 200.0))
+    (gm,) = cfg.model("gyro").terms
+    assert isinstance(gm, GaussMarkov)
+    assert math.isclose(gm.tau_c, 1.0 / 200.0 / math.log(2.0))  # decay factor 1/2 per sample
+    assert math.isclose(gm.sigma, 1e-3 / math.sqrt(0.75))
+    # at tau >> dt it is white noise of N = 2 BI sqrt(dt), no bias-instability floor
+    assert math.isclose(
+        math.sqrt(gm.avar(np.array([100.0]), 1 / 200.0)[0] * 100.0),
+        2e-3 * math.sqrt(1 / 200.0),
+        rel_tol=1e-3,
+    )
+
+
+def test_filtered_white_avar_is_exact_for_white_and_gauss_markov():
+    m = np.array([1.0, 3.0, 30.0, 300.0])
+    assert np.allclose(sim_laws.filtered_white_avar([1.0], [1.0], m), 1.0 / m, rtol=1e-6)
+    gm = GaussMarkov.from_ar1(0.9, 1.0, 1.0)
+    assert np.allclose(
+        sim_laws.filtered_white_avar([1.0], [1.0, -0.9], m), gm.avar(m, 1.0), rtol=1e-6
+    )
+
+
+@pytest.mark.parametrize("poles", [30, 300])
+def test_matlab_fractalcoef_is_flicker_over_the_stated_range(poles):
+    fmt = format_module("matlab")
+    den = sim_laws.kasdin_denominator(poles)
+    assert np.allclose(fmt.fractal_coefficients(poles)[1], den)
+    # MATLAB's filter against flicker B = BiasInstability, exactly (the spectral integral)
+    m = np.unique(np.round(np.geomspace(1, 20 * poles, 120)))
+    ratio = np.sqrt(sim_laws.filtered_white_avar([1.0], den, m) / Flicker(B=1.0).avar(m, 1.0))
+    five = (m >= 3) & (m <= fmt.FRACTAL_WITHIN_5 * poles)
+    eleven = (m >= 3) & (m <= fmt.FRACTAL_WITHIN_11 * poles)
+    assert np.all(np.abs(ratio[five] - 1) < 0.05)
+    assert np.all(np.abs(ratio[eleven] - 1) < 0.11)
+    assert np.max(np.abs(ratio[eleven] - 1)) > 0.10  # the 11 % is needed, not loose
+    assert 1.30 < ratio[0] < 1.32  # 1 sample
+    assert 1.08 < ratio[1] < 1.10  # 2 samples
+    assert ratio[-1] < 0.7  # beyond, white noise
+    # and the records simulated with the law follow that exact Allan variance
+    rate, n, bi = 100.0, 2**18, 2e-3
+    p = {"BiasInstability": bi, "Denominator": list(den)}
+    x = sim_laws.matlab_imu(p, n, rate, np.random.default_rng(9))
+    res = allanite.avar(x, rate, taus="octave")
+    keep = res.tau <= n / rate * 0.1
+    lo, hi = res.var_ci(LEVEL)
+    exact = bi**2 * sim_laws.filtered_white_avar([1.0], den, np.round(res.tau * rate))
+    assert np.all((exact[keep] > lo[keep]) & (exact[keep] < hi[keep]))
+    # the reader takes B = BiasInstability and states the range
+    cfg = fmt.read(
+        f"g = gyroparams('BiasInstability', {bi}, ...\n"
+        f"  'BiasInstabilityCoefficients', fractalcoef({poles}));",
+        rate=rate,
+    )
+    assert cfg.model("gyro").terms == (Flicker(B=bi),)
+    assert any(f"to {fmt.FRACTAL_WITHIN_5 * poles / rate:.3g} s" in note for note in cfg.notes)
+
+
+def _written_fields(text: str) -> dict:
+    """gyroparams values of a written script, parsed here (not with the reader)."""
+    out: dict = {}
+    for key in ("NoiseDensity", "BiasInstability", "RandomWalk"):
+        out[key] = float(re.search(rf"'{key}', ([^,)]+)", text).group(1))
+    out["NoiseType"] = re.search(r"'NoiseType', '([^']+)'", text).group(1)
+    den = re.search(r"'Denominator', \[([^\]]+)\]", text)
+    if den:
+        out["Denominator"] = [float(v) for v in den.group(1).split()]
+    return out
+
+
+def test_matlab_written_values_reproduce_the_model_under_its_law():
+    rate = 100.0
+    model = sensor_model(
+        [White(N=2e-3), GaussMarkov(sigma=5e-4, tau_c=3.0), RateRandomWalk(K=3e-5)], "gyro"
+    )
+    written = format_module("matlab").write(ImuConfig(gyro=model, rate=rate))
+    assert written.dropped == []
+    assert written.projections == []
+    p = _written_fields(written.text)
+    assert p["NoiseType"] == "single-sided"
+    assert "imuSensor('SampleRate', 100)" in written.text
+    x = sim_laws.matlab_imu(p, 2**18, rate, np.random.default_rng(10))
+    _inside_bands(x, rate, model)
+
+
+_BI = "g = gyroparams('BiasInstability', 1e-3, 'BiasInstabilityCoefficients', "
+
+
+@pytest.mark.parametrize(
+    ("text", "match"),
+    [
+        (_BI + "fractalcoef(4, 0.5));", "no allanite term"),
+        (_BI + "struct('Numerator', 1, 'Denominator', [1 0.5]));", "no allanite term"),
+        ("g = gyroparams('NoiseDensity', 1e-3, 'NoiseType', 'two-sided');", "single-sided"),
+        (
+            "g = gyroparams('BiasInstability', 1e-3, 'BiasInstabilityCoefficients', c);",
+            "cannot read",
+        ),
+    ],
+)
+def test_matlab_unreadable_settings_say_what_to_use(text, match):
+    with pytest.raises(ValueError, match=match):
+        format_module("matlab").read(text, rate=100.0)
+
+
+def test_matlab_without_a_sample_rate_uses_imusensors_default_and_says_so():
+    cfg = format_module("matlab").read("g = gyroparams('BiasInstability', 1e-3);")
+    assert any("default 100 Hz" in note for note in cfg.notes)
+    assert math.isclose(cfg.model("gyro").terms[0].tau_c, 0.01 / math.log(2.0))
+    text = (
+        "imu = imuSensor('accel-gyro');\nimu.SampleRate = 250;\ntraj.SampleRate = 50;\n"
+        "imu.Gyroscope = gyroparams('BiasInstability', 1e-3);\n"
+    )
+    cfg = format_module("matlab").read(text)
+    assert cfg.rate == 250.0
+    assert cfg.notes == ()
+    assert format_module("matlab").read(text.replace("imu.SampleRate = 250;", "")).rate == 100.0
+
+
 # --- round trips --------------------------------------------------------------------------
 ROUND_TRIP = {
     "gz-sdf": [White(N=1e-3), TurnOnBias(sigma=2e-3), GaussMarkov(sigma=1e-4, tau_c=50.0)],
@@ -180,7 +380,7 @@ ROUND_TRIP = {
     "orbslam3": [White(N=1e-3), RateRandomWalk(K=2e-5)],
     "vins": [White(N=1e-3), RateRandomWalk(K=2e-5)],
     "airsim": [White(N=1e-3), RateRandomWalk(K=2e-5)],
-    "matlab": [White(N=1e-3), Flicker(B=1e-4), RateRandomWalk(K=2e-5)],
+    "matlab": [White(N=1e-3), GaussMarkov(sigma=1e-4, tau_c=50.0), RateRandomWalk(K=2e-5)],
     "gnss-ins-sim": [White(N=1e-3), GaussMarkov(sigma=1e-4, tau_c=50.0)],
     "allanite": [White(N=1e-3), Quantization(Q=1e-5), Flicker(B=1e-4)],
     "gazebo-classic": [White(N=1e-3), TurnOnBias(sigma=2e-3)],
@@ -322,16 +522,21 @@ def test_gazebo_classic_ignores_the_dynamic_bias():
 
 def test_matlab_script_vectors_and_property_assignments():
     text = (
-        "g = gyroparams('NoiseDensity', [1e-3 1e-3 2e-3], ...\n"
+        "g = gyroparams('NoiseDensity', [1e-3 1e-3 2e-3], ...  % per axis\n"
         "    'RandomWalk', 2e-5);  % comment\n"
         "g.BiasInstability = 1e-4;\n"
+        'g.NoiseType = "single-sided";\n'
         "a = accelparams('NoiseDensity', 3e-3, 'ConstantBias', [0.1 0.1 0.1]);\n"
+        "a.BiasInstabilityCoefficients.Denominator = [1 -0.9];\n"
+        "a.BiasInstability = 2e-3;\n"
     )
-    cfg = format_module("matlab").read(text)
-    assert [t.type for t in cfg.model("gyro").terms] == ["white", "flicker", "rrw"]
-    assert cfg.model("gyro").terms[0].N == 1e-3
+    cfg = format_module("matlab").read(text, rate=50.0)
+    assert [t.type for t in cfg.model("gyro").terms] == ["white", "markov", "rrw"]
+    assert cfg.model("gyro").terms[0].N == 1e-3  # single-sided
     assert any("differs between axes" in n for n in cfg.notes)
-    assert cfg.model("accel").terms[0].N == 3e-3
+    accel = cfg.model("accel").terms
+    assert math.isclose(accel[0].N, 3e-3 / math.sqrt(2.0))  # double-sided (default)
+    assert math.isclose(accel[1].tau_c, -0.02 / math.log(0.9))
     assert cfg.offsets["accel"] == 0.1
 
 
@@ -357,7 +562,7 @@ def _random_terms(fmt: str, rng: np.random.Generator) -> list:
         "gazebo-classic": [n, on],
         "px4-plugin": [n, gm, on],
         "gnss-ins-sim": [n, gm],
-        "matlab": [n, b, k],
+        "matlab": [n, gm, k],
         "allanite": [n, b, k, gm],
     }.get(fmt, [n, k])
 

@@ -50,26 +50,24 @@ def _gyro_config(model: NoiseModel, rate: float | None = None) -> ImuConfig:
 
 
 def matlab_gyroparams(model: NoiseModel) -> dict[str, Any]:
-    """MATLAB ``gyroparams`` fields of ``model`` in SI units.
+    """MATLAB ``gyroparams`` fields of ``model`` in SI units (imuSensor at 100 Hz).
 
     Returns
     -------
     dict
-        ``{"NoiseDensity": N, "BiasInstability": B, "RandomWalk": K, "units": {...},
-        "not_exported": [what was dropped or projected]}``, values in rad-based SI units.
+        ``{"NoiseDensity": ..., "BiasInstability": ..., "RandomWalk": ..., "NoiseType":
+        "single-sided", "BiasInstabilityCoefficients": MATLAB text, "units": {...},
+        "not_exported": [what was dropped or projected]}``; the bias instability is the
+        driving std of imuSensor's first-order filter (see :mod:`allanite.formats.matlab`).
     """
-    config = _gyro_config(model)
-    written = matlab.write(config)
-    back = matlab.read(written.text).model("gyro")
-    values = {"NoiseDensity": 0.0, "BiasInstability": 0.0, "RandomWalk": 0.0}
-    for field, kind in matlab.FIELDS.items():
-        found = back.terms_of_type(kind)
-        if found:
-            values[field] = float(found[0].values()[found[0].params[0].name])
+    table, dropped, projections = matlab.fields(_gyro_config(model))
+    gyro = table["gyro"]
     return {
-        **values,
+        **{key: float(gyro[key]) for key in matlab.FIELDS},
+        "NoiseType": "single-sided",
+        "BiasInstabilityCoefficients": gyro.get(matlab.COEFFICIENTS, ""),
         "units": dict(MATLAB_UNITS),
-        "not_exported": written.dropped + written.projections,
+        "not_exported": dropped + projections,
     }
 
 
