@@ -15,6 +15,16 @@ by chance, taken from replicates of the simulated sensor:
 Tail probabilities of the scalar statistics built on these residuals come from distributions
 fitted to the null values (scaled chi-square for quadratic forms, Gumbel for maxima), so
 p-values below ``1/n`` remain meaningful.
+
+Long records (cost that does not grow with ``n_mc x N``)
+--------------------------------------------------------
+A feature that is a mean over ``k`` nearly independent pieces (Welch segments, first
+differences) has a null residual whose variance scales as ``1/k``; the null of a record of
+``N`` samples is then the null of shorter replicates (``k_s`` pieces) scaled by
+``sqrt(k_s / k)`` (:func:`rescaled`). The mean of the log of such a mean carries the bias
+``-var/2`` (delta method), so the reference moves by ``(var_s - var_N) / 2``. A maximum over
+``N`` samples is the maximum over ``N / N_s`` independent short records: for a Gumbel law with
+scale ``beta`` the location moves by ``beta ln(N / N_s)`` (max-stability, :func:`gumbel_scale`).
 """
 
 from __future__ import annotations
@@ -25,7 +35,16 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import stats
 
-__all__ = ["NullEnsemble", "chi2_like_sf", "empirical_sf", "gumbel_isf", "gumbel_sf", "runs"]
+__all__ = [
+    "NullEnsemble",
+    "chi2_like_sf",
+    "empirical_sf",
+    "gumbel_isf",
+    "gumbel_scale",
+    "gumbel_sf",
+    "rescaled",
+    "runs",
+]
 
 Features = dict[str, NDArray[np.float64]]
 
@@ -43,11 +62,15 @@ class NullEnsemble:
     real_scale : float
         Variance factor of the real residual relative to one null residual (1 for both kinds;
         kept for sources whose reference is averaged over several simulated records).
+    exact_tau : bool
+        The tau residuals are draws from a known law
+        (:func:`allanite.diagnosis.tau_view.gaussian_tau_null`), not replicates.
     """
 
     ref: Features
     null: dict[str, NDArray[np.float64]]
     real_scale: float
+    exact_tau: bool = False
 
     @property
     def n_null(self) -> int:
@@ -86,6 +109,44 @@ class NullEnsemble:
     def residual(self, real: Features, name: str) -> NDArray[np.float64]:
         """Real residual of one feature, scaled to the variance of a null residual."""
         return np.asarray((real[name] - self.ref[name]) / np.sqrt(self.real_scale))
+
+
+def rescaled(
+    ens: NullEnsemble, name: str, ratio: float, *, log_mean: bool, pool: bool = False
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Reference and null residuals of ``name`` for a record with ``1 / ratio`` times the pieces.
+
+    ``ens`` is the leave-one-out null of ``n`` shorter replicates (residual variance
+    ``s^2 n / (n - 1)``). The real record's residual against the replicates' mean has the
+    variance ``s^2 (ratio + 1/n)``: its own (``1/k`` scaling) plus the reference's; the null
+    residuals are scaled to it. With ``pool`` the feature has one expected value for all its
+    entries (the windows of a stationary record): the reference is the mean over entries and
+    replicates and its error is negligible. With ``log_mean`` (the feature is the log of a
+    mean) the reference moves by ``var (1 - ratio) / 2``, the change of the log-of-mean bias
+    ``-var/2``.
+    """
+    if not 0.0 < ratio <= 1.0:
+        raise ValueError(f"ratio of piece counts must lie in (0, 1], got {ratio}")
+    null = ens.null[name]
+    n = null.shape[0]
+    ref = ens.ref[name]
+    var = null.var(axis=0, ddof=1) * (n - 1.0) / n  # of one replicate's feature
+    if pool:
+        mean = float(np.mean(ref))
+        resid = (null * (n - 1.0) / n + ref) - mean  # replicate minus the pooled mean
+        ref = np.full_like(ref, mean)
+        scale = np.sqrt(ratio)
+    else:
+        resid = null
+        scale = np.sqrt((ratio + 1.0 / n) * (n - 1.0) / n)
+    if log_mean:
+        ref = ref + 0.5 * var * (1.0 - ratio)
+    return np.asarray(ref, dtype=np.float64), np.asarray(resid * scale, dtype=np.float64)
+
+
+def gumbel_scale(null: NDArray[np.float64]) -> float:
+    """Scale ``beta = s sqrt(6) / pi`` of the moment-matched Gumbel law of a maximum."""
+    return float(np.std(null, ddof=1)) * np.sqrt(6.0) / np.pi
 
 
 def empirical_sf(value: float, null: NDArray[np.float64]) -> float:

@@ -49,6 +49,7 @@ __all__ = [
     "TimePlan",
     "TimeView",
     "added_level_variance",
+    "kurtosis_blocks",
     "time_features",
     "time_plan",
     "time_view",
@@ -94,8 +95,16 @@ def _kurtosis(v: NDArray[np.float64]) -> float:
     return float(np.mean(v**4) / (s2 * s2) - 3.0) if s2 > 0 else 0.0
 
 
-def time_features(x: NDArray[np.float64], plan: TimePlan) -> dict[str, NDArray[np.float64]]:
-    """Per-window and record-wide features of a rate record."""
+def time_features(
+    x: NDArray[np.float64], plan: TimePlan, *, kurt_blocks: tuple[int, ...] | None = None
+) -> dict[str, NDArray[np.float64]]:
+    """Per-window and record-wide features of a rate record.
+
+    ``kurt_blocks`` overrides the block sizes of ``kurt_lf`` (default
+    :func:`kurtosis_blocks`; a decimated replicate uses the same block durations).
+    """
+    if kurt_blocks is None:
+        kurt_blocks = kurtosis_blocks(plan)
     w, length, m = plan.n_windows, plan.length, plan.m
     used = x[: w * length].reshape(w, length)
     means = used.mean(axis=1)
@@ -113,11 +122,11 @@ def time_features(x: NDArray[np.float64], plan: TimePlan) -> dict[str, NDArray[n
         "dyn": dyn,
         "spike": np.array([float(np.max(np.abs(hp))) / _robust_spread(hp)]),
         "kurt_hf": np.array([_kurtosis(dall)]),
-        "kurt_lf": np.array([_block_kurtosis(used, b) for b in _kurtosis_blocks(plan)]),
+        "kurt_lf": np.array([_block_kurtosis(used, b) for b in kurt_blocks]),
     }
 
 
-def _kurtosis_blocks(plan: TimePlan) -> tuple[int, ...]:
+def kurtosis_blocks(plan: TimePlan) -> tuple[int, ...]:
     """Block sizes of the low-frequency kurtosis: 8 samples, ``L/16`` and ``L/4``."""
     return tuple(sorted({8, plan.m, max(plan.length // 4, 2)}))
 
