@@ -24,11 +24,11 @@ from pathlib import Path
 
 import numpy as np
 
-from allanite.diagnosis.analysis import Plan, analyze, ensemble, record_features
+from allanite.diagnosis.analysis import Plan, ensemble, record_features
+from allanite.diagnosis.frequency_view import frequency_view
 from allanite.diagnosis.inputs import SimSource
 from allanite.diagnosis.scaled_null import uses_scaled_null
 from allanite.diagnosis.tau_view import build_tau_model, tau_view
-from allanite.diagnosis.frequency_view import frequency_view
 from allanite.diagnosis.time_view import time_view
 from allanite.model import NoiseModel
 from allanite.terms import TERM_TYPES

@@ -42,6 +42,7 @@ __all__ = [
     "gumbel_isf",
     "gumbel_scale",
     "gumbel_sf",
+    "max_shift",
     "rescaled",
     "runs",
 ]
@@ -147,6 +148,18 @@ def rescaled(
 def gumbel_scale(null: NDArray[np.float64]) -> float:
     """Scale ``beta = s sqrt(6) / pi`` of the moment-matched Gumbel law of a maximum."""
     return float(np.std(null, ddof=1)) * np.sqrt(6.0) / np.pi
+
+
+def max_shift(null: NDArray[np.float64], k: float) -> float:
+    """Location shift ``beta ln k`` of a maximum taken over ``k`` times as many values.
+
+    The maximum of ``k`` independent Gumbel(``mu``, ``beta``) variables is Gumbel(``mu + beta
+    ln k``, ``beta``) (max-stability). For maxima of lighter-than-exponential tails (Gaussian
+    samples) the true shift and scale are smaller, so the extrapolated test is conservative.
+    """
+    if k < 1.0:
+        raise ValueError(f"k must be >= 1 (a maximum over more values), got {k}")
+    return gumbel_scale(null) * float(np.log(k))
 
 
 def empirical_sf(value: float, null: NDArray[np.float64]) -> float:

@@ -37,7 +37,7 @@ from numpy.typing import NDArray
 
 from allanite.diagnosis.frequency_view import frequency_features
 from allanite.diagnosis.inputs import simulate_model
-from allanite.diagnosis.null import NullEnsemble, gumbel_scale, rescaled
+from allanite.diagnosis.null import NullEnsemble, max_shift, rescaled
 from allanite.diagnosis.tau_view import gaussian_tau_null
 from allanite.diagnosis.time_view import TimePlan, kurtosis_blocks, time_features, time_plan
 
@@ -183,7 +183,9 @@ def scaled_ensemble(
     ref["hf"], null["hf"] = rescaled(
         ens_s, "hf", (plan_s.length - 1) / (plan.length - 1), log_mean=True, pool=True
     )
-    ref["kurt_hf"], null["kurt_hf"] = rescaled(ens_s, "kurt_hf", (n_s - 1) / (n - 1), log_mean=False)
+    ref["kurt_hf"], null["kurt_hf"] = rescaled(
+        ens_s, "kurt_hf", (n_s - 1) / (n - 1), log_mean=False
+    )
     # the excess kurtosis of k Gaussian values has mean -6 / (k + 1)
     ref["kurt_hf"] = ref["kurt_hf"] + 6.0 / n_s - 6.0 / n
     k8 = (plan_s.length // blocks[0]) / (plan.length // blocks[0])
@@ -191,7 +193,7 @@ def scaled_ensemble(
     ref["kurt_lf"] = np.concatenate([ref_k8, ens_d.ref["kurt_lf"]])
     null["kurt_lf"] = np.concatenate([null_k8, ens_d.null["kurt_lf"]], axis=1)
     spike = ens_s.null["spike"][:, 0]
-    ref["spike"] = ens_s.ref["spike"] + gumbel_scale(spike) * np.log(n / n_s)
+    ref["spike"] = ens_s.ref["spike"] + max_shift(spike, n / n_s)
     null["spike"] = ens_s.null["spike"]
     for name in ("level", "jump", "dyn"):
         ref[name], null[name] = ens_d.ref[name], ens_d.null[name]

@@ -246,11 +246,18 @@ def added_level_variance(
 
     Monte Carlo over ``n_rep`` records of ``n`` samples of the term on its own (fixed seed, so
     the diagnosis stays reproducible), laid out like the time view's ``n_windows`` windows.
+    Window means do not depend on the sampling rate for the rate-free terms of
+    :func:`allanite.diagnosis.scaled_null.decimation`, so long records are simulated over the
+    same duration at ``fs / D``.
     """
+    from allanite.diagnosis.scaled_null import decimation
     from allanite.model import NoiseModel
 
-    x = NoiseModel((term,)).simulate(n, fs, channels=n_rep, seed=seed, allow_aliasing=True)
-    length = n // n_windows
+    model = NoiseModel((term,))
+    d = decimation(model, n, fs) if n > 4 * 2**16 else 1
+    n_d = n // d
+    x = model.simulate(n_d, fs / d, channels=n_rep, seed=seed, allow_aliasing=True)
+    length = (n // n_windows) // d
     means = x[: n_windows * length].reshape(n_windows, length, n_rep).mean(axis=1)
     level = means - x.mean(axis=0)
     return np.asarray(np.mean(level * level, axis=1), dtype=np.float64)
