@@ -140,7 +140,11 @@ def analyze(
     """Run the three views on the rate record ``x`` (``progress`` reports the replicates)."""
     plan = Plan.for_length(x.size, source.fs)
     ens = ensemble(source, plan, n_mc, seed, progress, stage)
+    if progress is not None:
+        progress("features of the record", 0, 1)
     real = record_features(x, plan)
+    if progress is not None:
+        progress("features of the record", 1, 1)
     tau = plan.m / plan.fs
     tmodel = build_tau_model(
         real, ens, tau, 1.0 / plan.fs, ens.ref["avar_lin"], x.size / plan.fs, loo=not ens.exact_tau

@@ -165,7 +165,7 @@ def scaled_ensemble(
         return feats
 
     def coarse(x: NDArray[np.float64]) -> Features:
-        return time_features(x, plan_d, kurt_blocks=coarse_blocks)
+        return time_features(x, plan_d, kurt_blocks=coarse_blocks, sample_scale=False)
 
     total = 2 * n_mc
     ens_s = NullEnsemble.from_model(
