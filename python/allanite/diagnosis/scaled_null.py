@@ -11,7 +11,9 @@ than :data:`FULL_REPLICATES_MAX` samples, each view gets a null whose cost does 
   ``kurt_hf``, ``kurt_lf`` over 8 samples): ``n_mc`` *short* replicates at the real rate, of
   :data:`SHORT_LENGTH` samples, with the same Welch segment length and 32 windows; a feature
   that is a mean over ``k`` pieces (segments, differences) has its null residuals scaled by
-  ``sqrt(k_short / k)`` and its log-of-mean bias moved (:func:`allanite.diagnosis.null.rescaled`);
+  ``sqrt(k_short / k)`` and its log-of-mean bias moved (:func:`allanite.diagnosis.null.rescaled`;
+  the Welch log PSD is mapped quantile by quantile between log-gamma laws, which also moves
+  its skewness: :func:`allanite.diagnosis.null.rescaled_log_gamma`);
   the spike maximum over ``N`` samples is the maximum of ``N / N_short`` short records (Gumbel
   location ``+ beta ln(N / N_short)``);
 * window-scale statistics of the time view (``level``, ``jump``, ``dyn``, ``kurt_lf`` over
@@ -37,7 +39,7 @@ from numpy.typing import NDArray
 
 from allanite.diagnosis.frequency_view import frequency_features
 from allanite.diagnosis.inputs import simulate_model
-from allanite.diagnosis.null import NullEnsemble, max_shift, rescaled
+from allanite.diagnosis.null import NullEnsemble, max_shift, rescaled, rescaled_log_gamma
 from allanite.diagnosis.tau_view import gaussian_tau_null
 from allanite.diagnosis.time_view import TimePlan, kurtosis_blocks, time_features, time_plan
 
@@ -179,7 +181,7 @@ def scaled_ensemble(
     step = nperseg // 2
     segs = ((n_s - nperseg) // step + 1) / ((n - nperseg) // step + 1)
     for name in ("log_psd", "log_line_psd"):
-        ref[name], null[name] = rescaled(ens_s, name, segs, log_mean=True)
+        ref[name], null[name] = rescaled_log_gamma(ens_s, name, segs)
     ref["hf"], null["hf"] = rescaled(
         ens_s, "hf", (plan_s.length - 1) / (plan.length - 1), log_mean=True, pool=True
     )
