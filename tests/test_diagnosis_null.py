@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from allanite.diagnosis.null import NullEnsemble, max_shift, rescaled
+from allanite.diagnosis.null import NullEnsemble, max_shift, rescaled, rescaled_log_gamma
 from allanite.diagnosis.scaled_null import (
     COARSE_LENGTH,
     FULL_REPLICATES_MAX,
@@ -136,3 +136,29 @@ def test_window_statistics_of_decimated_replicates_match_the_real_rate() -> None
         b = np.stack([x[name] for x in c])
         ratio = a.var(axis=0, ddof=1).mean() / b.var(axis=0, ddof=1).mean()
         assert lo < ratio < hi, (name, ratio)
+
+
+def test_rescaled_log_gamma_moves_mean_spread_and_skewness() -> None:
+    """Log of a mean of exponentials: the mapped short null has the long law's three moments."""
+    rng = np.random.default_rng(13)
+    k_s, k, n_s, n_l, bins = 8, 128, 400, 400, 40
+
+    def feature(pieces: int, count: int) -> np.ndarray:
+        return np.log(rng.exponential(size=(count, pieces, bins)).mean(axis=1))
+
+    ens = NullEnsemble.from_model([{"f": f} for f in feature(k_s, n_s)])
+    ref, null = rescaled_log_gamma(ens, "f", k_s / k)
+    long = feature(k, n_l)
+    # mean (pooled over bins): the short mean is biased by ~(1/8 - 1/128)/2 = 0.06 against it
+    se = np.sqrt(long.var(ddof=1) / (n_l * bins) + ens.null["f"].var(ddof=1) / (n_s * bins))
+    assert abs(long.mean() - ref.mean()) < 3.5 * se
+    # spread: the long spread plus the reference error of n_s short replicates
+    expected = np.sqrt(long.var(axis=0, ddof=1).mean() + 1.0 / (k_s * n_s))
+    assert null.std(axis=0, ddof=1).mean() == pytest.approx(expected, rel=0.03)
+    # skewness ~ -1/sqrt(k): pooled over bins, within 3.5 standard errors (sqrt(6 / count));
+    # plain scaling keeps the short skewness (about -0.37) and fails
+    count = null.size
+    skew_null = stats.skew(null.ravel())
+    skew_long = stats.skew((long - long.mean(axis=0)).ravel())
+    assert abs(skew_null - skew_long) < 3.5 * np.sqrt(6.0 / count + 6.0 / long.size)
+    assert abs(stats.skew(ens.null["f"].ravel()) - skew_long) > 3.5 * np.sqrt(6.0 / count)
