@@ -23,6 +23,7 @@ from allanite.diagnosis.frequency_view import (
 )
 from allanite.diagnosis.inputs import SimSource
 from allanite.diagnosis.null import NullEnsemble
+from allanite.diagnosis.scaled_null import scaled_ensemble, uses_scaled_null
 from allanite.diagnosis.tau_view import (
     TauModel,
     TauView,
@@ -107,7 +108,16 @@ def ensemble(
     progress: Progress | None = None,
     stage: str = "null replicates",
 ) -> NullEnsemble:
-    """Null ensemble of ``n_mc`` replicates (``2 n_mc`` for a simulated record)."""
+    """Null ensemble of ``n_mc`` replicates (``2 n_mc`` for a simulated record).
+
+    A long record against a model gets the null of short and decimated replicates and the
+    exact tau covariance instead (:mod:`allanite.diagnosis.scaled_null`).
+    """
+    if source.kind == "model" and uses_scaled_null(source.model, plan.n):
+        return scaled_ensemble(
+            source.model, plan.n, plan.fs, plan.m, plan.nperseg, plan.time, n_mc, seed,
+            progress, stage,
+        )  # fmt: skip
     if source.kind == "model":
         reps = _features_of(source.replicates(plan.n, n_mc, seed), plan, n_mc, progress, stage)
         return NullEnsemble.from_model(reps)
@@ -130,9 +140,15 @@ def analyze(
     """Run the three views on the rate record ``x`` (``progress`` reports the replicates)."""
     plan = Plan.for_length(x.size, source.fs)
     ens = ensemble(source, plan, n_mc, seed, progress, stage)
+    if progress is not None:
+        progress("features of the record", 0, 1)
     real = record_features(x, plan)
+    if progress is not None:
+        progress("features of the record", 1, 1)
     tau = plan.m / plan.fs
-    tmodel = build_tau_model(real, ens, tau, 1.0 / plan.fs, ens.ref["avar_lin"], x.size / plan.fs)
+    tmodel = build_tau_model(
+        real, ens, tau, 1.0 / plan.fs, ens.ref["avar_lin"], x.size / plan.fs, loo=not ens.exact_tau
+    )
     # localisation thresholds share the Bonferroni budget of the global test, so a reported
     # band, line or segment implies (approximately) a significant global gap
     view_alpha = alpha / 3.0

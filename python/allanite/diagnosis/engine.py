@@ -102,7 +102,10 @@ def diagnose(
     detector) and time (sliding-window scan for level jumps, warm-up, bursts, spikes and
     non-Gaussian amplitudes). When the combined test is significant, every candidate effect
     (a :class:`~allanite.terms.Term` type, or ``rescale:<type>`` of a model term) is fitted on
-    top of the simulated sensor and ranked; see docs/diagnosis.md.
+    top of the simulated sensor and ranked; see docs/diagnosis.md. A record longer than 2^18
+    samples against a model needs no full-length replicate: the tau view's null comes from the
+    model's exact AVAR covariance, the other views from short and decimated replicates
+    (:mod:`allanite.diagnosis.scaled_null`), so the cost hardly grows with the record.
 
     The gap statistic is :math:`G = \max(0, T - T_0)` (``T0`` the null mean of ``T``) and the
     shrinkage of an effect ``1 - G_after / G_before``.

@@ -17,7 +17,14 @@ from allanite.diagnosis.candidates import Candidate
 from allanite.diagnosis.inputs import SimSource
 from allanite.diagnosis.null import NullEnsemble
 from allanite.diagnosis.result import Holdout
-from allanite.diagnosis.tau_view import TauModel, build_tau_model, octave_factors, tau_features
+from allanite.diagnosis.scaled_null import uses_scaled_null
+from allanite.diagnosis.tau_view import (
+    TauModel,
+    build_tau_model,
+    gaussian_tau_null,
+    octave_factors,
+    tau_features,
+)
 
 __all__ = ["holdout_check", "holdout_set", "tau_model_for"]
 
@@ -31,6 +38,16 @@ def tau_model_for(x: NDArray[np.float64], source: SimSource, *, n_mc: int, seed:
         la = tau_features(r, fs, m)
         return {"log_avar": la, "avar_lin": np.exp(la)}
 
+    if source.kind == "model" and uses_scaled_null(source.model, x.size):
+        # a long record: the exact Gaussian AVAR covariance, no replicate
+        ref, avar, draws = gaussian_tau_null(
+            source.model, m, fs, x.size, n_draw=max(4000, 20 * n_mc), seed=seed
+        )
+        ens = NullEnsemble(
+            ref={"log_avar": ref, "avar_lin": avar}, null={"log_avar": draws}, real_scale=1.0,
+            exact_tau=True,
+        )  # fmt: skip
+        return build_tau_model(feats(x), ens, m / fs, 1.0 / fs, avar, x.size / fs, loo=False)
     if source.kind == "model":
         ens = NullEnsemble.from_model([feats(r) for r in source.replicates(x.size, n_mc, seed)])
     else:

@@ -15,6 +15,16 @@ by chance, taken from replicates of the simulated sensor:
 Tail probabilities of the scalar statistics built on these residuals come from distributions
 fitted to the null values (scaled chi-square for quadratic forms, Gumbel for maxima), so
 p-values below ``1/n`` remain meaningful.
+
+Long records (cost that does not grow with ``n_mc x N``)
+--------------------------------------------------------
+A feature that is a mean over ``k`` nearly independent pieces (Welch segments, first
+differences) has a null residual whose variance scales as ``1/k``; the null of a record of
+``N`` samples is then the null of shorter replicates (``k_s`` pieces) scaled by
+``sqrt(k_s / k)`` (:func:`rescaled`). The mean of the log of such a mean carries the bias
+``-var/2`` (delta method), so the reference moves by ``(var_s - var_N) / 2``. A maximum over
+``N`` samples is the maximum over ``N / N_s`` independent short records: for a Gumbel law with
+scale ``beta`` the location moves by ``beta ln(N / N_s)`` (max-stability, :func:`gumbel_scale`).
 """
 
 from __future__ import annotations
@@ -23,9 +33,20 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy import stats
+from scipy import special, stats
 
-__all__ = ["NullEnsemble", "chi2_like_sf", "empirical_sf", "gumbel_isf", "gumbel_sf", "runs"]
+__all__ = [
+    "NullEnsemble",
+    "chi2_like_sf",
+    "empirical_sf",
+    "gumbel_isf",
+    "gumbel_scale",
+    "gumbel_sf",
+    "max_shift",
+    "rescaled",
+    "rescaled_log_gamma",
+    "runs",
+]
 
 Features = dict[str, NDArray[np.float64]]
 
@@ -43,11 +64,15 @@ class NullEnsemble:
     real_scale : float
         Variance factor of the real residual relative to one null residual (1 for both kinds;
         kept for sources whose reference is averaged over several simulated records).
+    exact_tau : bool
+        The tau residuals are draws from a known law
+        (:func:`allanite.diagnosis.tau_view.gaussian_tau_null`), not replicates.
     """
 
     ref: Features
     null: dict[str, NDArray[np.float64]]
     real_scale: float
+    exact_tau: bool = False
 
     @property
     def n_null(self) -> int:
@@ -86,6 +111,101 @@ class NullEnsemble:
     def residual(self, real: Features, name: str) -> NDArray[np.float64]:
         """Real residual of one feature, scaled to the variance of a null residual."""
         return np.asarray((real[name] - self.ref[name]) / np.sqrt(self.real_scale))
+
+
+def _log_gamma_shape(var: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Shape ``a`` of a unit-mean gamma variable whose log has variance ``var``.
+
+    Solves ``psi'(a) = var`` (trigamma) by Newton steps from ``a ~ 1/var + 1/2``.
+    """
+    v = np.maximum(np.asarray(var, dtype=np.float64), 1e-12)
+    a = (1.0 + np.sqrt(1.0 + 2.0 * v)) / (2.0 * v)
+    for _ in range(6):
+        a = np.maximum(a - (special.polygamma(1, a) - v) / special.polygamma(2, a), 1e-3)
+    return np.asarray(a, dtype=np.float64)
+
+
+def rescaled_log_gamma(
+    ens: NullEnsemble, name: str, ratio: float
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Like :func:`rescaled` for the log of a mean of chi-square pieces (a Welch PSD).
+
+    The log of a unit-mean gamma variable with shape ``a`` (``a`` ~ the number of averaged
+    pieces) has the mean ``psi(a) - log a`` and a skewness ``~ -1/sqrt(a)`` that shrinks as
+    pieces are added; scaling alone would keep the short record's light upper tail and make the
+    line detector (a maximum over bins) anti-conservative. Each null residual is therefore
+    mapped through its quantile: ``u = F_a(x)`` under the shape ``a_s`` of the short replicates
+    (from their variance, ``psi'(a_s) = var``), ``x_N = F^{-1}_{a_N}(u)`` with ``a_N = a_s /
+    ratio``; the result is scaled by ``sqrt(1 + var_s / (n var_N))`` for the error of the
+    reference (the short replicates' mean), and the reference moves from the short law's mean
+    to the long one's.
+    """
+    if not 0.0 < ratio <= 1.0:
+        raise ValueError(f"ratio of piece counts must lie in (0, 1], got {ratio}")
+    null = ens.null[name]
+    n = null.shape[0]
+    var_s = null.var(axis=0, ddof=1) * (n - 1.0) / n
+    a_s = _log_gamma_shape(var_s)
+    a_n = a_s / ratio
+    mean_s = special.digamma(a_s) - np.log(a_s)
+    mean_n = special.digamma(a_n) - np.log(a_n)
+    u = special.gammainc(a_s, a_s * np.exp(null * (n - 1.0) / n + mean_s))
+    u = np.clip(u, 1e-300, 1.0 - 1e-16)
+    mapped = np.log(special.gammaincinv(a_n, u) / a_n) - mean_n
+    var_n = special.polygamma(1, a_n)
+    mapped = mapped * np.sqrt(1.0 + var_s / (n * var_n))
+    ref = ens.ref[name] - mean_s + mean_n
+    return np.asarray(ref, dtype=np.float64), np.asarray(mapped, dtype=np.float64)
+
+
+def rescaled(
+    ens: NullEnsemble, name: str, ratio: float, *, log_mean: bool, pool: bool = False
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Reference and null residuals of ``name`` for a record with ``1 / ratio`` times the pieces.
+
+    ``ens`` is the leave-one-out null of ``n`` shorter replicates (residual variance
+    ``s^2 n / (n - 1)``). The real record's residual against the replicates' mean has the
+    variance ``s^2 (ratio + 1/n)``: its own (``1/k`` scaling) plus the reference's; the null
+    residuals are scaled to it. With ``pool`` the feature has one expected value for all its
+    entries (the windows of a stationary record): the reference is the mean over entries and
+    replicates and its error is negligible. With ``log_mean`` (the feature is the log of a
+    mean) the reference moves by ``var (1 - ratio) / 2``, the change of the log-of-mean bias
+    ``-var/2``.
+    """
+    if not 0.0 < ratio <= 1.0:
+        raise ValueError(f"ratio of piece counts must lie in (0, 1], got {ratio}")
+    null = ens.null[name]
+    n = null.shape[0]
+    ref = ens.ref[name]
+    var = null.var(axis=0, ddof=1) * (n - 1.0) / n  # of one replicate's feature
+    if pool:
+        mean = float(np.mean(ref))
+        resid = (null * (n - 1.0) / n + ref) - mean  # replicate minus the pooled mean
+        ref = np.full_like(ref, mean)
+        scale = np.sqrt(ratio)
+    else:
+        resid = null
+        scale = np.sqrt((ratio + 1.0 / n) * (n - 1.0) / n)
+    if log_mean:
+        ref = ref + 0.5 * var * (1.0 - ratio)
+    return np.asarray(ref, dtype=np.float64), np.asarray(resid * scale, dtype=np.float64)
+
+
+def gumbel_scale(null: NDArray[np.float64]) -> float:
+    """Scale ``beta = s sqrt(6) / pi`` of the moment-matched Gumbel law of a maximum."""
+    return float(np.std(null, ddof=1)) * np.sqrt(6.0) / np.pi
+
+
+def max_shift(null: NDArray[np.float64], k: float) -> float:
+    """Location shift ``beta ln k`` of a maximum taken over ``k`` times as many values.
+
+    The maximum of ``k`` independent Gumbel(``mu``, ``beta``) variables is Gumbel(``mu + beta
+    ln k``, ``beta``) (max-stability). For maxima of lighter-than-exponential tails (Gaussian
+    samples) the true shift and scale are smaller, so the extrapolated test is conservative.
+    """
+    if k < 1.0:
+        raise ValueError(f"k must be >= 1 (a maximum over more values), got {k}")
+    return gumbel_scale(null) * float(np.log(k))
 
 
 def empirical_sf(value: float, null: NDArray[np.float64]) -> float:

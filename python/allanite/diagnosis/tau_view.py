@@ -20,6 +20,20 @@ shrinkage of an added effect is ``1 - G_after / G_before``.
 Per-tau residuals ``z_i = r_i / sqrt(C_ii)`` are flagged with a simultaneous threshold (the
 ``1 - alpha`` quantile of ``max_i |z_i|`` under the null), and flagged runs become the tau bands.
 
+Null of a model: exact covariance instead of replicates
+-------------------------------------------------------
+When the simulated sensor is a model and the record is long, the null of the tau view needs no
+Monte Carlo record at all (:func:`gaussian_tau_null`): the mean Allan variance is the model's
+exact ``avar``, the covariance ``V`` of the overlapping estimates between taus is the model's
+Gaussian (Whittle) covariance :func:`allanite.fit.covariance.avar_covariance` (the fit's
+covariance, with quantization's fourth cumulant) plus the terms' non-Gaussian
+``avar_excess_variance`` on the diagonal. Each estimate is a scaled chi-square with
+``nu_i = 2 mu_i^2 / V_ii`` degrees of freedom, so its log has mean
+``log mu_i + psi(nu_i/2) - log(nu_i/2)``; null draws of the log-AVAR vector are a Gaussian
+copula with the correlation of ``V`` and these marginals. ``T``, the per-tau thresholds and
+the band come from the draws exactly as from replicates (calibrated in
+``benchmarks/calibrate_diagnosis_null.py``).
+
 References
 ----------
 D. W. Allan, "Statistics of atomic frequency standards", Proc. IEEE 54 (1966) 221-230.
@@ -34,11 +48,12 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy import special, stats
 
 from allanite import _core
 from allanite.diagnosis.null import NullEnsemble, chi2_like_sf, gumbel_isf, runs
 
-__all__ = ["TauModel", "TauView", "octave_factors", "tau_features"]
+__all__ = ["TauModel", "TauView", "gaussian_tau_null", "octave_factors", "tau_features"]
 
 #: shrinkage of the Monte Carlo covariance toward its diagonal (stabilises the inverse)
 COV_SHRINK = 0.05
@@ -59,6 +74,65 @@ def tau_features(x: NDArray[np.float64], fs: float, m: NDArray[np.int64]) -> NDA
     phase = _core.phase(x.reshape(-1, 1), "rate")
     var = np.asarray(_core.variance(phase, m, "overlapping", 1))[:, 0]
     return np.asarray(np.log(np.maximum(var, 1e-300)), dtype=np.float64)
+
+
+def gaussian_tau_null(
+    model: Any, m: NDArray[np.int64], fs: float, n: int, *, n_draw: int, seed: int
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """Reference log AVAR, mean AVAR and ``n_draw`` null residual draws from the model alone.
+
+    See the module docstring (*Null of a model*). The cost does not depend on ``n``.
+
+    Parameters
+    ----------
+    model : NoiseModel
+        The simulated sensor.
+    m : numpy.ndarray
+        Averaging factors.
+    fs : float
+        Sampling frequency in Hz.
+    n : int
+        Record length in samples.
+    n_draw : int
+        Number of null draws.
+    seed : int
+        Seed of the draws.
+
+    Returns
+    -------
+    ref : numpy.ndarray
+        Mean log AVAR per tau.
+    avar : numpy.ndarray
+        Mean AVAR per tau (the model's exact ``avar``).
+    null : numpy.ndarray
+        ``(n_draw, len(m))`` null residuals of the log AVAR (draw minus its mean).
+    """
+    from allanite.fit.covariance import avar_covariance
+
+    dt = 1.0 / fs
+    tau = np.asarray(m, dtype=np.float64) * dt
+    mu = np.asarray(model.avar(tau, dt), dtype=np.float64)
+    if np.any(mu <= 0):
+        raise ValueError("the model's Allan variance is not positive at every tau; add noise terms")
+    cov = np.array(avar_covariance(model, m, dt, n), dtype=np.float64)
+    cov[np.diag_indices_from(cov)] += np.asarray(model.avar_excess_variance(tau, dt, n))
+    var = np.maximum(np.diag(cov), 1e-300)
+    corr = cov / np.sqrt(np.outer(var, var))
+    corr = 0.5 * (corr + corr.T)
+    np.fill_diagonal(corr, 1.0)
+    w, v = np.linalg.eigh(corr)  # nearest positive semi-definite correlation (clip eigenvalues)
+    root = v * np.sqrt(np.maximum(w, 0.0))
+    nu = 2.0 * mu * mu / var
+    rng = np.random.default_rng(seed)
+    z = rng.standard_normal((n_draw, tau.size)) @ root.T
+    z /= np.sqrt(np.maximum(np.sum(root * root, axis=1), 1e-300))
+    draws = np.log(stats.chi2.isf(stats.norm.sf(z), nu) / nu)
+    mean_log = special.digamma(nu / 2.0) - np.log(nu / 2.0)
+    return (
+        np.asarray(np.log(mu) + mean_log, dtype=np.float64),
+        mu,
+        np.asarray(draws - mean_log, dtype=np.float64),
+    )
 
 
 def _shrunk_inverse(null: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -198,17 +272,27 @@ def build_tau_model(
     dt: float,
     sim_avar: NDArray[np.float64],
     duration: float,
+    *,
+    loo: bool = True,
 ) -> TauModel:
-    """Build the :class:`TauModel` of a real record against the null ensemble."""
+    """Build the :class:`TauModel` of a real record against the null ensemble.
+
+    With ``loo`` (replicates) each null ``T`` uses the covariance of the other replicates,
+    like the real record, which is not part of the estimate either; without it (many draws
+    from a known law, :func:`gaussian_tau_null`) all draws share one covariance.
+    """
     null = ens.null["log_avar"]
     cov_inv = _shrunk_inverse(null)
     n = null.shape[0]
-    null_t = np.empty(n)
-    for j in range(n):
-        keep = np.ones(n, dtype=bool)
-        keep[j] = False
-        inv_j = _shrunk_inverse(null[keep])
-        null_t[j] = float(null[j] @ inv_j @ null[j])
+    if loo:
+        null_t = np.empty(n)
+        for j in range(n):
+            keep = np.ones(n, dtype=bool)
+            keep[j] = False
+            inv_j = _shrunk_inverse(null[keep])
+            null_t[j] = float(null[j] @ inv_j @ null[j])
+    else:
+        null_t = np.einsum("ij,jk,ik->i", null, cov_inv, null)
     return TauModel(
         tau=tau,
         dt=dt,

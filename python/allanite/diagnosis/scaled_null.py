@@ -1,0 +1,206 @@
+r"""The null of a long record without full-length Monte Carlo replicates.
+
+The replicate null (:func:`allanite.diagnosis.analysis.ensemble`) simulates ``n_mc`` records
+of the real length ``N``: its cost grows with ``n_mc x N``. For a model and a record longer
+than :data:`FULL_REPLICATES_MAX` samples, each view gets a null whose cost does not depend on
+``N``:
+
+* tau view: no replicate at all, draws from the model's exact Gaussian AVAR covariance
+  (:func:`allanite.diagnosis.tau_view.gaussian_tau_null`);
+* frequency view and the sample-scale statistics of the time view (``hf``, ``spike``,
+  ``kurt_hf``, ``kurt_lf`` over 8 samples): ``n_mc`` *short* replicates at the real rate, of
+  :data:`SHORT_LENGTH` samples, with the same Welch segment length and 32 windows; a feature
+  that is a mean over ``k`` pieces (segments, differences) has its null residuals scaled by
+  ``sqrt(k_short / k)`` and its log-of-mean bias moved (:func:`allanite.diagnosis.null.rescaled`;
+  the Welch log PSD is mapped quantile by quantile between log-gamma laws, which also moves
+  its skewness: :func:`allanite.diagnosis.null.rescaled_log_gamma`);
+  the spike maximum over ``N`` samples is the maximum of ``N / N_short`` short records (Gumbel
+  location ``+ beta ln(N / N_short)``);
+* window-scale statistics of the time view (``level``, ``jump``, ``dyn``, ``kurt_lf`` over
+  ``L/16`` and ``L/4`` samples): ``n_mc`` *decimated* replicates, the model simulated over the
+  real duration at the rate ``fs / D`` (``N / D`` ~ :data:`COARSE_LENGTH` samples). Means over a
+  time ``tau`` of white, flicker and random-walk noise, angle quantization, ramps and slow
+  processes do not depend on the sampling rate once ``tau >> D / fs``; a term with a time
+  scale shorter than ``5 D / fs`` (a line, a fast Markov or telegraph process, short bursts)
+  lowers ``D`` until it is resolved, and spikes (whose block-mean contribution is ``D`` times
+  larger at the coarse rate) keep ``D = 1``.
+
+A model with a warm-up (a transient at the start, which a short replicate would show over a
+far larger share of its length) keeps the full-length replicate null.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from allanite.diagnosis.frequency_view import frequency_features
+from allanite.diagnosis.inputs import simulate_model
+from allanite.diagnosis.null import NullEnsemble, max_shift, rescaled, rescaled_log_gamma
+from allanite.diagnosis.tau_view import gaussian_tau_null
+from allanite.diagnosis.time_view import TimePlan, kurtosis_blocks, time_features, time_plan
+
+__all__ = [
+    "COARSE_LENGTH",
+    "FULL_REPLICATES_MAX",
+    "SHORT_LENGTH",
+    "decimation",
+    "scaled_ensemble",
+    "uses_scaled_null",
+]
+
+#: records up to this length keep the full-length replicate null (it is cheap there)
+FULL_REPLICATES_MAX = 2**18
+#: length of the short replicates at the real rate (63 Welch segments of 4096 samples)
+SHORT_LENGTH = 2**17
+#: target length of the decimated replicates (32 windows of 2048 samples)
+COARSE_LENGTH = 2**16
+#: effects tied to the start of the record: no short replicate can stand for them
+START_TERMS = ("warmup",)
+#: term types whose window-scale statistics do not depend on the sampling rate, with the
+#: parameter giving their shortest time scale in seconds (None: no time scale)
+RATE_FREE: dict[str, Callable[[Any], float | None]] = {
+    "white": lambda t: None,
+    "flicker": lambda t: None,
+    "rrw": lambda t: None,
+    "quantization": lambda t: None,
+    "ramp": lambda t: None,
+    "turn_on_bias": lambda t: None,
+    "bias_steps": lambda t: float(t.interval),
+    "markov": lambda t: float(t.tau_c),
+    "telegraph": lambda t: float(t.tau_c),
+    "white_bursts": lambda t: float(t.burst_s),
+    "warmup": lambda t: float(t.tau_w),
+    "sine": lambda t: 1.0 / float(t.frequency),
+    "lowpass_white": lambda t: 1.0 / float(t.bandwidth),
+}
+
+Features = dict[str, NDArray[np.float64]]
+Progress = Callable[[str, int, int], None]
+
+
+def uses_scaled_null(model: Any, n: int) -> bool:
+    """Whether a record of ``n`` samples against ``model`` gets the scaled null."""
+    if model is None or n <= FULL_REPLICATES_MAX:
+        return False
+    return not any(getattr(t, "type", "") in START_TERMS for t in model.terms)
+
+
+def decimation(model: Any, n: int, fs: float) -> int:
+    """Decimation factor ``D`` (a power of 2) of the window-scale replicates.
+
+    The largest ``D`` with ``N / D >= COARSE_LENGTH`` and ``D / fs`` at most a fifth of every
+    term's time scale; 1 for a term outside :data:`RATE_FREE`.
+    """
+    d = 1
+    while n // (2 * d) >= COARSE_LENGTH:
+        d *= 2
+    for term in model.terms:
+        scale_of = RATE_FREE.get(getattr(term, "type", ""))
+        if scale_of is None:
+            return 1
+        scale = scale_of(term)
+        if scale is not None:
+            while d > 1 and d / fs > scale / 5.0:
+                d //= 2
+    return d
+
+
+def _replicates(
+    model: Any,
+    n: int,
+    fs: float,
+    count: int,
+    seed: int,
+    features: Callable[[NDArray[np.float64]], Features],
+    progress: Progress | None,
+    stage: str,
+    done0: int,
+    total: int,
+) -> list[Features]:
+    out: list[Features] = []
+    batch = int(max(1, min(count, 2**22 // n)))
+    step = max(1, total // 10)
+    while len(out) < count:
+        k = min(batch, count - len(out))
+        block = simulate_model(model, n, fs, seed + len(out), channels=k)
+        for j in range(k):
+            out.append(features(np.ascontiguousarray(block[:, j])))
+            i = done0 + len(out)
+            if progress is not None and (i % step == 0 or i == total):
+                progress(stage, i, total)
+    return out
+
+
+def scaled_ensemble(
+    model: Any,
+    n: int,
+    fs: float,
+    m: NDArray[np.int64],
+    nperseg: int,
+    plan: TimePlan,
+    n_mc: int,
+    seed: int,
+    progress: Progress | None = None,
+    stage: str = "null replicates",
+) -> NullEnsemble:
+    """The null of a record of ``n`` samples from short and decimated replicates of ``model``.
+
+    Same feature names and meaning as the full-length replicate null (see the module
+    docstring); ``exact_tau`` is set, the tau residuals being draws from a known law.
+    """
+    n_s = SHORT_LENGTH
+    plan_s = time_plan(n_s)
+    d = decimation(model, n, fs)
+    n_d = n // d
+    length_d = plan.length // d
+    plan_d = TimePlan(n_windows=plan.n_windows, length=length_d, m=max(2, length_d // 16))
+    blocks = kurtosis_blocks(plan)
+    coarse_blocks = tuple(max(b // d, 2) for b in blocks[1:])
+
+    def short(x: NDArray[np.float64]) -> Features:
+        feats = frequency_features(x, fs, nperseg)
+        feats.update(time_features(x, plan_s, kurt_blocks=blocks[:1]))
+        return feats
+
+    def coarse(x: NDArray[np.float64]) -> Features:
+        return time_features(x, plan_d, kurt_blocks=coarse_blocks, sample_scale=False)
+
+    total = 2 * n_mc
+    ens_s = NullEnsemble.from_model(
+        _replicates(model, n_s, fs, n_mc, seed, short, progress, stage, 0, total)
+    )
+    ens_d = NullEnsemble.from_model(
+        _replicates(model, n_d, fs / d, n_mc, seed + 7_919, coarse, progress, stage, n_mc, total)
+    )
+    ref: Features = {}
+    null: dict[str, NDArray[np.float64]] = {}
+    step = nperseg // 2
+    segs = ((n_s - nperseg) // step + 1) / ((n - nperseg) // step + 1)
+    for name in ("log_psd", "log_line_psd"):
+        ref[name], null[name] = rescaled_log_gamma(ens_s, name, segs)
+    ref["hf"], null["hf"] = rescaled(
+        ens_s, "hf", (plan_s.length - 1) / (plan.length - 1), log_mean=True, pool=True
+    )
+    ref["kurt_hf"], null["kurt_hf"] = rescaled(
+        ens_s, "kurt_hf", (n_s - 1) / (n - 1), log_mean=False
+    )
+    # the excess kurtosis of k Gaussian values has mean -6 / (k + 1)
+    ref["kurt_hf"] = ref["kurt_hf"] + 6.0 / n_s - 6.0 / n
+    k8 = (plan_s.length // blocks[0]) / (plan.length // blocks[0])
+    ref_k8, null_k8 = rescaled(ens_s, "kurt_lf", k8, log_mean=False)
+    ref["kurt_lf"] = np.concatenate([ref_k8, ens_d.ref["kurt_lf"]])
+    null["kurt_lf"] = np.concatenate([null_k8, ens_d.null["kurt_lf"]], axis=1)
+    spike = ens_s.null["spike"][:, 0]
+    ref["spike"] = ens_s.ref["spike"] + max_shift(spike, n / n_s)
+    null["spike"] = ens_s.null["spike"]
+    for name in ("level", "jump", "dyn"):
+        ref[name], null[name] = ens_d.ref[name], ens_d.null[name]
+    log_ref, avar, tau_null = gaussian_tau_null(
+        model, m, fs, n, n_draw=max(4000, 20 * n_mc), seed=seed + 104_729
+    )
+    ref["log_avar"], ref["avar_lin"], null["log_avar"] = log_ref, avar, tau_null
+    return NullEnsemble(ref=ref, null=null, real_scale=1.0, exact_tau=True)

@@ -1,0 +1,164 @@
+"""The diagnosis null of long records: exact tau covariance, rescaled short replicates, decimation.
+
+Every check compares the cheap null with what it stands for (Monte Carlo of the real length or
+rate, or a known law), with fixed seeds and tolerances from the estimates' own uncertainty.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy import stats
+
+from allanite.diagnosis.null import NullEnsemble, max_shift, rescaled, rescaled_log_gamma
+from allanite.diagnosis.scaled_null import (
+    COARSE_LENGTH,
+    FULL_REPLICATES_MAX,
+    decimation,
+    uses_scaled_null,
+)
+from allanite.diagnosis.tau_view import (
+    build_tau_model,
+    gaussian_tau_null,
+    octave_factors,
+    tau_features,
+)
+from allanite.diagnosis.time_view import TimePlan, time_features, time_plan
+from allanite.model import NoiseModel
+from allanite.terms import TERM_TYPES
+
+UNITS = {"rate": "deg/s", "time": "s"}
+
+
+def model(*extra) -> NoiseModel:  # type: ignore[no-untyped-def]
+    t = TERM_TYPES
+    return NoiseModel((t["white"](N=0.05), t["flicker"](B=0.01), t["rrw"](K=0.0008), *extra), UNITS)
+
+
+def test_gaussian_tau_null_matches_monte_carlo_and_T_is_calibrated() -> None:
+    """Mean and spread of log AVAR and the law of T from the model equal Monte Carlo's."""
+    fs, n, reps = 100.0, 2**14, 240
+    mod = model()
+    m = octave_factors(n)
+    ref, avar, draws = gaussian_tau_null(mod, m, fs, n, n_draw=4000, seed=3)
+    x = mod.simulate(n, fs, channels=reps, seed=11)
+    mc = np.stack([tau_features(np.ascontiguousarray(x[:, j]), fs, m) for j in range(reps)])
+    sd_mc = mc.std(axis=0, ddof=1)
+    # mean: within 3.5 standard errors at every tau (familywise over ~11 taus)
+    z = (mc.mean(axis=0) - ref) / (sd_mc / np.sqrt(reps))
+    assert np.all(np.abs(z) < 3.5), z
+    # spread: the ratio of standard deviations within the 99.9 % chi-square band of reps - 1 dof
+    lo, hi = (np.sqrt(stats.chi2.ppf(q, reps - 1) / (reps - 1)) for q in (0.0005, 0.9995))
+    ratio = sd_mc / draws.std(axis=0, ddof=1)
+    assert np.all((ratio > lo) & (ratio < hi)), ratio
+    # T of the Monte Carlo records against the draws' covariance: mean near T0, p-values uniform
+    ens = NullEnsemble(
+        ref={"log_avar": ref, "avar_lin": avar}, null={"log_avar": draws}, real_scale=1.0
+    )
+    ts, ps = [], []
+    for j in range(reps):
+        tm = build_tau_model({"log_avar": mc[j]}, ens, m / fs, 1.0 / fs, avar, n / fs, loo=False)
+        ts.append(tm.statistic())
+        ps.append(tm.p_value())
+    se = np.std(ts, ddof=1) / np.sqrt(reps)
+    assert abs(np.mean(ts) - tm.t0) < 3.5 * se
+    rejected = np.mean(np.asarray(ps) < 0.05)
+    assert rejected < 0.05 + 3.0 * np.sqrt(0.05 * 0.95 / reps)
+    assert stats.kstest(ps, "uniform").pvalue > 0.001
+
+
+def test_rescaled_log_mean_matches_longer_replicates() -> None:
+    """Log of a mean over k pieces: the short null, rescaled, is the null of 16x more pieces."""
+    rng = np.random.default_rng(5)
+    k_s, k, n_s, n_l, bins = 64, 1024, 200, 400, 50
+
+    def feature(pieces: int, count: int) -> np.ndarray:
+        return np.log(rng.exponential(size=(count, pieces, bins)).mean(axis=1))
+
+    ens = NullEnsemble.from_model([{"f": f} for f in feature(k_s, n_s)])
+    ref, null = rescaled(ens, "f", k_s / k, log_mean=True)
+    long = feature(k, n_l)
+    # the reference is the long mean (the short mean is biased by (var_s - var)/2 = 0.007,
+    # about four standard errors of the long mean, so dropping the correction fails)
+    err = np.sqrt(long.var(axis=0, ddof=1) / n_l + ens.null["f"].var(axis=0, ddof=1) / n_s**2)
+    z = (long.mean(axis=0) - ref.mean()) / (err / np.sqrt(bins))
+    assert np.all(np.abs(z.mean()) < 3.0)
+    # the null spread is the long spread plus the reference's own error
+    expected = np.sqrt(long.var(axis=0, ddof=1).mean() + 1.0 / (k_s * n_s))
+    assert null.std(axis=0, ddof=1).mean() == pytest.approx(expected, rel=0.03)
+
+
+def test_rescaled_rejects_bad_ratio() -> None:
+    ens = NullEnsemble.from_model([{"f": np.zeros(3) + j} for j in range(20)])
+    with pytest.raises(ValueError, match="ratio"):
+        rescaled(ens, "f", 1.5, log_mean=False)
+
+
+def test_max_shift_is_the_maximum_over_more_values() -> None:
+    """Gumbel maxima: the maximum of k short maxima sits ``beta ln k`` higher."""
+    rng = np.random.default_rng(8)
+    short = rng.gumbel(2.0, 0.5, size=400)
+    k = 50
+    long = rng.gumbel(2.0, 0.5, size=(400, k)).max(axis=1)
+    se = np.sqrt(short.var(ddof=1) / 400 + long.var(ddof=1) / 400 + (0.5 * np.log(k)) ** 2 / 400)
+    assert abs(long.mean() - (short.mean() + max_shift(short, k))) < 3.0 * se
+    with pytest.raises(ValueError, match="k must be"):
+        max_shift(short, 0.5)
+
+
+def test_decimation_factor_respects_time_scales() -> None:
+    n, fs = 2**23, 1000.0
+    assert decimation(model(), n, fs) * COARSE_LENGTH == n
+    # a 50 Hz line must stay below a fifth of the coarse rate: D <= 1000 / 250
+    assert decimation(model(TERM_TYPES["sine"](amplitude=0.1, frequency=50.0)), n, fs) == 4
+    # spikes are not rate-free: no decimation
+    assert decimation(model(TERM_TYPES["spikes"](amplitude=1.0, rate=0.1)), n, fs) == 1
+    assert not uses_scaled_null(model(), FULL_REPLICATES_MAX)
+    assert uses_scaled_null(model(), FULL_REPLICATES_MAX + 1)
+    warm = TERM_TYPES["warmup"](amplitude=0.1, tau_w=60.0, duration=600.0)
+    assert not uses_scaled_null(model(warm), 2**22)
+
+
+def test_window_statistics_of_decimated_replicates_match_the_real_rate() -> None:
+    """level, jump and dyn spreads: records at fs/8 over the same duration equal those at fs."""
+    fs, n, d, reps = 1000.0, 2**17, 8, 60
+    mod = model()
+    plan = time_plan(n)
+    plan_d = TimePlan(plan.n_windows, plan.length // d, (plan.length // d) // 16)
+    full = mod.simulate(n, fs, channels=reps, seed=21)
+    coarse = mod.simulate(n // d, fs / d, channels=reps, seed=22)
+    f = [time_features(np.ascontiguousarray(full[:, j]), plan) for j in range(reps)]
+    c = [time_features(np.ascontiguousarray(coarse[:, j]), plan_d) for j in range(reps)]
+    # F test of the pooled spreads over the windows (windows share the law up to the ends)
+    lo, hi = stats.f.ppf([0.0005, 0.9995], reps - 1, reps - 1)
+    for name in ("level", "jump", "dyn"):
+        a = np.stack([x[name] for x in f])
+        b = np.stack([x[name] for x in c])
+        ratio = a.var(axis=0, ddof=1).mean() / b.var(axis=0, ddof=1).mean()
+        assert lo < ratio < hi, (name, ratio)
+
+
+def test_rescaled_log_gamma_moves_mean_spread_and_skewness() -> None:
+    """Log of a mean of exponentials: the mapped short null has the long law's three moments."""
+    rng = np.random.default_rng(13)
+    k_s, k, n_s, n_l, bins = 8, 128, 400, 400, 40
+
+    def feature(pieces: int, count: int) -> np.ndarray:
+        return np.log(rng.exponential(size=(count, pieces, bins)).mean(axis=1))
+
+    ens = NullEnsemble.from_model([{"f": f} for f in feature(k_s, n_s)])
+    ref, null = rescaled_log_gamma(ens, "f", k_s / k)
+    long = feature(k, n_l)
+    # mean (pooled over bins): the short mean is biased by ~(1/8 - 1/128)/2 = 0.06 against it
+    se = np.sqrt(long.var(ddof=1) / (n_l * bins) + ens.null["f"].var(ddof=1) / (n_s * bins))
+    assert abs(long.mean() - ref.mean()) < 3.5 * se
+    # spread: the long spread plus the reference error of n_s short replicates
+    expected = np.sqrt(long.var(axis=0, ddof=1).mean() + 1.0 / (k_s * n_s))
+    assert null.std(axis=0, ddof=1).mean() == pytest.approx(expected, rel=0.03)
+    # skewness ~ -1/sqrt(k): pooled over bins, within 3.5 standard errors (sqrt(6 / count));
+    # plain scaling keeps the short skewness (about -0.37) and fails
+    count = null.size
+    skew_null = stats.skew(null.ravel())
+    skew_long = stats.skew((long - long.mean(axis=0)).ravel())
+    assert abs(skew_null - skew_long) < 3.5 * np.sqrt(6.0 / count + 6.0 / long.size)
+    assert abs(stats.skew(ens.null["f"].ravel()) - skew_long) > 3.5 * np.sqrt(6.0 / count)
