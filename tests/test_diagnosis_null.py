@@ -10,13 +10,9 @@ import numpy as np
 import pytest
 from scipy import stats
 
+from allanite.diagnosis.decimation import COARSE_LENGTH, decimation
 from allanite.diagnosis.null import NullEnsemble, max_shift, rescaled, rescaled_log_gamma
-from allanite.diagnosis.scaled_null import (
-    COARSE_LENGTH,
-    FULL_REPLICATES_MAX,
-    decimation,
-    uses_scaled_null,
-)
+from allanite.diagnosis.scaled_null import FULL_REPLICATES_MAX, uses_scaled_null
 from allanite.diagnosis.tau_view import (
     build_tau_model,
     gaussian_tau_null,

@@ -18,7 +18,8 @@ than :data:`FULL_REPLICATES_MAX` samples, each view gets a null whose cost does 
   location ``+ beta ln(N / N_short)``);
 * window-scale statistics of the time view (``level``, ``jump``, ``dyn``, ``kurt_lf`` over
   ``L/16`` and ``L/4`` samples): ``n_mc`` *decimated* replicates, the model simulated over the
-  real duration at the rate ``fs / D`` (``N / D`` ~ :data:`COARSE_LENGTH` samples). Means over a
+  real duration at the rate ``fs / D`` (``N / D`` ~ 2^16 samples,
+  :mod:`allanite.diagnosis.decimation`). Means over a
   time ``tau`` of white, flicker and random-walk noise, angle quantization, ramps and slow
   processes do not depend on the sampling rate once ``tau >> D / fs``; a term with a time
   scale shorter than ``5 D / fs`` (a line, a fast Markov or telegraph process, short bursts)
@@ -37,6 +38,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from allanite.diagnosis.decimation import decimation
 from allanite.diagnosis.frequency_view import frequency_features
 from allanite.diagnosis.inputs import simulate_model
 from allanite.diagnosis.null import NullEnsemble, max_shift, rescaled, rescaled_log_gamma
@@ -44,10 +46,8 @@ from allanite.diagnosis.tau_view import gaussian_tau_null
 from allanite.diagnosis.time_view import TimePlan, kurtosis_blocks, time_features, time_plan
 
 __all__ = [
-    "COARSE_LENGTH",
     "FULL_REPLICATES_MAX",
     "SHORT_LENGTH",
-    "decimation",
     "scaled_ensemble",
     "uses_scaled_null",
 ]
@@ -56,27 +56,8 @@ __all__ = [
 FULL_REPLICATES_MAX = 2**18
 #: length of the short replicates at the real rate (63 Welch segments of 4096 samples)
 SHORT_LENGTH = 2**17
-#: target length of the decimated replicates (32 windows of 2048 samples)
-COARSE_LENGTH = 2**16
 #: effects tied to the start of the record: no short replicate can stand for them
 START_TERMS = ("warmup",)
-#: term types whose window-scale statistics do not depend on the sampling rate, with the
-#: parameter giving their shortest time scale in seconds (None: no time scale)
-RATE_FREE: dict[str, Callable[[Any], float | None]] = {
-    "white": lambda t: None,
-    "flicker": lambda t: None,
-    "rrw": lambda t: None,
-    "quantization": lambda t: None,
-    "ramp": lambda t: None,
-    "turn_on_bias": lambda t: None,
-    "bias_steps": lambda t: float(t.interval),
-    "markov": lambda t: float(t.tau_c),
-    "telegraph": lambda t: float(t.tau_c),
-    "white_bursts": lambda t: float(t.burst_s),
-    "warmup": lambda t: float(t.tau_w),
-    "sine": lambda t: 1.0 / float(t.frequency),
-    "lowpass_white": lambda t: 1.0 / float(t.bandwidth),
-}
 
 Features = dict[str, NDArray[np.float64]]
 Progress = Callable[[str, int, int], None]
@@ -87,26 +68,6 @@ def uses_scaled_null(model: Any, n: int) -> bool:
     if model is None or n <= FULL_REPLICATES_MAX:
         return False
     return not any(getattr(t, "type", "") in START_TERMS for t in model.terms)
-
-
-def decimation(model: Any, n: int, fs: float) -> int:
-    """Decimation factor ``D`` (a power of 2) of the window-scale replicates.
-
-    The largest ``D`` with ``N / D >= COARSE_LENGTH`` and ``D / fs`` at most a fifth of every
-    term's time scale; 1 for a term outside :data:`RATE_FREE`.
-    """
-    d = 1
-    while n // (2 * d) >= COARSE_LENGTH:
-        d *= 2
-    for term in model.terms:
-        scale_of = RATE_FREE.get(getattr(term, "type", ""))
-        if scale_of is None:
-            return 1
-        scale = scale_of(term)
-        if scale is not None:
-            while d > 1 and d / fs > scale / 5.0:
-                d //= 2
-    return d
 
 
 def _replicates(

@@ -256,10 +256,10 @@ def added_level_variance(
     Monte Carlo over ``n_rep`` records of ``n`` samples of the term on its own (fixed seed, so
     the diagnosis stays reproducible), laid out like the time view's ``n_windows`` windows.
     Window means do not depend on the sampling rate for the rate-free terms of
-    :func:`allanite.diagnosis.scaled_null.decimation`, so long records are simulated over the
+    :func:`allanite.diagnosis.decimation.decimation`, so long records are simulated over the
     same duration at ``fs / D``.
     """
-    from allanite.diagnosis.scaled_null import decimation
+    from allanite.diagnosis.decimation import decimation
     from allanite.model import NoiseModel
 
     model = NoiseModel((term,))
