@@ -6,7 +6,7 @@ On white rate noise (N = 1e7 by default, ``--channels`` columns) and the default
 * ``kernel``: ``_core.variance`` alone (overlapping, all cores);
 * ``avar_alpha_0``: ``allanite.avar(x, fs, alpha=0)`` (no identification);
 * ``avar_alpha_none``: ``allanite.avar(x, fs)`` (Stable32 noise identification at every tau);
-* ``identify``: :func:`allanite.edf.identify_alpha` alone, with its two compiled parts
+* ``identify``: :func:`allanite.variance.edf.identify_alpha` alone, with its two compiled parts
   ``lag1_acf`` (lag-1 statistics, taus with >= 30 averages) and ``rn_all`` (R(n) at every
   tau with fewer, an upper bound: it is only evaluated where B1 points to phase noise);
 * ``identify_traced_peak_bytes``: the largest numpy allocation total during identification
@@ -32,7 +32,7 @@ import numpy as np
 
 import allanite
 from allanite import _core
-from allanite.edf import ACF_MIN_POINTS, identify_alpha
+from allanite.variance.edf import ACF_MIN_POINTS, identify_alpha
 
 RESULTS = Path(__file__).resolve().parent / "results" / "bench_identify.json"
 

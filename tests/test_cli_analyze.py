@@ -216,7 +216,7 @@ def test_angle_input_and_points(tmp_path: Path, capsys: pytest.CaptureFixture[st
     expected = allanite.avar(angle, FS, input="angle", points=30)
     np.testing.assert_allclose(data["allan"]["dev"], expected.dev, rtol=1e-12)
     assert data["allan"]["units"] == "deg/s"
-    assert len(data["allan"]["tau"]) == len(allanite.taus.log_grid(N, 30))
+    assert len(data["allan"]["tau"]) == len(allanite.variance.taus.log_grid(N, 30))
 
 
 def _truncated_npy(tmp_path: Path) -> Path:

@@ -106,7 +106,7 @@ def test_every_kind_with_bias_matches_exact_value(white_ints: np.ndarray, kind: 
     y = bias + white_ints[:n] / GRID
     w = np.round((y - bias) * GRID).astype(np.int64)
     phase = np.concatenate(([0], np.cumsum(w)))
-    top = allanite.taus.max_factor(kind, n + 1)
+    top = allanite.variance.taus.max_factor(kind, n + 1)
     factors = np.unique([1, 2, 7, 100, 1000, top // 3, top])
     exact = np.array([_exact_variance(phase, int(m), kind) for m in factors]) / GRID**2
     res = allanite.avar(y, 1.0, kind=kind, m=factors)  # type: ignore[arg-type]

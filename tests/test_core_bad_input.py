@@ -207,8 +207,8 @@ def test_core_compares_dtypes_by_kind_size_and_order(name: str) -> None:
 
 @pytest.mark.parametrize("name", _SAME_TYPES)
 def test_chunked_phase_accepts_equal_dtype_objects(name: str) -> None:
-    from allanite.io.large import ArrayRecord
-    from allanite.phase_store import build_phase_store
+    from allanite.variance.chunked import ArrayRecord
+    from allanite.variance.phase_store import build_phase_store
 
     x = (RNG.normal(size=(500, 2)) * 100).astype(name)
     y = x.astype(_same_but_other_object(name))

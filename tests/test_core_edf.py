@@ -1,4 +1,4 @@
-"""Equivalent degrees of freedom and noise identification (allanite.edf)."""
+"""Equivalent degrees of freedom and noise identification (allanite.variance.edf)."""
 
 from __future__ import annotations
 
@@ -9,7 +9,8 @@ import pytest
 from allantools import ci as at_ci
 
 import allanite
-from allanite import _core, edf
+from allanite import _core
+from allanite.variance import edf
 
 SHAPES = {
     "overlapping": (2, True, False),
@@ -262,7 +263,7 @@ def test_confidence_interval_coverage_for_white_fm(kind: str) -> None:
 
 
 # --------------------------------------------------------------------------------------------
-# Noise identification: compiled streaming statistics, bounded memory, no reference.py
+# Noise identification: compiled streaming statistics, bounded memory, no variance/oracle.py
 
 
 def _numpy_levels(series: np.ndarray, levels: int) -> list[float]:
@@ -308,13 +309,13 @@ def test_lag1_acf_kernel_bad_arguments() -> None:
 
 def test_mvar_avar_ratio_kernel_equals_reference() -> None:
     """R(n) in one pass (window advanced by third differences) = reference MVAR / AVAR."""
-    from allanite import reference
+    from allanite.variance import oracle
 
     rng = np.random.default_rng(12)
     phase = np.cumsum(rng.standard_normal((4001, 3)), axis=0) + 1e3 * np.arange(4001)[:, None]
     ms = [1, 2, 17, 400, 1333]
     got = np.asarray(_core.mvar_avar_ratio(phase, ms, 2))
-    mvar, avar = reference.modified_variance, reference.overlapping_variance
+    mvar, avar = oracle.modified_variance, oracle.overlapping_variance
     want = [[mvar(phase[:, c], m) / avar(phase[:, c], m) for c in range(3)] for m in ms]
     np.testing.assert_allclose(got, want, rtol=1e-10)
     for threads in (1, 3):
@@ -325,8 +326,8 @@ def test_mvar_avar_ratio_kernel_equals_reference() -> None:
 
 
 def _identify_by_definition(x: np.ndarray, factors: np.ndarray, kind: str, data: str) -> np.ndarray:
-    """Stable32's rule written out with numpy and reference.py (the test oracle)."""
-    from allanite import reference
+    """Stable32's rule written out with numpy and variance/oracle.py (the test oracle)."""
+    from allanite.variance import oracle
 
     shape = edf.estimator_shape(kind)
     lo, hi = (-2, 2) if kind == "total" else (2 - 2 * shape.d, 2)
@@ -344,8 +345,8 @@ def _identify_by_definition(x: np.ndarray, factors: np.ndarray, kind: str, data:
             else:
                 ratio = None
                 if 3 * m <= col.size:  # second differences ignore the trend of phase data
-                    av = reference.overlapping_variance(col, m)
-                    ratio = reference.modified_variance(col, m) / av if av else None
+                    av = oracle.overlapping_variance(col, m)
+                    ratio = oracle.modified_variance(col, m) / av if av else None
                 alpha = edf.b1_noise_id(ybar, m, ratio)
                 if longest_acf:  # beyond the lag-1 range: at most the last lag-1 exponent
                     alpha = min(alpha, cap)
@@ -430,15 +431,15 @@ def test_identification_memory_is_bounded() -> None:
 def test_large_records_never_use_the_reference_oracle(
     kind: str, input_kind: str, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    """2e5 x 3 samples: the library path is compiled only (reference.py would take minutes)."""
-    from allanite import reference
+    """2e5 x 3 samples: the library path is compiled only (the oracle would take minutes)."""
+    from allanite.variance import oracle
 
     def forbidden(*args: object, **kwargs: object) -> None:
-        raise AssertionError("the library path called reference.py")
+        raise AssertionError("the library path called variance/oracle.py")
 
-    for name in dir(reference):
-        if not name.startswith("__") and callable(getattr(reference, name)):
-            monkeypatch.setattr(reference, name, forbidden)
+    for name in dir(oracle):
+        if not name.startswith("__") and callable(getattr(oracle, name)):
+            monkeypatch.setattr(oracle, name, forbidden)
     rng = np.random.default_rng(200)
     x = rng.standard_normal((200_000, 3))
     res = allanite.avar(x, 100.0, input=input_kind, kind=kind)
@@ -455,7 +456,7 @@ def test_large_records_never_use_the_reference_oracle(
 
 
 def test_smooth_isolated_alpha_replaces_single_flips_only():
-    from allanite.edf import smooth_isolated_alpha
+    from allanite.variance.edf import smooth_isolated_alpha
 
     alpha = np.array([[0], [0], [1], [0], [-1], [-1], [-2], [-1], [-1], [-2]])
     factors = np.arange(1, alpha.shape[0] + 1)

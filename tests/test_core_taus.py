@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import allanite
-from allanite import taus
+from allanite.variance import taus
 
 
 def test_log_grid_is_the_original_programs() -> None:

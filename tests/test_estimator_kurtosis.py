@@ -21,7 +21,6 @@ import pytest
 from scipy import signal
 
 import allanite
-from allanite import reference
 from allanite.model import NoiseModel
 from allanite.terms import (
     BiasSteps,
@@ -37,6 +36,7 @@ from allanite.terms._estimator_kurtosis import (
     step_excess_variance,
     telegraph_excess_variance,
 )
+from allanite.variance import oracle
 
 DT = 0.01
 GRID_X, GRID_W = np.polynomial.legendre.leggauss(32)
@@ -49,12 +49,12 @@ def estimator_matrix(n: int, m: int) -> np.ndarray:
     for i in range(n):
         e = np.zeros(n)
         e[i] = 1.0
-        columns.append(reference._d2(reference.phase_from_record(e), m) / m)
+        columns.append(oracle._d2(oracle.phase_from_record(e), m) / m)
     h = np.array(columns).T  # (M, n): second differences of window means
     b = h.T @ h / (2.0 * h.shape[0])
     y = np.random.default_rng(m).standard_normal(n)
     assert y @ b @ y == pytest.approx(
-        reference.overlapping_variance(reference.phase_from_record(y), m), rel=1e-12
+        oracle.overlapping_variance(oracle.phase_from_record(y), m), rel=1e-12
     )
     return b
 

@@ -54,7 +54,7 @@ def test_gui_load_switch_views_screenshot_export(
     # grid points: recompute with fewer points
     window.points_spin.setValue(10)
     window.compute()
-    assert window.session.result.tau.size == allanite.taus.log_grid(N, 10).size
+    assert window.session.result.tau.size == allanite.variance.taus.log_grid(N, 10).size
 
     # channel selection: only gy is drawn and listed
     window.channel_list.item(0).setCheckState(window.channel_list.item(0).checkState().Unchecked)

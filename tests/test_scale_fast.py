@@ -8,8 +8,8 @@ from scipy import stats
 
 import allanite
 from allanite import _core
-from allanite.fast import autocovariance, fast_variance, relative_deviation, stride
-from allanite.large import avar_large
+from allanite.variance.fast import autocovariance, fast_variance, relative_deviation, stride
+from allanite.variance.outofcore import avar_large
 
 
 @pytest.mark.parametrize("q", [4, 8, 16])

@@ -8,9 +8,9 @@ import pytest
 import allanite
 from allanite import _core
 from allanite.errors import InputError
-from allanite.io.large import ArrayRecord, BinaryRecord, TextRecord, npy_record, open_large
-from allanite.large import avar_large, parse_memory
-from allanite.phase_store import build_phase_store
+from allanite.variance.chunked import ArrayRecord, BinaryRecord, TextRecord, npy_record, open_large
+from allanite.variance.outofcore import avar_large, parse_memory
+from allanite.variance.phase_store import build_phase_store
 
 WINDOWED = ["overlapping", "standard", "hadamard", "standard_hadamard"]
 
@@ -89,8 +89,8 @@ def test_angle_input_out_of_core(tmp_path):
 
 
 def test_noise_identification_out_of_core_matches_when_it_fits():
-    from allanite.edf import identify_alpha
-    from allanite.large import variance_from_store
+    from allanite.variance.edf import identify_alpha
+    from allanite.variance.outofcore import variance_from_store
 
     x = _record(4000, c=2)
     factors = np.array([1, 2, 4, 8, 16, 64, 256, 1024, 1999], dtype=np.int64)
@@ -280,27 +280,27 @@ def test_avar_delegates_memory_limit_progress_and_fast(tmp_path, monkeypatch):
 @pytest.mark.parametrize("kind", ["overlapping", "standard_hadamard"])
 def test_kernel_paths_match_reference_at_large_m(channels, kind):
     """Every channel-count specialisation (1-4 and the generic one) against the numpy oracle."""
-    from allanite import reference
+    from allanite.variance import oracle
 
     x = _record(9000, c=channels, seed=channels)
     phase = _core.phase(x, "rate")
     top = int(_core.max_m(kind, phase.shape[0]))
     factors = np.array([1, 3, 1000, top - 1, top], dtype=np.int64)
     got = _core.variance(phase, factors, kind, 2)
-    oracle = getattr(reference, f"{kind}_variance")
+    oracle_kernel = getattr(oracle, f"{kind}_variance")
     for c in range(channels):
-        ref = [oracle(phase[:, c], int(m)) for m in factors]
+        ref = [oracle_kernel(phase[:, c], int(m)) for m in factors]
         np.testing.assert_allclose(got[:, c], ref, rtol=1e-12)
 
 
 def test_bounded_identification_in_memory_uses_the_decimated_head():
-    from allanite.edf import identify_alpha
-    from allanite.large import _identify
+    from allanite.variance.edf import identify_alpha
+    from allanite.variance.outofcore import _identify
 
     x = _record(6000, c=2)
     phase = _core.phase(x, "rate")
     factors = np.array([1, 4, 32, 512], dtype=np.int64)
-    from allanite.edf import cap_few_point_alpha
+    from allanite.variance.edf import cap_few_point_alpha
 
     got = _identify(phase, factors, "overlapping", "frequency", 700)
     heads = [np.ascontiguousarray(phase[::m][:700]) for m in factors.tolist()]

@@ -145,7 +145,7 @@ def add_grid_arguments(parser: argparse.ArgumentParser) -> None:
         "--fast",
         action="store_true",
         help="fast mode for huge records: strided sums at long taus, deviation < 0.075 of the "
-        "estimate's own 1-sigma error for white rate noise (see allanite.fast)",
+        "estimate's own 1-sigma error for white rate noise (see allanite.variance.fast)",
     )
 
 

@@ -34,7 +34,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from allanite.simulation.streams import TermStream, block_length
-from allanite.transfer import avar_transfer
+from allanite.variance.transfer import avar_transfer
 
 __all__ = ["SpectralStream", "WholeRecordStream", "expected_avar", "synthesis_length"]
 

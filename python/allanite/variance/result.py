@@ -1,9 +1,4 @@
-"""Allan-family variances of a record: the public entry points and their result type.
-
-The numeric work runs in :mod:`allanite._core` (compensated prefix sums, then one O(N) pass per
-averaging factor, threaded over factors); this module validates the input, resolves the tau
-grid, identifies the noise type and attaches equivalent degrees of freedom.
-"""
+"""The result of an Allan-family variance (:class:`AllanResult`) and its assembly from sums."""
 
 from __future__ import annotations
 
@@ -11,46 +6,19 @@ import dataclasses
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy import stats
 
 from allanite import _core
-from allanite.edf import (
-    equivalent_dof,
-    identify_alpha,
-    smooth_isolated_alpha,
-    wants_identification,
-)
 from allanite.extras import require
 from allanite.notebook import repr_html
-from allanite.taus import KERNEL_KIND, TauSpec, averaging_factors
-from allanite.units import record_rate_unit
+from allanite.variance.edf import equivalent_dof
+from allanite.variance.taus import KERNEL_KIND
 
-__all__ = [
-    "KINDS",
-    "AllanResult",
-    "adev",
-    "avar",
-    "hdev",
-    "mdev",
-    "oadev",
-    "ohdev",
-    "prepare_record",
-    "tdev",
-    "totdev",
-]
-
-InputKind = Literal["rate", "increment", "angle"]
-Kind = Literal[
-    "overlapping", "standard", "modified", "hadamard", "standard_hadamard", "total", "time"
-]
-KINDS: tuple[str, ...] = tuple(KERNEL_KIND)
-INPUTS: tuple[str, ...] = ("rate", "increment", "angle")
-
-_ACCEPTED = (np.float64, np.float32, np.int16, np.int32, np.int64)
+__all__ = ["AllanResult", "assemble_result"]
 
 
 @dataclass(frozen=True)
@@ -290,233 +258,6 @@ class AllanResult:
         np.savetxt(path, table, delimiter=",", header=header, comments="", fmt="%.17g")
 
 
-def prepare_record(x: ArrayLike, *, name: str = "x") -> tuple[NDArray[Any], bool]:
-    """Validate a record and return it as a 2-D ``(N, C)`` view (no copy when possible).
-
-    Parameters
-    ----------
-    x : array_like
-        Record of shape ``(N,)`` or ``(N, C)``.
-    name : str
-        Name used in error messages.
-
-    Returns
-    -------
-    tuple
-        The 2-D array (dtype one of float64, float32, int16, int32, int64) and whether the
-        input was 1-D.
-    """
-    arr = np.asarray(x)
-    if arr.dtype == np.bool_ or not (
-        np.issubdtype(arr.dtype, np.integer) or np.issubdtype(arr.dtype, np.floating)
-    ):
-        raise TypeError(
-            f"{name} has dtype {arr.dtype}; give real numbers (float64, float32, int16, int32, "
-            "int64)"
-        )
-    if arr.dtype.type not in _ACCEPTED:
-        if np.issubdtype(arr.dtype, np.unsignedinteger) and arr.dtype.itemsize == 8:
-            raise TypeError(
-                f"{name} has dtype uint64, which may overflow; convert to int64 or float64"
-            )
-        arr = arr.astype(np.float64 if arr.dtype.kind == "f" else np.int64)
-    if not arr.dtype.isnative:
-        arr = arr.astype(arr.dtype.newbyteorder("="))
-    if arr.ndim == 1:
-        return arr.reshape(-1, 1), True
-    if arr.ndim != 2:
-        raise ValueError(
-            f"{name} must be 1-D (samples) or 2-D (samples, channels), got shape {arr.shape}"
-        )
-    if arr.shape[0] < 3:
-        raise ValueError(f"{name} is too short: {arr.shape[0]} samples; need at least 3")
-    if arr.shape[0] < arr.shape[1]:
-        raise ValueError(
-            f"{name} has shape {arr.shape}: fewer samples than channels. Records are (samples, "
-            "channels); pass x.T if your channels are rows"
-        )
-    return arr, False
-
-
-def _check_fs(fs: float) -> float:
-    try:
-        value = float(fs)
-    except (TypeError, ValueError) as exc:
-        raise TypeError(f"fs must be a number in Hz, got {fs!r}") from exc
-    if not np.isfinite(value) or value <= 0:
-        raise ValueError(f"fs must be a positive, finite sampling frequency in Hz, got {fs!r}")
-    return value
-
-
-def _check_threads(threads: int | None) -> int:
-    if threads is None:
-        return 0
-    if isinstance(threads, bool) or not isinstance(threads, (int, np.integer)) or threads < 1:
-        raise ValueError(f"threads must be a positive integer or None, got {threads!r}")
-    return int(threads)
-
-
-def _given_alpha(alpha: int | ArrayLike | str | None, shape: tuple[int, ...]) -> NDArray[np.int64]:
-    """Caller's noise exponents broadcast to ``(T, C)``: a scalar, one per tau, or per channel."""
-    given = np.asarray(alpha)
-    if given.dtype.kind not in "iuf" or not np.all(np.isfinite(given)):
-        raise TypeError(f"alpha must be integers between -4 and 2, got {alpha!r}")
-    if np.any(given != np.round(given)) or np.any(given < -4) or np.any(given > 2):
-        raise ValueError(
-            f"alpha must hold integer power-law exponents in [-4, 2] (2 white PM ... -2 random "
-            f"walk FM), got {alpha!r}"
-        )
-    values = given.astype(np.int64)
-    if values.ndim == 1:
-        values = values.reshape(-1, 1)
-    try:
-        return np.broadcast_to(values, shape).copy()
-    except ValueError:
-        raise ValueError(
-            f"alpha has shape {given.shape}; give a scalar, one value per tau ({shape[0]}) or a "
-            f"(taus, channels) array {shape}"
-        ) from None
-
-
-def avar(
-    x: ArrayLike,
-    fs: float = 1.0,
-    *,
-    input: InputKind = "rate",
-    kind: Kind = "overlapping",
-    taus: TauSpec = "log",
-    m: ArrayLike | None = None,
-    points: int = 100,
-    alpha: int | ArrayLike | str | None = None,
-    threads: int | None = None,
-    units: str | None = None,
-    memory_limit: int | float | str | None = None,
-    progress: Any = None,
-    fast: bool | int = False,
-) -> AllanResult:
-    r"""Allan-family variance of a record for a grid of averaging times.
-
-    For rate samples :math:`y_k` the phase is :math:`x_k = \sum_{i<k} y_i` (compensated, mean
-    removed) and the overlapping Allan variance is
-
-    .. math:: \sigma^2(\tau) = \frac{1}{2\tau^2(M-2m)}\sum_{k=0}^{M-2m-1}
-              (x_{k+2m} - 2x_{k+m} + x_k)^2 \,\tau_0^2,\qquad \tau = m\tau_0,
-
-    (NIST SP1065 eq. 11). Angle input uses the angle itself as the phase (the integrating-gyro
-    case); increment input integrates the angle increments.
-
-    Parameters
-    ----------
-    x : array_like
-        Record, shape ``(N,)`` or ``(N, C)`` (samples, channels); float64, float32, int16,
-        int32 or int64 (strided views are read without a copy).
-    fs : float
-        Sampling frequency in Hz.
-    input : {"rate", "increment", "angle"}
-        Rate samples, angle increments per sample, or angle.
-    kind : {"overlapping", "standard", "modified", "hadamard", "standard_hadamard", "total", \
-"time"}
-        Estimator. ``time`` is the time variance :math:`\tau^2\,\mathrm{MVAR}/3`.
-    taus : {"log", "octave", "decade", "all"} or array_like
-        Tau grid, or explicit averaging times in seconds. ``"log"`` is the original program's
-        grid ``unique(ceil(logspace(0, log10(2^floor(log2(N/2))), points)))``.
-    m : array_like of int, optional
-        Explicit averaging factors (overrides ``taus``).
-    points : int
-        Number of points of the ``"log"`` grid.
-    alpha : int or array_like, optional
-        Power-law noise exponent (2 white PM ... -2 random walk FM, down to -4 for the Hadamard
-        kinds) for the EDF: a scalar, one per tau, or ``(taus, channels)``. When omitted it is
-        identified from the data at every tau as Stable32 does (lag-1 autocorrelation with at
-        least 30 decimated points, else the B1 ratio and R(n); :func:`allanite.edf.identify_alpha`),
-        then an isolated flip between two agreeing neighbours is replaced by their exponent
-        (:func:`allanite.edf.smooth_isolated_alpha`) so the intervals do not jump at one tau.
-        ``alpha="stable32"`` keeps Stable32's per-tau identification, flips included.
-        The EDF follows Greenhall & Riley (2003) for every kind but ``total``, which uses the
-        SP1065 formulas (:mod:`allanite.edf`).
-    threads : int, optional
-        Worker threads (default: all cores). Results are identical for any thread count.
-    units : str, optional
-        Unit of the record, carried into the result as its rate unit: an angular rate
-        (``deg/s``, ``deg/h``, ``dph``, ``rad/s``, ...) or an acceleration (``m/s^2``, ``g``,
-        ``mg``, ``ug``, ...); for angle/increment samples also their angle (``deg``) or
-        velocity (``m/s``), read as that unit per second. Checked by
-        :func:`allanite.units.record_rate_unit` (a unit that is not one of these raises).
-    memory_limit, progress, fast
-        Large records (:func:`allanite.large.avar_large`, which also reads files in chunks):
-        a working-memory budget like ``"1GB"`` beyond which the phase array goes to a
-        temporary file; a ``progress(stage, done, total)`` callback; fast mode (strided sums
-        at large m with a stated error bound, :mod:`allanite.fast`). Same results otherwise.
-
-    Returns
-    -------
-    AllanResult
-        Variances, EDF and confidence intervals.
-
-    References
-    ----------
-    W. J. Riley, *Handbook of Frequency Stability Analysis*, NIST SP1065 (2008).
-    """
-    units = record_rate_unit(units, input)  # one validation of the unit, for every caller
-    if memory_limit is not None or progress is not None or (fast is not False and fast is not None):
-        from allanite.large import avar_large
-
-        return avar_large(
-            x,
-            fs,
-            input=input,
-            kind=kind,
-            taus=taus,
-            m=m,
-            points=points,
-            alpha=alpha,
-            threads=threads,
-            units=units,
-            memory_limit=memory_limit,
-            progress=progress,
-            fast=fast,
-        )
-    if kind not in KERNEL_KIND:
-        raise ValueError(f"unknown kind {kind!r}; use one of {', '.join(KINDS)}")
-    if input not in INPUTS:
-        raise ValueError(f"unknown input {input!r}; use 'rate', 'increment' or 'angle'")
-    rate = _check_fs(fs)
-    nthreads = _check_threads(threads)
-    arr, was_1d = prepare_record(x)
-    phase = _core.phase(arr, input)
-    n_phase = int(phase.shape[0])
-    factors = averaging_factors(
-        taus, fs=rate, n_samples=arr.shape[0], n_phase=n_phase, kind=kind, m=m, points=points
-    )
-    kernel_kind = KERNEL_KIND[kind]
-    var = np.asarray(_core.variance(phase, factors, kernel_kind, nthreads))
-    if wants_identification(alpha):
-        # Stable32 identifies phase data on the phase as recorded (its frequency offset makes
-        # the lag-1 method difference at least once); frequency data on the averaged rates
-        if input == "angle":
-            alphas = identify_alpha(
-                arr, factors, kernel_kind, data="phase", detrended=phase, threads=nthreads
-            )
-        else:
-            alphas = identify_alpha(phase, factors, kernel_kind, data="frequency", threads=nthreads)
-        if alpha is None:
-            alphas = smooth_isolated_alpha(alphas, factors)
-    else:
-        alphas = _given_alpha(alpha, var.shape)
-    return assemble_result(
-        var,
-        factors,
-        alphas,
-        rate=rate,
-        input=input,
-        kind=kind,
-        n_phase=n_phase,
-        n_samples=int(arr.shape[0]),
-        units=units,
-        was_1d=was_1d,
-    )
-
-
 def assemble_result(
     var: NDArray[np.float64],
     factors: NDArray[np.int64],
@@ -533,7 +274,7 @@ def assemble_result(
 ) -> AllanResult:
     """Scale kernel variances (tau0 = 1, phase units) to rate units and attach the EDF.
 
-    Shared by :func:`avar` and the large-record path (:func:`allanite.large.avar_large`).
+    Shared by :func:`avar` and the large-record path (:func:`~allanite.variance.avar_large`).
     ``var`` and ``alphas`` are ``(T, C)``; the result is 1-D per field when ``was_1d``.
     """
     kernel_kind = KERNEL_KIND[kind]
@@ -563,26 +304,3 @@ def assemble_result(
         units=units,
         meta=dict(meta or {}),
     )
-
-
-def _twin(kind: Kind, name: str, what: str) -> Any:
-    def dev(x: ArrayLike, fs: float = 1.0, **kwargs: Any) -> AllanResult:
-        return avar(x, fs, kind=kind, **kwargs)
-
-    dev.__name__ = name
-    dev.__qualname__ = name
-    dev.__doc__ = (
-        f"{what} of a record: ``avar(x, fs, kind={kind!r}, ...)``.\n\n"
-        "Returns an :class:`AllanResult`; its ``dev`` is the deviation. See :func:`avar` for the "
-        "parameters."
-    )
-    return dev
-
-
-adev = _twin("standard", "adev", "Non-overlapping Allan deviation")
-oadev = _twin("overlapping", "oadev", "Overlapping Allan deviation")
-mdev = _twin("modified", "mdev", "Modified Allan deviation")
-hdev = _twin("standard_hadamard", "hdev", "Non-overlapping Hadamard deviation")
-ohdev = _twin("hadamard", "ohdev", "Overlapping Hadamard deviation")
-tdev = _twin("time", "tdev", "Time deviation tau * sqrt(MVAR / 3)")
-totdev = _twin("total", "totdev", "Total deviation (SP1065 reflected extension)")
