@@ -2,9 +2,9 @@
 
 A *chunked record* knows its channel count and sample type and yields ``(rows, channels)``
 blocks in order. The out-of-core variance path (:mod:`allanite.variance.outofcore`) consumes
-these chunks, so peak resident memory is set by the chunk size, not by the file size. Files are read with
-``os.pread`` into reusable buffers rather than memory-mapped: mapped pages that have been
-touched count towards the resident set size (RSS) until the kernel evicts them, read pages only
+these chunks, so peak resident memory is set by the chunk size, not by the file size. Files are
+read with ``os.pread`` into reusable buffers rather than memory-mapped: mapped pages that have
+been touched count towards the resident set size (RSS) until the kernel evicts them, read pages only
 occupy the page cache.
 
 Supported sources:
