@@ -26,9 +26,9 @@ from scipy import stats
 import allanite
 from allanite.simulation import simulate
 from allanite.simulation.flicker import flicker_stream
-from allanite.simulation.kasdin import kasdin_avar
 from allanite.terms import Flicker
 from allanite.terms.flicker import PLATEAU
+from allanite.terms.flicker_laws import kasdin_avar
 
 FS, B = 100.0, 1e-3
 DT = 1.0 / FS

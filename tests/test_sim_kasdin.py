@@ -17,11 +17,11 @@ from allanite.simulation.flicker import FLICKER_METHODS, flicker_stream
 from allanite.simulation.kasdin import (
     KASDIN_MAX_SAMPLES,
     KasdinStream,
-    kasdin_avar,
     kasdin_coefficients,
 )
 from allanite.terms import Flicker, White
 from allanite.terms.flicker import PLATEAU
+from allanite.terms.flicker_laws import kasdin_avar
 
 FS = 100.0
 DT = 1.0 / FS

@@ -9,7 +9,7 @@ from scipy import stats
 import allanite
 from allanite.model import NoiseModel
 from allanite.simulation import simulate, simulate_chunks
-from allanite.simulation.flicker import bank_avar, flicker_stream
+from allanite.simulation.flicker import flicker_stream
 from allanite.simulation.spectral import expected_avar
 from allanite.simulation.streams import block_length
 from allanite.terms import (
@@ -28,6 +28,7 @@ from allanite.terms import (
     White,
 )
 from allanite.terms.flicker import PLATEAU
+from allanite.terms.flicker_laws import bank_avar
 
 EVERY_TERM = NoiseModel(
     (

@@ -11,7 +11,6 @@ from scipy import integrate
 import allanite
 from allanite.simulation.flicker import (
     SPECTRAL_MAX_SAMPLES,
-    bank_avar,
     flicker_stream,
 )
 from allanite.simulation.gaussian import Ar1BankStream, _residual_variance
@@ -27,6 +26,7 @@ from allanite.terms import (
     term_from_dict,
 )
 from allanite.terms.flicker import PLATEAU
+from allanite.terms.flicker_laws import bank_avar
 from allanite.terms.transients import markov_avar_continuous
 
 NEW_TERMS = [

@@ -9,14 +9,14 @@ r"""Flicker (1/f) rate noise: spectral synthesis, Kasdin's filter, or a streamin
   log-spaced correlation times (three per decade from :math:`\Delta t/4` to beyond the record
   length) plus a white part, run in the C++ core in bounded memory. The variances are fitted
   (non-negative least squares, relative error on a log-frequency grid) to the sampled PSD.
-  Its exact Allan variance (:func:`bank_avar`) holds the flicker plateau :math:`0.664 B`
-  within about 0.5% from :math:`\tau \approx 30\Delta t` up to about a tenth of the longest
-  correlation time, but it is not the band-limited flicker shape at the first few lags
-  (about -30% at :math:`\tau = \Delta t`).
+  Its exact Allan variance (:func:`allanite.terms.flicker_laws.bank_avar`) holds the flicker
+  plateau :math:`0.664 B` within about 0.5% from :math:`\tau \approx 30\Delta t` up to about
+  a tenth of the longest correlation time, but it is not the band-limited flicker shape at the
+  first few lags (about -30% at :math:`\tau = \Delta t`).
 * ``method="kasdin"`` (on request only, records of known length up to
   :data:`~allanite.simulation.kasdin.KASDIN_MAX_SAMPLES`): Kasdin's fractional-difference
   filter of white noise, :class:`~allanite.simulation.kasdin.KasdinStream`; its own exact
-  Allan variance is :func:`~allanite.simulation.kasdin.kasdin_avar` (+70% over the term at
+  Allan variance is :func:`~allanite.terms.flicker_laws.kasdin_avar` (+70% over the term at
   :math:`\tau = \Delta t`, the 0.664 B plateau from about :math:`100\Delta t` on).
 
 References
@@ -32,7 +32,7 @@ import math
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import NDArray
 from scipy.optimize import nnls
 
 from allanite.simulation.gaussian import Ar1BankStream
@@ -43,7 +43,6 @@ from allanite.simulation.streams import TermStream
 __all__ = [
     "FLICKER_METHODS",
     "SPECTRAL_MAX_SAMPLES",
-    "bank_avar",
     "flicker_bank",
     "flicker_stream",
 ]
@@ -130,36 +129,6 @@ def flicker_bank(
     sigma = np.sqrt(weights[:-1][keep]) * B
     white_n = math.sqrt(weights[-1]) * B * math.sqrt(dt)  # per-sample sd = N / sqrt(dt)
     return tcs[keep] * dt, sigma, white_n
-
-
-def bank_avar(
-    tau: ArrayLike,
-    dt: float,
-    B: float,
-    *,
-    cutoff_hz: float | None = None,
-    n_samples: int | None = None,
-) -> NDArray[np.float64]:
-    r"""Return the exact Allan variance of the streaming bank (its AR(1) and white parts).
-
-    Components with :math:`\theta = \Delta t/T_c \ge 10^{-4}` use the sampled AR(1) form of
-    :class:`~allanite.terms.GaussMarkov`; slower ones, where that form cancels
-    catastrophically, the continuous form plus the sampled random walk's
-    :math:`s^2\theta/(3m)` (relative error :math:`O(\theta)`).
-    """
-    from allanite.terms import GaussMarkov, White
-    from allanite.terms.transients import markov_avar_continuous
-
-    t = np.asarray(tau, dtype=np.float64)
-    tcs, sigma, white_n = flicker_bank(B, dt, cutoff_hz=cutoff_hz, n_samples=n_samples)
-    total = White(N=white_n).avar(t, dt)
-    for tc, s in zip(tcs, sigma, strict=True):
-        if dt / tc >= 1e-4:
-            total = total + GaussMarkov(sigma=float(s), tau_c=float(tc)).avar(t, dt)
-        else:
-            theta = dt / tc
-            total = total + markov_avar_continuous(s**2, tc, t) + s**2 * theta * dt / (3.0 * t)
-    return np.asarray(total)
 
 
 def flicker_stream(

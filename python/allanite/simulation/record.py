@@ -234,7 +234,7 @@ def simulate(
         How flicker terms are simulated (:func:`allanite.simulation.flicker.flicker_stream`):
         ``auto`` = exact spectral synthesis up to ``SPECTRAL_MAX_SAMPLES``, else the streaming
         Gauss-Markov bank; ``kasdin`` = Kasdin's fractional filter (law:
-        :func:`allanite.simulation.kasdin.kasdin_avar`).
+        :func:`allanite.terms.flicker_laws.kasdin_avar`).
 
     Returns
     -------

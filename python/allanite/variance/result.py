@@ -14,7 +14,7 @@ from scipy import stats
 
 from allanite import _core
 from allanite.extras import require
-from allanite.notebook import repr_html
+from allanite.notebook import allan_html
 from allanite.variance.edf import equivalent_dof
 from allanite.variance.taus import KERNEL_KIND
 
@@ -64,7 +64,7 @@ class AllanResult:
     n_samples: int
     units: str | None = None
     meta: dict[str, Any] = field(default_factory=dict, compare=False)
-    _repr_html_ = repr_html  # Jupyter: a compact table and the plot (allanite.notebook)
+    _repr_html_ = allan_html  # Jupyter: a compact table and the plot (allanite.notebook)
 
     @property
     def dev(self) -> NDArray[np.float64]:
