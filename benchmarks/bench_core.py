@@ -68,7 +68,7 @@ def main() -> None:
     timings["core_threads_2"], v2 = _best(lambda: core(2), args.repeat)
     assert np.array_equal(v1, v2)
     timings["avar_end_to_end"], res = _best(
-        lambda: allanite.avar(y, 1.0, kind="overlapping", m=m, threads=2), 1
+        lambda: allanite.avar(y, fs=1.0, kind="overlapping", m=m, threads=2), 1
     )
 
     def numpy_oracle() -> np.ndarray:

@@ -57,7 +57,7 @@ def main() -> None:
     rng = np.random.default_rng(0)
     x = rng.standard_normal((n, nc)) if nc > 1 else rng.standard_normal(n)
     fs = 100.0
-    res = allanite.avar(x, fs, alpha=0)
+    res = allanite.avar(x, fs=fs, alpha=0)
     phase = np.asarray(_core.phase(x.reshape(n, -1), "rate"))
     factors = res.m
     n_series = (phase.shape[0] - 1) // factors
@@ -68,8 +68,8 @@ def main() -> None:
         "channels": nc,
         "taus": int(factors.size),
         "kernel": _best(lambda: _core.variance(phase, factors, "overlapping", 0), args.repeat),
-        "avar_alpha_0": _best(lambda: allanite.avar(x, fs, alpha=0), args.repeat),
-        "avar_alpha_none": _best(lambda: allanite.avar(x, fs), args.repeat),
+        "avar_alpha_0": _best(lambda: allanite.avar(x, fs=fs, alpha=0), args.repeat),
+        "avar_alpha_none": _best(lambda: allanite.avar(x, fs=fs), args.repeat),
         "identify": _best(lambda: identify_alpha(phase, factors, "overlapping"), args.repeat),
         "lag1_acf": _best(lambda: _core.lag1_acf(phase, acf_m, "frequency", 3, 0), args.repeat),
         "rn_all": _best(lambda: _core.mvar_avar_ratio(phase, rn_m, 0), args.repeat),

@@ -83,7 +83,9 @@ def worker(method: str, path: str, threads: int, repeats: int) -> dict[str, Any]
     if method == "allanite":
         import allanite
 
-        seconds, res = _best(lambda: allanite.avar(x, FS, m=m, alpha=0, threads=threads), repeats)
+        seconds, res = _best(
+            lambda: allanite.avar(x, fs=FS, m=m, alpha=0, threads=threads), repeats
+        )
         out["threads"] = threads
         out["checksum"] = float(np.sum(res.var))
         # floor: one streaming read of the prefix array per tau, measured here
@@ -138,7 +140,7 @@ def outofcore_worker(path: str, n: int, limit: str, threads: int) -> dict[str, A
     from allanite.variance.outofcore import avar_large
 
     t0 = time.perf_counter()
-    res = avar_large(path, FS, dtype="float32", channels=1, memory_limit=limit, threads=threads)
+    res = avar_large(path, fs=FS, dtype="float32", channels=1, memory_limit=limit, threads=threads)
     seconds = time.perf_counter() - t0
     return {
         "method": "allanite avar_large",

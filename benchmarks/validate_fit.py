@@ -199,7 +199,7 @@ def run_case(case: Case) -> dict[str, Any]:
         dtype=np.float64,
     ).ravel()
     t1 = time.perf_counter()
-    res = allanite.avar(x, case.fs, input=case.input, taus=case.taus, units=case.unit)
+    res = allanite.avar(x, fs=case.fs, input=case.input, taus=case.taus, units=case.unit)
     f = fit(res)
     t2 = time.perf_counter()
     truth = model.coefficients()

@@ -103,7 +103,7 @@ def test_variance_matches_reference(rec: dict, kind: str) -> None:
     fs = 4.0
     phase = _core.phase(x, rec["input"])
     factors = _factors(rng, kind, phase.shape[0])
-    res = allanite.avar(x, fs, kind=kind, input=rec["input"], m=factors)
+    res = allanite.avar(x, fs=fs, kind=kind, input=rec["input"], m=factors)
     scale = 1.0 if rec["input"] == "rate" else fs * fs
     want = _reference(x, factors, kind, rec["input"]) * scale
     # where the exact variance is 0 (integer records can cancel exactly) rounding leaves ~1e-33:
@@ -118,10 +118,10 @@ def test_every_dtype_every_kind_multichannel(kind: str, dtype: type) -> None:
     rng = np.random.default_rng(11)
     x = _base(rng, 301, 3, dtype)
     factors = np.arange(1, int(_core.max_m(kind, 302)) + 1, 7)
-    res = allanite.avar(x, 1.0, kind=kind, m=factors)
+    res = allanite.avar(x, fs=1.0, kind=kind, m=factors)
     np.testing.assert_allclose(res.var, _reference(x, factors, kind, "rate"), rtol=RTOL)
     # a 1-D record gives the first channel, shaped (T,)
-    one = allanite.avar(np.ascontiguousarray(x[:, 0]), 1.0, kind=kind, m=factors)
+    one = allanite.avar(np.ascontiguousarray(x[:, 0]), fs=1.0, kind=kind, m=factors)
     assert one.var.shape == (factors.size,)
     np.testing.assert_array_equal(one.var, res.var[:, 0])
 
@@ -131,7 +131,7 @@ def test_zero_stride_broadcast_record() -> None:
     rng = np.random.default_rng(5)
     col = rng.standard_normal(200)
     x = np.broadcast_to(col[:, None], (200, 3))
-    res = allanite.avar(x, 1.0, kind="overlapping", taus="all")
+    res = allanite.avar(x, fs=1.0, kind="overlapping", taus="all")
     for j in range(3):
         np.testing.assert_array_equal(res.var[:, j], res.var[:, 0])
     np.testing.assert_allclose(res.var[:, 0], oracle.variance(col, res.m, "overlapping"), rtol=RTOL)
@@ -148,7 +148,7 @@ def test_thread_count_gives_bit_identical_results(kind: str, seed: int, c: int) 
     results = [_core.variance(phase, factors, kind, t) for t in (1, 2, 3, 4)]
     for other in results[1:]:
         assert np.array_equal(results[0], other)
-    default = allanite.avar(x, 1.0, kind=kind, m=factors)
+    default = allanite.avar(x, fs=1.0, kind=kind, m=factors)
     assert np.array_equal(default.var.reshape(results[0].shape), results[0])
 
 
@@ -156,8 +156,8 @@ def test_time_variance_is_tau_squared_mvar_over_three() -> None:
     rng = np.random.default_rng(3)
     x = rng.standard_normal(400)
     fs = 2.0
-    mod = allanite.mdev(x, fs, input="angle", taus="all")
-    tim = allanite.tdev(x, fs, input="angle", taus="all")
+    mod = allanite.mdev(x, fs=fs, input="angle", taus="all")
+    tim = allanite.tdev(x, fs=fs, input="angle", taus="all")
     np.testing.assert_allclose(tim.var, mod.tau**2 * mod.var / 3.0, rtol=1e-15)
     np.testing.assert_allclose(tim.dev, mod.tau * mod.dev / np.sqrt(3.0), rtol=1e-15)
 

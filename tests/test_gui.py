@@ -48,7 +48,7 @@ def test_gui_load_switch_views_screenshot_export(
     assert "2 channel(s)" in window.status_label.text()
     result = window.session.result
     assert result is not None
-    expected = allanite.avar(data, FS, points=25)
+    expected = allanite.avar(data, fs=FS, points=25)
     np.testing.assert_allclose(result.dev, expected.dev, rtol=1e-12)
 
     # grid points: recompute with fewer points

@@ -209,7 +209,9 @@ def _table(shared_data: Path, ds: DataSet, name: str) -> Table:
 
 def _compute(shared_data: Path, ds: DataSet, table: Table, **kwargs: Any) -> allanite.AllanResult:
     x = _record(str(shared_data), ds.folder, ds.data)
-    return allanite.avar(x, 1.0 / table.tau0, input=ds.input, kind=table.kind, m=table.m, **kwargs)
+    return allanite.avar(
+        x, fs=1.0 / table.tau0, input=ds.input, kind=table.kind, m=table.m, **kwargs
+    )
 
 
 @functools.cache

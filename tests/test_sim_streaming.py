@@ -122,7 +122,7 @@ def test_streamed_flicker_holds_its_plateau_over_three_decades():
     stream = flicker_stream(Flicker(B=B), fs, channels, seed=9, n_samples=n, method="bank")
     x = np.concatenate([stream.next(1 << 20) for _ in range(n >> 20)] + [stream.next(1)])
     m = np.unique(np.round(np.logspace(np.log10(30), np.log10(30_000), 13))).astype(np.int64)
-    result = allanite.avar(x, fs, m=m, alpha=-1)
+    result = allanite.avar(x, fs=fs, m=m, alpha=-1)
     tau = result.tau
     # the bank's exact Allan variance is the 0.664 B plateau within 1% over these 3 decades
     exact = bank_avar(tau, 1.0 / fs, B, n_samples=n)

@@ -160,7 +160,7 @@ def test_simulated_lowpass_has_the_negative_quantization_signature():
     # a white + quantization fit of a low-pass record's AVAR curve returns Q^2 < 0 (DESIGN.md)
     term = LowPassWhite(N=0.01, bandwidth=2.0)
     x = allanite.model.NoiseModel((term,)).simulate(1 << 16, 100.0, seed=3)
-    r = allanite.avar(x, 100.0, taus="octave", alpha=0)
+    r = allanite.avar(x, fs=100.0, taus="octave", alpha=0)
     keep = (r.tau > 0.15) & (r.tau < 6.0)
     weight = 1.0 / r.var[keep]  # relative errors
     design = np.column_stack([3.0 / r.tau[keep] ** 2, 1.0 / r.tau[keep]]) * weight[:, None]

@@ -243,7 +243,7 @@ def _analyse(task: _Task) -> list[dict[str, Any]]:
         samples, fs, input_kind, units, names = _load(task)
         rate = _rate_unit(input_kind, units)
         _unit_free(task.sheet, rate)
-        result = avar_large(samples, fs, input=input_kind, units=rate, **task.avar_options)
+        result = avar_large(samples, fs=fs, input=input_kind, units=rate, **task.avar_options)
     except (InputError, ValueError, TypeError, OSError) as exc:
         return [{"record": task.name, "channel": None, "error": " ".join(str(exc).split())}]
     rows = []

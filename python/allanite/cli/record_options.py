@@ -342,7 +342,7 @@ def avar_from_args(record: Record, args: argparse.Namespace) -> AllanResult:
     with progress_bars() as bar:
         return avar(
             part.samples if part.n_channels > 1 else part.samples[:, 0],
-            part.require_fs(),
+            fs=part.require_fs(),
             input=part.input,  # type: ignore[arg-type]
             kind=args.kind,
             taus=args.taus,
@@ -368,7 +368,7 @@ def warn_implausible(
     fs = part.require_fs()
     if result is None:
         samples = part.samples if part.n_channels > 1 else part.samples[:, 0]
-        result = avar(samples, fs, input=part.input, points=50)  # type: ignore[arg-type]
+        result = avar(samples, fs=fs, input=part.input, points=50)  # type: ignore[arg-type]
     dev = np.asarray(result.dev, dtype=np.float64).reshape(result.tau.size, -1)
     findings = check_samples(
         part.samples,

@@ -141,7 +141,7 @@ class Session:
         part = record.longest_segment()
         self.result = avar(
             part.samples,
-            fs,
+            fs=fs,
             input=part.input,  # type: ignore[arg-type]
             kind=o.kind,  # type: ignore[arg-type]
             points=o.points,

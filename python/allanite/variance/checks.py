@@ -11,6 +11,7 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from allanite.io.record import Record
 from allanite.variance.taus import KERNEL_KIND
 
 __all__ = [
@@ -22,6 +23,7 @@ __all__ = [
     "check_threads",
     "given_alpha",
     "prepare_record",
+    "resolve_source",
 ]
 
 InputKind = Literal["rate", "increment", "angle"]
@@ -122,3 +124,54 @@ def given_alpha(alpha: int | ArrayLike | str | None, shape: tuple[int, ...]) -> 
             f"alpha has shape {given.shape}; give a scalar, one value per tau ({shape[0]}) or a "
             f"(taus, channels) array {shape}"
         ) from None
+
+
+def resolve_source(
+    x: Any, fs: float | None, input: str | None, units: str | None
+) -> tuple[Any, float, str, str | None, dict[str, Any]]:
+    """Samples, sampling frequency, input kind, unit and metadata of a record or raw array.
+
+    A :class:`~allanite.io.Record` carries its own ``fs``, ``input`` and unit: they are taken
+    from it (its longest segment when a time column split it; one channel gives a 1-D record).
+    Giving ``fs``, ``input`` or ``units`` as well is allowed only when it agrees with the
+    record (or fills in an ``fs`` the record lacks). Anything else is a raw record, for which
+    ``fs`` is required and ``input`` defaults to ``"rate"``.
+
+    Raises
+    ------
+    TypeError
+        Without ``fs`` for a raw record.
+    ValueError
+        When ``fs``, ``input`` or ``units`` contradict the record's own.
+    """
+    if isinstance(x, Record):
+        part = x.longest_segment()
+        meta: dict[str, Any] = {"source": x.source, "channels": list(x.channels)}
+        if len(x.segments) > 1:
+            meta["segment"] = x.segments.index(max(x.segments, key=lambda s: s.n_samples))
+        if fs is not None and part.fs is not None and not np.isclose(fs, part.fs, rtol=1e-12):
+            raise ValueError(
+                f"fs={fs!r} contradicts the record's own fs={part.fs!r} Hz; leave fs out (it is "
+                "taken from the Record) or build the Record with the right fs"
+            )
+        given = fs if fs is not None else part.require_fs()
+        rate = check_fs(part.fs if part.fs is not None else given)
+        if input is not None and input != part.input:
+            raise ValueError(
+                f"input={input!r} contradicts the record's input={part.input!r}; leave input out "
+                "(it is taken from the Record)"
+            )
+        unit = part.rate_unit()
+        if units is not None and unit is not None and units not in (part.units, unit):
+            raise ValueError(
+                f"units={units!r} contradicts the record's unit {part.units!r}; leave units out "
+                "(it is taken from the Record)"
+            )
+        samples = part.samples if part.n_channels > 1 else part.samples[:, 0]
+        return samples, rate, part.input, units if unit is None else unit, meta
+    if fs is None:
+        raise TypeError(
+            "fs (the sampling frequency in Hz) is required for a raw array: e.g. "
+            "avar(x, fs=100.0); a Record carries its own"
+        )
+    return x, check_fs(fs), "rate" if input is None else input, units, {}

@@ -10,25 +10,25 @@ memory (a ``memory_limit``, a file path or a chunked record) go to
 from __future__ import annotations
 
 import os
-from typing import Any
 
 from numpy.typing import ArrayLike
 
 from allanite import _core
+from allanite.io.record import Record
 from allanite.units import record_rate_unit
 from allanite.variance.checks import (
     INPUTS,
     KINDS,
     InputKind,
     Kind,
-    check_fs,
     check_threads,
     given_alpha,
     prepare_record,
+    resolve_source,
 )
 from allanite.variance.chunked import ChunkedRecord
 from allanite.variance.edf import identify_alpha, smooth_isolated_alpha, wants_identification
-from allanite.variance.kernel import fast_q, variances
+from allanite.variance.kernel import ProgressCallback, fast_q, variances
 from allanite.variance.outofcore import avar_large
 from allanite.variance.result import AllanResult, assemble_result
 from allanite.variance.taus import KERNEL_KIND, TauSpec, averaging_factors
@@ -37,10 +37,10 @@ __all__ = ["adev", "avar", "hdev", "mdev", "oadev", "ohdev", "tdev", "totdev"]
 
 
 def avar(
-    x: ArrayLike,
-    fs: float = 1.0,
+    x: ArrayLike | Record | ChunkedRecord | str | os.PathLike[str],
     *,
-    input: InputKind = "rate",
+    fs: float | None = None,
+    input: InputKind | None = None,
     kind: Kind = "overlapping",
     taus: TauSpec = "log",
     m: ArrayLike | None = None,
@@ -49,7 +49,7 @@ def avar(
     threads: int | None = None,
     units: str | None = None,
     memory_limit: int | float | str | None = None,
-    progress: Any = None,
+    progress: ProgressCallback | None = None,
     fast: bool | int = False,
 ) -> AllanResult:
     r"""Allan-family variance of a record for a grid of averaging times.
@@ -65,13 +65,17 @@ def avar(
 
     Parameters
     ----------
-    x : array_like
-        Record, shape ``(N,)`` or ``(N, C)`` (samples, channels); float64, float32, int16,
-        int32 or int64 (strided views are read without a copy).
+    x : array_like, Record, ChunkedRecord or path
+        Samples, shape ``(N,)`` or ``(N, C)`` (samples, channels); float64, float32, int16,
+        int32 or int64 (strided views are read without a copy). Or a
+        :class:`~allanite.io.Record` (from :func:`allanite.read_record`), which brings its own
+        ``fs``, ``input`` and unit (its longest segment is analysed when a time column split
+        it). A file path or chunked record goes to :func:`avar_large` (read in chunks).
     fs : float
-        Sampling frequency in Hz.
+        Sampling frequency in Hz, keyword only; required for raw samples, taken from a Record.
     input : {"rate", "increment", "angle"}
-        Rate samples, angle increments per sample, or angle.
+        Rate samples, angle increments per sample, or angle (default ``"rate"``; a Record's
+        own for a Record).
     kind : {"overlapping", "standard", "modified", "hadamard", "standard_hadamard", "total", \
 "time"}
         Estimator. ``time`` is the time variance :math:`\tau^2\,\mathrm{MVAR}/3`.
@@ -118,11 +122,10 @@ def avar(
     ----------
     W. J. Riley, *Handbook of Frequency Stability Analysis*, NIST SP1065 (2008).
     """
-    units = record_rate_unit(units, input)  # one validation of the unit, for every caller
     if memory_limit is not None or isinstance(x, (str, os.PathLike, ChunkedRecord)):
         return avar_large(
             x,
-            fs,
+            fs=fs,
             input=input,
             kind=kind,
             taus=taus,
@@ -135,15 +138,16 @@ def avar(
             progress=progress,
             fast=fast,
         )
+    samples, rate, what, units, meta = resolve_source(x, fs, input, units)
+    units = record_rate_unit(units, what)  # one validation of the unit, for every caller
     if kind not in KERNEL_KIND:
         raise ValueError(f"unknown kind {kind!r}; use one of {', '.join(KINDS)}")
-    if input not in INPUTS:
-        raise ValueError(f"unknown input {input!r}; use 'rate', 'increment' or 'angle'")
-    rate = check_fs(fs)
+    if what not in INPUTS:
+        raise ValueError(f"unknown input {what!r}; use 'rate', 'increment' or 'angle'")
     nthreads = check_threads(threads)
     q = fast_q(fast)
-    arr, was_1d = prepare_record(x)
-    phase = _core.phase(arr, input)
+    arr, was_1d = prepare_record(samples)
+    phase = _core.phase(arr, what)
     n_phase = int(phase.shape[0])
     if progress is not None:
         progress("phase", arr.shape[0], arr.shape[0])
@@ -151,14 +155,13 @@ def avar(
         taus, fs=rate, n_samples=arr.shape[0], n_phase=n_phase, kind=kind, m=m, points=points
     )
     kernel_kind = KERNEL_KIND[kind]
-    meta: dict[str, Any] = {}
     var = variances(
         phase, factors, kernel_kind, threads=nthreads, progress=progress, q=q, meta=meta
     )
     if wants_identification(alpha):
         # Stable32 identifies phase data on the phase as recorded (its frequency offset makes
         # the lag-1 method difference at least once); frequency data on the averaged rates
-        if input == "angle":
+        if what == "angle":
             alphas = identify_alpha(
                 arr, factors, kernel_kind, data="phase", detrended=phase, threads=nthreads
             )
@@ -173,7 +176,7 @@ def avar(
         factors,
         alphas,
         rate=rate,
-        input=input,
+        input=what,
         kind=kind,
         n_phase=n_phase,
         n_samples=int(arr.shape[0]),
@@ -183,24 +186,337 @@ def avar(
     )
 
 
-def _twin(kind: Kind, name: str, what: str) -> Any:
-    def dev(x: ArrayLike, fs: float = 1.0, **kwargs: Any) -> AllanResult:
-        return avar(x, fs, kind=kind, **kwargs)
+def adev(
+    x: ArrayLike | Record | ChunkedRecord | str | os.PathLike[str],
+    *,
+    fs: float | None = None,
+    input: InputKind | None = None,
+    taus: TauSpec = "log",
+    m: ArrayLike | None = None,
+    points: int = 100,
+    alpha: int | ArrayLike | str | None = None,
+    threads: int | None = None,
+    units: str | None = None,
+    memory_limit: int | float | str | None = None,
+    progress: ProgressCallback | None = None,
+    fast: bool | int = False,
+) -> AllanResult:
+    """Non-overlapping Allan deviation of a record: :func:`avar` with ``kind="standard"``.
 
-    dev.__name__ = name
-    dev.__qualname__ = name
-    dev.__doc__ = (
-        f"{what} of a record: ``avar(x, fs, kind={kind!r}, ...)``.\n\n"
-        "Returns an :class:`AllanResult`; its ``dev`` is the deviation. See :func:`avar` for the "
-        "parameters."
+    NIST SP1065 eq. 7: adjacent, non-overlapping differences.
+
+    Parameters
+    ----------
+    x, fs, input, taus, m, points, alpha, threads, units, memory_limit, progress, fast
+        As for :func:`avar` (``fs`` keyword only, required for raw samples, taken from a
+        :class:`~allanite.io.Record`).
+
+    Returns
+    -------
+    AllanResult
+        The variance in ``var``; the deviation is ``result.dev`` and its confidence interval
+        ``result.ci(level)``.
+    """
+    return avar(
+        x,
+        fs=fs,
+        input=input,
+        kind="standard",
+        taus=taus,
+        m=m,
+        points=points,
+        alpha=alpha,
+        threads=threads,
+        units=units,
+        memory_limit=memory_limit,
+        progress=progress,
+        fast=fast,
     )
-    return dev
 
 
-adev = _twin("standard", "adev", "Non-overlapping Allan deviation")
-oadev = _twin("overlapping", "oadev", "Overlapping Allan deviation")
-mdev = _twin("modified", "mdev", "Modified Allan deviation")
-hdev = _twin("standard_hadamard", "hdev", "Non-overlapping Hadamard deviation")
-ohdev = _twin("hadamard", "ohdev", "Overlapping Hadamard deviation")
-tdev = _twin("time", "tdev", "Time deviation tau * sqrt(MVAR / 3)")
-totdev = _twin("total", "totdev", "Total deviation (SP1065 reflected extension)")
+def oadev(
+    x: ArrayLike | Record | ChunkedRecord | str | os.PathLike[str],
+    *,
+    fs: float | None = None,
+    input: InputKind | None = None,
+    taus: TauSpec = "log",
+    m: ArrayLike | None = None,
+    points: int = 100,
+    alpha: int | ArrayLike | str | None = None,
+    threads: int | None = None,
+    units: str | None = None,
+    memory_limit: int | float | str | None = None,
+    progress: ProgressCallback | None = None,
+    fast: bool | int = False,
+) -> AllanResult:
+    """Overlapping Allan deviation of a record: :func:`avar` with ``kind="overlapping"``.
+
+    NIST SP1065 eq. 11: all overlapping second differences.
+
+    Parameters
+    ----------
+    x, fs, input, taus, m, points, alpha, threads, units, memory_limit, progress, fast
+        As for :func:`avar` (``fs`` keyword only, required for raw samples, taken from a
+        :class:`~allanite.io.Record`).
+
+    Returns
+    -------
+    AllanResult
+        The variance in ``var``; the deviation is ``result.dev`` and its confidence interval
+        ``result.ci(level)``.
+    """
+    return avar(
+        x,
+        fs=fs,
+        input=input,
+        kind="overlapping",
+        taus=taus,
+        m=m,
+        points=points,
+        alpha=alpha,
+        threads=threads,
+        units=units,
+        memory_limit=memory_limit,
+        progress=progress,
+        fast=fast,
+    )
+
+
+def mdev(
+    x: ArrayLike | Record | ChunkedRecord | str | os.PathLike[str],
+    *,
+    fs: float | None = None,
+    input: InputKind | None = None,
+    taus: TauSpec = "log",
+    m: ArrayLike | None = None,
+    points: int = 100,
+    alpha: int | ArrayLike | str | None = None,
+    threads: int | None = None,
+    units: str | None = None,
+    memory_limit: int | float | str | None = None,
+    progress: ProgressCallback | None = None,
+    fast: bool | int = False,
+) -> AllanResult:
+    """Modified Allan deviation of a record: :func:`avar` with ``kind="modified"``.
+
+    NIST SP1065 eq. 14: second differences of phase averages over m.
+
+    Parameters
+    ----------
+    x, fs, input, taus, m, points, alpha, threads, units, memory_limit, progress, fast
+        As for :func:`avar` (``fs`` keyword only, required for raw samples, taken from a
+        :class:`~allanite.io.Record`).
+
+    Returns
+    -------
+    AllanResult
+        The variance in ``var``; the deviation is ``result.dev`` and its confidence interval
+        ``result.ci(level)``.
+    """
+    return avar(
+        x,
+        fs=fs,
+        input=input,
+        kind="modified",
+        taus=taus,
+        m=m,
+        points=points,
+        alpha=alpha,
+        threads=threads,
+        units=units,
+        memory_limit=memory_limit,
+        progress=progress,
+        fast=fast,
+    )
+
+
+def hdev(
+    x: ArrayLike | Record | ChunkedRecord | str | os.PathLike[str],
+    *,
+    fs: float | None = None,
+    input: InputKind | None = None,
+    taus: TauSpec = "log",
+    m: ArrayLike | None = None,
+    points: int = 100,
+    alpha: int | ArrayLike | str | None = None,
+    threads: int | None = None,
+    units: str | None = None,
+    memory_limit: int | float | str | None = None,
+    progress: ProgressCallback | None = None,
+    fast: bool | int = False,
+) -> AllanResult:
+    """Non-overlapping Hadamard deviation: :func:`avar` with ``kind="standard_hadamard"``.
+
+    NIST SP1065 eq. 17: third differences, insensitive to a linear drift of the rate.
+
+    Parameters
+    ----------
+    x, fs, input, taus, m, points, alpha, threads, units, memory_limit, progress, fast
+        As for :func:`avar` (``fs`` keyword only, required for raw samples, taken from a
+        :class:`~allanite.io.Record`).
+
+    Returns
+    -------
+    AllanResult
+        The variance in ``var``; the deviation is ``result.dev`` and its confidence interval
+        ``result.ci(level)``.
+    """
+    return avar(
+        x,
+        fs=fs,
+        input=input,
+        kind="standard_hadamard",
+        taus=taus,
+        m=m,
+        points=points,
+        alpha=alpha,
+        threads=threads,
+        units=units,
+        memory_limit=memory_limit,
+        progress=progress,
+        fast=fast,
+    )
+
+
+def ohdev(
+    x: ArrayLike | Record | ChunkedRecord | str | os.PathLike[str],
+    *,
+    fs: float | None = None,
+    input: InputKind | None = None,
+    taus: TauSpec = "log",
+    m: ArrayLike | None = None,
+    points: int = 100,
+    alpha: int | ArrayLike | str | None = None,
+    threads: int | None = None,
+    units: str | None = None,
+    memory_limit: int | float | str | None = None,
+    progress: ProgressCallback | None = None,
+    fast: bool | int = False,
+) -> AllanResult:
+    """Overlapping Hadamard deviation of a record: :func:`avar` with ``kind="hadamard"``.
+
+    NIST SP1065 eq. 18: all overlapping third differences.
+
+    Parameters
+    ----------
+    x, fs, input, taus, m, points, alpha, threads, units, memory_limit, progress, fast
+        As for :func:`avar` (``fs`` keyword only, required for raw samples, taken from a
+        :class:`~allanite.io.Record`).
+
+    Returns
+    -------
+    AllanResult
+        The variance in ``var``; the deviation is ``result.dev`` and its confidence interval
+        ``result.ci(level)``.
+    """
+    return avar(
+        x,
+        fs=fs,
+        input=input,
+        kind="hadamard",
+        taus=taus,
+        m=m,
+        points=points,
+        alpha=alpha,
+        threads=threads,
+        units=units,
+        memory_limit=memory_limit,
+        progress=progress,
+        fast=fast,
+    )
+
+
+def tdev(
+    x: ArrayLike | Record | ChunkedRecord | str | os.PathLike[str],
+    *,
+    fs: float | None = None,
+    input: InputKind | None = None,
+    taus: TauSpec = "log",
+    m: ArrayLike | None = None,
+    points: int = 100,
+    alpha: int | ArrayLike | str | None = None,
+    threads: int | None = None,
+    units: str | None = None,
+    memory_limit: int | float | str | None = None,
+    progress: ProgressCallback | None = None,
+    fast: bool | int = False,
+) -> AllanResult:
+    """Time deviation of a record: :func:`avar` with ``kind="time"``.
+
+    ``tau * mdev / sqrt(3)`` (NIST SP1065 eq. 15).
+
+    Parameters
+    ----------
+    x, fs, input, taus, m, points, alpha, threads, units, memory_limit, progress, fast
+        As for :func:`avar` (``fs`` keyword only, required for raw samples, taken from a
+        :class:`~allanite.io.Record`).
+
+    Returns
+    -------
+    AllanResult
+        The variance in ``var``; the deviation is ``result.dev`` and its confidence interval
+        ``result.ci(level)``.
+    """
+    return avar(
+        x,
+        fs=fs,
+        input=input,
+        kind="time",
+        taus=taus,
+        m=m,
+        points=points,
+        alpha=alpha,
+        threads=threads,
+        units=units,
+        memory_limit=memory_limit,
+        progress=progress,
+        fast=fast,
+    )
+
+
+def totdev(
+    x: ArrayLike | Record | ChunkedRecord | str | os.PathLike[str],
+    *,
+    fs: float | None = None,
+    input: InputKind | None = None,
+    taus: TauSpec = "log",
+    m: ArrayLike | None = None,
+    points: int = 100,
+    alpha: int | ArrayLike | str | None = None,
+    threads: int | None = None,
+    units: str | None = None,
+    memory_limit: int | float | str | None = None,
+    progress: ProgressCallback | None = None,
+    fast: bool | int = False,
+) -> AllanResult:
+    """Total deviation of a record: :func:`avar` with ``kind="total"``.
+
+    NIST SP1065 eq. 25: overlapping differences on the reflected extension of the record.
+
+    Parameters
+    ----------
+    x, fs, input, taus, m, points, alpha, threads, units, memory_limit, progress, fast
+        As for :func:`avar` (``fs`` keyword only, required for raw samples, taken from a
+        :class:`~allanite.io.Record`).
+
+    Returns
+    -------
+    AllanResult
+        The variance in ``var``; the deviation is ``result.dev`` and its confidence interval
+        ``result.ci(level)``.
+    """
+    return avar(
+        x,
+        fs=fs,
+        input=input,
+        kind="total",
+        taus=taus,
+        m=m,
+        points=points,
+        alpha=alpha,
+        threads=threads,
+        units=units,
+        memory_limit=memory_limit,
+        progress=progress,
+        fast=fast,
+    )

@@ -34,8 +34,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from allanite import _core
+from allanite.io.record import Record
 from allanite.units import record_rate_unit
-from allanite.variance.checks import INPUTS, KINDS, check_fs, check_threads, given_alpha
+from allanite.variance.checks import INPUTS, KINDS, check_threads, given_alpha, resolve_source
 from allanite.variance.chunked import ChunkedRecord, as_chunked, open_large
 from allanite.variance.edf import (
     cap_few_point_alpha,
@@ -317,10 +318,10 @@ def _capped(
 
 
 def avar_large(
-    source: ArrayLike | ChunkedRecord | str | os.PathLike[str],
-    fs: float = 1.0,
+    source: ArrayLike | Record | ChunkedRecord | str | os.PathLike[str],
     *,
-    input: str = "rate",
+    fs: float | None = None,
+    input: str | None = None,
     kind: str = "overlapping",
     taus: TauSpec = "log",
     m: ArrayLike | None = None,
@@ -343,8 +344,9 @@ def avar_large(
 
     Parameters
     ----------
-    source : array_like, ChunkedRecord or path
-        Samples ``(N,)``/``(N, C)``, a record from :mod:`allanite.variance.chunked`, or a file path
+    source : array_like, Record, ChunkedRecord or path
+        Samples ``(N,)``/``(N, C)``, a :class:`~allanite.io.Record` (its own ``fs``, ``input``
+        and unit), a record from :mod:`allanite.variance.chunked`, or a file path
         opened with :func:`allanite.variance.chunked.open_large` and ``open_options`` (e.g.
         ``dtype="float32", channels=3, byteorder="<"`` for raw binary).
     fs, input, kind, taus, m, points, alpha, threads, units
@@ -375,12 +377,12 @@ def avar_large(
     ----------
     W. J. Riley, *Handbook of Frequency Stability Analysis*, NIST SP1065 (2008), eq. 11-20.
     """
+    source, rate, input, units, meta = resolve_source(source, fs, input, units)
     if kind not in KERNEL_KIND:
         raise ValueError(f"unknown kind {kind!r}; use one of {', '.join(KINDS)}")
     if input not in INPUTS:
         raise ValueError(f"unknown input {input!r}; use 'rate', 'increment' or 'angle'")
     units = record_rate_unit(units, input)  # the same check as avar's
-    rate = check_fs(fs)
     nthreads = check_threads(threads)
     limit = parse_memory(memory_limit)
     if isinstance(source, (str, Path, os.PathLike)):
@@ -388,7 +390,7 @@ def avar_large(
     else:
         if open_options:
             raise TypeError(f"file options {sorted(open_options)} apply only when source is a path")
-        record = as_chunked(source)
+        record = as_chunked(source)  # type: ignore[arg-type]  # a Record was resolved above
     nc = record.n_channels
     workers = max(1, nthreads or (os.cpu_count() or 1))
     if chunk_rows is None:
@@ -413,7 +415,7 @@ def avar_large(
         )
         window_bytes = None if limit is None else limit // 2
         alpha_rows = None if limit is None else max(1024, limit // (16 * 8 * workers * nc))
-        meta: dict[str, Any] = {"phase_in_memory": store.in_memory, "phase_bytes": store.nbytes}
+        meta.update(phase_in_memory=store.in_memory, phase_bytes=store.nbytes)
         q = fast_q(fast)
         if q is not None:
             if store.array is None:
