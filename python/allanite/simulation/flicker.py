@@ -1,23 +1,45 @@
-r"""Flicker (1/f) rate noise: spectral synthesis, Kasdin's filter, or a streaming bank.
+r"""Flicker (1/f) rate noise: spectral synthesis, a streaming bank + FIR, or Kasdin's filter.
 
 * Records up to :data:`SPECTRAL_MAX_SAMPLES` samples (and :data:`SPECTRAL_MAX_VALUES` values
-  over all channels): :class:`~allanite.simulation.spectral.
-  SpectralStream` with the term's exact sampled PSD :math:`B^2/(\pi f)\,\mathrm{sinc}^2(f
-  \Delta t)` (interval averages of band-limited 1/f noise), so the samples have the exact
-  Allan variance of :class:`allanite.terms.Flicker` down to :math:`\tau = \Delta t`.
-* Longer records (or ``method="bank"``): a sum of point-sampled AR(1) processes with
-  log-spaced correlation times (three per decade from :math:`\Delta t/4` to beyond the record
-  length) plus a white part, run in the C++ core in bounded memory. The variances are fitted
-  (non-negative least squares, relative error on a log-frequency grid) to the sampled PSD.
-  Its exact Allan variance (:func:`allanite.terms.flicker_laws.bank_avar`) holds the flicker
-  plateau :math:`0.664 B` within about 0.5% from :math:`\tau \approx 30\Delta t` up to about
-  a tenth of the longest correlation time, but it is not the band-limited flicker shape at the
-  first few lags (about -30% at :math:`\tau = \Delta t`).
+  over all channels): :class:`~allanite.simulation.spectral.SpectralStream` with the term's
+  exact sampled PSD :math:`S(f) = B^2/(\pi f)\,\mathrm{sinc}^2(f\Delta t)` (interval averages
+  of band-limited 1/f noise), so the samples have the exact Allan variance of
+  :class:`allanite.terms.Flicker` down to :math:`\tau = \Delta t`.
+* Longer records (or ``method="bank"``): :class:`FlickerStream`, in bounded memory and for any
+  length, the sum of three independent parts whose sampled PSDs add up to :math:`S`:
+
+  1. a bank of point-sampled stationary AR(1) processes with log-spaced correlation times
+     :math:`T_j = T_0 r^j` (:data:`STREAM_PER_DECADE` per decade, :math:`T_0` =
+     :data:`STREAM_FASTEST_TC` samples, up to :data:`STREAM_SLOWEST_RECORDS` record lengths)
+     and the weights :math:`s_j^2 = B^2\ln r/\pi` of the log-spaced relaxation sum, which make
+     :math:`\sum_j 4 s_j^2 T_j/(1 + (2\pi f T_j)^2) = B^2/(\pi f)` up to a relative ripple
+     :math:`4 e^{-\pi^2/\ln r} = 1.4\times 10^{-7}` between the two ends (C++ core);
+  2. a random walk standing for the components slower than the last one (their PSD, for
+     :math:`f \gg 1/T_{max}`, is :math:`\sum s_j^2/(\pi^2 f^2 T_j)`, a random walk's);
+  3. the rest, :math:`S - S_\text{bank}` (non-negative by design: the bank lacks the fast
+     components, :math:`\approx 0.94 B^2 T_0` at low frequency), as white noise through a
+     zero-phase FIR filter of :data:`STREAM_FIR_TAPS` taps (frequency sampling of
+     :math:`\sqrt{(S - S_\text{bank})/2}` on :data:`STREAM_DESIGN_GRID` lines), applied by
+     overlap-save in fixed blocks. Its correlation is short (:math:`\sim T_0`), so the
+     truncated filter reproduces it, including the interval-average :math:`\mathrm{sinc}^2`
+     factor and the band edge at the cutoff.
+
+  Every part's law is exact and computed in
+  :func:`allanite.terms.flicker_laws.bank_avar` (AR(1) and walk in closed form, the FIR from
+  its taps' autocovariance); its largest relative deviation from the term's
+  :meth:`~allanite.terms.Flicker.avar`, over :math:`\tau = \Delta t` .. half the record, is
+  about :math:`10^{-7}` with ``f0`` unset (see ``benchmarks/results/sim_flicker_stream.md``),
+  far inside the chi-square band of any feasible record (:math:`\gtrsim 10^{-4}` at
+  :math:`\tau = \Delta t` for :math:`10^8` samples).
 * ``method="kasdin"`` (on request only, records of known length up to
   :data:`~allanite.simulation.kasdin.KASDIN_MAX_SAMPLES`): Kasdin's fractional-difference
   filter of white noise, :class:`~allanite.simulation.kasdin.KasdinStream`; its own exact
   Allan variance is :func:`~allanite.terms.flicker_laws.kasdin_avar` (+70% over the term at
   :math:`\tau = \Delta t`, the 0.664 B plateau from about :math:`100\Delta t` on).
+
+:func:`flicker_bank` (a Gauss-Markov bank plus white noise fitted to the sampled PSD, about
+-30% in Allan variance at :math:`\tau = \Delta t`) is no longer a simulation method: it is the
+Gauss-Markov reading of a flicker term used by the error laws of :mod:`allanite.impact`.
 
 References
 ----------
@@ -29,6 +51,7 @@ from __future__ import annotations
 
 import functools
 import math
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -38,12 +61,16 @@ from scipy.optimize import nnls
 from allanite.simulation.gaussian import Ar1BankStream
 from allanite.simulation.kasdin import KasdinStream
 from allanite.simulation.spectral import SpectralStream
-from allanite.simulation.streams import TermStream
+from allanite.simulation.streams import TermStream, seed_sequence
 
 __all__ = [
     "FLICKER_METHODS",
     "SPECTRAL_MAX_SAMPLES",
+    "FirStream",
+    "FlickerDesign",
+    "FlickerStream",
     "flicker_bank",
+    "flicker_design",
     "flicker_stream",
 ]
 
@@ -54,7 +81,20 @@ FLICKER_METHODS: tuple[str, ...] = ("auto", "spectral", "kasdin", "bank")
 SPECTRAL_MAX_SAMPLES = 1 << 21
 #: and at most this many values (samples x channels) held for all channels (128 MB)
 SPECTRAL_MAX_VALUES = 1 << 24
-#: Gauss-Markov components per decade of correlation time in the streaming bank
+#: AR(1) components per decade of correlation time in the streaming generator (PSD ripple
+#: 4 exp(-pi^2 / ln r) = 1.4e-7 for r = 10^(1/4))
+STREAM_PER_DECADE = 4
+#: its fastest AR(1) component, in samples (faster parts of the PSD are the FIR's)
+STREAM_FASTEST_TC = 256.0
+#: its slowest AR(1) component is at least this many record lengths (slower: a random walk)
+STREAM_SLOWEST_RECORDS = 100.0
+#: taps of its FIR residual filter
+STREAM_FIR_TAPS = 1 << 15
+#: frequency lines (over [0, 1/dt)) on which the FIR residual filter is designed
+STREAM_DESIGN_GRID = 1 << 20
+#: FFT length of the overlap-save FIR filtering (fixed, so the samples never depend on chunks)
+STREAM_FFT = 1 << 17
+#: Gauss-Markov components per decade of correlation time in :func:`flicker_bank`
 PER_DECADE = 3
 #: components up to this correlation time (in samples) are fitted, slower ones analytic
 FITTED_TC = 300.0
@@ -113,7 +153,10 @@ def _unit_bank(decades: int, cutoff: float) -> tuple[NDArray[np.float64], NDArra
 def flicker_bank(
     B: float, dt: float, *, cutoff_hz: float | None = None, n_samples: int | None = None
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], float]:
-    """Design the streaming bank for flicker ``B`` at period ``dt``.
+    """Gauss-Markov bank plus white noise fitted to flicker ``B`` at period ``dt``.
+
+    The Gauss-Markov reading of a flicker term for the error laws of :mod:`allanite.impact`
+    (about -30% in Allan variance at ``tau = dt``); simulation uses :class:`FlickerStream`.
 
     Returns
     -------
@@ -129,6 +172,160 @@ def flicker_bank(
     sigma = np.sqrt(weights[:-1][keep]) * B
     white_n = math.sqrt(weights[-1]) * B * math.sqrt(dt)  # per-sample sd = N / sqrt(dt)
     return tcs[keep] * dt, sigma, white_n
+
+
+@dataclass(frozen=True)
+class FlickerDesign:
+    """The streaming flicker generator for ``B = 1`` and ``dt = 1`` (scale by B and dt).
+
+    Attributes
+    ----------
+    tcs : numpy.ndarray
+        Correlation times of the AR(1) components, in samples.
+    variance : float
+        Variance of each AR(1) component (the same for all, ``ln r / pi``).
+    walk : float
+        Variance of the random walk's increment per sample.
+    taps : numpy.ndarray
+        FIR taps of the residual filter (zero-phase, centred), driven by unit white noise.
+    clipped : float
+        Power of the negative residual PSD clipped to zero, as a share of the target's power on
+        the design grid: 0 when the bank stays below the target everywhere (as it does without
+        a cutoff ``f0``); with ``f0`` below Nyquist the bank's tails above ``f0`` are not
+        cancelled and the generator is only approximate (see the module docstring).
+    """
+
+    tcs: NDArray[np.float64]
+    variance: float
+    walk: float
+    taps: NDArray[np.float64]
+    clipped: float
+
+
+def _bank_psd(u: NDArray[np.float64], tcs: NDArray[np.float64], variance: float, walk: float):
+    """One-sided sampled PSD (dt = 1) of the AR(1) components and the walk at u = f dt."""
+    total = walk / (2.0 * np.sin(np.pi * u) ** 2)
+    for tc in tcs:
+        total = total + variance * _ar1_psd(u, float(tc))
+    return total
+
+
+@functools.lru_cache(maxsize=16)
+def _unit_design(n_components: int, cutoff: float) -> FlickerDesign:
+    ratio = 10.0 ** (1.0 / STREAM_PER_DECADE)
+    variance = math.log(ratio) / math.pi
+    tcs = STREAM_FASTEST_TC * ratio ** np.arange(n_components)
+    # the slower components' PSD sum_j s^2 / (pi^2 f^2 T_j) is a random walk's K^2/(2 pi^2 f^2)
+    walk = 2.0 * variance / (tcs[-1] * (ratio - 1.0))
+    grid = STREAM_DESIGN_GRID
+    u = np.arange(1, grid // 2 + 1) / grid
+    target = _unit_psd(u, cutoff)
+    residual = target - _bank_psd(u, tcs, variance, walk)
+    clipped = float(np.sum(np.clip(-residual, 0.0, None)) / np.sum(target))
+    amplitude = np.sqrt(np.clip(residual, 0.0, None) / 2.0)
+    # the zero-frequency line: the residual's limit there (it is smooth, ~0.94 T0)
+    amplitude = np.concatenate((amplitude[:1], amplitude))
+    response = np.fft.irfft(amplitude, grid)
+    half = STREAM_FIR_TAPS // 2
+    taps = np.concatenate((response[-half:], response[:half]))
+    return FlickerDesign(tcs, variance, walk, taps, clipped)
+
+
+def flicker_design(n_samples: int | None = None, cutoff: float = 0.5) -> FlickerDesign:
+    """Design the streaming generator (``B = 1``, ``dt = 1``) for a record of ``n_samples``.
+
+    Parameters
+    ----------
+    n_samples : int, optional
+        Record length (default :data:`DEFAULT_BANK_SAMPLES`); the slowest AR(1) component is
+        at least :data:`STREAM_SLOWEST_RECORDS` times longer.
+    cutoff : float
+        Cutoff ``f0 dt`` of the term (at most 1/2, the Nyquist frequency).
+    """
+    n = DEFAULT_BANK_SAMPLES if n_samples is None else max(int(n_samples), 10)
+    ratio = 10.0 ** (1.0 / STREAM_PER_DECADE)
+    slowest = STREAM_SLOWEST_RECORDS * n / STREAM_FASTEST_TC
+    n_components = max(1, math.ceil(math.log(slowest) / math.log(ratio)) + 1)
+    return _unit_design(n_components, round(min(cutoff, 0.5), 12))
+
+
+def _child(seed: Any, index: int) -> np.random.SeedSequence:
+    """The ``index``-th child of ``seed`` without mutating it (as ``spawn`` would make it)."""
+    parent = seed_sequence(seed)
+    return np.random.SeedSequence(parent.entropy, spawn_key=(*parent.spawn_key, index))
+
+
+class FirStream(TermStream):
+    """Unit white noise through the FIR filter ``taps`` (stationary from the first sample).
+
+    Output ``y_k = sum_i taps_i w_{k-i}``, by overlap-save with a fixed FFT length
+    (:data:`STREAM_FFT`), so the samples depend on the seed alone; it holds the last
+    ``len(taps) - 1`` inputs per channel.
+    """
+
+    def __init__(
+        self, taps: NDArray[np.float64], fs: float, n_channels: int, seed: Any = None
+    ) -> None:
+        super().__init__(fs, n_channels, seed)
+        self.taps = np.asarray(taps, dtype=np.float64)
+        self.n_fft = max(STREAM_FFT, 1 << int(math.ceil(math.log2(4 * self.taps.size))))
+        self.step = self.n_fft - self.taps.size + 1
+        self._kernel = np.fft.rfft(self.taps, self.n_fft)[:, None]
+        self._inputs = self.rng.standard_normal((self.taps.size - 1, self.n_channels))
+        self._pending = np.empty((0, self.n_channels))
+
+    def _filter(self) -> NDArray[np.float64]:
+        x = np.concatenate((self._inputs, self.rng.standard_normal((self.step, self.n_channels))))
+        spectrum = np.fft.rfft(x, axis=0) * self._kernel
+        y = np.fft.irfft(spectrum, self.n_fft, axis=0)[self.taps.size - 1 :]
+        self._inputs = x[self.step :]
+        return y
+
+    def _generate(self, start: int, n: int) -> NDArray[np.float64]:
+        parts = [self._pending]
+        have = self._pending.shape[0]
+        while have < n:
+            parts.append(self._filter())
+            have += parts[-1].shape[0]
+        pending = np.concatenate(parts) if len(parts) > 1 else self._pending
+        self._pending = pending[n:]
+        return pending[:n]
+
+
+class FlickerStream(TermStream):
+    """Streaming flicker noise for records of any length (see the module docstring).
+
+    The AR(1) bank with its random walk and the FIR residual have their own generators,
+    children 0 and 1 of ``seed``.
+
+    Parameters
+    ----------
+    B : float
+        Flicker coefficient (rate).
+    design : FlickerDesign
+        From :func:`flicker_design`.
+    fs, n_channels, seed
+        See :class:`~allanite.simulation.streams.TermStream`.
+    """
+
+    def __init__(
+        self, B: float, design: FlickerDesign, fs: float, n_channels: int, seed: Any = None
+    ) -> None:
+        super().__init__(fs, n_channels, seed)
+        self.design = design
+        theta = 1.0 / design.tcs
+        phi = np.append(np.exp(-theta), 1.0)
+        sd = B * math.sqrt(design.variance)
+        q = np.append(sd * np.sqrt(-np.expm1(-theta) * (1.0 + phi[:-1])), B * math.sqrt(design.walk))
+        initial = np.append(np.full(design.tcs.size, sd), 0.0)
+        self.bank = Ar1BankStream(
+            phi, q, phi, 1.0, fs=fs, n_channels=n_channels, seed=_child(seed, 0),
+            initial_sd=initial,
+        )  # fmt: skip
+        self.fir = FirStream(B * design.taps, fs, n_channels, _child(seed, 1))
+
+    def _generate(self, start: int, n: int) -> NDArray[np.float64]:
+        return self.bank.next(n) + self.fir.next(n)
 
 
 def flicker_stream(
@@ -153,7 +350,9 @@ def flicker_stream(
     method : {"auto", "spectral", "kasdin", "bank"}
         ``auto`` = spectral when ``n_samples`` is known, at most
         :data:`SPECTRAL_MAX_SAMPLES` and ``n_samples * n_channels`` at most
-        :data:`SPECTRAL_MAX_VALUES`, else the streaming bank. ``kasdin`` = Kasdin's
+        :data:`SPECTRAL_MAX_VALUES`, else the streaming bank + FIR generator
+        (:class:`FlickerStream`, exact to about 1e-7 in Allan variance, any length);
+        ``bank`` forces it. ``kasdin`` = Kasdin's
         fractional filter (needs ``n_samples``; no cutoff ``f0``).
 
     Raises
@@ -194,18 +393,5 @@ def flicker_stream(
         if n_samples is None:
             raise ValueError("the spectral flicker method needs the record length n_samples")
         return SpectralStream(lambda f: term.psd_sampled(f, dt), n_samples, fs, n_channels, seed)
-    tcs, sigma, white_n = flicker_bank(term.B, dt, cutoff_hz=term.f0, n_samples=n_samples)
-    theta = dt / tcs
-    phi = np.exp(-theta)
-    q = sigma * np.sqrt(-np.expm1(-theta) * (1.0 + phi))
-    return Ar1BankStream(
-        phi,
-        q,
-        phi,
-        1.0,
-        g=white_n / math.sqrt(dt),
-        fs=fs,
-        n_channels=n_channels,
-        seed=seed,
-        initial_sd=sigma,
-    )
+    design = flicker_design(n_samples, 0.5 if term.f0 is None else term.f0 * dt)
+    return FlickerStream(term.B, design, fs, n_channels, seed)

@@ -3,8 +3,9 @@ r"""Exact Allan variances of the two streaming flicker generators of :mod:`allan
 The flicker term's own law is :meth:`allanite.terms.Flicker.avar`; the simulated samples follow
 the law of the generator that produced them, which these functions give exactly:
 
-* :func:`bank_avar`: the sum of AR(1) processes and a white part designed by
-  :func:`allanite.simulation.flicker.flicker_bank`;
+* :func:`bank_avar`: the streaming generator
+  :class:`allanite.simulation.flicker.FlickerStream` (AR(1) bank, random walk and FIR
+  residual, designed by :func:`allanite.simulation.flicker.flicker_design`);
 * :func:`kasdin_avar`: Kasdin's fractional-difference filter
   (:class:`allanite.simulation.kasdin.KasdinStream`), stationary or truncated at the record
   start (see :mod:`allanite.simulation.kasdin` for the derivation).
@@ -22,12 +23,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy import integrate
 
-from allanite.simulation.flicker import flicker_bank
+from allanite.simulation.flicker import flicker_design
 from allanite.simulation.kasdin import kasdin_coefficients
 from allanite.terms._checks import averaging_factor
-from allanite.terms.markov import GaussMarkov
-from allanite.terms.transients import markov_avar_continuous
-from allanite.terms.white import White
+from allanite.terms.markov import sampled_ar1_avar
 
 __all__ = ["bank_avar", "kasdin_avar"]
 
@@ -45,23 +44,67 @@ def bank_avar(
     cutoff_hz: float | None = None,
     n_samples: int | None = None,
 ) -> NDArray[np.float64]:
-    r"""Return the exact Allan variance of the streaming bank (its AR(1) and white parts).
+    r"""Return the exact Allan variance of the streaming flicker generator.
 
-    Components with :math:`\theta = \Delta t/T_c \ge 10^{-4}` use the sampled AR(1) form of
-    :class:`~allanite.terms.GaussMarkov`; slower ones, where that form cancels
-    catastrophically, the continuous form plus the sampled random walk's
-    :math:`s^2\theta/(3m)` (relative error :math:`O(\theta)`).
+    The sum of its three independent parts (:mod:`allanite.simulation.flicker`): the AR(1)
+    components (:func:`~allanite.terms.markov.sampled_ar1_avar`), the random walk
+    (:math:`K^2\Delta t(2m^2+1)/(6m)`) and the FIR residual, whose Allan variance is
+    :math:`\frac{1}{2m^2}\sum_k R_k\,(2t_k - t_{k-m} - t_{k+m})` from its taps'
+    autocovariance :math:`R_k` and :math:`t_k = \max(m - |k|, 0)`.
+
+    Parameters
+    ----------
+    tau : array_like
+        Averaging times in seconds, whole multiples ``m dt`` of the sample period.
+    dt : float
+        Sample period in seconds.
+    B : float
+        Flicker coefficient (rate).
+    cutoff_hz : float, optional
+        The term's cutoff ``f0`` (None: Nyquist).
+    n_samples : int, optional
+        Record length the generator was designed for (None: its default).
+
+    Raises
+    ------
+    ValueError
+        For ``tau`` off the sample grid.
     """
-    t = np.asarray(tau, dtype=np.float64)
-    tcs, sigma, white_n = flicker_bank(B, dt, cutoff_hz=cutoff_hz, n_samples=n_samples)
-    total = White(N=white_n).avar(t, dt)
-    for tc, s in zip(tcs, sigma, strict=True):
-        if dt / tc >= 1e-4:
-            total = total + GaussMarkov(sigma=float(s), tau_c=float(tc)).avar(t, dt)
-        else:
-            theta = dt / tc
-            total = total + markov_avar_continuous(s**2, tc, t) + s**2 * theta * dt / (3.0 * t)
-    return np.asarray(total)
+    t, m = _whole_factors(tau, dt)
+    cutoff = 0.5 if cutoff_hz is None else cutoff_hz * dt
+    design = flicker_design(n_samples, cutoff)
+    mf = m.astype(np.float64)
+    total = design.walk * (2.0 * mf**2 + 1.0) / (6.0 * mf)
+    for tc in design.tcs:
+        total = total + sampled_ar1_avar(design.variance, 1.0 / float(tc), mf)
+    total = total + _fir_avar(design.taps, m)
+    return np.asarray(B * B * total, dtype=np.float64).reshape(t.shape)
+
+
+def _fir_avar(taps: NDArray[np.float64], m: NDArray[np.int64]) -> NDArray[np.float64]:
+    """Allan variance of unit white noise through ``taps`` at whole factors ``m``."""
+    n = taps.size
+    size = 1 << int(math.ceil(math.log2(2 * n)))
+    spectrum = np.fft.rfft(taps, size)
+    autocov = np.fft.irfft(spectrum.real**2 + spectrum.imag**2, size)[:n]  # R_0 .. R_{n-1}
+    lags = np.arange(n, dtype=np.float64)
+    total_r = autocov[0] + 2.0 * float(np.sum(autocov[1:]))
+    total_kr = 2.0 * float(np.sum(lags * autocov))
+    out = np.empty(m.shape, dtype=np.float64)
+    for index, mm in np.ndenumerate(m):
+        mm = int(mm)
+        if mm >= n:
+            # all lags inside the blocks: the weight is 2m - 3|k|
+            out[index] = (2.0 * mm * total_r - 3.0 * total_kr) / (2.0 * mm * mm)
+            continue
+        tri = np.clip(mm - lags, 0.0, None)
+        shifted_down = np.clip(mm - np.abs(lags - mm), 0.0, None)
+        shifted_up = np.clip(mm - (lags + mm), 0.0, None)  # zero for k >= 0
+        weight = 2.0 * tri - shifted_down - shifted_up
+        # R is even: lag 0 once, the others twice
+        value = autocov[0] * weight[0] + 2.0 * float(np.sum(autocov[1:] * weight[1:]))
+        out[index] = value / (2.0 * mm * mm)
+    return out
 
 
 def _cumulative_table(k_max: int) -> NDArray[np.float64]:
