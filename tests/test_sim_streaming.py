@@ -135,6 +135,23 @@ def test_streamed_flicker_holds_its_plateau_over_three_decades():
     assert np.all((lo <= exact) & (exact <= hi)), np.sqrt(pooled / PLATEAU) / B
 
 
+def test_long_streamed_flicker_has_the_term_avar_from_the_first_tau():
+    # 2^22 samples (> SPECTRAL_MAX_SAMPLES: auto streams the bank + FIR generator); every tau
+    # from dt to n/16 inside the 99.9% chi-square band (EDF of the estimate) of Flicker.avar,
+    # which the law of the generator equals (test_sim_terms); the band at tau = dt is +-0.3%
+    fs, n, B = 10.0, 1 << 22, 2e-3
+    term = Flicker(B=B)
+    stream = flicker_stream(term, fs, 1, seed=2024, n_samples=n)
+    x = np.concatenate([stream.next(1 << 20) for _ in range(4)])
+    m = np.unique(np.round(np.logspace(0, np.log10(n / 16), 16))).astype(np.int64)
+    result = allanite.avar(x, fs=fs, m=m, alpha=-1)
+    edf = result.edf[:, 0]
+    exact = term.avar(result.tau, 1.0 / fs)
+    lo = result.var[:, 0] * edf / stats.chi2.ppf(0.9995, edf)
+    hi = result.var[:, 0] * edf / stats.chi2.ppf(0.0005, edf)
+    assert np.all((lo <= exact) & (exact <= hi)), result.var[:, 0] / exact
+
+
 def test_streaming_flicker_bank_is_chunk_independent():
     def make():
         return flicker_stream(Flicker(B=1.0), 100.0, 3, seed=21, method="bank")

@@ -11,9 +11,11 @@ from scipy import integrate
 import allanite
 from allanite.simulation.flicker import (
     SPECTRAL_MAX_SAMPLES,
+    FlickerStream,
+    flicker_design,
     flicker_stream,
 )
-from allanite.simulation.gaussian import Ar1BankStream, _residual_variance
+from allanite.simulation.gaussian import _residual_variance
 from allanite.simulation.spectral import SpectralStream
 from allanite.terms import (
     BiasSteps,
@@ -26,7 +28,8 @@ from allanite.terms import (
     term_from_dict,
 )
 from allanite.terms.flicker import PLATEAU
-from allanite.terms.flicker_laws import bank_avar
+from allanite.terms.flicker_laws import _fir_avar, bank_avar
+from allanite.terms.markov import sampled_ar1_avar
 from allanite.terms.transients import markov_avar_continuous
 
 NEW_TERMS = [
@@ -114,18 +117,52 @@ def test_flicker_method_choice():
     term = Flicker(B=1.0)
     assert isinstance(flicker_stream(term, 100.0, 1, 1, n_samples=1000), SpectralStream)
     assert isinstance(
-        flicker_stream(term, 100.0, 1, 1, n_samples=SPECTRAL_MAX_SAMPLES + 1), Ar1BankStream
+        flicker_stream(term, 100.0, 1, 1, n_samples=SPECTRAL_MAX_SAMPLES + 1), FlickerStream
     )
-    assert isinstance(flicker_stream(term, 100.0, 1, 1), Ar1BankStream)
+    assert isinstance(flicker_stream(term, 100.0, 1, 1), FlickerStream)
     with pytest.raises(ValueError, match="unknown flicker method"):
         flicker_stream(term, 100.0, 1, 1, method="fft")
 
 
-def test_bank_plateau_for_a_day_at_2khz():
-    dt, n = 1.0 / 2000.0, 24 * 3600 * 2000
-    tau = np.logspace(np.log10(30 * dt), np.log10(n * dt / 10), 40)
-    ratio = bank_avar(tau, dt, 1.0, n_samples=n) / PLATEAU
-    np.testing.assert_allclose(ratio, 1.0, atol=0.01)
+@pytest.mark.parametrize("n", [24 * 3600 * 2000, 10**9])
+def test_streaming_flicker_law_is_the_term_at_every_tau(n):
+    # a day at 2 kHz and 1e9 samples: the generator's exact law is Flicker.avar from tau = dt
+    # to half the record within 1e-5, far inside the chi-square band (>= 1e-4 at tau = dt)
+    dt = 1.0 / 2000.0
+    m = np.unique(np.round(np.logspace(0, np.log10(n / 2), 60)))
+    law = bank_avar(m * dt, dt, 1.0, n_samples=n)
+    np.testing.assert_allclose(law, Flicker(B=1.0).avar(m * dt, dt), rtol=1e-5, atol=0)
+    # the three parts sum to the sampled PSD without clipping anything
+    assert flicker_design(n).clipped == 0.0
+    # (the old point-sampled bank was -30% at tau = dt; the plateau holds as before)
+    plateau = m >= 30
+    np.testing.assert_allclose(law[plateau] / PLATEAU, 1.0, atol=0.01)
+
+
+def test_bank_law_needs_tau_on_the_sample_grid():
+    with pytest.raises(ValueError, match="whole multiples"):
+        bank_avar([1.5e-3], 1e-3, 1.0)
+
+
+@pytest.mark.parametrize("theta", [1e-9, 1e-4, 0.09, 0.11, 3.0])
+def test_sampled_ar1_avar_is_the_autocovariance_sum(theta):
+    # brute force: AVAR = -(1/2m^2) sum_k (1 - phi^|k|) w_k (the constant part of R cancels)
+    for m in (1, 2, 9, 150):
+        k = np.arange(-2 * m + 1, 2 * m)
+        tri = np.clip(m - np.abs(k), 0, None)
+        w = 2 * tri - np.clip(m - np.abs(k - m), 0, None) - np.clip(m - np.abs(k + m), 0, None)
+        brute = -np.sum(-np.expm1(-np.abs(k) * theta) * w) / (2.0 * m * m)
+        assert sampled_ar1_avar(2.0, theta, m) == pytest.approx(2.0 * brute, rel=1e-12)
+
+
+def test_fir_avar_is_the_filtered_difference_variance():
+    # AVAR = |g|^2 / 2 with g = taps * c, c = (-1 x m, +1 x m) / m: white input, both branches
+    taps = np.random.default_rng(3).standard_normal(50)
+    for m in (1, 7, 49, 50, 120):
+        c = np.concatenate((-np.ones(m), np.ones(m))) / m
+        g = np.convolve(taps, c)
+        expected = 0.5 * float(np.sum(g * g))
+        assert _fir_avar(taps, np.array([m]))[0] == pytest.approx(expected, rel=1e-12)
 
 
 def test_spectral_stream_rejects_overrun():

@@ -202,7 +202,9 @@ class FlickerDesign:
     clipped: float
 
 
-def _bank_psd(u: NDArray[np.float64], tcs: NDArray[np.float64], variance: float, walk: float):
+def _bank_psd(
+    u: NDArray[np.float64], tcs: NDArray[np.float64], variance: float, walk: float
+) -> NDArray[np.float64]:
     """One-sided sampled PSD (dt = 1) of the AR(1) components and the walk at u = f dt."""
     total = walk / (2.0 * np.sin(np.pi * u) ** 2)
     for tc in tcs:
@@ -268,7 +270,7 @@ class FirStream(TermStream):
     ) -> None:
         super().__init__(fs, n_channels, seed)
         self.taps = np.asarray(taps, dtype=np.float64)
-        self.n_fft = max(STREAM_FFT, 1 << int(math.ceil(math.log2(4 * self.taps.size))))
+        self.n_fft = max(STREAM_FFT, 1 << math.ceil(math.log2(4 * self.taps.size)))
         self.step = self.n_fft - self.taps.size + 1
         self._kernel = np.fft.rfft(self.taps, self.n_fft)[:, None]
         self._inputs = self.rng.standard_normal((self.taps.size - 1, self.n_channels))
@@ -316,7 +318,9 @@ class FlickerStream(TermStream):
         theta = 1.0 / design.tcs
         phi = np.append(np.exp(-theta), 1.0)
         sd = B * math.sqrt(design.variance)
-        q = np.append(sd * np.sqrt(-np.expm1(-theta) * (1.0 + phi[:-1])), B * math.sqrt(design.walk))
+        q = np.append(
+            sd * np.sqrt(-np.expm1(-theta) * (1.0 + phi[:-1])), B * math.sqrt(design.walk)
+        )
         initial = np.append(np.full(design.tcs.size, sd), 0.0)
         self.bank = Ar1BankStream(
             phi, q, phi, 1.0, fs=fs, n_channels=n_channels, seed=_child(seed, 0),

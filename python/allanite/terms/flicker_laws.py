@@ -84,7 +84,7 @@ def bank_avar(
 def _fir_avar(taps: NDArray[np.float64], m: NDArray[np.int64]) -> NDArray[np.float64]:
     """Allan variance of unit white noise through ``taps`` at whole factors ``m``."""
     n = taps.size
-    size = 1 << int(math.ceil(math.log2(2 * n)))
+    size = 1 << math.ceil(math.log2(2 * n))
     spectrum = np.fft.rfft(taps, size)
     autocov = np.fft.irfft(spectrum.real**2 + spectrum.imag**2, size)[:n]  # R_0 .. R_{n-1}
     lags = np.arange(n, dtype=np.float64)

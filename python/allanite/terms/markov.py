@@ -109,7 +109,7 @@ class GaussMarkov(Term):
 
 
 def _walk_bracket(theta: float) -> float:
-    r"""Return :math:`2\theta(1 - e^{-\theta}) - (e^{-2\theta} - 1 + 2\theta)` (:math:`\approx\theta^3/3`).
+    r"""Return :math:`2\theta(1 - e^{-\theta}) - (e^{-2\theta} - 1 + 2\theta) \approx \theta^3/3`.
 
     Below ``theta = 0.1`` its Taylor series, coefficients :math:`(-1)^j (2j - 2^j)/j!`,
     ``j = 3 .. 14``; the direct form (written with ``expm1``) above.
