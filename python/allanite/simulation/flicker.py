@@ -26,20 +26,29 @@ r"""Flicker (1/f) rate noise: spectral synthesis, a streaming bank + FIR, or Kas
 
   Every part's law is exact and computed in
   :func:`allanite.terms.flicker_laws.bank_avar` (AR(1) and walk in closed form, the FIR from
-  its taps' autocovariance); its largest relative deviation from the term's
-  :meth:`~allanite.terms.Flicker.avar`, over :math:`\tau = \Delta t` .. half the record, is
-  about :math:`10^{-7}` with ``f0`` unset (see ``benchmarks/results/sim_flicker_stream.md``),
-  far inside the chi-square band of any feasible record (:math:`\gtrsim 10^{-4}` at
-  :math:`\tau = \Delta t` for :math:`10^8` samples).
+  its taps' autocovariance). With ``f0`` unset it deviates from the term's
+  :meth:`~allanite.terms.Flicker.avar` by at most :math:`2\times 10^{-12}` (relative) for
+  :math:`\tau \le 1000\Delta t` and :math:`2\times 10^{-6}` up to half the record (the slow
+  end, where the walk stands for the missing components), for records of :math:`2^{22}` to
+  :math:`10^9` samples (``benchmarks/results/sim_flicker_stream.md``): far inside the
+  chi-square band of any record (95% half-width :math:`9\times 10^{-5}` at
+  :math:`\tau = \Delta t` for :math:`10^9` samples). With a cutoff ``f0`` below Nyquist the
+  AR(1) tails above ``f0`` cannot be cancelled (:attr:`FlickerDesign.clipped` > 0) and the
+  generator is approximate: +0.1% at :math:`\tau = \Delta t` for :math:`f_0 = 0.4/\Delta t`,
+  +4% for :math:`0.1/\Delta t`; spectral synthesis (``auto`` up to 2^21 samples) stays exact.
+  Cost: one normal number per AR(1) component (26 to 36) per sample and channel; memory: the
+  FIR's last :data:`STREAM_FIR_TAPS` inputs and one :data:`STREAM_FFT` block per channel.
 * ``method="kasdin"`` (on request only, records of known length up to
   :data:`~allanite.simulation.kasdin.KASDIN_MAX_SAMPLES`): Kasdin's fractional-difference
   filter of white noise, :class:`~allanite.simulation.kasdin.KasdinStream`; its own exact
   Allan variance is :func:`~allanite.terms.flicker_laws.kasdin_avar` (+70% over the term at
   :math:`\tau = \Delta t`, the 0.664 B plateau from about :math:`100\Delta t` on).
 
-:func:`flicker_bank` (a Gauss-Markov bank plus white noise fitted to the sampled PSD, about
--30% in Allan variance at :math:`\tau = \Delta t`) is no longer a simulation method: it is the
-Gauss-Markov reading of a flicker term used by the error laws of :mod:`allanite.impact`.
+:func:`flicker_bank` (a point-sampled Gauss-Markov bank plus white noise fitted to the sampled
+PSD; its exact law is -3.9% off the term at :math:`\tau = \Delta t` and up to 9% over the
+first decades, tens of standard errors on long records) is no longer a simulation method: it
+is the Gauss-Markov reading of a flicker term used by the error laws of
+:mod:`allanite.impact`.
 
 References
 ----------
@@ -156,7 +165,7 @@ def flicker_bank(
     """Gauss-Markov bank plus white noise fitted to flicker ``B`` at period ``dt``.
 
     The Gauss-Markov reading of a flicker term for the error laws of :mod:`allanite.impact`
-    (about -30% in Allan variance at ``tau = dt``); simulation uses :class:`FlickerStream`.
+    (-3.9% in Allan variance at ``tau = dt``); simulation uses :class:`FlickerStream`.
 
     Returns
     -------
@@ -355,7 +364,7 @@ def flicker_stream(
         ``auto`` = spectral when ``n_samples`` is known, at most
         :data:`SPECTRAL_MAX_SAMPLES` and ``n_samples * n_channels`` at most
         :data:`SPECTRAL_MAX_VALUES`, else the streaming bank + FIR generator
-        (:class:`FlickerStream`, exact to about 1e-7 in Allan variance, any length);
+        (:class:`FlickerStream`, the term's Allan variance to 2e-6, any length);
         ``bank`` forces it. ``kasdin`` = Kasdin's
         fractional filter (needs ``n_samples``; no cutoff ``f0``).
 

@@ -1,0 +1,152 @@
+"""Validation of the streaming flicker generator (AR(1) bank + random walk + FIR residual).
+
+Three parts, written to ``results/sim_flicker_stream.json`` and ``.md``:
+
+* ``design``: the largest relative deviation of the generator's exact Allan variance
+  (:func:`allanite.terms.flicker_laws.bank_avar`) from the term's
+  (:meth:`allanite.terms.Flicker.avar`) over 200 log-spaced tau from ``dt`` to half the record,
+  for several record lengths (and two cutoffs ``f0`` below Nyquist, where it is approximate),
+  next to the old point-sampled Gauss-Markov bank's and the half-width of the 95% chi-square
+  band at ``tau = dt`` (Greenhall EDF, flicker FM) of one record;
+* ``monte_carlo``: 32 records of 2^22 samples (``flicker_method="auto"``): per tau the share
+  of 95% bands (the EDF allanite.avar attaches) that hold the term's AVAR and the z-score of the
+  mean AVAR ratio (standard error from the 32 records);
+* ``stream``: one channel of ``--stream`` samples (default 1e8) in chunks of 2^20: time, peak
+  resident memory, and the overlapping AVAR at ``tau = dt`` accumulated on the fly against the
+  term's (its 95% band from the Greenhall EDF).
+
+Run: ``nice python benchmarks/sim_flicker_stream.py [--stream N]`` (about 10 min, 2 cores).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import resource
+import time
+from pathlib import Path
+
+import numpy as np
+from scipy import stats
+
+import allanite
+from allanite.simulation.flicker import flicker_bank, flicker_stream
+from allanite.terms import Flicker, GaussMarkov, White
+from allanite.terms.flicker_laws import bank_avar
+from allanite.variance.edf import greenhall_edf
+
+RESULTS = Path(__file__).parent / "results"
+
+
+def _old_bank_avar(m: np.ndarray, n: int) -> np.ndarray:
+    """Exact AVAR of the previous simulation method (point-sampled Gauss-Markov bank + white)."""
+    tcs, sigma, white_n = flicker_bank(1.0, 1.0, n_samples=n)
+    total = White(N=white_n).avar(m, 1.0)
+    for tc, s in zip(tcs, sigma, strict=True):
+        total = total + GaussMarkov(sigma=float(s), tau_c=float(tc)).avar(m, 1.0)
+    return np.asarray(total)
+
+
+def _band(edf: float) -> float:
+    """Relative half-width of the 95% chi-square band of an AVAR estimate with this EDF."""
+    return 0.5 * (edf / stats.chi2.ppf(0.025, edf) - edf / stats.chi2.ppf(0.975, edf))
+
+
+def design() -> list[dict]:
+    rows = []
+    for n, f0 in ((1 << 22, None), (10**8, None), (10**9, None), (10**8, 0.4), (10**8, 0.1)):
+        m = np.unique(np.round(np.logspace(0, math.log10(n / 2), 200)))
+        term = Flicker(B=1.0, f0=f0)
+        error = bank_avar(m, 1.0, 1.0, n_samples=n, cutoff_hz=f0) / term.avar(m, 1.0) - 1.0
+        old = _old_bank_avar(m, n) / term.avar(m, 1.0) - 1.0 if f0 is None else None
+        rows.append(
+            {
+                "n": n,
+                "f0_fs": f0,
+                "max_rel_error": float(np.max(np.abs(error))),
+                "at_m": float(m[np.argmax(np.abs(error))]),
+                "rel_error_m1": float(error[0]),
+                "max_rel_error_m_le_1000": float(np.max(np.abs(error[m <= 1000]))),
+                "old_bank_rel_error_m1": None if old is None else float(old[0]),
+                "old_bank_max_rel_error": None if old is None else float(np.max(np.abs(old))),
+                "band95_m1": _band(
+                    greenhall_edf(-1, 2, 1, n + 1, overlapping=True, modified=False)
+                ),
+            }
+        )
+        print(rows[-1], flush=True)
+    return rows
+
+
+def monte_carlo(records: int = 32, channels: int = 8) -> dict:
+    fs, n = 1.0, 1 << 22
+    term = Flicker(B=1.0)
+    m = np.unique(np.round(np.logspace(0, math.log10(n / 16), 16))).astype(np.int64)
+    ratios, covered = [], []
+    for call in range(records // channels):
+        stream = flicker_stream(term, fs, channels, seed=500 + call, n_samples=n)
+        x = stream.next(n)
+        r = allanite.avar(x, fs=fs, m=m, alpha=-1)
+        exact = term.avar(r.tau, 1.0 / fs)[:, None]
+        lo, hi = r.var_ci(0.95)
+        covered.append((lo <= exact) & (exact <= hi))
+        ratios.append(r.var / exact)
+        print("monte carlo", call, flush=True)
+    ratio = np.concatenate(ratios, axis=1)
+    cover = np.concatenate(covered, axis=1)
+    mean = ratio.mean(axis=1)
+    se = ratio.std(axis=1, ddof=1) / math.sqrt(ratio.shape[1])
+    return {
+        "n": n,
+        "records": int(ratio.shape[1]),
+        "m": m.tolist(),
+        "coverage95": cover.mean(axis=1).tolist(),
+        "coverage95_all": float(cover.mean()),
+        "mean_ratio": mean.tolist(),
+        "z_mean": ((mean - 1.0) / se).tolist(),
+    }
+
+
+def stream(n: int, chunk: int = 1 << 20) -> dict:
+    term = Flicker(B=1.0)
+    s = flicker_stream(term, 1.0, 1, seed=7)  # length unknown: designed for 1e9 samples
+    start = time.perf_counter()
+    total, count, last = 0.0, 0, None
+    done = 0
+    while done < n:
+        x = s.next(min(chunk, n - done))[:, 0]
+        d = np.diff(x) if last is None else np.diff(np.concatenate(([last], x)))
+        total += float(np.dot(d, d))
+        count += d.size
+        last = x[-1]
+        done += x.size
+    seconds = time.perf_counter() - start
+    avar1 = 0.5 * total / count
+    exact = float(term.avar(np.array([1.0]), 1.0)[0])
+    edf = greenhall_edf(-1, 2, 1, n + 1, overlapping=True, modified=False)
+    return {
+        "n": n,
+        "chunk": chunk,
+        "seconds": seconds,
+        "ns_per_sample": 1e9 * seconds / n,
+        "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0,
+        "avar_m1_ratio": avar1 / exact,
+        "band95_m1": _band(edf),
+        "load": os.getloadavg(),
+    }
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--stream", type=int, default=10**8, help="samples of the stream test")
+    args = parser.parse_args()
+    out = {"design": design(), "monte_carlo": monte_carlo(), "stream": stream(args.stream)}
+    RESULTS.mkdir(exist_ok=True)
+    (RESULTS / "sim_flicker_stream.json").write_text(json.dumps(out, indent=1))
+    print(json.dumps(out["monte_carlo"], indent=1), json.dumps(out["stream"], indent=1))
+
+
+if __name__ == "__main__":
+    main()
