@@ -204,3 +204,22 @@ def test_simulated_lowpass_has_the_negative_quantization_signature():
     q2, n2 = np.linalg.lstsq(design, r.var[keep] * weight, rcond=None)[0]
     assert q2 < 0
     assert n2 == pytest.approx(term.N**2, rel=0.1)
+
+
+def test_fir_stream_is_the_direct_convolution_across_overlap_save_steps():
+    from allanite.simulation.flicker import FirStream
+    from allanite.simulation.streams import make_generator
+
+    taps = np.random.default_rng(4).standard_normal(40)
+    stream = FirStream(taps, 10.0, 2, seed=11)
+    n = stream.step + 1000  # two overlap-save steps
+    y = stream.next(n)
+    # the same normal numbers in the same order: the history, then whole steps
+    rng = make_generator(11)
+    inputs = np.concatenate(
+        [rng.standard_normal((taps.size - 1, 2))]
+        + [rng.standard_normal((stream.step, 2)) for _ in range(2)]
+    )
+    for c in range(2):
+        direct = np.convolve(inputs[:, c], taps, mode="valid")[:n]
+        np.testing.assert_allclose(y[:, c], direct, rtol=0, atol=1e-12 * np.abs(direct).max())
