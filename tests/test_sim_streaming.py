@@ -135,14 +135,16 @@ def test_streamed_flicker_holds_its_plateau_over_three_decades():
     assert np.all((lo <= exact) & (exact <= hi)), np.sqrt(pooled / PLATEAU) / B
 
 
-def test_long_streamed_flicker_has_the_term_avar_from_the_first_tau():
-    # 2^22 samples (> SPECTRAL_MAX_SAMPLES: auto streams the bank + FIR generator); every tau
-    # from dt to n/16 inside the 99.9% chi-square band (EDF of the estimate) of Flicker.avar,
-    # which the law of the generator equals (test_sim_terms); the band at tau = dt is +-0.3%
-    fs, n, B = 10.0, 1 << 22, 2e-3
-    term = Flicker(B=B)
-    stream = flicker_stream(term, fs, 1, seed=2024, n_samples=n)
-    x = np.concatenate([stream.next(1 << 20) for _ in range(4)])
+@pytest.mark.parametrize(("f0", "n", "method"), [(None, 1 << 22, "auto"), (2.5, 1 << 20, "bank")])
+def test_long_streamed_flicker_has_the_term_avar_from_the_first_tau(f0, n, method):
+    # 2^22 samples (> SPECTRAL_MAX_SAMPLES: auto streams the bank + FIR generator; with a
+    # cutoff f0 = fs/4 the bank also goes through its low-pass); every tau from dt to n/16
+    # inside the 99.9% chi-square band (EDF of the estimate) of Flicker.avar, which the law of
+    # the generator equals (test_sim_terms); the band at tau = dt is +-0.3% (2^22 samples)
+    fs, B = 10.0, 2e-3
+    term = Flicker(B=B, f0=f0)
+    stream = flicker_stream(term, fs, 1, seed=2024, n_samples=n, method=method)
+    x = np.concatenate([stream.next(1 << 20) for _ in range(n >> 20)])
     m = np.unique(np.round(np.logspace(0, np.log10(n / 16), 16))).astype(np.int64)
     result = allanite.avar(x, fs=fs, m=m, alpha=-1)
     edf = result.edf[:, 0]
@@ -152,9 +154,10 @@ def test_long_streamed_flicker_has_the_term_avar_from_the_first_tau():
     assert np.all((lo <= exact) & (exact <= hi)), result.var[:, 0] / exact
 
 
-def test_streaming_flicker_bank_is_chunk_independent():
+@pytest.mark.parametrize("f0", [None, 20.0])
+def test_streaming_flicker_bank_is_chunk_independent(f0):
     def make():
-        return flicker_stream(Flicker(B=1.0), 100.0, 3, seed=21, method="bank")
+        return flicker_stream(Flicker(B=1.0, f0=f0), 100.0, 3, seed=21, method="bank")
 
     whole = make().next(3 * 70_001)
     stream = make()

@@ -139,6 +139,18 @@ def test_streaming_flicker_law_is_the_term_at_every_tau(n):
     np.testing.assert_allclose(law[plateau] / PLATEAU, 1.0, atol=0.01)
 
 
+@pytest.mark.parametrize(("cutoff", "rtol"), [(0.25, 2e-5), (0.1, 1e-5)])
+def test_streaming_flicker_law_with_a_cutoff_below_nyquist(cutoff, rtol):
+    # the low-pass on the bank removes its tails above f0 (nothing clipped) and the residual
+    # takes the band edge: the law is the band-limited term's within rtol (measured 7e-6, 5e-6)
+    dt, n = 1.0 / 100.0, 10**8
+    m = np.unique(np.round(np.logspace(0, np.log10(n / 2), 25)))
+    term = Flicker(B=1.0, f0=cutoff / dt)
+    law = bank_avar(m * dt, dt, 1.0, cutoff_hz=term.f0, n_samples=n)
+    np.testing.assert_allclose(law, term.avar(m * dt, dt), rtol=rtol, atol=0)
+    assert flicker_design(n, cutoff).clipped < 1e-10
+
+
 def test_bank_law_needs_tau_on_the_sample_grid():
     with pytest.raises(ValueError, match="whole multiples"):
         bank_avar([1.5e-3], 1e-3, 1.0)

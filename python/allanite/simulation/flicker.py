@@ -97,7 +97,7 @@ STREAM_PER_DECADE = 4
 STREAM_FASTEST_TC = 256.0
 #: its slowest AR(1) component is at least this many record lengths (slower: a random walk)
 STREAM_SLOWEST_RECORDS = 100.0
-#: taps of its FIR residual filter
+#: taps of its FIR residual filter (times 2^ceil(log2(0.5 / f0 dt)) below Nyquist, <= 2^18)
 STREAM_FIR_TAPS = 1 << 15
 #: frequency lines (over [0, 1/dt)) on which the FIR residual filter is designed
 STREAM_DESIGN_GRID = 1 << 20
@@ -197,6 +197,12 @@ class FlickerDesign:
         Variance of the random walk's increment per sample.
     taps : numpy.ndarray
         FIR taps of the residual filter (zero-phase, centred), driven by unit white noise.
+    lowpass : numpy.ndarray or None
+        With a cutoff below Nyquist: zero-phase FIR low-pass applied to the bank's output
+        (pass band up to ``0.9 f0``, raised-cosine edge, Kaiser window), so that the bank's
+        tails above ``f0`` are gone and the residual can take the band edge; None otherwise.
+    grid : int
+        Frequency lines (over ``[0, 1/dt)``) of the design; 8 per residual tap at least.
     clipped : float
         Power of the negative residual PSD clipped to zero, as a share of the target's power on
         the design grid: 0 when the bank stays below the target everywhere (as it does without
@@ -209,6 +215,19 @@ class FlickerDesign:
     walk: float
     taps: NDArray[np.float64]
     clipped: float
+    lowpass: NDArray[np.float64] | None = None
+    grid: int = STREAM_DESIGN_GRID
+
+    def bank_psd(self, u: NDArray[np.float64]) -> NDArray[np.float64]:
+        """One-sided sampled PSD (dt = 1) of the AR(1) components and the walk at u = f dt."""
+        return _bank_psd(u, self.tcs, self.variance, self.walk)
+
+    def lowpass_gain(self, grid: int) -> NDArray[np.float64]:
+        """``|G(k/grid)|^2`` of the low-pass for ``k = 0 .. grid/2`` (ones without one)."""
+        if self.lowpass is None:
+            return np.ones(grid // 2 + 1)
+        response = np.fft.rfft(self.lowpass, grid)
+        return np.asarray(response.real**2 + response.imag**2)
 
 
 def _bank_psd(
@@ -228,18 +247,34 @@ def _unit_design(n_components: int, cutoff: float) -> FlickerDesign:
     tcs = STREAM_FASTEST_TC * ratio ** np.arange(n_components)
     # the slower components' PSD sum_j s^2 / (pi^2 f^2 T_j) is a random walk's K^2/(2 pi^2 f^2)
     walk = 2.0 * variance / (tcs[-1] * (ratio - 1.0))
-    grid = STREAM_DESIGN_GRID
+    # below Nyquist the residual holds the band edge: more taps, as many more as 0.5 / cutoff
+    n_taps = min(STREAM_FIR_TAPS << max(0, math.ceil(math.log2(0.5 / cutoff))), 1 << 18)
+    grid = max(STREAM_DESIGN_GRID, 8 * n_taps)
     u = np.arange(1, grid // 2 + 1) / grid
     target = _unit_psd(u, cutoff)
-    residual = target - _bank_psd(u, tcs, variance, walk)
+    lowpass = None if cutoff >= 0.5 else _lowpass(cutoff)
+    design = FlickerDesign(tcs, variance, walk, np.zeros(1), 0.0, lowpass, grid)
+    residual = target - design.lowpass_gain(grid)[1:] * design.bank_psd(u)
     clipped = float(np.sum(np.clip(-residual, 0.0, None)) / np.sum(target))
     amplitude = np.sqrt(np.clip(residual, 0.0, None) / 2.0)
     # the zero-frequency line: the residual's limit there (it is smooth, ~0.94 T0)
     amplitude = np.concatenate((amplitude[:1], amplitude))
     response = np.fft.irfft(amplitude, grid)
-    half = STREAM_FIR_TAPS // 2
+    half = n_taps // 2
     taps = np.concatenate((response[-half:], response[:half]))
-    return FlickerDesign(tcs, variance, walk, taps, clipped)
+    return FlickerDesign(tcs, variance, walk, taps, clipped, lowpass, grid)
+
+
+def _lowpass(cutoff: float) -> NDArray[np.float64]:
+    """Zero-phase low-pass: ``|G|^2`` = 1 up to ``0.9 cutoff``, raised cosine to 0 at cutoff."""
+    width = 0.1 * cutoff
+    n_taps = min(max(4096, 1 << math.ceil(math.log2(64.0 / width))), 1 << 16)
+    lines = 8 * n_taps
+    u = np.arange(lines // 2 + 1) / lines
+    edge = np.clip((u - (cutoff - width)) / width, 0.0, 1.0)
+    response = np.fft.irfft(np.cos(0.5 * np.pi * edge), lines)
+    half = n_taps // 2
+    return np.concatenate((response[-half:], response[:half])) * np.kaiser(n_taps, 14.0)
 
 
 def flicker_design(n_samples: int | None = None, cutoff: float = 0.5) -> FlickerDesign:
@@ -267,26 +302,38 @@ def _child(seed: Any, index: int) -> np.random.SeedSequence:
 
 
 class FirStream(TermStream):
-    """Unit white noise through the FIR filter ``taps`` (stationary from the first sample).
+    """Unit white noise (or a ``source`` stream) through the FIR filter ``taps``.
 
     Output ``y_k = sum_i taps_i w_{k-i}``, by overlap-save with a fixed FFT length
     (:data:`STREAM_FFT`), so the samples depend on the seed alone; it holds the last
-    ``len(taps) - 1`` inputs per channel.
+    ``len(taps) - 1`` inputs per channel, drawn up front (stationary from the first sample).
     """
 
     def __init__(
-        self, taps: NDArray[np.float64], fs: float, n_channels: int, seed: Any = None
+        self,
+        taps: NDArray[np.float64],
+        fs: float,
+        n_channels: int,
+        seed: Any = None,
+        *,
+        source: TermStream | None = None,
     ) -> None:
         super().__init__(fs, n_channels, seed)
+        self.source = source
         self.taps = np.asarray(taps, dtype=np.float64)
         self.n_fft = max(STREAM_FFT, 1 << math.ceil(math.log2(4 * self.taps.size)))
         self.step = self.n_fft - self.taps.size + 1
         self._kernel = np.fft.rfft(self.taps, self.n_fft)[:, None]
-        self._inputs = self.rng.standard_normal((self.taps.size - 1, self.n_channels))
+        self._inputs = self._draw(self.taps.size - 1)
         self._pending = np.empty((0, self.n_channels))
 
+    def _draw(self, n: int) -> NDArray[np.float64]:
+        if self.source is not None:
+            return self.source.next(n)
+        return self.rng.standard_normal((n, self.n_channels))
+
     def _filter(self) -> NDArray[np.float64]:
-        x = np.concatenate((self._inputs, self.rng.standard_normal((self.step, self.n_channels))))
+        x = np.concatenate((self._inputs, self._draw(self.step)))
         spectrum = np.fft.rfft(x, axis=0) * self._kernel
         y = np.fft.irfft(spectrum, self.n_fft, axis=0)[self.taps.size - 1 :]
         self._inputs = x[self.step :]
@@ -331,10 +378,12 @@ class FlickerStream(TermStream):
             sd * np.sqrt(-np.expm1(-theta) * (1.0 + phi[:-1])), B * math.sqrt(design.walk)
         )
         initial = np.append(np.full(design.tcs.size, sd), 0.0)
-        self.bank = Ar1BankStream(
+        self.bank: TermStream = Ar1BankStream(
             phi, q, phi, 1.0, fs=fs, n_channels=n_channels, seed=_child(seed, 0),
             initial_sd=initial,
         )  # fmt: skip
+        if design.lowpass is not None:
+            self.bank = FirStream(design.lowpass, fs, n_channels, source=self.bank)
         self.fir = FirStream(B * design.taps, fs, n_channels, _child(seed, 1))
 
     def _generate(self, start: int, n: int) -> NDArray[np.float64]:

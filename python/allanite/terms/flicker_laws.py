@@ -23,10 +23,11 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy import integrate
 
-from allanite.simulation.flicker import flicker_design
+from allanite.simulation.flicker import FlickerDesign, flicker_design
 from allanite.simulation.kasdin import kasdin_coefficients
 from allanite.terms._checks import averaging_factor
 from allanite.terms.markov import sampled_ar1_avar
+from allanite.variance.transfer import avar_transfer
 
 __all__ = ["bank_avar", "kasdin_avar"]
 
@@ -77,8 +78,34 @@ def bank_avar(
     total = design.walk * (2.0 * mf**2 + 1.0) / (6.0 * mf)
     for tc in design.tcs:
         total = total + sampled_ar1_avar(design.variance, 1.0 / float(tc), mf)
-    total = total + _fir_avar(design.taps, m)
+    total = total + _fir_avar(design.taps, m) - _lowpass_loss(design, m)
     return np.asarray(B * B * total, dtype=np.float64).reshape(t.shape)
+
+
+def _lowpass_loss(design: FlickerDesign, m: NDArray[np.int64]) -> NDArray[np.float64]:
+    r"""Allan variance the low-pass removes from the bank (zero without a low-pass).
+
+    :math:`\int_0^{1/2} (1 - |G(u)|^2)\,S_\text{bank}(u)\,|H_m(u)|^2\,du` (trapezoid rule on
+    the design's ``grid`` lines from below the pass-band
+    edge, where :math:`1 - |G|^2` stops being negligible; the integrand is smooth and even
+    about 1/2). For ``m`` above a sixteenth of the grid :math:`\sin^4(\pi u m)` is replaced
+    by its mean 3/8 (the oscillating rest vanishes faster than any power of 1/m).
+    """
+    out = np.zeros(m.shape, dtype=np.float64)
+    if design.lowpass is None:
+        return out
+    grid = design.grid
+    u = np.arange(1, grid // 2 + 1) / grid
+    loss = (1.0 - design.lowpass_gain(grid)[1:]) * design.bank_psd(u)
+    start = int(np.argmax(np.abs(loss) > 1e-18 * np.abs(loss).max()))
+    u, loss = u[start:], loss[start:] / grid
+    loss[-1] *= 0.5  # the Nyquist end of the trapezoid
+    for index, mm in np.ndenumerate(m):
+        if mm <= grid // 16:
+            out[index] = float(np.sum(loss * avar_transfer(u, [float(mm)], 1.0)[0]))
+        else:
+            out[index] = 0.75 / float(mm) ** 2 * float(np.sum(loss / np.sin(np.pi * u) ** 2))
+    return out
 
 
 def _fir_avar(taps: NDArray[np.float64], m: NDArray[np.int64]) -> NDArray[np.float64]:
