@@ -61,7 +61,15 @@ def _band(edf: float) -> float:
 
 def design() -> list[dict]:
     rows = []
-    for n, f0 in ((1 << 22, None), (10**8, None), (10**9, None), (10**8, 0.4), (10**8, 0.1)):
+    cases = (
+        (1 << 22, None),
+        (10**8, None),
+        (10**9, None),
+        (10**8, 0.4),
+        (10**8, 0.1),
+        (10**8, 0.01),
+    )
+    for n, f0 in cases:
         m = np.unique(np.round(np.logspace(0, math.log10(n / 2), 200)))
         term = Flicker(B=1.0, f0=f0)
         error = bank_avar(m, 1.0, 1.0, n_samples=n, cutoff_hz=f0) / term.avar(m, 1.0) - 1.0

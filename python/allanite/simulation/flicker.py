@@ -33,9 +33,12 @@ r"""Flicker (1/f) rate noise: spectral synthesis, a streaming bank + FIR, or Kas
   :math:`10^9` samples (``benchmarks/results/sim_flicker_stream.md``): far inside the
   chi-square band of any record (95% half-width :math:`9\times 10^{-5}` at
   :math:`\tau = \Delta t` for :math:`10^9` samples). With a cutoff ``f0`` below Nyquist the
-  AR(1) tails above ``f0`` cannot be cancelled (:attr:`FlickerDesign.clipped` > 0) and the
-  generator is approximate: +0.1% at :math:`\tau = \Delta t` for :math:`f_0 = 0.4/\Delta t`,
-  +4% for :math:`0.1/\Delta t`; spectral synthesis (``auto`` up to 2^21 samples) stays exact.
+  bank's output first goes through a FIR low-pass (pass band to :math:`0.9 f_0`, raised-cosine
+  edge to :math:`f_0`), which removes its tails above ``f0``, and the residual (then with
+  :math:`2^{15} \cdot 2^{\lceil\log_2(0.5/f_0\Delta t)\rceil}` taps, at most :math:`2^{18}`)
+  takes the band edge; the law subtracts the low-pass's loss (a smooth integral). The
+  remaining error is the truncated band edge: :math:`10^{-5}` for
+  :math:`f_0 \ge 0.1/\Delta t`, :math:`8\times 10^{-5}` at :math:`0.01/\Delta t`.
   Cost: one normal number per AR(1) component (26 to 36) per sample and channel; memory: the
   FIR's last :data:`STREAM_FIR_TAPS` inputs and one :data:`STREAM_FFT` block per channel.
 * ``method="kasdin"`` (on request only, records of known length up to
@@ -205,9 +208,8 @@ class FlickerDesign:
         Frequency lines (over ``[0, 1/dt)``) of the design; 8 per residual tap at least.
     clipped : float
         Power of the negative residual PSD clipped to zero, as a share of the target's power on
-        the design grid: 0 when the bank stays below the target everywhere (as it does without
-        a cutoff ``f0``); with ``f0`` below Nyquist the bank's tails above ``f0`` are not
-        cancelled and the generator is only approximate (see the module docstring).
+        the design grid: 0 when the (low-passed) bank stays below the target everywhere, as
+        it does without a cutoff ``f0``; below 1e-9 with one (the low-pass's stop band).
     """
 
     tcs: NDArray[np.float64]

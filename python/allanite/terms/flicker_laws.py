@@ -51,7 +51,8 @@ def bank_avar(
     components (:func:`~allanite.terms.markov.sampled_ar1_avar`), the random walk
     (:math:`K^2\Delta t(2m^2+1)/(6m)`) and the FIR residual, whose Allan variance is
     :math:`\frac{1}{2m^2}\sum_k R_k\,(2t_k - t_{k-m} - t_{k+m})` from its taps'
-    autocovariance :math:`R_k` and :math:`t_k = \max(m - |k|, 0)`.
+    autocovariance :math:`R_k` and :math:`t_k = \max(m - |k|, 0)`; with a cutoff below Nyquist
+    minus what the low-pass on the bank removes (:func:`_lowpass_loss`).
 
     Parameters
     ----------
