@@ -7,7 +7,7 @@ benchmarks/results/bench_core.json:
 * ``core_threads_1`` / ``core_threads_2``: the compiled part alone (``_core.phase`` +
   ``_core.variance``), 1 and 2 worker threads (best of ``--repeat``);
 * ``avar_end_to_end``: ``allanite.avar`` including noise identification and EDF;
-* ``reference``: :mod:`allanite.reference` (numpy, vectorised per tau);
+* ``reference``: :mod:`allanite.variance.oracle` (numpy, vectorised per tau);
 * ``allantools``: ``allantools.oadev`` on the same frequency data and taus;
 
 and the largest relative difference of each result from the compiled one.
@@ -29,8 +29,9 @@ from typing import Any
 import numpy as np
 
 import allanite
-from allanite import _core, reference
-from allanite.taus import log_grid
+from allanite import _core
+from allanite.variance import oracle
+from allanite.variance.taus import log_grid
 
 RESULTS = Path(__file__).resolve().parent / "results" / "bench_core.json"
 
@@ -67,14 +68,14 @@ def main() -> None:
     timings["core_threads_2"], v2 = _best(lambda: core(2), args.repeat)
     assert np.array_equal(v1, v2)
     timings["avar_end_to_end"], res = _best(
-        lambda: allanite.avar(y, 1.0, kind="overlapping", m=m, threads=2), 1
+        lambda: allanite.avar(y, fs=1.0, kind="overlapping", m=m, threads=2), 1
     )
 
-    def oracle() -> np.ndarray:
-        phase = reference.phase_from_record(y, "rate")
-        return np.array([reference.overlapping_variance(phase, int(k)) for k in m])
+    def numpy_oracle() -> np.ndarray:
+        phase = oracle.phase_from_record(y, "rate")
+        return np.array([oracle.overlapping_variance(phase, int(k)) for k in m])
 
-    timings["reference"], v_ref = _best(oracle, 1)
+    timings["reference"], v_ref = _best(numpy_oracle, 1)
     diffs = {
         "avar_end_to_end": float(np.max(np.abs(res.var / v1 - 1))),
         "reference": float(np.max(np.abs(v_ref / v1 - 1))),

@@ -6,7 +6,7 @@ On white rate noise (N = 1e7 by default, ``--channels`` columns) and the default
 * ``kernel``: ``_core.variance`` alone (overlapping, all cores);
 * ``avar_alpha_0``: ``allanite.avar(x, fs, alpha=0)`` (no identification);
 * ``avar_alpha_none``: ``allanite.avar(x, fs)`` (Stable32 noise identification at every tau);
-* ``identify``: :func:`allanite.edf.identify_alpha` alone, with its two compiled parts
+* ``identify``: :func:`allanite.variance.edf.identify_alpha` alone, with its two compiled parts
   ``lag1_acf`` (lag-1 statistics, taus with >= 30 averages) and ``rn_all`` (R(n) at every
   tau with fewer, an upper bound: it is only evaluated where B1 points to phase noise);
 * ``identify_traced_peak_bytes``: the largest numpy allocation total during identification
@@ -32,7 +32,7 @@ import numpy as np
 
 import allanite
 from allanite import _core
-from allanite.edf import ACF_MIN_POINTS, identify_alpha
+from allanite.variance.edf import ACF_MIN_POINTS, identify_alpha
 
 RESULTS = Path(__file__).resolve().parent / "results" / "bench_identify.json"
 
@@ -57,7 +57,7 @@ def main() -> None:
     rng = np.random.default_rng(0)
     x = rng.standard_normal((n, nc)) if nc > 1 else rng.standard_normal(n)
     fs = 100.0
-    res = allanite.avar(x, fs, alpha=0)
+    res = allanite.avar(x, fs=fs, alpha=0)
     phase = np.asarray(_core.phase(x.reshape(n, -1), "rate"))
     factors = res.m
     n_series = (phase.shape[0] - 1) // factors
@@ -68,8 +68,8 @@ def main() -> None:
         "channels": nc,
         "taus": int(factors.size),
         "kernel": _best(lambda: _core.variance(phase, factors, "overlapping", 0), args.repeat),
-        "avar_alpha_0": _best(lambda: allanite.avar(x, fs, alpha=0), args.repeat),
-        "avar_alpha_none": _best(lambda: allanite.avar(x, fs), args.repeat),
+        "avar_alpha_0": _best(lambda: allanite.avar(x, fs=fs, alpha=0), args.repeat),
+        "avar_alpha_none": _best(lambda: allanite.avar(x, fs=fs), args.repeat),
         "identify": _best(lambda: identify_alpha(phase, factors, "overlapping"), args.repeat),
         "lag1_acf": _best(lambda: _core.lag1_acf(phase, acf_m, "frequency", 3, 0), args.repeat),
         "rn_all": _best(lambda: _core.mvar_avar_ratio(phase, rn_m, 0), args.repeat),

@@ -1,11 +1,11 @@
 """Speed and memory of the overlapping Allan variance at scale, against other implementations.
 
 One run measures, for N = 1e6, 1e7, 1e8 samples and 1 and 3 channels, with the ~100-point log
-tau grid (``allanite.taus.log_grid(N, 100)``):
+tau grid (``allanite.variance.taus.log_grid(N, 100)``):
 
 - allanite ``avar`` with 1 and 2 threads (``alpha=0``: the variance path, without the
-  noise identification that :mod:`allanite.edf` adds on top),
-- ``allanite.reference.variance`` (the numpy oracle),
+  noise identification that :mod:`allanite.variance.edf` adds on top),
+- ``allanite.variance.oracle.variance`` (the numpy oracle),
 - ``allantools.oadev`` (per channel) where it finishes in reasonable time,
 - nmayorov's ``allan_variance.compute_avar`` (PyPI ``allan-variance``) on the same taus,
 - the memory-bandwidth floor: ``n_taus x`` the best time of one streaming read (``numpy.sum``)
@@ -76,14 +76,16 @@ def worker(method: str, path: str, threads: int, repeats: int) -> dict[str, Any]
     """Run one method on the record in ``path`` (a .npy file); returns timings and RSS."""
     x = np.load(path)
     n, c = x.shape
-    from allanite.taus import log_grid
+    from allanite.variance.taus import log_grid
 
     m = log_grid(n, 100)
     out: dict[str, Any] = {"method": method, "n": n, "channels": c, "n_taus": int(m.size)}
     if method == "allanite":
         import allanite
 
-        seconds, res = _best(lambda: allanite.avar(x, FS, m=m, alpha=0, threads=threads), repeats)
+        seconds, res = _best(
+            lambda: allanite.avar(x, fs=FS, m=m, alpha=0, threads=threads), repeats
+        )
         out["threads"] = threads
         out["checksum"] = float(np.sum(res.var))
         # floor: one streaming read of the prefix array per tau, measured here
@@ -99,9 +101,9 @@ def worker(method: str, path: str, threads: int, repeats: int) -> dict[str, Any]
         out["prefix_mb"] = phase.nbytes / 1e6
         del phase
     elif method == "reference":
-        from allanite import reference
+        from allanite.variance import oracle
 
-        seconds, v = _best(lambda: reference.variance(x, m, "overlapping"), 1)
+        seconds, v = _best(lambda: oracle.variance(x, m, "overlapping"), 1)
         out["checksum"] = float(np.sum(v))
     elif method == "allantools":
         import allantools
@@ -135,10 +137,10 @@ def worker(method: str, path: str, threads: int, repeats: int) -> dict[str, Any]
 
 def outofcore_worker(path: str, n: int, limit: str, threads: int) -> dict[str, Any]:
     """Analyse a raw float32 file with a memory budget."""
-    from allanite.large import avar_large
+    from allanite.variance.outofcore import avar_large
 
     t0 = time.perf_counter()
-    res = avar_large(path, FS, dtype="float32", channels=1, memory_limit=limit, threads=threads)
+    res = avar_large(path, fs=FS, dtype="float32", channels=1, memory_limit=limit, threads=threads)
     seconds = time.perf_counter() - t0
     return {
         "method": "allanite avar_large",

@@ -43,7 +43,7 @@ def fit_model(x: np.ndarray) -> tuple[NoiseModel, str]:
     On this sensor the fit is converged but flagged misspecified at short tau (its internal
     filter); the model discrepancy is part of its intervals and the diagnosis shows the gap.
     """
-    result = allanite.avar(x, FS, taus="octave", units="deg/s")
+    result = allanite.avar(x, fs=FS, taus="octave", units="deg/s")
     fitted = allanite.fit(result)
     note = (
         f"allanite.fit (GLS, auto terms; chi2 {fitted.chi2:.3g} / {fitted.dof} dof, "

@@ -3,12 +3,12 @@
 Beyond the last averaging factor with at least 30 decimated points, Stable32's B1/R(n) rule
 often reads a random walk as phase noise at one tau, which inflates that tau's EDF. allanite
 caps the exponent there at the one of the longest lag-1 factor
-(:func:`allanite.edf.cap_few_point_alpha`). This benchmark simulates 300 records of the
+(:func:`allanite.variance.edf.cap_few_point_alpha`). This benchmark simulates 300 records of the
 built-in example model (30 min at 100 Hz, angle input), computes the 68.3 % intervals of the
 overlapping Allan variance with the identified noise type, and counts how often they contain
 the model's exact Allan variance at the few-point taus, with the cap and with Stable32's plain
 rule. It also reports the coverage over all taus for the default identification (the cap and
-the smoothing of isolated flips, :func:`allanite.edf.smooth_isolated_alpha`), for the cap
+the smoothing of isolated flips, :func:`allanite.variance.edf.smooth_isolated_alpha`), for the cap
 without the smoothing (``alpha="stable32"``) and for Stable32's plain rule.
 Run ``python benchmarks/edf_few_points.py``; writes
 ``benchmarks/results/edf_few_points.json``.
@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 import allanite
-import allanite.edf as edf
+import allanite.variance.edf as edf
 from allanite.examples import EXAMPLE_FS, example_model
 
 RESULTS = Path(__file__).resolve().parent / "results"
@@ -38,7 +38,7 @@ def coverage(records: int = 300, batch: int = 100, alpha: str | None = None) -> 
     everywhere = []
     for s in range(records // batch):
         x = model.simulate(n, EXAMPLE_FS, channels=batch, seed=100 + s, output="angle")
-        r = allanite.avar(x, EXAMPLE_FS, input="angle", alpha=alpha)
+        r = allanite.avar(x, fs=EXAMPLE_FS, input="angle", alpha=alpha)
         few = (r.n_samples - 1) // r.m < edf.ACF_MIN_POINTS
         theory = model.avar(r.tau, 1.0 / EXAMPLE_FS)[:, None]
         lo, hi = r.var_ci(LEVEL)

@@ -33,7 +33,7 @@ def ramp(seeds: int) -> dict[str, float]:
     for seed in range(seeds):
         rng = np.random.default_rng(100 + seed)
         x = big_n * math.sqrt(fs) * rng.standard_normal(n) + big_r * np.arange(n) / fs
-        f = fit(allanite.avar(x, fs, units="deg/s"))
+        f = fit(allanite.avar(x, fs=fs, units="deg/s"))
         lo, hi = f["R"].ci(0.95)
         covered += lo <= big_r <= hi
         z.append((f["R"].value - big_r) / f["R"].stderr)
@@ -56,7 +56,7 @@ def sine(seeds: int) -> dict[str, float]:
     covered, z = 0, []
     for seed in range(seeds):
         x = np.asarray(model.simulate(n, fs, seed=seed)).ravel()
-        f = fit(allanite.avar(x, fs, units="deg/s"), ["white", "sine"])
+        f = fit(allanite.avar(x, fs=fs, units="deg/s"), ["white", "sine"])
         name = next(k for k in f.coefficients if k.startswith("amp"))
         lo, hi = f[name].ci(0.95)
         covered += lo <= amplitude <= hi

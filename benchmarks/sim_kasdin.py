@@ -26,9 +26,9 @@ from scipy import stats
 import allanite
 from allanite.simulation import simulate
 from allanite.simulation.flicker import flicker_stream
-from allanite.simulation.kasdin import kasdin_avar
 from allanite.terms import Flicker
 from allanite.terms.flicker import PLATEAU
+from allanite.terms.flicker_laws import kasdin_avar
 
 FS, B = 100.0, 1e-3
 DT = 1.0 / FS
@@ -61,7 +61,7 @@ def coverage(seeds: range = range(10), n: int = 1 << 14, channels: int = 50) -> 
     own, term_law = [], []
     for seed in seeds:
         x = simulate([Flicker(B=B)], FS, n, channels=channels, seed=seed, flicker_method="kasdin")
-        r = allanite.avar(x, FS, taus="octave")
+        r = allanite.avar(x, fs=FS, taus="octave")
         keep = r.tau <= n * DT / 10.0
         lo, hi = r.var_ci(0.95)
         for theory, out in (
@@ -85,7 +85,7 @@ def plateau(n: int = 1 << 21, channels: int = 4) -> list[dict[str, float]]:
     stream = flicker_stream(Flicker(B=B), FS, channels, seed=77, n_samples=n, method="kasdin")
     x = stream.next(n)
     m = np.unique(np.round(np.logspace(1, np.log10(2e5), 16))).astype(np.int64)
-    r = allanite.avar(x, FS, m=m, alpha=-1)
+    r = allanite.avar(x, fs=FS, m=m, alpha=-1)
     edf = r.edf.sum(axis=1)
     pooled = (r.var * r.edf).sum(axis=1) / edf
     lo = pooled * edf / stats.chi2.ppf(0.995, edf)

@@ -1,6 +1,6 @@
 #!/bin/sh
 # Peak memory of streaming a 24 h x 2 kHz record (1.728e8 samples, one axis, angle output) of
-# the example model (Q, N, B, K, R; flicker through the streaming Gauss-Markov bank) to .npy.
+# the example model (Q, N, B, K, R; flicker through the streaming AR(1) bank + FIR) to .npy.
 # Usage: sh benchmarks/sim_stream_memory.sh [OUTDIR]   (needs /usr/bin/time: apt-get install time)
 set -e
 OUT=${1:-/tmp}

@@ -41,11 +41,11 @@ def compare(x: np.ndarray, *, seed: int = SEED, level: float = 0.99):
     (``FitResult.misfit``); ``inside`` marks the taus where the simulated Allan variance lies
     in the real curve's ``level`` chi-square band.
     """
-    real = allanite.avar(x, FS, taus="octave", units="deg/s")
+    real = allanite.avar(x, fs=FS, taus="octave", units="deg/s")
     fitted = allanite.fit(real)
     model = fitted.model
     sim_x = model.simulate(x.size, FS, seed=seed)
-    sim = allanite.avar(sim_x, FS, m=real.m)
+    sim = allanite.avar(sim_x, fs=FS, m=real.m)
     keep = real.tau <= x.size / FS / 10.0
     fit_ok = dict(zip(fitted.tau.tolist(), (~fitted.misfit).tolist(), strict=True))
     good = keep & np.array([fit_ok.get(t, False) for t in real.tau.tolist()])

@@ -75,7 +75,7 @@ def estimate_variance(records: int = 1000) -> dict[str, dict[str, list[float]]]:
         blocks = []
         for block in range(records // CHANNELS):
             x = model.simulate(N, FS, channels=CHANNELS, seed=2000 + block)
-            r = allanite.avar(x, FS, taus="octave", alpha=0)
+            r = allanite.avar(x, fs=FS, taus="octave", alpha=0)
             blocks.append(r.var)
         keep = r.tau <= N / FS / 10.0
         est = np.concatenate(blocks, axis=1)[keep]
@@ -102,7 +102,7 @@ def main() -> None:
     for i, (name, terms) in enumerate(CASES.items()):
         model = NoiseModel(tuple(terms))
         x = model.simulate(N, FS, channels=CHANNELS, seed=1000 + i)
-        r = allanite.avar(x, FS, taus="octave")
+        r = allanite.avar(x, fs=FS, taus="octave")
         keep = r.tau <= N / FS / 10.0
         expected = model.avar(r.tau, 1.0 / FS)
         excess = model.avar_excess_variance(r.tau, 1.0 / FS, N)

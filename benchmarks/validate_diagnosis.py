@@ -378,7 +378,7 @@ def evaluate(case: Case, seed: int, n_mc: int) -> dict[str, Any]:
     row["lambda_expected"] = noncentrality(extra)
     if effect is not None:  # the gap this record really has: the realised effect's AVAR
         m = np.rint(tm.tau * case.fs).astype(np.int64)
-        extra = allanite.avar(effect[: case.n // 2], case.fs, taus=m / case.fs).var
+        extra = allanite.avar(effect[: case.n // 2], fs=case.fs, taus=m / case.fs).var
     lam = noncentrality(extra)
     row["lambda"] = lam
     for key, value in (("clear", lam), ("clear_expected", row["lambda_expected"])):

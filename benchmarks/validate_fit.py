@@ -65,9 +65,10 @@ SUBSETS = (
     ("Q", "N", "B"),
 )
 LEVEL = 0.95
-#: flicker by spectral synthesis of the Flicker term's exact sampled PSD at every length: the
-#: streaming bank that "auto" uses above 2**21 samples misses the term's Allan variance at the
-#: first taus by tens of standard errors on long records (results/validate_fit_bank_flicker.md)
+#: flicker by spectral synthesis of the Flicker term's exact sampled PSD at every length (the
+#: old point-sampled bank missed the term's Allan variance at the first taus by tens of standard
+#: errors, results/validate_fit_bank_flicker.md; "auto" now streams an exact generator above
+#: 2**21 samples, results/sim_flicker_stream.md, slower than spectral synthesis here)
 FLICKER_METHOD = "spectral"
 #: a term "clearly dominates" when it carries most of the variance over this many decades
 CLEAR_DECADES = 0.5
@@ -199,7 +200,7 @@ def run_case(case: Case) -> dict[str, Any]:
         dtype=np.float64,
     ).ravel()
     t1 = time.perf_counter()
-    res = allanite.avar(x, case.fs, input=case.input, taus=case.taus, units=case.unit)
+    res = allanite.avar(x, fs=case.fs, input=case.input, taus=case.taus, units=case.unit)
     f = fit(res)
     t2 = time.perf_counter()
     truth = model.coefficients()

@@ -44,7 +44,7 @@ def test_accelerometer_fit_recovers_the_model_in_any_acceleration_unit(accel_rec
     fits = {}
     for unit in ("m/s^2", "mg", "ug", "ft/s^2", "gal"):
         x = accel_record * convert(1.0, "m/s^2", unit)
-        res = allanite.oadev(x, FS, units=unit, taus="octave")
+        res = allanite.oadev(x, fs=FS, units=unit, taus="octave")
         fits[unit] = allanite.fit(res, terms=["white", "rrw"])
     si = fits["m/s^2"]
     n, k = si["N"], si["K"]
@@ -69,14 +69,14 @@ def test_accelerometer_fit_recovers_the_model_in_any_acceleration_unit(accel_rec
 def test_velocity_increments_are_an_accelerometer_record(accel_record):
     # delta-velocity samples in m/s: their rate is m/s/s = m/s^2
     dv = ACCEL_MODEL.simulate(200_000, FS, seed=5, output="increment")
-    res = allanite.oadev(dv, FS, input="increment", units="m/s", taus="octave")
-    ref = allanite.oadev(accel_record, FS, units="m/s^2", taus="octave")
+    res = allanite.oadev(dv, fs=FS, input="increment", units="m/s", taus="octave")
+    ref = allanite.oadev(accel_record, fs=FS, units="m/s^2", taus="octave")
     assert res.units == "m/s^2"
     np.testing.assert_allclose(res.dev, ref.dev, rtol=1e-9)
 
 
 def test_accelerometer_slope_names_and_report(accel_record):
-    res = allanite.oadev(accel_record, FS, units="m/s^2")
+    res = allanite.oadev(accel_record, fs=FS, units="m/s^2")
     rows = slope_table(res.tau, res.dev, res.edf, sensor="accelerometer")
     assert rows[0].term.startswith("velocity random walk")
     assert rows[0].symbol == "N"
@@ -262,7 +262,7 @@ def test_records_without_units_are_shown_in_record_units(imu_csv, tmp_path, caps
     assert "deg" not in out
     # the library: no silent deg/s either
     x = np.random.default_rng(1).standard_normal(20_000)
-    fit = allanite.fit(allanite.oadev(x, FS, taus="octave"), terms=["white"])
+    fit = allanite.fit(allanite.oadev(x, fs=FS, taus="octave"), terms=["white"])
     assert fit.model.units["rate"] == "unit"
     assert fit.model.sensor == "unknown"
     with pytest.raises(ValueError, match="cannot convert 'unit\\*sqrt\\(s\\)'"):

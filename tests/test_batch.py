@@ -50,7 +50,7 @@ def test_table_holds_the_fit_with_intervals_and_pass_fail():
     assert res.failures == [("gyro03", "0")]
     assert not res.passed
     # the very numbers of allanite.fit on the same curve
-    single = allanite.avar(lot[0][1][:, 0], FS, alpha=0, units="deg/s")
+    single = allanite.avar(lot[0][1][:, 0], fs=FS, alpha=0, units="deg/s")
     fitted = allanite.fit(single)
     assert res.column("N")[0] == fitted["N"].value
     assert (res.column("N_low")[0], res.column("N_high")[0]) == fitted["N"].ci(0.95)

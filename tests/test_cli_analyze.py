@@ -111,7 +111,7 @@ def test_analyze_every_format_matches_library(
     code, out, err = _run(argv, capsys)
     assert code == 0, err
     data = json.loads(out)
-    expected = allanite.avar(RATE, FS, points=12, units="deg/s")
+    expected = allanite.avar(RATE, fs=FS, points=12, units="deg/s")
     np.testing.assert_allclose(data["allan"]["tau"], expected.tau)
     np.testing.assert_allclose(data["allan"]["dev"], expected.dev, rtol=1e-12)
     lo, hi = expected.ci(0.683)
@@ -136,7 +136,7 @@ def test_raw_binary_every_dtype_loads_without_scale(
     code, out, err = _run([*argv, "--points", "12", "--json"], capsys)
     assert code == 0, err
     data = json.loads(out)
-    expected = allanite.avar(samples, FS, points=12)
+    expected = allanite.avar(samples, fs=FS, points=12)
     np.testing.assert_allclose(data["allan"]["dev"], expected.dev, rtol=1e-12)
     assert data["record"]["n_samples"] == N
 
@@ -181,7 +181,7 @@ def test_analyze_text_table_channels_kind_and_outputs(
     ]
     code, out, err = _run(argv, capsys)
     assert code == 0, err
-    expected = allanite.avar(RATE[:, 1], FS, kind="modified", taus="octave")
+    expected = allanite.avar(RATE[:, 1], fs=FS, kind="modified", taus="octave")
     assert "modified Allan deviation" in out
     assert "channel gy:" in out
     table = np.loadtxt(csv_out, delimiter=",", skiprows=1)
@@ -213,10 +213,10 @@ def test_angle_input_and_points(tmp_path: Path, capsys: pytest.CaptureFixture[st
     )
     assert code == 0, err
     data = json.loads(out)
-    expected = allanite.avar(angle, FS, input="angle", points=30)
+    expected = allanite.avar(angle, fs=FS, input="angle", points=30)
     np.testing.assert_allclose(data["allan"]["dev"], expected.dev, rtol=1e-12)
     assert data["allan"]["units"] == "deg/s"
-    assert len(data["allan"]["tau"]) == len(allanite.taus.log_grid(N, 30))
+    assert len(data["allan"]["tau"]) == len(allanite.variance.taus.log_grid(N, 30))
 
 
 def _truncated_npy(tmp_path: Path) -> Path:

@@ -48,7 +48,7 @@ def test_fit_cli_json_model_and_plot(tmp_path: Path, capsys: pytest.CaptureFixtu
     data_out = json.loads(out)
     (channel,) = data_out["channels"]
     rows = {r["symbol"]: r for r in channel["coefficients"]}
-    expected = fit_module.fit(allanite.avar(RATE, FS, points=40, units="deg/s"))
+    expected = fit_module.fit(allanite.avar(RATE, fs=FS, points=40, units="deg/s"))
     n = expected["N"]
     # customary unit: deg/sqrt(s) -> deg/sqrt(h) is a factor 60; intervals at the 68.3 % level
     assert rows["N"]["unit"] == "deg/sqrt(h)"
@@ -95,5 +95,5 @@ def test_fit_cli_datasheet_exit_codes(tmp_path: Path, capsys: pytest.CaptureFixt
     assert main([*common, "--datasheet", str(tight)]) == 1
     out = json.loads(capsys.readouterr().out)
     assert out["passed"] is False
-    expected = fit_module.fit(allanite.avar(RATE[:20_000], FS, points=30, units="deg/s"))
+    expected = fit_module.fit(allanite.avar(RATE[:20_000], fs=FS, points=30, units="deg/s"))
     assert out["channels"][0]["checks"][0]["value"] == pytest.approx(60 * expected["N"].value)

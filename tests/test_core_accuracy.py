@@ -43,7 +43,7 @@ def test_rate_with_large_bias_matches_exact_value(white_ints: np.ndarray, bias: 
     # the phase of y is cumsum(y - mean); the mean cancels in every second difference exactly
     phase = np.concatenate(([0], np.cumsum(w)))
     exact = np.array([_exact_avar_from_phase_ints(phase, int(m)) for m in FACTORS]) / GRID**2
-    res = allanite.avar(y, 1.0, kind="overlapping", m=FACTORS)
+    res = allanite.avar(y, fs=1.0, kind="overlapping", m=FACTORS)
     rel = np.abs(res.var / exact - 1.0)
     assert rel.max() < 1e-12, f"bias {bias:g}: worst relative error {rel.max():.2e}"
 
@@ -63,7 +63,7 @@ def test_angle_with_large_drift_matches_exact_value(drift: float) -> None:
     assert np.array_equal(np.round(theta * ANGLE_GRID).astype(np.int64), theta_ints)
     exact = np.array([_exact_avar_from_phase_ints(theta_ints, int(m)) for m in FACTORS])
     exact /= ANGLE_GRID**2
-    res = allanite.avar(theta, 1.0, input="angle", kind="overlapping", m=FACTORS)
+    res = allanite.avar(theta, fs=1.0, input="angle", kind="overlapping", m=FACTORS)
     rel = np.abs(res.var / exact - 1.0)
     assert rel.max() < 1e-12, f"drift {drift:g}: worst relative error {rel.max():.2e}"
 
@@ -106,10 +106,10 @@ def test_every_kind_with_bias_matches_exact_value(white_ints: np.ndarray, kind: 
     y = bias + white_ints[:n] / GRID
     w = np.round((y - bias) * GRID).astype(np.int64)
     phase = np.concatenate(([0], np.cumsum(w)))
-    top = allanite.taus.max_factor(kind, n + 1)
+    top = allanite.variance.taus.max_factor(kind, n + 1)
     factors = np.unique([1, 2, 7, 100, 1000, top // 3, top])
     exact = np.array([_exact_variance(phase, int(m), kind) for m in factors]) / GRID**2
-    res = allanite.avar(y, 1.0, kind=kind, m=factors)  # type: ignore[arg-type]
+    res = allanite.avar(y, fs=1.0, kind=kind, m=factors)  # type: ignore[arg-type]
     rel = np.abs(res.var / exact - 1.0)
     assert rel.max() < 1e-12, f"{kind}: worst relative error {rel.max():.2e}"
 
@@ -120,5 +120,5 @@ def test_plain_cumsum_would_fail_at_large_bias(white_ints: np.ndarray) -> None:
     phase = np.concatenate(([0.0], np.cumsum(y)))
     d2 = phase[2:] - 2 * phase[1:-1] + phase[:-2]
     naive = np.mean(d2**2) / 2.0
-    good = allanite.avar(y, 1.0, kind="overlapping", m=[1]).var[0]
+    good = allanite.avar(y, fs=1.0, kind="overlapping", m=[1]).var[0]
     assert abs(naive / good - 1.0) > 1e-3

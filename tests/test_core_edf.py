@@ -1,4 +1,4 @@
-"""Equivalent degrees of freedom and noise identification (allanite.edf)."""
+"""Equivalent degrees of freedom and noise identification (allanite.variance.edf)."""
 
 from __future__ import annotations
 
@@ -9,7 +9,8 @@ import pytest
 from allantools import ci as at_ci
 
 import allanite
-from allanite import _core, edf
+from allanite import _core
+from allanite.variance import edf
 
 SHAPES = {
     "overlapping": (2, True, False),
@@ -166,17 +167,17 @@ def test_lag1_identification_of_pure_noises(alpha: int, input_kind: str) -> None
     else:
         phase = _power_law_phase(rng, alpha, n + 1, 1)[:, 0]
         x = phase if input_kind == "angle" else np.diff(phase)
-    res = allanite.avar(x, 1.0, input=input_kind, kind="overlapping", m=[1, 4, 16, 64])
+    res = allanite.avar(x, fs=1.0, input=input_kind, kind="overlapping", m=[1, 4, 16, 64])
     np.testing.assert_array_equal(res.alpha, alpha)
 
 
 def test_hadamard_identifies_random_run_fm() -> None:
     rng = np.random.default_rng(9)
     rate = np.cumsum(np.cumsum(rng.standard_normal(20_000)))  # alpha = -4
-    res = allanite.avar(rate, 1.0, kind="hadamard", m=[1, 4, 16])
+    res = allanite.avar(rate, fs=1.0, kind="hadamard", m=[1, 4, 16])
     np.testing.assert_array_equal(res.alpha, -4)
     # the Allan variance cannot measure them: clipped to random-walk FM
-    res2 = allanite.avar(rate, 1.0, kind="overlapping", m=[1, 4, 16])
+    res2 = allanite.avar(rate, fs=1.0, kind="overlapping", m=[1, 4, 16])
     np.testing.assert_array_equal(res2.alpha, -2)
 
 
@@ -188,7 +189,7 @@ def test_b1_identification_with_few_points() -> None:
         hits = 0
         for _ in range(20):
             phase = _power_law_phase(rng, alpha, 2001, 1)[:, 0]
-            res = allanite.avar(phase, 1.0, input="angle", kind="modified", m=[100])
+            res = allanite.avar(phase, fs=1.0, input="angle", kind="modified", m=[100])
             hits += int(res.alpha[0] == alpha)
         agree[alpha] = hits
     # 20 averages per record: B1 picks the right type in most records
@@ -221,7 +222,7 @@ def test_ci_limits_follow_chi_square() -> None:
     from scipy import stats
 
     rng = np.random.default_rng(3)
-    res = allanite.avar(rng.standard_normal(5000), 1.0, taus="octave", alpha=0)
+    res = allanite.avar(rng.standard_normal(5000), fs=1.0, taus="octave", alpha=0)
     lo, hi = res.var_ci(0.9)
     np.testing.assert_allclose(lo, res.var * res.edf / stats.chi2.ppf(0.95, res.edf))
     np.testing.assert_allclose(hi, res.var * res.edf / stats.chi2.ppf(0.05, res.edf))
@@ -254,7 +255,7 @@ def test_confidence_interval_coverage_for_white_fm(kind: str) -> None:
     truth["modified"] = float(np.sum(np.convolve(weights, np.ones(m)) ** 2)) / (2 * m**4)
     covered = 0
     for _ in range(reps):
-        res = allanite.avar(rng.standard_normal(n), 1.0, kind=kind, m=[m], alpha=0)
+        res = allanite.avar(rng.standard_normal(n), fs=1.0, kind=kind, m=[m], alpha=0)
         lo, hi = res.var_ci(0.683)
         covered += int(lo[0] <= truth[kind] <= hi[0])
     se = math.sqrt(0.683 * 0.317 / reps)
@@ -262,7 +263,7 @@ def test_confidence_interval_coverage_for_white_fm(kind: str) -> None:
 
 
 # --------------------------------------------------------------------------------------------
-# Noise identification: compiled streaming statistics, bounded memory, no reference.py
+# Noise identification: compiled streaming statistics, bounded memory, no variance/oracle.py
 
 
 def _numpy_levels(series: np.ndarray, levels: int) -> list[float]:
@@ -308,13 +309,13 @@ def test_lag1_acf_kernel_bad_arguments() -> None:
 
 def test_mvar_avar_ratio_kernel_equals_reference() -> None:
     """R(n) in one pass (window advanced by third differences) = reference MVAR / AVAR."""
-    from allanite import reference
+    from allanite.variance import oracle
 
     rng = np.random.default_rng(12)
     phase = np.cumsum(rng.standard_normal((4001, 3)), axis=0) + 1e3 * np.arange(4001)[:, None]
     ms = [1, 2, 17, 400, 1333]
     got = np.asarray(_core.mvar_avar_ratio(phase, ms, 2))
-    mvar, avar = reference.modified_variance, reference.overlapping_variance
+    mvar, avar = oracle.modified_variance, oracle.overlapping_variance
     want = [[mvar(phase[:, c], m) / avar(phase[:, c], m) for c in range(3)] for m in ms]
     np.testing.assert_allclose(got, want, rtol=1e-10)
     for threads in (1, 3):
@@ -325,8 +326,8 @@ def test_mvar_avar_ratio_kernel_equals_reference() -> None:
 
 
 def _identify_by_definition(x: np.ndarray, factors: np.ndarray, kind: str, data: str) -> np.ndarray:
-    """Stable32's rule written out with numpy and reference.py (the test oracle)."""
-    from allanite import reference
+    """Stable32's rule written out with numpy and variance/oracle.py (the test oracle)."""
+    from allanite.variance import oracle
 
     shape = edf.estimator_shape(kind)
     lo, hi = (-2, 2) if kind == "total" else (2 - 2 * shape.d, 2)
@@ -344,8 +345,8 @@ def _identify_by_definition(x: np.ndarray, factors: np.ndarray, kind: str, data:
             else:
                 ratio = None
                 if 3 * m <= col.size:  # second differences ignore the trend of phase data
-                    av = reference.overlapping_variance(col, m)
-                    ratio = reference.modified_variance(col, m) / av if av else None
+                    av = oracle.overlapping_variance(col, m)
+                    ratio = oracle.modified_variance(col, m) / av if av else None
                 alpha = edf.b1_noise_id(ybar, m, ratio)
                 if longest_acf:  # beyond the lag-1 range: at most the last lag-1 exponent
                     alpha = min(alpha, cap)
@@ -371,7 +372,7 @@ def test_example_record_has_no_isolated_edf_jumps() -> None:
     from allanite.examples import example_record
 
     x, fs = example_record()
-    res = allanite.avar(x, fs, input="angle")
+    res = allanite.avar(x, fs=fs, input="angle")
     few = (res.n_samples - 1) // res.m < edf.ACF_MIN_POINTS
     assert few.sum() >= 5
     edf_few = res.edf[few]
@@ -430,18 +431,18 @@ def test_identification_memory_is_bounded() -> None:
 def test_large_records_never_use_the_reference_oracle(
     kind: str, input_kind: str, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    """2e5 x 3 samples: the library path is compiled only (reference.py would take minutes)."""
-    from allanite import reference
+    """2e5 x 3 samples: the library path is compiled only (the oracle would take minutes)."""
+    from allanite.variance import oracle
 
     def forbidden(*args: object, **kwargs: object) -> None:
-        raise AssertionError("the library path called reference.py")
+        raise AssertionError("the library path called variance/oracle.py")
 
-    for name in dir(reference):
-        if not name.startswith("__") and callable(getattr(reference, name)):
-            monkeypatch.setattr(reference, name, forbidden)
+    for name in dir(oracle):
+        if not name.startswith("__") and callable(getattr(oracle, name)):
+            monkeypatch.setattr(oracle, name, forbidden)
     rng = np.random.default_rng(200)
     x = rng.standard_normal((200_000, 3))
-    res = allanite.avar(x, 100.0, input=input_kind, kind=kind)
+    res = allanite.avar(x, fs=100.0, input=input_kind, kind=kind)
     assert res.alpha.shape == res.var.shape == (res.m.size, 3)
     assert np.all(np.isfinite(res.edf))
     assert np.all(res.edf > 0)
@@ -455,7 +456,7 @@ def test_large_records_never_use_the_reference_oracle(
 
 
 def test_smooth_isolated_alpha_replaces_single_flips_only():
-    from allanite.edf import smooth_isolated_alpha
+    from allanite.variance.edf import smooth_isolated_alpha
 
     alpha = np.array([[0], [0], [1], [0], [-1], [-1], [-2], [-1], [-1], [-2]])
     factors = np.arange(1, alpha.shape[0] + 1)
@@ -471,8 +472,8 @@ def test_example_record_edf_does_not_jump_at_one_tau():
     from allanite.examples import example_record
 
     x, fs = example_record()
-    smoothed = allanite.avar(x, fs, input="angle")
-    stable32 = allanite.avar(x, fs, input="angle", alpha="stable32")
+    smoothed = allanite.avar(x, fs=fs, input="angle")
+    stable32 = allanite.avar(x, fs=fs, input="angle", alpha="stable32")
     flips = np.flatnonzero(smoothed.alpha != stable32.alpha)
     # Stable32's rule flips at one tau near 0.79 s in this record; the default smooths it
     assert flips.size >= 1
@@ -492,11 +493,11 @@ def test_out_of_core_smooths_like_in_memory(tmp_path):
     x, fs = example_record()
     path = tmp_path / "x.npy"
     np.save(path, x)
-    mem = allanite.avar(x, fs, input="angle")
-    big = allanite.avar_large(str(path), fs, input="angle")
+    mem = allanite.avar(x, fs=fs, input="angle")
+    big = allanite.avar_large(str(path), fs=fs, input="angle")
     np.testing.assert_array_equal(mem.alpha, big.alpha)
 
 
 def test_unknown_alpha_string_is_refused():
     with pytest.raises(TypeError, match="stable32"):
-        allanite.avar(np.random.default_rng(0).standard_normal(1000), 1.0, alpha="stable")
+        allanite.avar(np.random.default_rng(0).standard_normal(1000), fs=1.0, alpha="stable")

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import allanite
-from allanite import taus
+from allanite.variance import taus
 
 
 def test_log_grid_is_the_original_programs() -> None:
@@ -38,9 +38,9 @@ def test_log_grid_never_passes_its_top(n: int) -> None:
 def test_named_grids_stop_where_stable32_stops(kind: str, ratio: int) -> None:
     n = 19_982  # the OCXO record of the Stable32 reference tables
     x = np.random.default_rng(0).standard_normal(n)
-    octave = allanite.avar(x, 1.0, kind=kind, taus="octave").m  # type: ignore[arg-type]
+    octave = allanite.avar(x, fs=1.0, kind=kind, taus="octave").m  # type: ignore[arg-type]
     assert octave[-1] == 2 ** int(np.floor(np.log2(n // ratio)))
-    decade = allanite.avar(x, 1.0, kind=kind, taus="decade").m  # type: ignore[arg-type]
+    decade = allanite.avar(x, fs=1.0, kind=kind, taus="decade").m  # type: ignore[arg-type]
     assert decade.tolist() == [
         d for d in (1, 2, 4, 10, 20, 40, 100, 200, 400, 1000, 2000, 4000, 10000) if d <= n // ratio
     ]
@@ -48,13 +48,13 @@ def test_named_grids_stop_where_stable32_stops(kind: str, ratio: int) -> None:
 
 def test_all_grid_is_every_factor_to_the_stop() -> None:
     x = np.random.default_rng(1).standard_normal(101)
-    res = allanite.avar(x, 1.0, kind="overlapping", taus="all")
+    res = allanite.avar(x, fs=1.0, kind="overlapping", taus="all")
     np.testing.assert_array_equal(res.m, np.arange(1, 101 // 4 + 1))
 
 
 def test_explicit_taus_round_to_whole_samples_and_may_reach_the_kernel_limit() -> None:
     x = np.random.default_rng(2).standard_normal(1000)
-    res = allanite.avar(x, 100.0, taus=[0.01, 0.0149, 0.5, 5.0])
+    res = allanite.avar(x, fs=100.0, taus=[0.01, 0.0149, 0.5, 5.0])
     np.testing.assert_array_equal(res.m, [1, 50, 500])
     np.testing.assert_allclose(res.tau, [0.01, 0.5, 5.0])
     assert taus.max_factor("overlapping", 1001) == 500
@@ -62,7 +62,7 @@ def test_explicit_taus_round_to_whole_samples_and_may_reach_the_kernel_limit() -
 
 def test_default_is_the_log_grid() -> None:
     x = np.random.default_rng(3).standard_normal(5000)
-    res = allanite.avar(x, 1.0, points=50)
+    res = allanite.avar(x, fs=1.0, points=50)
     np.testing.assert_array_equal(res.m, taus.log_grid(5000, 50))
     with pytest.raises(ValueError, match="points"):
-        allanite.avar(x, 1.0, points=1)
+        allanite.avar(x, fs=1.0, points=1)

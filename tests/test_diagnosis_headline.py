@@ -238,7 +238,7 @@ def test_white_bursts_term_simulates_its_allan_variance():
     on = np.mean(x != 0)
     assert on == pytest.approx(0.3, rel=0.12)
     taus = np.array([0.01, 0.1, 1.0])
-    measured = allanite.avar(x, FS, taus=taus).var
+    measured = allanite.avar(x, fs=FS, taus=taus).var
     np.testing.assert_allclose(measured, term.avar(taus, 1 / FS), rtol=0.12)
     d = np.diff(x)
     assert np.mean(d**4) / np.mean(d**2) ** 2 - 3 > 1.0  # a scale mixture is heavy-tailed

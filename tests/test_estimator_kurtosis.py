@@ -21,7 +21,6 @@ import pytest
 from scipy import signal
 
 import allanite
-from allanite import reference
 from allanite.model import NoiseModel
 from allanite.terms import (
     BiasSteps,
@@ -37,6 +36,7 @@ from allanite.terms._estimator_kurtosis import (
     step_excess_variance,
     telegraph_excess_variance,
 )
+from allanite.variance import oracle
 
 DT = 0.01
 GRID_X, GRID_W = np.polynomial.legendre.leggauss(32)
@@ -49,12 +49,12 @@ def estimator_matrix(n: int, m: int) -> np.ndarray:
     for i in range(n):
         e = np.zeros(n)
         e[i] = 1.0
-        columns.append(reference._d2(reference.phase_from_record(e), m) / m)
+        columns.append(oracle._d2(oracle.phase_from_record(e), m) / m)
     h = np.array(columns).T  # (M, n): second differences of window means
     b = h.T @ h / (2.0 * h.shape[0])
     y = np.random.default_rng(m).standard_normal(n)
     assert y @ b @ y == pytest.approx(
-        reference.overlapping_variance(reference.phase_from_record(y), m), rel=1e-12
+        oracle.overlapping_variance(oracle.phase_from_record(y), m), rel=1e-12
     )
     return b
 
@@ -198,7 +198,7 @@ def _monte_carlo(term, seed):
     est = []
     for block in range(RECORDS // 50):
         x = model.simulate(N, FS, channels=50, seed=1000 * seed + block)
-        result = allanite.avar(x, FS, taus="octave", alpha=0)
+        result = allanite.avar(x, fs=FS, taus="octave", alpha=0)
         est.append(result.var)
     keep = result.tau <= N * DT / 10.0
     return result.m[keep], result.tau[keep], np.concatenate(est, axis=1)[keep]
@@ -261,7 +261,7 @@ def test_telegraph_excess_sign():
 
 def test_with_excess_variance_formula():
     rng = np.random.default_rng(3)
-    result = allanite.avar(rng.standard_normal((4096, 3)), FS, taus="octave", alpha=0)
+    result = allanite.avar(rng.standard_normal((4096, 3)), fs=FS, taus="octave", alpha=0)
     gaussian = np.full(result.tau.shape, 2.0)
     excess = np.linspace(0.0, 1.0, result.tau.size)
     corrected = result.with_excess_variance(excess, gaussian)
@@ -281,7 +281,7 @@ def test_with_model_edf():
     """The model's excess and Gaussian variance; a Gaussian model leaves the EDF as it is."""
     model = NoiseModel((White(N=1e-3), Telegraph(amplitude=1e-3, tau_c=0.2)))
     x = model.simulate(4096, FS, channels=2, seed=8)
-    result = allanite.avar(x, FS, taus="octave")
+    result = allanite.avar(x, fs=FS, taus="octave")
     corrected = result.with_model_edf(model)
     excess = model.avar_excess_variance(result.tau, DT, 4096)
     gaussian = model.avar_gaussian_variance(result.tau, DT, 4096)
@@ -291,7 +291,7 @@ def test_with_model_edf():
     plain = result.with_model_edf(NoiseModel((White(N=1e-3),)))
     np.testing.assert_array_equal(plain.edf, result.edf)
     # angle input: n_samples angle points are n_samples - 1 rate samples
-    angle = allanite.avar(np.cumsum(x, axis=0) * DT, FS, input="angle", taus="octave")
+    angle = allanite.avar(np.cumsum(x, axis=0) * DT, fs=FS, input="angle", taus="octave")
     excess_angle = model.avar_excess_variance(angle.tau, DT, 4095)
     gaussian_angle = model.avar_gaussian_variance(angle.tau, DT, 4095)
     np.testing.assert_allclose(
@@ -330,7 +330,7 @@ def test_gaussian_variance_needs_spectra():
 )
 def test_with_excess_variance_bad_input(kwargs, message):
     result = allanite.avar(
-        np.random.default_rng(5).standard_normal(2048), FS, taus="octave", alpha=0
+        np.random.default_rng(5).standard_normal(2048), fs=FS, taus="octave", alpha=0
     )
     args = {"excess": np.zeros(result.tau.size), "gaussian": np.ones(result.tau.size), **kwargs}
     with pytest.raises(ValueError, match=message):
@@ -338,7 +338,7 @@ def test_with_excess_variance_bad_input(kwargs, message):
 
 
 def test_with_excess_variance_needs_overlapping():
-    result = allanite.avar(np.random.default_rng(6).standard_normal(2048), FS, kind="modified")
+    result = allanite.avar(np.random.default_rng(6).standard_normal(2048), fs=FS, kind="modified")
     with pytest.raises(ValueError, match="overlapping"):
         result.with_excess_variance(np.zeros(result.tau.size), np.ones(result.tau.size))
 

@@ -28,7 +28,7 @@ def curves(shared_data):
     out = {}
     for run in (1, 2, 3):
         counts = np.load(shared_data / "imu" / "adis16405" / f"run{run}.npz")["gyro_counts"]
-        res = allanite.avar(counts * LSB, FS, taus="octave", units="deg/s")
+        res = allanite.avar(counts * LSB, fs=FS, taus="octave", units="deg/s")
         for axis in range(3):
             out[run, axis] = res.channel(axis)
     return out
@@ -114,7 +114,7 @@ def test_explicit_rrw_is_bounded_not_runaway(curves):
 
 def test_dense_grid_uses_an_octave_like_subset(shared_data, fits):
     counts = np.load(shared_data / "imu" / "adis16405" / "run1.npz")["gyro_counts"][:, 0]
-    dense = allanite.avar(counts * LSB, FS, taus="log", points=100, units="deg/s")
+    dense = allanite.avar(counts * LSB, fs=FS, taus="log", points=100, units="deg/s")
     assert dense.tau.size > 60
     fitted = allanite.fit(dense)
     assert np.all(fitted.tau[1:] / fitted.tau[:-1] >= 2.0 * (1 - 1e-9))
@@ -129,7 +129,7 @@ def test_dense_grid_uses_an_octave_like_subset(shared_data, fits):
 def test_example_record_fits_without_discrepancy():
     """The example record (simulated angle, the original work's model) is well specified."""
     x, fs = allanite.examples.example_record()
-    curve = allanite.avar(x, fs, input="angle", taus="octave", units="deg/s")
+    curve = allanite.avar(x, fs=fs, input="angle", taus="octave", units="deg/s")
     fitted = allanite.fit(curve)
     assert fitted.p_value > fitted.misfit_level
     assert fitted.discrepancy == 0
@@ -155,7 +155,7 @@ def test_discrepancy_stops_a_runaway_term_on_filtered_white_noise():
     rng = np.random.default_rng(3)
     w = rng.standard_normal(2**18 + 3) * 0.04 / np.sqrt(0.01)
     x = np.round(signal.lfilter(np.ones(4) / 4, [1.0], w)[3:] / LSB) * LSB
-    curve = allanite.avar(x, FS, taus="octave", units="deg/s")
+    curve = allanite.avar(x, fs=FS, taus="octave", units="deg/s")
     naive = allanite.fit(curve, ["white", "flicker"], misfit_level=0)
     fitted = allanite.fit(curve, ["white", "flicker"])
     long = fitted.tau >= 5.0

@@ -36,7 +36,7 @@ M = 2 ** np.arange(10)  # up to N/8
 )
 def test_variances_and_correlations_match_monte_carlo(model):
     x = simulate(model, N, DT, REPS, seed=21)
-    est = allanite.avar(x, 1 / DT, m=M, alpha=0).var
+    est = allanite.avar(x, fs=1 / DT, m=M, alpha=0).var
     centred = est - est.mean(axis=1, keepdims=True)
     mc_var = np.mean(centred**2, axis=1)
     mc_se = np.sqrt((np.mean(centred**4, axis=1) - mc_var**2) / REPS)
@@ -60,7 +60,7 @@ def test_quantization_fourth_cumulant_matters():
     cov = avar_covariance(model, M, DT, N)
     gaussian = cov - UNIFORM_EXCESS_KURTOSIS * q**4 * _fourth_cumulant(M.astype(float), DT, N)
     x = simulate(model, N, DT, REPS, seed=22)
-    est = allanite.avar(x, 1 / DT, m=M, alpha=0).var
+    est = allanite.avar(x, fs=1 / DT, m=M, alpha=0).var
     centred = est - est.mean(axis=1, keepdims=True)
     mc_var = np.mean(centred**2, axis=1)
     allowed = 4 * np.sqrt((np.mean(centred**4, axis=1) - mc_var**2) / REPS) + 0.10 * mc_var

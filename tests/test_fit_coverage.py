@@ -23,7 +23,7 @@ UNITS = {"rate": "deg/s", "time": "s"}
 def coverage(model: NoiseModel, terms: list[str], n: int, seed: int) -> dict[str, float]:
     truth = model.coefficients()
     x = simulate(model, n, DT, SEEDS, seed=seed)
-    res = allanite.avar(x, 1 / DT, taus="octave", alpha=0, units="deg/s")
+    res = allanite.avar(x, fs=1 / DT, taus="octave", alpha=0, units="deg/s")
     hits = dict.fromkeys(truth, 0)
     for c in range(SEEDS):
         fitted = allanite.fit(res.channel(c), terms)
@@ -64,7 +64,7 @@ def test_auto_does_not_invent_absent_terms():
     """Quantization + white noise: B, K and R must stay out in >= 95 % of the records."""
     model = NoiseModel((Quantization(Q=1e-3), White(N=0.02)), UNITS)
     x = simulate(model, 2**13, DT, SEEDS, seed=14)
-    res = allanite.avar(x, 1 / DT, taus="octave", alpha=0, units="deg/s")
+    res = allanite.avar(x, fs=1 / DT, taus="octave", alpha=0, units="deg/s")
     clean = found = 0
     for c in range(SEEDS):
         types = {t.type for t in allanite.fit(res.channel(c), "auto").model.terms}

@@ -34,7 +34,7 @@ def test_example_model_30min_seed_102():
     model = example_model()
     x = np.asarray(model.simulate(180_000, 100.0, seed=102)).ravel()
     f = fit(x, fs=100.0, units="deg/s")  # a record: the octave grid
-    g = fit(allanite.avar(x, 100.0, units="deg/s"))  # the default log grid
+    g = fit(allanite.avar(x, fs=100.0, units="deg/s"))  # the default log grid
     truth = model.coefficients()
     for result in (f, g):
         assert not result.rejected
@@ -63,7 +63,7 @@ def test_quantization_white_flicker_rrw_1khz_1e7():
     )
     x = np.asarray(model.simulate(10_000_000, 1000.0, output="rate", seed=1)).ravel()
     truth = model.coefficients()
-    f = fit(allanite.avar(x, 1000.0, taus="log", units="deg/s"))  # the default grid
+    f = fit(allanite.avar(x, fs=1000.0, taus="log", units="deg/s"))  # the default grid
     assert not f.rejected
     # B never dominates here (its plateau is 50x below the curve's minimum)
     assert set(f.coefficients) == {"Q", "N", "K"}
@@ -79,7 +79,7 @@ def test_dense_and_sparse_log_grids_agree():
     )
     x = np.asarray(model.simulate(1_000_000, 1000.0, seed=1)).ravel()
     for points in (20, 300):
-        f = fit(allanite.avar(x, 1000.0, taus="log", points=points, units="deg/s"))
+        f = fit(allanite.avar(x, fs=1000.0, taus="log", points=points, units="deg/s"))
         assert not f.rejected, points
         assert set(f.coefficients) == {"Q", "N", "K"}, points
         # the covariance of the points used stays well conditioned
@@ -97,7 +97,7 @@ def test_ramp_interval_carries_the_ramp_noise_cross_term():
     for seed in range(3):
         rng = np.random.default_rng(seed)
         x = 0.01 * math.sqrt(fs) * rng.standard_normal(n) + big_r * np.arange(n) / fs
-        f = fit(allanite.avar(x, fs, units="deg/s"))
+        f = fit(allanite.avar(x, fs=fs, units="deg/s"))
         assert set(f.coefficients) == {"N", "R"}
         lo, hi = f["R"].ci(0.95)
         covered += lo <= big_r <= hi
@@ -117,7 +117,7 @@ def test_ramp_cross_term_matches_monte_carlo():
         [
             allanite.avar(
                 np.cumsum(noise.K * math.sqrt(dt) * rng.standard_normal(n)) + ramp.R * t,
-                1 / dt,
+                fs=1 / dt,
                 m=m,
             ).var
             for _ in range(reps)

@@ -28,7 +28,7 @@ CLASSICAL = (
 @pytest.fixture(scope="module")
 def mtig_fit(shared_data):
     x = np.load(shared_data / "imu" / "mtig" / "cont_imu1_gyro_x.npy")
-    res = allanite.avar(x, 1 / DT, taus="octave", units="rad/s")
+    res = allanite.avar(x, fs=1 / DT, taus="octave", units="rad/s")
     return allanite.fit(res, ["markov", "markov"])
 
 

@@ -40,7 +40,7 @@ def test_original_coefficients_within_their_intervals(angle_records):
     For calibrated intervals the count is Binomial(20, 0.95); P(count < 16) = 1.6 %.
     """
     truth = ORIGINAL.coefficients()
-    res = allanite.avar(angle_records, FS, input="angle", taus="octave", units="deg/s")
+    res = allanite.avar(angle_records, fs=FS, input="angle", taus="octave", units="deg/s")
     inside = dict.fromkeys(truth, 0)
     for c in range(RECORDS):
         fitted = allanite.fit(res.channel(c), ["Q", "N", "B", "K", "R"])
@@ -51,7 +51,7 @@ def test_original_coefficients_within_their_intervals(angle_records):
 
 
 def test_one_record_table_and_classic_readouts(angle_records):
-    res = allanite.avar(angle_records[:, 0], FS, input="angle", taus="octave", units="deg/s")
+    res = allanite.avar(angle_records[:, 0], fs=FS, input="angle", taus="octave", units="deg/s")
     fitted = allanite.fit(res, ["Q", "N", "B", "K", "R"])
     rows = {r["name"]: r for r in fitted.table("deg/h")}
     assert rows["N"]["unit"] == "deg/sqrt(h)"
@@ -66,7 +66,7 @@ def test_one_record_table_and_classic_readouts(angle_records):
 
 
 def test_seed_method_reproduces_the_original_fit_form(angle_records):
-    res = allanite.avar(angle_records[:, 0], FS, input="angle", taus="log", units="deg/s")
+    res = allanite.avar(angle_records[:, 0], fs=FS, input="angle", taus="log", units="deg/s")
     seed = allanite.fit(res, method="seed")
     assert seed.method == "seed"
     assert set(seed.coefficients) == {"Q", "N", "B", "K", "R"}

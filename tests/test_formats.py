@@ -33,7 +33,7 @@ LEVEL = 0.995  # chi-square band of every tau (fixed seeds; ~20 correlated taus 
 
 
 def _inside_bands(x: np.ndarray, rate: float, model, *, max_fraction: float = 0.1) -> None:
-    res = allanite.avar(x, rate, taus="octave")
+    res = allanite.avar(x, fs=rate, taus="octave")
     keep = res.tau <= x.size / rate * max_fraction
     lo, hi = res.var_ci(LEVEL)
     theory = model.avar(res.tau, 1.0 / rate)

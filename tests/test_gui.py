@@ -48,13 +48,13 @@ def test_gui_load_switch_views_screenshot_export(
     assert "2 channel(s)" in window.status_label.text()
     result = window.session.result
     assert result is not None
-    expected = allanite.avar(data, FS, points=25)
+    expected = allanite.avar(data, fs=FS, points=25)
     np.testing.assert_allclose(result.dev, expected.dev, rtol=1e-12)
 
     # grid points: recompute with fewer points
     window.points_spin.setValue(10)
     window.compute()
-    assert window.session.result.tau.size == allanite.taus.log_grid(N, 10).size
+    assert window.session.result.tau.size == allanite.variance.taus.log_grid(N, 10).size
 
     # channel selection: only gy is drawn and listed
     window.channel_list.item(0).setCheckState(window.channel_list.item(0).checkState().Unchecked)

@@ -70,7 +70,7 @@ def test_output_variance_matches_simulation(simulated):
 def test_angle_view_avar_matches_the_exact_form(simulated):
     filt, out = simulated
     taus = DT * np.array([1, 2, 4, 8, 16, 32, 64, 128, 256, 512, 1024, 2048])
-    res = allanite.avar(out, FS, input="angle", taus=taus, alpha=0)
+    res = allanite.avar(out, fs=FS, input="angle", taus=taus, alpha=0)
     mean, se = _mean_se(res.var)
     exact = filt.output_avar(res.tau)
     assert np.all(np.abs(mean - exact) < Z * se), (mean / exact, se / exact)
@@ -88,8 +88,8 @@ def test_angle_view_slopes_and_break(simulated):
     filt, out = simulated
     short = DT * np.array([2, 3, 4, 6, 8, 10])  # tau <= 0.1 T
     long_ = T_OPT * np.array([8.0, 10.0, 14.0, 20.0, 28.0])  # tau >= 8 T
-    rs = allanite.avar(out, FS, input="angle", taus=short, alpha=0)
-    rl = allanite.avar(out, FS, input="angle", taus=long_, alpha=0)
+    rs = allanite.avar(out, fs=FS, input="angle", taus=short, alpha=0)
+    rl = allanite.avar(out, fs=FS, input="angle", taus=long_, alpha=0)
     s_short, se_short = _mean_se(_loglog_slope(rs.tau, rs.var))
     s_long, se_long = _mean_se(_loglog_slope(rl.tau, rl.var))
     # the exact curve's own curvature over these ranges is below 0.02 in slope
@@ -109,7 +109,7 @@ def test_signal_view_has_the_gauss_markov_hump_at_1_89_t(simulated):
     filt, out = simulated
     taus = T_OPT * np.array([0.25, 0.5, 1.0, 1.5, 1.89, 2.5, 4.0, 8.0])
     taus = np.round(taus / DT) * DT
-    res = allanite.avar(out, FS, input="rate", taus=taus, alpha=0)
+    res = allanite.avar(out, fs=FS, input="rate", taus=taus, alpha=0)
     mean, se = _mean_se(res.var)
     exact = filt.output_avar(res.tau, view="signal")
     assert np.all(np.abs(mean - exact) < Z * se), (mean / exact, se / exact)

@@ -37,7 +37,7 @@ def test_complementary_filter_figure(tmp_path):
     filt = optimal_complementary_filter(2e-3, 2e-2, dt=0.01)
     rng = np.random.default_rng(3)
     out = filt.apply(rng.standard_normal(20_000) * 0.02, rng.standard_normal(20_000) * 0.2)
-    res = allanite.avar(out, 100.0, input="angle", taus="octave", alpha=0)
+    res = allanite.avar(out, fs=100.0, input="angle", taus="octave", alpha=0)
     fig = complementary_filter_figure(filt, res)
     ax = fig.get_axes()[0]
     labels = [line.get_label() for line in ax.get_lines()]

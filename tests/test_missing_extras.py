@@ -122,7 +122,7 @@ def test_without_tqdm(
 
 
 def test_without_pandas(monkeypatch: pytest.MonkeyPatch) -> None:
-    result = allanite.avar(SAMPLES[:, 0], 100.0, taus="octave")
+    result = allanite.avar(SAMPLES[:, 0], fs=100.0, taus="octave")
     _hide(monkeypatch, "pandas")
     with pytest.raises(MissingExtraError, match=r'to_frame\(\) needs pandas.*"allanite\[pandas\]"'):
         result.to_frame()

@@ -26,7 +26,7 @@ def _png_of(html: str) -> bytes:
 
 def test_allan_result_table_and_plot() -> None:
     x = RNG.standard_normal((20_000, 2)) * 0.01
-    result = allanite.avar(x, FS, units="deg/s")
+    result = allanite.avar(x, fs=FS, units="deg/s")
     html = result._repr_html_()
     assert html.startswith('<div class="allanite-result">')
     assert "AllanResult: overlapping deviation of 20000 rate samples at 100 Hz" in html
@@ -47,7 +47,7 @@ def test_allan_result_table_and_plot() -> None:
 
 def test_fit_result_table_with_goodness_of_fit() -> None:
     x = RNG.standard_normal(40_000) * 0.01
-    fitted = allanite.fit(allanite.avar(x, FS, units="deg/s"))
+    fitted = allanite.fit(allanite.avar(x, fs=FS, units="deg/s"))
     html = fitted._repr_html_()
     assert "FitResult (gls): white" in html
     row = fitted.table(None, 0.95)[0]
@@ -75,7 +75,7 @@ def test_diagnosis_table_with_attribution() -> None:
 
 
 def test_without_matplotlib_the_table_alone(monkeypatch: pytest.MonkeyPatch) -> None:
-    result = allanite.avar(RNG.standard_normal(5000), FS)
+    result = allanite.avar(RNG.standard_normal(5000), fs=FS)
     for name in [n for n in sys.modules if n == "matplotlib" or n.startswith("matplotlib.")]:
         monkeypatch.setitem(sys.modules, name, None)
     monkeypatch.setitem(sys.modules, "matplotlib", None)
@@ -87,7 +87,7 @@ def test_without_matplotlib_the_table_alone(monkeypatch: pytest.MonkeyPatch) -> 
 def test_text_is_escaped() -> None:
     # avar refuses such a unit; a result built by hand (or unpickled) may still carry markup
     result = dataclasses.replace(
-        allanite.avar(RNG.standard_normal(5000), FS, units="deg/s"), units="<b>deg/s</b>"
+        allanite.avar(RNG.standard_normal(5000), fs=FS, units="deg/s"), units="<b>deg/s</b>"
     )
     html = result._repr_html_()
     assert "<b>deg/s</b>" not in html

@@ -62,7 +62,7 @@ def test_ten_point_phase_is_the_published_one() -> None:
 def test_nbs14_10_point(kind: str, input_kind: str) -> None:
     y = NBS14_10_FREQUENCY
     x = y if input_kind == "rate" else _phase(y)
-    res = allanite.avar(x, 1.0, input=input_kind, kind=kind, m=[1, 2])  # type: ignore[arg-type]
+    res = allanite.avar(x, fs=1.0, input=input_kind, kind=kind, m=[1, 2])  # type: ignore[arg-type]
     np.testing.assert_allclose(res.dev, NBS14_10[kind], rtol=1e-4)
 
 
@@ -71,5 +71,5 @@ def test_nbs14_10_point(kind: str, input_kind: str) -> None:
 def test_nbs14_1000_point(kind: str, input_kind: str) -> None:
     y = nbs14_1000()
     x = y if input_kind == "rate" else _phase(y)
-    res = allanite.avar(x, 1.0, input=input_kind, kind=kind, m=[1, 10, 100])  # type: ignore[arg-type]
+    res = allanite.avar(x, fs=1.0, input=input_kind, kind=kind, m=[1, 10, 100])  # type: ignore[arg-type]
     np.testing.assert_allclose(res.dev, NBS14_1000[kind], rtol=1e-4)

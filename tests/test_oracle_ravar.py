@@ -49,7 +49,7 @@ def test_r_avar_overlapping_avar_of_adis16405_run1(
     ms = np.array(sorted(table[CHANNELS[0]]), dtype=np.int64)
     assert ms.size == 18
     rate = counts * lsb  # deg/s and g, as the R package stores them
-    res = allanite.avar(rate, 100.0, kind="overlapping", m=ms)
+    res = allanite.avar(rate, fs=100.0, kind="overlapping", m=ms)
     n = counts.shape[0]
     mean = np.abs(rate.mean(axis=0))
     # exact integer phase; the mean rate cancels in every second difference

@@ -209,7 +209,9 @@ def _table(shared_data: Path, ds: DataSet, name: str) -> Table:
 
 def _compute(shared_data: Path, ds: DataSet, table: Table, **kwargs: Any) -> allanite.AllanResult:
     x = _record(str(shared_data), ds.folder, ds.data)
-    return allanite.avar(x, 1.0 / table.tau0, input=ds.input, kind=table.kind, m=table.m, **kwargs)
+    return allanite.avar(
+        x, fs=1.0 / table.tau0, input=ds.input, kind=table.kind, m=table.m, **kwargs
+    )
 
 
 @functools.cache
@@ -263,7 +265,7 @@ def test_noise_identification(shared_data: Path, ds: DataSet, name: str) -> None
         pytest.skip("Stable32 ran this table with a fixed noise type")
     table, res = _identified(str(shared_data), ds, name)
     x = _record(str(shared_data), ds.folder, ds.data)
-    acf = _decimated_points(ds, x.size, table.m) >= allanite.edf.ACF_MIN_POINTS
+    acf = _decimated_points(ds, x.size, table.m) >= allanite.variance.edf.ACF_MIN_POINTS
     known = np.isin(table.m, list(KNOWN_ALPHA_DIFFERENCES.get((ds.folder, name), ())))
     check = acf & ~known
     assert check.sum() >= 1

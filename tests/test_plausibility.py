@@ -56,13 +56,15 @@ def test_default_path_on_generated_gyros_no_false_alarm_and_wrong_input_caught()
     for seed in seeds:
         rate = _gyro(seed)
         angle = np.cumsum(rate) / FS
-        right = allanite.avar(rate, FS), allanite.avar(angle, FS, input="angle")
+        right = allanite.avar(rate, fs=FS), allanite.avar(angle, fs=FS, input="angle")
         for res, x in zip(right, (rate, angle), strict=True):
             dev0 = np.atleast_1d(res.dev[0])
             found = check_allan(res) + check_samples(x, FS, input=res.input, short_dev=dev0)
             assert found == [], (seed, [f.message for f in found])
-        caught["angle_as_rate"] += "angle_as_rate" in _codes(check_allan(allanite.avar(angle, FS)))
-        wrong = allanite.avar(rate, FS, input="angle")
+        caught["angle_as_rate"] += "angle_as_rate" in _codes(
+            check_allan(allanite.avar(angle, fs=FS))
+        )
+        wrong = allanite.avar(rate, fs=FS, input="angle")
         caught["rate_as_angle"] += "rate_as_angle" in _codes(check_allan(wrong))
     assert caught["angle_as_rate"] >= 27, caught
     assert caught["rate_as_angle"] >= 24, caught
@@ -71,22 +73,22 @@ def test_default_path_on_generated_gyros_no_false_alarm_and_wrong_input_caught()
 def test_pure_cases_are_named_with_their_slope() -> None:
     rng = np.random.default_rng(1)
     w = rng.standard_normal(100_000) * 0.01
-    angle_as_rate = check_allan(allanite.avar(np.cumsum(w + 0.004) / FS, FS), ["gx"])
+    angle_as_rate = check_allan(allanite.avar(np.cumsum(w + 0.004) / FS, fs=FS), ["gx"])
     assert [f.code for f in angle_as_rate] == ["angle_as_rate"]
     assert "channel gx: the Allan deviation rises (as tau^+0.9" in angle_as_rate[0].message
     assert "give --input angle" in angle_as_rate[0].message
-    rate_as_angle = check_allan(allanite.avar(w, FS, input="angle"))
+    rate_as_angle = check_allan(allanite.avar(w, fs=FS, input="angle"))
     assert [f.code for f in rate_as_angle] == ["rate_as_angle"]
     assert "falls as tau^-1.0" in rate_as_angle[0].message
     assert "give --input rate" in rate_as_angle[0].message
     # the modified deviation has other slopes: not judged
-    assert check_allan(allanite.avar(w, FS, input="angle", kind="modified")) == []
+    assert check_allan(allanite.avar(w, fs=FS, input="angle", kind="modified")) == []
 
 
 def test_counts_without_scale() -> None:
     rng = np.random.default_rng(2)
     counts = np.round(rng.standard_normal(50_000) * 3 + 5000).astype(np.int16)
-    dev0 = np.atleast_1d(allanite.avar(counts, FS).dev[0])
+    dev0 = np.atleast_1d(allanite.avar(counts, fs=FS).dev[0])
     found = check_samples(counts, FS, short_dev=dev0)
     assert [f.code for f in found] == ["counts_without_scale"]
     assert "raw counts without a scale factor? give the units per count (--scale)" in str(found[0])

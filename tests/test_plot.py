@@ -21,7 +21,7 @@ X = RNG.normal(size=(5000, 2))
 
 
 def test_error_bars_are_the_confidence_interval() -> None:
-    result = allanite.avar(X, FS, points=15, units="deg/s")
+    result = allanite.avar(X, fs=FS, points=15, units="deg/s")
     fig = allan_figure(result, labels=["gx", "gy"], level=0.95)
     ax = fig.axes[0]
     assert [t.get_text() for t in ax.get_legend().get_texts()] == ["gx", "gy"]
@@ -35,8 +35,8 @@ def test_error_bars_are_the_confidence_interval() -> None:
 
 
 def test_overlay_of_several_results_and_label_check() -> None:
-    a = allanite.avar(X[:, 0], FS, points=10)
-    b = allanite.avar(X[:, 1] * 2, FS, points=10)
+    a = allanite.avar(X[:, 0], fs=FS, points=10)
+    b = allanite.avar(X[:, 1] * 2, fs=FS, points=10)
     fig = allan_figure([a, b], labels=["device", "reference"])
     assert len(fig.axes[0].containers) == 2
     with pytest.raises(ValueError, match="3 labels for 2 curves"):
@@ -63,7 +63,7 @@ def test_model_figure_draws_each_term_with_its_slope() -> None:
     )
     dt = 1.0 / FS
     x = RNG.normal(size=50_000) * model.terms[1].N / np.sqrt(dt)
-    result = allanite.avar(x, FS, points=40, units="deg/s")
+    result = allanite.avar(x, fs=FS, points=40, units="deg/s")
     fig = model_figure(result, model, labels=["gx"])
     ax = fig.axes[0]
     labels = [t.get_text() for t in ax.texts]
@@ -78,7 +78,7 @@ def test_model_figure_draws_each_term_with_its_slope() -> None:
 
 
 def test_export_formats_and_atomicity(tmp_path: Path) -> None:
-    fig = allan_figure(allanite.avar(X[:, 0], FS, points=8))
+    fig = allan_figure(allanite.avar(X[:, 0], fs=FS, points=8))
     for suffix, magic in ((".png", b"\x89PNG"), (".svg", b"<?xml"), (".pdf", b"%PDF")):
         path = tmp_path / f"adev{suffix}"
         save_figure(fig, path)

@@ -37,7 +37,7 @@ SAMPLES = RNG.normal(size=(N, 2)) * 0.5 + np.cumsum(RNG.normal(size=(N, 2)) * 0.
 
 def _device(samples: np.ndarray = SAMPLES, name: str = "dut.npy") -> DeviceAnalysis:
     record = Record(samples=samples, fs=FS, units="deg/s", channels=("gx", "gy"), source=name)
-    return DeviceAnalysis(record, allanite.avar(samples, FS, points=30, units="deg/s"))
+    return DeviceAnalysis(record, allanite.avar(samples, fs=FS, points=30, units="deg/s"))
 
 
 # --- datasheet ------------------------------------------------------------------------------
@@ -357,7 +357,7 @@ def test_several_records_are_overlaid_and_summarised() -> None:
 def test_goodness_of_fit_is_reported_and_misfits_are_flagged() -> None:
     fit_module = pytest.importorskip("allanite.fit")
     rate = RNG.normal(size=20_000) * 0.5
-    result = allanite.avar(rate, FS, points=40, units="deg/s")
+    result = allanite.avar(rate, fs=FS, points=40, units="deg/s")
     record = Record(samples=rate, fs=FS, units="deg/s", channels=("gx",), source="w.npy")
     good = fit_module.fit(result, terms=["white"])
     bad = fit_module.fit(result, terms=["rrw"])  # white noise fitted as rate random walk
@@ -379,7 +379,7 @@ def test_slope_table_says_why_a_bias_instability_band_is_not_in_the_model() -> N
                        {"rate": "deg/s", "time": "s"})  # fmt: skip
     samples = model.simulate(200_000, FS, channels=1, seed=4)
     record = Record(samples=samples, fs=FS, units="deg/s", channels=("gx",), source="dut.npy")
-    result = allanite.avar(samples, FS, units="deg/s")
+    result = allanite.avar(samples, fs=FS, units="deg/s")
     bands = slope_table(result.tau, result.dev, result.edf)
     assert any(r.symbol == "B" for r in bands)  # the flat bottom is there
     fit = allanite.fit(result)

@@ -8,8 +8,8 @@ from scipy import stats
 
 import allanite
 from allanite import _core
-from allanite.fast import autocovariance, fast_variance, relative_deviation, stride
-from allanite.large import avar_large
+from allanite.variance.fast import autocovariance, fast_variance, relative_deviation, stride
+from allanite.variance.outofcore import avar_large
 
 
 @pytest.mark.parametrize("q", [4, 8, 16])
@@ -63,8 +63,8 @@ def test_monte_carlo_deviation_matches_the_bound():
 
 def test_fast_mode_in_the_api():
     x = np.random.default_rng(5).standard_normal(50_000)
-    exact = allanite.avar(x, 100.0, alpha=0)
-    fast = avar_large(x, 100.0, alpha=0, fast=True)
+    exact = allanite.avar(x, fs=100.0, alpha=0)
+    fast = avar_large(x, fs=100.0, alpha=0, fast=True)
     assert fast.meta["fast_q"] == 16
     small = fast.m < 32
     assert np.array_equal(fast.var[small], exact.var[small])
@@ -72,8 +72,8 @@ def test_fast_mode_in_the_api():
     # R <= 0.075 sd: far inside the 68 % interval of the exact estimate
     assert np.all((fast.var > lo) & (fast.var < hi))
     with pytest.raises(ValueError, match="fast"):
-        avar_large(x, 100.0, alpha=0, fast=True, kind="modified")
+        avar_large(x, fs=100.0, alpha=0, fast=True, kind="modified")
     with pytest.raises(ValueError, match="positive integer"):
-        avar_large(x, 100.0, alpha=0, fast=-3)
+        avar_large(x, fs=100.0, alpha=0, fast=-3)
     with pytest.raises(ValueError, match="in memory"):
-        avar_large(x, 100.0, alpha=0, fast=True, memory_limit="100kB")
+        avar_large(x, fs=100.0, alpha=0, fast=True, memory_limit="100kB")

@@ -8,9 +8,9 @@ import pytest
 import allanite
 from allanite import _core
 from allanite.errors import InputError
-from allanite.io.large import ArrayRecord, BinaryRecord, TextRecord, npy_record, open_large
-from allanite.large import avar_large, parse_memory
-from allanite.phase_store import build_phase_store
+from allanite.variance.chunked import ArrayRecord, BinaryRecord, TextRecord, npy_record, open_large
+from allanite.variance.outofcore import avar_large, parse_memory
+from allanite.variance.phase_store import build_phase_store
 
 WINDOWED = ["overlapping", "standard", "hadamard", "standard_hadamard"]
 
@@ -58,11 +58,11 @@ def test_partial_sums_split_on_blocks_are_exact():
 @pytest.mark.parametrize("kind", WINDOWED)
 def test_out_of_core_equals_in_memory_for_threads_and_chunks(kind, tmp_path):
     x = _record(40_000)
-    expected = allanite.avar(x, 50.0, kind=kind, alpha=0, threads=1)
+    expected = allanite.avar(x, fs=50.0, kind=kind, alpha=0, threads=1)
     for threads in (1, 2):
         for limit in ("300kB", "1.5MB"):
             got = avar_large(
-                x, 50.0, kind=kind, alpha=0, threads=threads, memory_limit=limit, tmpdir=tmp_path
+                x, fs=50.0, kind=kind, alpha=0, threads=threads, memory_limit=limit, tmpdir=tmp_path
             )
             assert got.meta["phase_in_memory"] is False
             assert np.array_equal(got.var, expected.var), (threads, limit)
@@ -73,24 +73,24 @@ def test_out_of_core_equals_in_memory_for_threads_and_chunks(kind, tmp_path):
 @pytest.mark.parametrize("kind", [*WINDOWED, "modified", "total", "time"])
 def test_in_memory_results_identical_across_thread_counts(kind):
     x = _record(6000)
-    one = allanite.avar(x, 10.0, kind=kind, alpha=0, threads=1)
-    two = allanite.avar(x, 10.0, kind=kind, alpha=0, threads=2)
-    large = avar_large(x, 10.0, kind=kind, alpha=0, threads=2, chunk_rows=1000)
+    one = allanite.avar(x, fs=10.0, kind=kind, alpha=0, threads=1)
+    two = allanite.avar(x, fs=10.0, kind=kind, alpha=0, threads=2)
+    large = avar_large(x, fs=10.0, kind=kind, alpha=0, threads=2, chunk_rows=1000)
     assert np.array_equal(one.var, two.var)
     assert np.array_equal(one.var, large.var)
 
 
 def test_angle_input_out_of_core(tmp_path):
     x = np.cumsum(_record(30_000, c=1)[:, 0])
-    expected = allanite.avar(x, 100.0, input="angle", alpha=0)
-    got = avar_large(x, 100.0, input="angle", alpha=0, memory_limit="200kB", tmpdir=tmp_path)
+    expected = allanite.avar(x, fs=100.0, input="angle", alpha=0)
+    got = avar_large(x, fs=100.0, input="angle", alpha=0, memory_limit="200kB", tmpdir=tmp_path)
     assert got.var.ndim == 1
     assert np.array_equal(got.var, expected.var)
 
 
 def test_noise_identification_out_of_core_matches_when_it_fits():
-    from allanite.edf import identify_alpha
-    from allanite.large import variance_from_store
+    from allanite.variance.edf import identify_alpha
+    from allanite.variance.outofcore import variance_from_store
 
     x = _record(4000, c=2)
     factors = np.array([1, 2, 4, 8, 16, 64, 256, 1024, 1999], dtype=np.int64)
@@ -119,10 +119,10 @@ def test_raw_binary_file(tmp_path, byteorder, layout):
     assert rec.n_samples == 12_345
     blocks = np.concatenate([b.copy() for b in rec.chunks(1000)])
     assert np.array_equal(blocks, x)
-    expected = allanite.avar(x, 200.0, alpha=0)
+    expected = allanite.avar(x, fs=200.0, alpha=0)
     got = avar_large(
         path,
-        200.0,
+        fs=200.0,
         alpha=0,
         memory_limit="256kB",
         dtype="float32",
@@ -142,8 +142,8 @@ def test_npy_file_read_in_chunks(tmp_path, order):
     rec = npy_record(path)
     assert (rec.n_samples, rec.n_channels) == (5000, 3)
     assert np.array_equal(np.concatenate([b.copy() for b in rec.chunks(333)]), x)
-    got = avar_large(path, 1.0, alpha=0, kind="hadamard", memory_limit="128kB")
-    assert np.array_equal(got.var, allanite.avar(x, 1.0, alpha=0, kind="hadamard").var)
+    got = avar_large(path, fs=1.0, alpha=0, kind="hadamard", memory_limit="128kB")
+    assert np.array_equal(got.var, allanite.avar(x, fs=1.0, alpha=0, kind="hadamard").var)
 
 
 def test_text_file_read_in_chunks(tmp_path):
@@ -155,8 +155,8 @@ def test_text_file_read_in_chunks(tmp_path):
     rec = open_large(path, columns=(1, 2, 3), skiprows=1)
     assert isinstance(rec, TextRecord)
     assert rec.n_channels == 3
-    got = avar_large(rec, 100.0, alpha=0, memory_limit="64kB", chunk_rows=256)
-    assert np.array_equal(got.var, allanite.avar(x, 100.0, alpha=0).var)
+    got = avar_large(rec, fs=100.0, alpha=0, memory_limit="64kB", chunk_rows=256)
+    assert np.array_equal(got.var, allanite.avar(x, fs=100.0, alpha=0).var)
 
 
 def test_text_file_bad_line_names_the_line(tmp_path):
@@ -172,7 +172,7 @@ def test_progress_callback_reports_both_stages(tmp_path):
     calls: list[tuple[str, int, int]] = []
     avar_large(
         x,
-        1.0,
+        fs=1.0,
         alpha=0,
         memory_limit="200kB",
         chunk_rows=4096,
@@ -197,9 +197,9 @@ def test_in_memory_progress_and_result_unchanged():
     x = _record(8000, c=1)[:, 0]
     seen: list[int] = []
     got = avar_large(
-        x, 1.0, alpha=0, progress=lambda s, d, t: seen.append(d) if s == "variance" else None
+        x, fs=1.0, alpha=0, progress=lambda s, d, t: seen.append(d) if s == "variance" else None
     )
-    expected = allanite.avar(x, 1.0, alpha=0)
+    expected = allanite.avar(x, fs=1.0, alpha=0)
     assert np.array_equal(got.var, expected.var)
     assert seen[-1] == expected.tau.size
 
@@ -233,7 +233,7 @@ def test_kinds_needing_memory_are_refused_out_of_core(tmp_path):
     with pytest.raises(ValueError, match="raise memory_limit"):
         avar_large(
             _record(20_000, c=1),
-            1.0,
+            fs=1.0,
             kind="modified",
             alpha=0,
             memory_limit="100kB",
@@ -257,22 +257,22 @@ def test_non_finite_sample_is_named(tmp_path):
     x = _record(5000, c=1)[:, 0]
     x[4321] = np.nan
     with pytest.raises(ValueError, match="sample 4321"):
-        avar_large(x, 1.0, alpha=0, memory_limit="64kB", chunk_rows=1000, tmpdir=tmp_path)
+        avar_large(x, fs=1.0, alpha=0, memory_limit="64kB", chunk_rows=1000, tmpdir=tmp_path)
     assert list(tmp_path.iterdir()) == []
 
 
 def test_avar_delegates_memory_limit_progress_and_fast(tmp_path, monkeypatch):
     monkeypatch.setattr("tempfile.tempdir", str(tmp_path))
     x = _record(30_000, c=1)[:, 0]
-    plain = allanite.avar(x, 10.0, alpha=0)
+    plain = allanite.avar(x, fs=10.0, alpha=0)
     stages = set()
     big = allanite.avar(
-        x, 10.0, alpha=0, memory_limit="100kB", progress=lambda s, d, t: stages.add(s)
+        x, fs=10.0, alpha=0, memory_limit="100kB", progress=lambda s, d, t: stages.add(s)
     )
     assert big.meta["phase_in_memory"] is False
     assert np.array_equal(big.var, plain.var)
     assert stages == {"phase", "variance"}
-    assert allanite.avar(x, 10.0, alpha=0, fast=True).meta["fast_q"] == 16
+    assert allanite.avar(x, fs=10.0, alpha=0, fast=True).meta["fast_q"] == 16
     assert list(tmp_path.iterdir()) == []
 
 
@@ -280,27 +280,27 @@ def test_avar_delegates_memory_limit_progress_and_fast(tmp_path, monkeypatch):
 @pytest.mark.parametrize("kind", ["overlapping", "standard_hadamard"])
 def test_kernel_paths_match_reference_at_large_m(channels, kind):
     """Every channel-count specialisation (1-4 and the generic one) against the numpy oracle."""
-    from allanite import reference
+    from allanite.variance import oracle
 
     x = _record(9000, c=channels, seed=channels)
     phase = _core.phase(x, "rate")
     top = int(_core.max_m(kind, phase.shape[0]))
     factors = np.array([1, 3, 1000, top - 1, top], dtype=np.int64)
     got = _core.variance(phase, factors, kind, 2)
-    oracle = getattr(reference, f"{kind}_variance")
+    oracle_kernel = getattr(oracle, f"{kind}_variance")
     for c in range(channels):
-        ref = [oracle(phase[:, c], int(m)) for m in factors]
+        ref = [oracle_kernel(phase[:, c], int(m)) for m in factors]
         np.testing.assert_allclose(got[:, c], ref, rtol=1e-12)
 
 
 def test_bounded_identification_in_memory_uses_the_decimated_head():
-    from allanite.edf import identify_alpha
-    from allanite.large import _identify
+    from allanite.variance.edf import identify_alpha
+    from allanite.variance.outofcore import _identify
 
     x = _record(6000, c=2)
     phase = _core.phase(x, "rate")
     factors = np.array([1, 4, 32, 512], dtype=np.int64)
-    from allanite.edf import cap_few_point_alpha
+    from allanite.variance.edf import cap_few_point_alpha
 
     got = _identify(phase, factors, "overlapping", "frequency", 700)
     heads = [np.ascontiguousarray(phase[::m][:700]) for m in factors.tolist()]

@@ -196,7 +196,7 @@ def test_example_record_is_fixed_and_follows_its_model():
     assert np.array_equal(x, y)
     import allanite
 
-    result = allanite.avar(x, fs, input="angle", taus="octave", alpha=2)
+    result = allanite.avar(x, fs=fs, input="angle", taus="octave", alpha=2)
     # short tau is quantization-dominated: 3 Q^2 / tau^2 + N^2 / tau, within 1% at tau = dt
     theory = example_model().avar(result.tau[:1], 1.0 / fs)
     np.testing.assert_allclose(result.var[:1], theory, rtol=0.01)

@@ -17,11 +17,11 @@ from allanite.simulation.flicker import FLICKER_METHODS, flicker_stream
 from allanite.simulation.kasdin import (
     KASDIN_MAX_SAMPLES,
     KasdinStream,
-    kasdin_avar,
     kasdin_coefficients,
 )
 from allanite.terms import Flicker, White
 from allanite.terms.flicker import PLATEAU
+from allanite.terms.flicker_laws import kasdin_avar
 
 FS = 100.0
 DT = 1.0 / FS
@@ -101,7 +101,7 @@ def test_truncated_law_matches_the_brute_force_expectation():
 def test_chi_square_coverage_over_50_seeds():
     n, channels, B = 1 << 14, 50, 1e-3
     x = simulate([Flicker(B=B)], FS, n, channels=channels, seed=404, flicker_method="kasdin")
-    result = allanite.avar(x, FS, taus="octave")
+    result = allanite.avar(x, fs=FS, taus="octave")
     keep = result.tau <= n * DT / 10.0
     theory = kasdin_avar(result.tau[keep], DT, B, n_samples=n)[:, None]
     lo, hi = result.var_ci(0.95)
@@ -118,7 +118,7 @@ def test_long_kasdin_record_holds_the_plateau_over_three_decades():
     stream = flicker_stream(Flicker(B=B), FS, channels, seed=77, n_samples=n, method="kasdin")
     x = np.concatenate([stream.next(1 << 19) for _ in range(4)])
     m = np.unique(np.round(np.logspace(np.log10(100), np.log10(100_000), 13))).astype(np.int64)
-    result = allanite.avar(x, FS, m=m, alpha=-1)
+    result = allanite.avar(x, fs=FS, m=m, alpha=-1)
     # pooled estimate of the channels and its 99% chi-square band
     edf = result.edf.sum(axis=1)
     pooled = (result.var * result.edf).sum(axis=1) / edf

@@ -46,7 +46,7 @@ CHANNELS = 50
 def _estimate(terms, seed, *, n=N, alpha=None):
     model = NoiseModel(tuple(terms))
     x = model.simulate(n, FS, channels=CHANNELS, seed=seed)
-    result = allanite.avar(x, FS, taus="octave", alpha=alpha)
+    result = allanite.avar(x, fs=FS, taus="octave", alpha=alpha)
     keep = result.tau <= n * DT / 10.0
     return model, result, keep
 
@@ -129,5 +129,5 @@ def test_turn_on_bias_constant_per_run():
 
     lo, hi = stats.chi2.ppf([0.0005, 0.9995], 399) / 399
     assert lo * sigma**2 <= sample_var <= hi * sigma**2
-    result = allanite.avar(x[:, :3], FS, taus="octave", alpha=0)
+    result = allanite.avar(x[:, :3], fs=FS, taus="octave", alpha=0)
     assert np.all(result.var < 1e-20)

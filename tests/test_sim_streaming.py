@@ -9,7 +9,7 @@ from scipy import stats
 import allanite
 from allanite.model import NoiseModel
 from allanite.simulation import simulate, simulate_chunks
-from allanite.simulation.flicker import bank_avar, flicker_stream
+from allanite.simulation.flicker import flicker_stream
 from allanite.simulation.spectral import expected_avar
 from allanite.simulation.streams import block_length
 from allanite.terms import (
@@ -28,6 +28,7 @@ from allanite.terms import (
     White,
 )
 from allanite.terms.flicker import PLATEAU
+from allanite.terms.flicker_laws import bank_avar
 
 EVERY_TERM = NoiseModel(
     (
@@ -121,7 +122,7 @@ def test_streamed_flicker_holds_its_plateau_over_three_decades():
     stream = flicker_stream(Flicker(B=B), fs, channels, seed=9, n_samples=n, method="bank")
     x = np.concatenate([stream.next(1 << 20) for _ in range(n >> 20)] + [stream.next(1)])
     m = np.unique(np.round(np.logspace(np.log10(30), np.log10(30_000), 13))).astype(np.int64)
-    result = allanite.avar(x, fs, m=m, alpha=-1)
+    result = allanite.avar(x, fs=fs, m=m, alpha=-1)
     tau = result.tau
     # the bank's exact Allan variance is the 0.664 B plateau within 1% over these 3 decades
     exact = bank_avar(tau, 1.0 / fs, B, n_samples=n)
@@ -134,9 +135,29 @@ def test_streamed_flicker_holds_its_plateau_over_three_decades():
     assert np.all((lo <= exact) & (exact <= hi)), np.sqrt(pooled / PLATEAU) / B
 
 
-def test_streaming_flicker_bank_is_chunk_independent():
+@pytest.mark.parametrize(("f0", "n", "method"), [(None, 1 << 22, "auto"), (2.5, 1 << 20, "bank")])
+def test_long_streamed_flicker_has_the_term_avar_from_the_first_tau(f0, n, method):
+    # 2^22 samples (> SPECTRAL_MAX_SAMPLES: auto streams the bank + FIR generator; with a
+    # cutoff f0 = fs/4 the bank also goes through its low-pass); every tau from dt to n/16
+    # inside the 99.9% chi-square band (EDF of the estimate) of Flicker.avar, which the law of
+    # the generator equals (test_sim_terms); the band at tau = dt is +-0.3% (2^22 samples)
+    fs, B = 10.0, 2e-3
+    term = Flicker(B=B, f0=f0)
+    stream = flicker_stream(term, fs, 1, seed=2024, n_samples=n, method=method)
+    x = np.concatenate([stream.next(1 << 20) for _ in range(n >> 20)])
+    m = np.unique(np.round(np.logspace(0, np.log10(n / 16), 16))).astype(np.int64)
+    result = allanite.avar(x, fs=fs, m=m, alpha=-1)
+    edf = result.edf[:, 0]
+    exact = term.avar(result.tau, 1.0 / fs)
+    lo = result.var[:, 0] * edf / stats.chi2.ppf(0.9995, edf)
+    hi = result.var[:, 0] * edf / stats.chi2.ppf(0.0005, edf)
+    assert np.all((lo <= exact) & (exact <= hi)), result.var[:, 0] / exact
+
+
+@pytest.mark.parametrize("f0", [None, 20.0])
+def test_streaming_flicker_bank_is_chunk_independent(f0):
     def make():
-        return flicker_stream(Flicker(B=1.0), 100.0, 3, seed=21, method="bank")
+        return flicker_stream(Flicker(B=1.0, f0=f0), 100.0, 3, seed=21, method="bank")
 
     whole = make().next(3 * 70_001)
     stream = make()

@@ -11,10 +11,11 @@ from scipy import integrate
 import allanite
 from allanite.simulation.flicker import (
     SPECTRAL_MAX_SAMPLES,
-    bank_avar,
+    FlickerStream,
+    flicker_design,
     flicker_stream,
 )
-from allanite.simulation.gaussian import Ar1BankStream, _residual_variance
+from allanite.simulation.gaussian import _residual_variance
 from allanite.simulation.spectral import SpectralStream
 from allanite.terms import (
     BiasSteps,
@@ -27,6 +28,8 @@ from allanite.terms import (
     term_from_dict,
 )
 from allanite.terms.flicker import PLATEAU
+from allanite.terms.flicker_laws import _fir_avar, bank_avar
+from allanite.terms.markov import sampled_ar1_avar
 from allanite.terms.transients import markov_avar_continuous
 
 NEW_TERMS = [
@@ -114,18 +117,64 @@ def test_flicker_method_choice():
     term = Flicker(B=1.0)
     assert isinstance(flicker_stream(term, 100.0, 1, 1, n_samples=1000), SpectralStream)
     assert isinstance(
-        flicker_stream(term, 100.0, 1, 1, n_samples=SPECTRAL_MAX_SAMPLES + 1), Ar1BankStream
+        flicker_stream(term, 100.0, 1, 1, n_samples=SPECTRAL_MAX_SAMPLES + 1), FlickerStream
     )
-    assert isinstance(flicker_stream(term, 100.0, 1, 1), Ar1BankStream)
+    assert isinstance(flicker_stream(term, 100.0, 1, 1), FlickerStream)
     with pytest.raises(ValueError, match="unknown flicker method"):
         flicker_stream(term, 100.0, 1, 1, method="fft")
 
 
-def test_bank_plateau_for_a_day_at_2khz():
-    dt, n = 1.0 / 2000.0, 24 * 3600 * 2000
-    tau = np.logspace(np.log10(30 * dt), np.log10(n * dt / 10), 40)
-    ratio = bank_avar(tau, dt, 1.0, n_samples=n) / PLATEAU
-    np.testing.assert_allclose(ratio, 1.0, atol=0.01)
+@pytest.mark.parametrize("n", [24 * 3600 * 2000, 10**9])
+def test_streaming_flicker_law_is_the_term_at_every_tau(n):
+    # a day at 2 kHz and 1e9 samples: the generator's exact law is Flicker.avar from tau = dt
+    # to half the record within 1e-5, far inside the chi-square band (>= 1e-4 at tau = dt)
+    dt = 1.0 / 2000.0
+    m = np.unique(np.round(np.logspace(0, np.log10(n / 2), 60)))
+    law = bank_avar(m * dt, dt, 1.0, n_samples=n)
+    np.testing.assert_allclose(law, Flicker(B=1.0).avar(m * dt, dt), rtol=1e-5, atol=0)
+    # the three parts sum to the sampled PSD without clipping anything
+    assert flicker_design(n).clipped == 0.0
+    # (the old point-sampled bank was -30% at tau = dt; the plateau holds as before)
+    plateau = m >= 30
+    np.testing.assert_allclose(law[plateau] / PLATEAU, 1.0, atol=0.01)
+
+
+@pytest.mark.parametrize(("cutoff", "rtol"), [(0.25, 2e-5), (0.1, 1e-5)])
+def test_streaming_flicker_law_with_a_cutoff_below_nyquist(cutoff, rtol):
+    # the low-pass on the bank removes its tails above f0 (nothing clipped) and the residual
+    # takes the band edge: the law is the band-limited term's within rtol (measured 7e-6, 5e-6)
+    dt, n = 1.0 / 100.0, 10**8
+    m = np.unique(np.round(np.logspace(0, np.log10(n / 2), 25)))
+    term = Flicker(B=1.0, f0=cutoff / dt)
+    law = bank_avar(m * dt, dt, 1.0, cutoff_hz=term.f0, n_samples=n)
+    np.testing.assert_allclose(law, term.avar(m * dt, dt), rtol=rtol, atol=0)
+    assert flicker_design(n, cutoff).clipped < 1e-10
+
+
+def test_bank_law_needs_tau_on_the_sample_grid():
+    with pytest.raises(ValueError, match="whole multiples"):
+        bank_avar([1.5e-3], 1e-3, 1.0)
+
+
+@pytest.mark.parametrize("theta", [1e-9, 1e-4, 0.09, 0.11, 3.0])
+def test_sampled_ar1_avar_is_the_autocovariance_sum(theta):
+    # brute force: AVAR = -(1/2m^2) sum_k (1 - phi^|k|) w_k (the constant part of R cancels)
+    for m in (1, 2, 9, 150):
+        k = np.arange(-2 * m + 1, 2 * m)
+        tri = np.clip(m - np.abs(k), 0, None)
+        w = 2 * tri - np.clip(m - np.abs(k - m), 0, None) - np.clip(m - np.abs(k + m), 0, None)
+        brute = -np.sum(-np.expm1(-np.abs(k) * theta) * w) / (2.0 * m * m)
+        assert sampled_ar1_avar(2.0, theta, m) == pytest.approx(2.0 * brute, rel=1e-12)
+
+
+def test_fir_avar_is_the_filtered_difference_variance():
+    # AVAR = |g|^2 / 2 with g = taps * c, c = (-1 x m, +1 x m) / m: white input, both branches
+    taps = np.random.default_rng(3).standard_normal(50)
+    for m in (1, 7, 49, 50, 120):
+        c = np.concatenate((-np.ones(m), np.ones(m))) / m
+        g = np.convolve(taps, c)
+        expected = 0.5 * float(np.sum(g * g))
+        assert _fir_avar(taps, np.array([m]))[0] == pytest.approx(expected, rel=1e-12)
 
 
 def test_spectral_stream_rejects_overrun():
@@ -160,10 +209,29 @@ def test_simulated_lowpass_has_the_negative_quantization_signature():
     # a white + quantization fit of a low-pass record's AVAR curve returns Q^2 < 0 (DESIGN.md)
     term = LowPassWhite(N=0.01, bandwidth=2.0)
     x = allanite.model.NoiseModel((term,)).simulate(1 << 16, 100.0, seed=3)
-    r = allanite.avar(x, 100.0, taus="octave", alpha=0)
+    r = allanite.avar(x, fs=100.0, taus="octave", alpha=0)
     keep = (r.tau > 0.15) & (r.tau < 6.0)
     weight = 1.0 / r.var[keep]  # relative errors
     design = np.column_stack([3.0 / r.tau[keep] ** 2, 1.0 / r.tau[keep]]) * weight[:, None]
     q2, n2 = np.linalg.lstsq(design, r.var[keep] * weight, rcond=None)[0]
     assert q2 < 0
     assert n2 == pytest.approx(term.N**2, rel=0.1)
+
+
+def test_fir_stream_is_the_direct_convolution_across_overlap_save_steps():
+    from allanite.simulation.flicker import FirStream
+    from allanite.simulation.streams import make_generator
+
+    taps = np.random.default_rng(4).standard_normal(40)
+    stream = FirStream(taps, 10.0, 2, seed=11)
+    n = stream.step + 1000  # two overlap-save steps
+    y = stream.next(n)
+    # the same normal numbers in the same order: the history, then whole steps
+    rng = make_generator(11)
+    inputs = np.concatenate(
+        [rng.standard_normal((taps.size - 1, 2))]
+        + [rng.standard_normal((stream.step, 2)) for _ in range(2)]
+    )
+    for c in range(2):
+        direct = np.convolve(inputs[:, c], taps, mode="valid")[:n]
+        np.testing.assert_allclose(y[:, c], direct, rtol=0, atol=1e-12 * np.abs(direct).max())

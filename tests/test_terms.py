@@ -185,7 +185,7 @@ def test_bad_parameter_values():
 def test_guesses_from_a_curve():
     rng = np.random.default_rng(1)
     x = rng.standard_normal(20000) * 0.5 / math.sqrt(DT)
-    res = allanite.avar(x, 1 / DT, taus="octave")
+    res = allanite.avar(x, fs=1 / DT, taus="octave")
     g = White.guess(res)
     assert g is not None
     assert 0.4 < g.N <= 0.6

@@ -126,7 +126,7 @@ def _physical_record() -> np.ndarray:
 def _fit_in(unit: str):
     """Fit of the physical record written in ``unit`` (scale from the unit algebra)."""
     x = _physical_record() / parse_unit(unit).scale
-    res = allanite.oadev(x, 100.0, units=unit, taus="octave")
+    res = allanite.oadev(x, fs=100.0, units=unit, taus="octave")
     return allanite.fit(res, terms=["white", "rrw"])
 
 

@@ -10,7 +10,6 @@ from allanite.batch import BatchResult, batch
 from allanite.diagnosis import Diagnosis, diagnose
 from allanite.fit import Coefficient, FitResult, fit
 from allanite.io import Record, read_record
-from allanite.large import avar_large
 from allanite.model import NoiseModel
 from allanite.terms import (
     Flicker,
@@ -34,6 +33,7 @@ from allanite.variance import (
     tdev,
     totdev,
 )
+from allanite.variance.outofcore import avar_large
 
 __version__ = "0.1.0"
 

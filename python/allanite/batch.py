@@ -237,13 +237,13 @@ def _fit_row(single: Any, task: _Task, rate: str | None) -> dict[str, Any]:
 
 def _analyse(task: _Task) -> list[dict[str, Any]]:
     """Rows of one record (module-level so that Dask can pickle it)."""
-    from allanite.large import avar_large
+    from allanite.variance.outofcore import avar_large
 
     try:
         samples, fs, input_kind, units, names = _load(task)
         rate = _rate_unit(input_kind, units)
         _unit_free(task.sheet, rate)
-        result = avar_large(samples, fs, input=input_kind, units=rate, **task.avar_options)
+        result = avar_large(samples, fs=fs, input=input_kind, units=rate, **task.avar_options)
     except (InputError, ValueError, TypeError, OSError) as exc:
         return [{"record": task.name, "channel": None, "error": " ".join(str(exc).split())}]
     rows = []
@@ -368,13 +368,13 @@ def batch(
         Run one task per record on this cluster (``pip install 'allanite[dask]'``); default:
         locally, in order.
     taus, points, threads, memory_limit
-        Passed to :func:`allanite.large.avar_large` for every record (overlapping Allan
+        Passed to :func:`allanite.variance.outofcore.avar_large` for every record (overlapping Allan
         variance; the EDF assumes white FM, ``alpha=0``, which keeps a batch fast: the fit
         computes its own covariance and the Allan deviation intervals of ``adev`` limits are
         those of white noise).
     progress : callable, optional
         ``progress("records", done, total)`` after each record (on the calling thread; the
-        same signature as the ``progress`` of :func:`allanite.large.avar_large`).
+        same signature as the ``progress`` of :func:`allanite.variance.outofcore.avar_large`).
     **read_options
         Reader options for paths (``input``, ``units``, ``columns``, ``scale``, ``dtype``,
         ...); ``input`` and ``units`` also describe arrays.

@@ -14,10 +14,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from allanite.io.record import Record
 from allanite.model import NoiseModel
 from allanite.terms import Flicker, Quantization, RateRamp, RateRandomWalk, White
 
-__all__ = ["EXAMPLE_FS", "EXAMPLE_SEED", "example_model", "example_record"]
+__all__ = ["EXAMPLE_FS", "EXAMPLE_SEED", "example_as_record", "example_model", "example_record"]
 
 EXAMPLE_FS = 100.0
 EXAMPLE_DURATION_S = 1800.0
@@ -59,3 +60,19 @@ def example_record(**overrides: Any) -> tuple[NDArray[np.float64], float]:
     }
     options.update(overrides)
     return example_model().simulate(fs=EXAMPLE_FS, **options), EXAMPLE_FS
+
+
+def example_as_record() -> Record:
+    """The example as a :class:`~allanite.io.Record`: angle in deg at 100 Hz.
+
+    The CLI's ``--example`` and the GUI's example button load this record.
+    """
+    samples, fs = example_record()
+    return Record(
+        samples=samples,
+        fs=float(fs),
+        input="angle",
+        units="deg",
+        channels=("example",) if samples.ndim == 1 else (),
+        source="example record (simulated, 30 min at 100 Hz)",
+    )

@@ -2,8 +2,10 @@
 
 A result shown as the last expression of a notebook cell appears as a compact table with its
 plot (an inline PNG when matplotlib is installed; the table alone otherwise), the way pandas
-and matplotlib users expect. The classes' ``_repr_html_`` are one-line hooks into
-:func:`repr_html`; the HTML is self-contained (no scripts, no external files) and escaped.
+and matplotlib users expect. Each class's ``_repr_html_`` is one of :func:`allan_html`,
+:func:`fit_html` and :func:`diagnosis_html` (the results know their view; this module imports
+none of them, so it sits below them in the import graph); the HTML is self-contained (no
+scripts, no external files) and escaped.
 """
 
 from __future__ import annotations
@@ -16,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["repr_html"]
+__all__ = ["allan_html", "diagnosis_html", "fit_html"]
 
 #: longest table shown inline; longer ones show their first and last rows
 MAX_ROWS = 12
@@ -77,7 +79,8 @@ def _layout(title: str, tables: str, image: str) -> str:
     )
 
 
-def _allan_html(result: Any) -> str:
+def allan_html(result: Any) -> str:
+    """HTML of an :class:`allanite.variance.AllanResult`: its table and plot."""
     from allanite.plot.allan import allan_figure
 
     dev = np.asarray(result.dev, dtype=np.float64).reshape(result.tau.size, -1)
@@ -118,7 +121,8 @@ def _fit_figure(fit: Any) -> Any:
     return fig
 
 
-def _fit_html(fit: Any) -> str:
+def fit_html(fit: Any) -> str:
+    """HTML of an :class:`allanite.fit.FitResult`: its coefficients, the misfit test, the plot."""
     level = 0.95
     rows = [
         [r["name"], r["value"], r["stderr"], f"{_num(r['low'])} – {_num(r['high'])}", r["unit"]]
@@ -141,7 +145,8 @@ def _fit_html(fit: Any) -> str:
     return _layout(title, table, _png(lambda: _fit_figure(fit)))
 
 
-def _diagnosis_html(diagnosis: Any) -> str:
+def diagnosis_html(diagnosis: Any) -> str:
+    """HTML of an :class:`allanite.diagnosis.Diagnosis`: the gap, its attribution, the views."""
     from allanite.plot.diagnosis import diagnosis_figure
 
     verdict = "differ beyond chance" if diagnosis.significant else "agree within chance"
@@ -174,18 +179,3 @@ def _diagnosis_html(diagnosis: Any) -> str:
             caption="attribution, best first",
         )
     return _layout("Diagnosis", table, _png(lambda: diagnosis_figure(diagnosis, figsize=(6, 7))))
-
-
-def repr_html(obj: Any) -> str:
-    """HTML of an AllanResult, FitResult or Diagnosis: a compact table and its plot."""
-    from allanite.diagnosis.result import Diagnosis
-    from allanite.fit.result import FitResult
-    from allanite.variance import AllanResult
-
-    if isinstance(obj, AllanResult):
-        return _allan_html(obj)
-    if isinstance(obj, FitResult):
-        return _fit_html(obj)
-    if isinstance(obj, Diagnosis):
-        return _diagnosis_html(obj)
-    raise TypeError(f"no HTML view of {type(obj).__name__}")

@@ -2,7 +2,7 @@
 
 One helper for every subcommand. :func:`progress_bars` yields the ``progress(stage, done,
 total)`` callback that the library's long-running functions accept
-(:func:`allanite.large.avar_large`, :func:`allanite.batch`); :func:`progress` wraps an
+(:func:`allanite.variance.outofcore.avar_large`, :func:`allanite.batch`); :func:`progress` wraps an
 iterable with the same bars for loops in the CLI itself. When stderr is not a terminal nothing
 is drawn; without tqdm (the ``progress`` extra) nothing is drawn either, unless bars were asked
 for explicitly, which is an error naming the extra.

@@ -20,7 +20,6 @@ from allanite.io.readers import FORMATS, read_record
 from allanite.io.record import INPUT_KINDS, Record
 from allanite.io.timebase import GAP_POLICIES
 from allanite.plausibility import check_allan, check_samples, refuse_constant
-from allanite.units import record_rate_unit
 from allanite.variance import KINDS, AllanResult, avar
 
 __all__ = [
@@ -145,7 +144,7 @@ def add_grid_arguments(parser: argparse.ArgumentParser) -> None:
         "--fast",
         action="store_true",
         help="fast mode for huge records: strided sums at long taus, deviation < 0.075 of the "
-        "estimate's own 1-sigma error for white rate noise (see allanite.fast)",
+        "estimate's own 1-sigma error for white rate noise (see allanite.variance.fast)",
     )
 
 
@@ -169,20 +168,12 @@ def _time_column(text: str | None) -> int | str | None:
 def example_record(args: argparse.Namespace | None = None) -> Record:
     """Return the built-in example: a simulated 30-minute angle record at 100 Hz."""
     try:
-        from allanite.examples import example_record as make_example
+        from allanite.examples import example_as_record
     except ImportError as exc:
         raise ValueError(
             "the example record is not available in this installation; give a FILE"
         ) from exc
-    samples, fs = make_example()
-    return Record(
-        samples=samples,
-        fs=float(fs),
-        input="angle",
-        units="deg",
-        channels=("example",) if samples.ndim == 1 else (),
-        source="example record (simulated, 30 min at 100 Hz)",
-    )
+    return example_as_record()
 
 
 def unit_list(text: str | None) -> list[str]:
@@ -334,7 +325,7 @@ def rate_unit(record: Record) -> str | None:
         If the unit is not a rate or acceleration for rate samples, or not an angle or a
         velocity for angle/increment samples (e.g. ``--input angle --units deg/s``).
     """
-    return record_rate_unit(record.units, record.input, strict=True)
+    return record.rate_unit()
 
 
 def avar_from_args(record: Record, args: argparse.Namespace) -> AllanResult:
@@ -351,7 +342,7 @@ def avar_from_args(record: Record, args: argparse.Namespace) -> AllanResult:
     with progress_bars() as bar:
         return avar(
             part.samples if part.n_channels > 1 else part.samples[:, 0],
-            part.require_fs(),
+            fs=part.require_fs(),
             input=part.input,  # type: ignore[arg-type]
             kind=args.kind,
             taus=args.taus,
@@ -377,7 +368,7 @@ def warn_implausible(
     fs = part.require_fs()
     if result is None:
         samples = part.samples if part.n_channels > 1 else part.samples[:, 0]
-        result = avar(samples, fs, input=part.input, points=50)  # type: ignore[arg-type]
+        result = avar(samples, fs=fs, input=part.input, points=50)  # type: ignore[arg-type]
     dev = np.asarray(result.dev, dtype=np.float64).reshape(result.tau.size, -1)
     findings = check_samples(
         part.samples,

@@ -47,7 +47,8 @@ def register(subparsers: Any) -> None:
         choices=("auto", "spectral", "kasdin", "bank"),
         default="auto",
         help="how flicker is simulated: auto (exact spectral synthesis up to 2^21 samples, "
-        "else a streaming Gauss-Markov bank), spectral, kasdin (Kasdin's fractional filter) "
+        "else the streaming AR(1) bank + FIR generator, exact too), spectral, kasdin (Kasdin's "
+        "fractional filter) "
         "or bank",
     )
     parser.add_argument(

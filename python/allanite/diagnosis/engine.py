@@ -25,7 +25,7 @@ from allanite.diagnosis.null import runs
 from allanite.diagnosis.result import Diagnosis, Holdout
 from allanite.diagnosis.verdict import verdict
 from allanite.terms import term_from_dict
-from allanite.variance import _check_fs
+from allanite.variance.checks import check_fs as _check_fs
 
 __all__ = ["diagnose"]
 

@@ -13,7 +13,7 @@ from allanite.diagnosis.joint import Explanation
 from allanite.diagnosis.tau_view import TauView
 from allanite.diagnosis.time_view import TimeView
 from allanite.diagnosis.verdict import Unexplained
-from allanite.notebook import repr_html
+from allanite.notebook import diagnosis_html
 
 __all__ = ["Diagnosis", "Holdout"]
 
@@ -120,7 +120,7 @@ class Diagnosis:
     unexplained: list[Unexplained] = field(default_factory=list)
     headline: str = ""
 
-    _repr_html_ = repr_html  # Jupyter: a compact table and the plot (allanite.notebook)
+    _repr_html_ = diagnosis_html  # Jupyter: a compact table and the plot (allanite.notebook)
 
     @property
     def where(self) -> dict[str, Any]:

@@ -47,7 +47,7 @@ def _curve(
     if x.ndim != 1:
         raise ValueError(f"fit one channel at a time; got a record of shape {x.shape}")
     taus = "octave" if method == "gls" else "log"
-    return avar(x, fs, input=input, taus=taus, units=units)  # type: ignore[arg-type]
+    return avar(x, fs=fs, input=input, taus=taus, units=units)  # type: ignore[arg-type]
 
 
 def _points(result: AllanResult, method: str, max_fraction: float) -> NDArray[np.bool_]:

@@ -42,7 +42,7 @@ from numpy.typing import NDArray
 
 from allanite.model import NoiseModel
 from allanite.terms import Quantization, RateRamp, Sine, Term
-from allanite.transfer import avar_transfer
+from allanite.variance.transfer import avar_transfer
 
 __all__ = ["CovarianceBasis", "avar_covariance", "avar_transfer", "ramp_cross_basis"]
 

@@ -14,7 +14,7 @@ from scipy import stats
 
 from allanite.fit.classic import ClassicReadout
 from allanite.model import NoiseModel
-from allanite.notebook import repr_html
+from allanite.notebook import fit_html
 from allanite.units import convert, display_unit, parse_unit
 
 __all__ = ["Coefficient", "Comparison", "ComparisonRow", "FitResult"]
@@ -155,7 +155,7 @@ class FitResult:
     meta: dict[str, Any] = field(default_factory=dict, compare=False)
     discrepancy: float = 0.0
     misfit_level: float = 0.001
-    _repr_html_ = repr_html  # Jupyter: a compact table and the plot (allanite.notebook)
+    _repr_html_ = fit_html  # Jupyter: a compact table and the plot (allanite.notebook)
 
     @property
     def misspecified(self) -> bool:

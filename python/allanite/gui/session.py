@@ -139,26 +139,28 @@ class Session:
             record = dataclasses.replace(record, fs=fs)
             self.record = record
         part = record.longest_segment()
-        from allanite.cli.record_options import rate_unit as record_rate_unit
-
         self.result = avar(
             part.samples,
-            fs,
+            fs=fs,
             input=part.input,  # type: ignore[arg-type]
             kind=o.kind,  # type: ignore[arg-type]
             points=o.points,
-            units=record_rate_unit(part),
+            units=part.rate_unit(),
         )
         self.fits = {}
         return self.result
 
     def fit(self, channel: int) -> Any:
-        """Fit a noise model to one channel (None when no fitter is installed)."""
-        from allanite.cli.fit import fit_result
+        """Fit a noise model to one channel (None unless the estimator is the overlapping AVAR).
+
+        The fit models the overlapping Allan variance's covariance, so other kinds get no fit.
+        """
+        from allanite.fit import fit
 
         result = self.result if self.result is not None else self.compute()
         if channel not in self.fits:
-            self.fits[channel] = fit_result(result.channel(channel))
+            one = result.channel(channel)
+            self.fits[channel] = fit(one) if one.kind == "overlapping" else None
         return self.fits[channel]
 
     def diagnose(self, model_path: str | Path, channel: int) -> Any:

@@ -518,9 +518,9 @@ class MainWindow(QtWidgets.QMainWindow):
             self._guard(lambda: self.open_file(path))()
 
     def _open_example(self) -> None:
-        from allanite.cli.record_options import example_record
+        from allanite.examples import example_as_record
 
-        self._guard(lambda: self.use_record(example_record()))()
+        self._guard(lambda: self.use_record(example_as_record()))()
 
     def _ask_model(self) -> None:
         path, _ = QtWidgets.QFileDialog.getOpenFileName(

@@ -26,7 +26,8 @@ from allanite.impact.ins_errors import (
     long_interval_sigma,
     short_interval_sigma,
 )
-from allanite.impact.sensor import Component, SensorNoise, as_sensor_noise
+from allanite.impact.model_adapter import as_sensor_noise
+from allanite.impact.sensor import Component, SensorNoise
 
 __all__ = ["ALL_QUANTITIES", "BudgetComponent", "ErrorBudget", "error_budget"]
 

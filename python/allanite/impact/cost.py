@@ -153,7 +153,7 @@ def _budget_or_zero(
     markov_start: Literal["zero", "stationary"],
     accel_scale: float,
 ) -> Any:
-    from allanite.impact.sensor import as_sensor_noise
+    from allanite.impact.model_adapter import as_sensor_noise
 
     g = as_sensor_noise(gyro, name="gyro")
     a = as_sensor_noise(accel, name="accel", accel_scale=accel_scale) if accel is not None else None

@@ -27,7 +27,7 @@ from typing import Any
 
 from allanite.impact.sensor import MarkovNoise, SensorNoise
 
-__all__ = ["FLICKER_DT", "FLICKER_HORIZON", "sensor_noise_from_model"]
+__all__ = ["FLICKER_DT", "FLICKER_HORIZON", "as_sensor_noise", "sensor_noise_from_model"]
 
 #: sample period (s) that sets the high cutoff of the flicker bank (5 Hz: far above the
 #: frequencies that drive navigation errors)
@@ -126,4 +126,26 @@ def sensor_noise_from_model(model: Any, *, sensor: str, accel_scale: float = 1.0
         random_walk=math.sqrt(rrw2),
         markov=tuple(markov),
         ignored=tuple(ignored),
+    )
+
+
+def as_sensor_noise(obj: Any, *, name: str, accel_scale: float = 1.0) -> SensorNoise:
+    """Accept a :class:`SensorNoise` or a NoiseModel (converted to SI); anything else is an error.
+
+    Parameters
+    ----------
+    obj : SensorNoise or allanite.model.NoiseModel
+        The sensor's noise.
+    name : {"gyro", "accel"}
+        Which sensor (selects the conversion; also used in error messages).
+    accel_scale : float
+        m/s^2 per unit of an accelerometer NoiseModel's coefficients.
+    """
+    if isinstance(obj, SensorNoise):
+        return obj
+    if hasattr(obj, "terms"):
+        return sensor_noise_from_model(obj, sensor=name, accel_scale=accel_scale)
+    raise TypeError(
+        f"{name} must be an allanite.impact.SensorNoise or an allanite NoiseModel, got "
+        f"{type(obj).__name__}"
     )

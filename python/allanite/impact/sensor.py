@@ -3,18 +3,19 @@
 The navigation error laws act on four kinds of sensor error: a random constant (turn-on bias,
 constant over the run, random from run to run), white noise (ARW for a gyro, VRW for an
 accelerometer), a Wiener process (rate/acceleration random walk) and first-order Gauss-Markov
-processes. :class:`SensorNoise` holds their coefficients in SI units; :func:`as_sensor_noise`
-also accepts a :class:`allanite.model.NoiseModel` (see :mod:`allanite.impact.model_adapter`).
+processes. :class:`SensorNoise` holds their coefficients in SI units;
+:func:`allanite.impact.model_adapter.as_sensor_noise` also accepts a
+:class:`allanite.model.NoiseModel` (see :mod:`allanite.impact.model_adapter`).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, Literal
+from typing import Literal
 
 from allanite.impact._checks import nonnegative as _check_nonneg
 
-__all__ = ["Component", "MarkovNoise", "SensorNoise", "as_sensor_noise"]
+__all__ = ["Component", "MarkovNoise", "SensorNoise"]
 
 ComponentKind = Literal["constant", "white", "random_walk", "markov"]
 COMPONENT_KINDS: tuple[str, ...] = ("constant", "white", "random_walk", "markov")
@@ -122,27 +123,3 @@ class SensorNoise:
             Component("markov", m.sigma, m.tau_c, m.source) for m in self.markov if m.sigma > 0
         )
         return tuple(out)
-
-
-def as_sensor_noise(obj: Any, *, name: str, accel_scale: float = 1.0) -> SensorNoise:
-    """Accept a :class:`SensorNoise` or a NoiseModel (converted to SI); anything else is an error.
-
-    Parameters
-    ----------
-    obj : SensorNoise or allanite.model.NoiseModel
-        The sensor's noise.
-    name : {"gyro", "accel"}
-        Which sensor (selects the conversion; also used in error messages).
-    accel_scale : float
-        m/s^2 per unit of an accelerometer NoiseModel's coefficients.
-    """
-    if isinstance(obj, SensorNoise):
-        return obj
-    if hasattr(obj, "terms"):
-        from allanite.impact.model_adapter import sensor_noise_from_model
-
-        return sensor_noise_from_model(obj, sensor=name, accel_scale=accel_scale)
-    raise TypeError(
-        f"{name} must be an allanite.impact.SensorNoise or an allanite NoiseModel, got "
-        f"{type(obj).__name__}"
-    )

@@ -9,6 +9,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from allanite.units import record_rate_unit
+
 __all__ = ["INPUT_KINDS", "Record", "Segment", "Timing"]
 
 #: what the samples are: angular rate, angle increments per sample, or angle
@@ -166,6 +168,17 @@ class Record:
                 "--fs HZ) or name a time column (--time-column)"
             )
         return self.fs
+
+    def rate_unit(self) -> str | None:
+        """Rate unit of the record: its unit for rate samples, unit per second for angle/increment.
+
+        Raises
+        ------
+        ValueError
+            If the unit is not a rate or acceleration for rate samples, or not an angle or a
+            velocity for angle/increment samples (e.g. ``input="angle", units="deg/s"``).
+        """
+        return record_rate_unit(self.units, self.input, strict=True)
 
     def select(self, channels: list[int | str] | tuple[int | str, ...]) -> Record:
         """Return a record with only the given channels (by index or name), in the given order."""

@@ -11,15 +11,28 @@ here are each term's exact Allan deviation for the record's sample period
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 from numpy.typing import NDArray
 
 from allanite.extras import require
-from allanite.variance import AllanResult
+
+if TYPE_CHECKING:
+    from allanite.variance import AllanResult
 
 __all__ = ["SLOPE_LABELS", "allan_figure", "model_figure", "plot_allan", "plot_model", "slope_of"]
+
+
+def _as_list(results: AllanResult | Sequence[AllanResult]) -> list[AllanResult]:
+    """The results as a list: one result (it has ``tau``) or a sequence of them.
+
+    Duck-typed so that plotting does not import :mod:`allanite.variance` (which sits below).
+    """
+    if hasattr(results, "tau"):
+        return [cast("AllanResult", results)]
+    return list(results)
+
 
 #: canonical log-log slopes of the Allan deviation and their labels
 SLOPE_LABELS: dict[float, str] = {-1.0: "−1", -0.5: "−1/2", 0.0: "0", 0.5: "+1/2", 1.0: "+1"}
@@ -73,7 +86,7 @@ def plot_allan(
     list
         The drawn artists, one per curve.
     """
-    items = [results] if isinstance(results, AllanResult) else list(results)
+    items = _as_list(results)
     if not items:
         raise ValueError("nothing to plot: give at least one AllanResult")
     curves: list[tuple[AllanResult, NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]]
@@ -261,7 +274,7 @@ def allan_figure(
     if model is None:
         plot_allan(ax, results, labels=labels, level=level)
     else:
-        first = results if isinstance(results, AllanResult) else results[0]
+        first = _as_list(results)[0]
         data = first.channel(channel)
         label = labels[channel] if labels is not None and len(labels) > channel else "data"
         plot_allan(ax, data, labels=[label], level=level)

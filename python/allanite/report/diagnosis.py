@@ -12,7 +12,6 @@ __all__ = ["diagnosis_html", "diagnosis_section", "run_diagnosis"]
 
 def run_diagnosis(record: Record, model: Any, channel: int = 0, **options: Any) -> Any:
     """Diagnose one channel of a record (its longest segment) against a noise model."""
-    from allanite.cli.record_options import rate_unit
     from allanite.diagnosis import diagnose
 
     part = record.longest_segment()
@@ -21,7 +20,7 @@ def run_diagnosis(record: Record, model: Any, channel: int = 0, **options: Any) 
         model,
         part.require_fs(),
         input=part.input,
-        units=rate_unit(part),
+        units=part.rate_unit(),
         **options,
     )
 

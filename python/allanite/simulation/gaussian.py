@@ -1,7 +1,7 @@
 r"""Gaussian streams: white noise, angle quantization and banks of first-order recursions.
 
-The recursive generators (rate random walk, Gauss-Markov, the Gauss-Markov bank that makes
-streaming flicker noise, low-pass filtered white noise) all run in the C++ core
+The recursive generators (rate random walk, Gauss-Markov, the AR(1) bank of the
+streaming flicker generator, low-pass filtered white noise) all run in the C++ core
 (:func:`allanite._core.ar1_bank`, GIL released): ``J`` recursions per channel
 
 .. math:: e = q_j z,\qquad y_k \mathrel{+}= a_j x_j + b_j e,\qquad x_j \leftarrow \phi_j x_j + e

@@ -21,8 +21,8 @@ Scaling. Kasdin's one-sided discrete PSD is
 Which law the samples follow
 ----------------------------
 Because the filter starts from zero history, the samples are not the stationary-increment
-Kasdin process but its truncation. :func:`kasdin_avar` gives both laws exactly, from the
-filter itself. With the second difference of the cumulative filter
+Kasdin process but its truncation. :func:`allanite.terms.flicker_laws.kasdin_avar` gives both
+laws exactly, from the filter itself. With the second difference of the cumulative filter
 :math:`H(k) = \sum_{i<k} h_i = 2k\,h_k` (hockey-stick identity; :math:`H(k) = 0` for
 :math:`k \le 0`),
 
@@ -70,22 +70,19 @@ N. J. Kasdin, "Discrete simulation of colored noise and stochastic processes and
 
 from __future__ import annotations
 
-import math
 import numbers
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
-from scipy import fft, integrate
+from numpy.typing import NDArray
+from scipy import fft
 
 from allanite.simulation.spectral import WholeRecordStream
-from allanite.terms._checks import averaging_factor
 
 __all__ = [
     "KASDIN_MAX_SAMPLES",
     "KASDIN_MAX_VALUES",
     "KasdinStream",
-    "kasdin_avar",
     "kasdin_coefficients",
 ]
 
@@ -96,10 +93,6 @@ KASDIN_MAX_SAMPLES = 1 << 21
 KASDIN_MAX_VALUES = 1 << 24
 #: flicker exponent of the filter (PSD ~ 1/f^alpha)
 ALPHA = 1.0
-#: the stationary law sums u_m(p)^2 exactly up to p = TAIL_FACTOR m + TAIL_START, then
-#: integrates the asymptotic form of H (relative error of the tail below 1e-7)
-TAIL_FACTOR = 4
-TAIL_START = 4096
 
 
 def kasdin_coefficients(n: int, alpha: float = ALPHA) -> NDArray[np.float64]:
@@ -125,121 +118,6 @@ def kasdin_coefficients(n: int, alpha: float = ALPHA) -> NDArray[np.float64]:
     h[0] = 1.0
     h[1:] = np.cumprod((k - 1.0 + 0.5 * alpha) / k)
     return h
-
-
-def _cumulative_table(k_max: int) -> NDArray[np.float64]:
-    r""":math:`H(k) = \sum_{i<k} h_i = 2k h_k` (alpha = 1) for ``k = 0 .. k_max``."""
-    k = np.arange(k_max + 1, dtype=np.float64)
-    return 2.0 * k * kasdin_coefficients(k_max + 1)
-
-
-def _responses(m: int, last: int, table: NDArray[np.float64]) -> NDArray[np.float64]:
-    r""":math:`u_m(p)` for :math:`p = 1 - 2m \ldots` ``last`` from :func:`_cumulative_table`."""
-    padded = np.concatenate((np.zeros(2 * m), table[: last + 2 * m + 1]))  # H(k <= 0) = 0
-    count = last + 2 * m  # number of p values; padded[j] = H(j - 2m)
-    high = padded[2 * m + 1 : 2 * m + 1 + count]  # H(p + 2m) = padded[p + 4m]
-    mid = padded[m + 1 : m + 1 + count]
-    low = padded[1 : 1 + count]
-    return (high - 2.0 * mid + low) / m
-
-
-def _tail(m: int, start: float) -> float:
-    r"""Integral of :math:`u_m(p)^2` over :math:`p \ge` ``start`` from the asymptotic H.
-
-    :math:`H(k) = \tfrac{2}{\sqrt\pi}(\sqrt k - k^{-1/2}/8 + O(k^{-3/2}))`; the second
-    difference of :math:`\sqrt k` is written without cancellation,
-    :math:`-2m^2/[(s_2 + s_0)(s_2 + s_1)(s_1 + s_0)]` with :math:`s_j = \sqrt{p + jm}`.
-    """
-
-    def integrand(p: float) -> float:
-        s0, s1, s2 = math.sqrt(p), math.sqrt(p + m), math.sqrt(p + 2 * m)
-        root = -2.0 * m * m / ((s2 + s0) * (s2 + s1) * (s1 + s0))
-        inverse = 1.0 / s2 - 2.0 / s1 + 1.0 / s0
-        return (2.0 / math.sqrt(math.pi) * (root - inverse / 8.0) / m) ** 2
-
-    # substitute p = start / t (t in (0, 1]) so that the range is finite and smooth
-    value, _ = integrate.quad(
-        lambda t: integrand(start / t) * start / (t * t), 0.0, 1.0, epsabs=0.0, epsrel=1e-10
-    )
-    return float(value)
-
-
-def _whole_factors(tau: ArrayLike, dt: float) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
-    t, m, _ = averaging_factor(tau, dt)
-    whole = np.round(m)
-    if np.any(np.abs(m - whole) > 1e-6 * np.maximum(whole, 1.0)) or np.any(whole < 1):
-        raise ValueError(
-            "tau must be whole multiples of the sample period dt (tau = m dt, m >= 1); "
-            "round tau to the sample grid"
-        )
-    return t, whole.astype(np.int64)
-
-
-def kasdin_avar(
-    tau: ArrayLike, dt: float, B: float, n_samples: int | None = None
-) -> NDArray[np.float64]:
-    r"""Return the exact Allan variance of Kasdin flicker samples of coefficient ``B``.
-
-    Parameters
-    ----------
-    tau : array_like
-        Averaging times in seconds, whole multiples ``m dt`` of the sample period.
-    dt : float
-        Sample period in seconds.
-    B : float
-        Flicker coefficient (rate); the innovations have variance :math:`Q_d = B^2`.
-    n_samples : int, optional
-        None: the stationary law :math:`\tfrac{B^2}{2}\sum_{p \ge 1-2m} u_m(p)^2` of the
-        infinite-history process. An integer ``N``: the expected overlapping Allan variance of
-        a record of ``N`` samples from the truncated filter (what :class:`KasdinStream`
-        produces), :math:`\tfrac{B^2}{2K}\sum_{p=1-2m}^{K-1} u_m(p)^2 (K - \max(p, 0))`,
-        :math:`K = N - 2m + 1`. See the module docstring for both.
-
-    Returns
-    -------
-    numpy.ndarray
-        Allan variance per ``tau`` in rate units squared.
-
-    Raises
-    ------
-    ValueError
-        For ``tau`` off the sample grid, ``B < 0``, or ``2m > n_samples``.
-
-    References
-    ----------
-    N. J. Kasdin, Proc. IEEE 83(5) (1995), eq. (116) for the filter.
-    """
-    if isinstance(B, bool) or not isinstance(B, numbers.Real):
-        raise TypeError(f"B must be a number (rate units), got {B!r}")
-    if not math.isfinite(B) or B < 0:
-        raise ValueError(f"B must be finite and non-negative, got {B!r}")
-    t, m = _whole_factors(tau, dt)
-    if n_samples is not None:
-        if isinstance(n_samples, bool) or not isinstance(n_samples, numbers.Integral):
-            raise TypeError(f"n_samples must be a whole number of samples, got {n_samples!r}")
-        if np.any(2 * m > n_samples):
-            raise ValueError(
-                f"tau = {t.max()} s needs 2 tau / dt = {2 * int(m.max())} samples but the record "
-                f"has n_samples = {n_samples}; use tau <= n_samples dt / 2"
-            )
-    if n_samples is None:
-        table = _cumulative_table(int(TAIL_FACTOR * m.max() + TAIL_START + 2 * m.max()))
-    else:
-        table = _cumulative_table(int(n_samples))
-    out = np.empty(m.shape, dtype=np.float64)
-    for index, mm in np.ndenumerate(m):
-        mm = int(mm)
-        if n_samples is None:
-            last = TAIL_FACTOR * mm + TAIL_START
-            u = _responses(mm, last, table)
-            total = float(np.sum(u * u)) + _tail(mm, last + 0.5)
-        else:
-            windows = int(n_samples) - 2 * mm + 1
-            u = _responses(mm, windows - 1, table)
-            weight = windows - np.maximum(np.arange(1 - 2 * mm, windows), 0)
-            total = float(np.sum(u * u * weight)) / windows
-        out[index] = 0.5 * B * B * total
-    return out
 
 
 class KasdinStream(WholeRecordStream):

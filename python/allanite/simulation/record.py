@@ -171,8 +171,8 @@ def simulate_chunks(
 
     Memory is bounded by the chunk and the terms' blocks, whatever the record length (the
     flicker term of a record longer than ``SPECTRAL_MAX_SAMPLES`` streams through its
-    Gauss-Markov bank). Parameters as in :func:`simulate`; ``chunk`` only sets the piece size,
-    never the samples.
+    AR(1) bank + FIR generator). Parameters as in :func:`simulate`; ``chunk`` only sets the
+    piece size, never the samples.
     """
     rate = check_fs(fs)
     total = record_length(rate, n, duration)
@@ -233,8 +233,8 @@ def simulate(
     flicker_method : {"auto", "spectral", "kasdin", "bank"}
         How flicker terms are simulated (:func:`allanite.simulation.flicker.flicker_stream`):
         ``auto`` = exact spectral synthesis up to ``SPECTRAL_MAX_SAMPLES``, else the streaming
-        Gauss-Markov bank; ``kasdin`` = Kasdin's fractional filter (law:
-        :func:`allanite.simulation.kasdin.kasdin_avar`).
+        AR(1) bank + FIR generator (the same law to about 1e-6); ``kasdin`` = Kasdin's
+        fractional filter (law: :func:`allanite.terms.flicker_laws.kasdin_avar`).
 
     Returns
     -------

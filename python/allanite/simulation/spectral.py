@@ -34,7 +34,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from allanite.simulation.streams import TermStream, block_length
-from allanite.transfer import avar_transfer
+from allanite.variance.transfer import avar_transfer
 
 __all__ = ["SpectralStream", "WholeRecordStream", "expected_avar", "synthesis_length"]
 
@@ -101,7 +101,7 @@ class WholeRecordStream(TermStream):
         if start + n > self._record.shape[0]:
             raise ValueError(
                 f"this {type(self).__name__} was built for {self.n_samples} samples; ask the "
-                "model for the full length up front (or use the streaming Gauss-Markov bank)"
+                "model for the full length up front (or use the streaming flicker generator)"
             )
         return self._record[start : start + n]
 
@@ -111,7 +111,7 @@ class SpectralStream(WholeRecordStream):
 
     The whole record (``n_samples`` rounded up to whole blocks, per channel) is synthesised on
     the first request and then served block by block, so it needs ``8 n_samples C`` bytes;
-    use it for records of moderate length (the Gauss-Markov bank streams longer ones).
+    use it for records of moderate length (the streaming flicker generator serves longer ones).
     """
 
     def __init__(

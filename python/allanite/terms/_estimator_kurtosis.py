@@ -82,7 +82,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from allanite.terms._checks import averaging_factor
-from allanite.transfer import avar_transfer
+from allanite.variance.transfer import avar_transfer
 
 __all__ = [
     "gaussian_estimate_variance",

@@ -106,7 +106,8 @@ class Flicker(Term):
         """Stream flicker noise (see :mod:`allanite.simulation.flicker`).
 
         ``method="auto"``: spectral synthesis of the exact sampled PSD for records of known
-        length up to 2^21 samples, else a streaming Gauss-Markov bank; ``"spectral"``,
+        length up to 2^21 samples, else the streaming AR(1) bank + FIR generator (exact law
+        too, any length); ``"spectral"``,
         ``"kasdin"`` (Kasdin's fractional filter) or ``"bank"`` force one.
         """
         from allanite.simulation.flicker import flicker_stream

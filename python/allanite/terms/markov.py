@@ -12,12 +12,13 @@ from numpy.typing import ArrayLike, NDArray
 from allanite.terms._checks import averaging_factor, check_parameters
 from allanite.terms._guess import hump
 from allanite.terms.base import ParamSpec, Term
+from allanite.terms.transients import relaxation_bracket
 
 if TYPE_CHECKING:
     from allanite.simulation.streams import TermStream
     from allanite.variance import AllanResult
 
-__all__ = ["PEAK_ADEV", "PEAK_TAU", "GaussMarkov"]
+__all__ = ["PEAK_ADEV", "PEAK_TAU", "GaussMarkov", "sampled_ar1_avar"]
 
 #: ADEV peak of a Gauss-Markov process: 0.617 sigma at tau = 1.89 Tc
 PEAK_ADEV = 0.6166
@@ -75,11 +76,7 @@ class GaussMarkov(Term):
     def avar(self, tau: ArrayLike, dt: float) -> NDArray[np.float64]:
         """Exact Allan variance of the sampled process (see the class docstring)."""
         _, m, step = averaging_factor(tau, dt)
-        phi = math.exp(-step / self.tau_c)
-        one_minus = -math.expm1(-step / self.tau_c)
-        q2 = self.sigma**2 * one_minus * (1.0 + phi)
-        num = m - 3.0 * phi - m * phi**2 + 4.0 * phi ** (m + 1.0) - phi ** (2.0 * m + 1.0)
-        return q2 * num / (m**2 * one_minus**2 * (1.0 - phi**2))
+        return sampled_ar1_avar(self.sigma**2, step / self.tau_c, m)
 
     def psd(self, f: ArrayLike) -> NDArray[np.float64]:
         """One-sided PSD ``4 sigma^2 Tc / (1 + (2 pi f Tc)^2)`` in rate^2/Hz."""
@@ -109,3 +106,39 @@ class GaussMarkov(Term):
             return None
         tau, var = peak
         return cls(sigma=math.sqrt(var) / PEAK_ADEV, tau_c=tau / PEAK_TAU)
+
+
+def _walk_bracket(theta: float) -> float:
+    r"""Return :math:`2\theta(1 - e^{-\theta}) - (e^{-2\theta} - 1 + 2\theta) \approx \theta^3/3`.
+
+    Below ``theta = 0.1`` its Taylor series, coefficients :math:`(-1)^j (2j - 2^j)/j!`,
+    ``j = 3 .. 14``; the direct form (written with ``expm1``) above.
+    """
+    if theta >= 0.1:
+        return -2.0 * theta * math.expm1(-theta) - math.expm1(-2.0 * theta) - 2.0 * theta
+    total = 0.0
+    for j in range(14, 2, -1):
+        total = total * theta + (-1) ** j * (2 * j - 2**j) / math.factorial(j)
+    return total * theta**3
+
+
+def sampled_ar1_avar(variance: float, theta: float, m: ArrayLike) -> NDArray[np.float64]:
+    r"""Exact Allan variance of a point-sampled stationary AR(1), stable for any ``theta``.
+
+    With :math:`\phi = e^{-\theta}` (:math:`\theta = \Delta t/T_c`) the class docstring's
+    numerator is :math:`m\,P(\theta) + \phi\,C(m\theta)` with
+    :math:`P = 2\theta(1-\phi) - (\phi^2 - 1 + 2\theta)` and
+    :math:`C(x) = 2x - 3 + 4e^{-x} - e^{-2x}`
+    (:func:`~allanite.terms.transients.relaxation_bracket`), both evaluated without
+    cancellation, so that
+
+    .. math:: \sigma^2(m\Delta t) = s^2\,\frac{m P(\theta) + \phi C(m\theta)}
+              {m^2 (1-\phi)^2}
+
+    keeps full relative precision for correlation times far beyond the record
+    (:math:`\to s^2\theta(2m^2+1)/(3m)`, a random walk) as well as for white-like ones.
+    """
+    m = np.asarray(m, dtype=np.float64)
+    one_minus = -math.expm1(-theta)
+    numerator = m * _walk_bracket(theta) + math.exp(-theta) * relaxation_bracket(m * theta)
+    return variance * numerator / (m**2 * one_minus**2)

@@ -1,7 +1,7 @@
 """The phase (prefix-sum) array of a record, in memory or in a temporary file.
 
 :func:`build_phase_store` runs the passes of the compiled ``phase`` kernel one chunk of rows at
-a time (:mod:`allanite.io.large` supplies the chunks), carrying the compensated sums between
+a time (:mod:`allanite.variance.chunked` supplies the chunks), carrying the compensated sums between
 chunks, so the result equals ``allanite._core.phase(x, input)`` bit for bit whatever the chunk
 size. The phase lives in a numpy array when it fits the memory budget, otherwise in a
 temporary float64 file that is read back in windows and deleted by :meth:`PhaseStore.close`.
@@ -15,7 +15,6 @@ from __future__ import annotations
 import contextlib
 import os
 import tempfile
-from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -24,12 +23,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from allanite import _core
-from allanite.io.large import ChunkedRecord
+from allanite.variance.chunked import ChunkedRecord
+from allanite.variance.kernel import ProgressCallback
 
 __all__ = ["PhaseStore", "ProgressCallback", "build_phase_store"]
-
-#: progress(stage, done, total): stage "phase" counts samples x passes, "variance" counts taus
-ProgressCallback = Callable[[str, int, int], None]
 
 _ITEM = 8  # float64 phase
 

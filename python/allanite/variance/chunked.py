@@ -1,10 +1,10 @@
 """Records larger than memory: read in chunks of rows without mapping the whole file.
 
 A *chunked record* knows its channel count and sample type and yields ``(rows, channels)``
-blocks in order. The out-of-core variance path (:mod:`allanite.large`) consumes these chunks,
-so peak resident memory is set by the chunk size, not by the file size. Files are read with
-``os.pread`` into reusable buffers rather than memory-mapped: mapped pages that have been
-touched count towards the resident set size (RSS) until the kernel evicts them, read pages only
+blocks in order. The out-of-core variance path (:mod:`allanite.variance.outofcore`) consumes
+these chunks, so peak resident memory is set by the chunk size, not by the file size. Files are
+read with ``os.pread`` into reusable buffers rather than memory-mapped: mapped pages that have
+been touched count towards the resident set size (RSS) until the kernel evicts them, read pages only
 occupy the page cache.
 
 Supported sources:
@@ -29,6 +29,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from allanite.errors import InputError
+from allanite.variance.checks import prepare_record
 
 __all__ = [
     "ArrayRecord",
@@ -439,8 +440,6 @@ def as_chunked(source: ArrayLike | ChunkedRecord) -> ChunkedRecord:
         return source
     if isinstance(source, ChunkedRecord) and not isinstance(source, np.ndarray):
         return source
-    from allanite.variance import prepare_record
-
     arr, _ = prepare_record(source)
     return ArrayRecord(arr)
 

@@ -18,7 +18,8 @@ the averaging factor, the record length and the dominant power-law noise
   ``alpha`` as tau grows, and the cap can only lower the EDF, widening the interval).
   An exponent that differs from both of its neighbours in tau while they agree (one flip of
   the identification, e.g. 3801 -> 13196 -> 3031 in the example record) is replaced by theirs
-  (:func:`smooth_isolated_alpha`, applied by :func:`allanite.avar` unless Stable32's per-tau
+  (:func:`smooth_isolated_alpha`, applied by :func:`~allanite.variance.avar` unless Stable32's
+  per-tau
   identification is asked for with ``alpha="stable32"``): the noise type of a power-law
   spectrum changes over decades, not at one averaging time.
 
@@ -709,7 +710,7 @@ def identify_alpha(
     of the record or of the decimated series), the B1 ratio from the fewer than 30 averages,
     and R(n) from the compiled one-pass :func:`allanite._core.mvar_avar_ratio`, evaluated
     only at the factors where B1 points to phase noise. Extra memory is O(T C) besides the
-    input; nothing here calls :mod:`allanite.reference` (the test oracle).
+    input; nothing here calls :mod:`allanite.variance.oracle` (the test oracle).
 
     Parameters
     ----------

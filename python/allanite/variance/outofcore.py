@@ -1,7 +1,7 @@
 """Allan-family variances of records larger than memory, with a memory budget and progress.
 
-:func:`avar_large` is :func:`allanite.avar` for big inputs: the record may be a file
-(:func:`allanite.io.large.open_large`: ``.npy``, raw binary, text) read in chunks, the phase
+:func:`avar_large` is :func:`allanite.variance.avar` for big inputs: the record may be a file
+(:func:`allanite.variance.chunked.open_large`: ``.npy``, raw binary, text) read in chunks, the phase
 array goes to a temporary file when it exceeds ``memory_limit``, and the variance passes read
 it back in windows. The difference estimators need the taps ``x[k], x[k+m], x[k+2m]``
 (``x[k+3m]`` for Hadamard): for a chunk of terms ``[j0, j0 + t)`` each tap is one window of
@@ -34,25 +34,26 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from allanite import _core
-from allanite.edf import (
+from allanite.io.record import Record
+from allanite.units import record_rate_unit
+from allanite.variance.checks import INPUTS, KINDS, check_threads, given_alpha, resolve_source
+from allanite.variance.chunked import ChunkedRecord, as_chunked, open_large
+from allanite.variance.edf import (
     cap_few_point_alpha,
     identify_alpha,
     smooth_isolated_alpha,
     wants_identification,
 )
-from allanite.io.large import ChunkedRecord, as_chunked
-from allanite.phase_store import PhaseStore, ProgressCallback, build_phase_store
-from allanite.taus import KERNEL_KIND, TauSpec, averaging_factors
-from allanite.units import record_rate_unit
-from allanite.variance import (
-    INPUTS,
-    KINDS,
-    AllanResult,
-    _check_fs,
-    _check_threads,
-    _given_alpha,
-    assemble_result,
+from allanite.variance.kernel import (
+    ProgressCallback,
+    fast_q,
+    identify_bounded,
+    series_points,
+    variances,
 )
+from allanite.variance.phase_store import PhaseStore, build_phase_store
+from allanite.variance.result import AllanResult, assemble_result
+from allanite.variance.taus import KERNEL_KIND, TauSpec, averaging_factors
 
 __all__ = ["avar_large", "parse_memory", "variance_from_store"]
 
@@ -190,38 +191,6 @@ class _WindowReader:
         return state, np.concatenate(decimated, axis=0)
 
 
-def _identify(
-    phase: NDArray[np.float64],
-    factors: NDArray[np.int64],
-    kernel_kind: str,
-    identify: str | None,
-    alpha_rows: int | None,
-) -> NDArray[np.int64] | None:
-    """Noise identification on an in-memory phase; bounded memory when alpha_rows is given.
-
-    Without a bound this is :func:`allanite.edf.identify_alpha` on the whole phase (as
-    :func:`allanite.avar`). With one, each factor's decimated phase ``x[::m]`` is cut to its
-    first ``alpha_rows`` points (the same rule as the out-of-core pass), so the temporary
-    arrays of the identification stay small.
-    """
-    if identify is None:
-        return None
-    if alpha_rows is None:
-        return identify_alpha(phase, factors, kernel_kind, data=identify)
-    out = np.empty((factors.size, phase.shape[1]), dtype=np.int64)
-    points = np.empty(factors.size, dtype=np.int64)
-    for i, m in enumerate(factors.tolist()):
-        decimated = np.ascontiguousarray(phase[: m * alpha_rows : m])
-        out[i] = identify_alpha(decimated, np.array([1]), kernel_kind, data=identify)[0]
-        points[i] = _series_points(decimated.shape[0], identify)
-    return cap_few_point_alpha(out, factors, points)
-
-
-def _series_points(decimated_rows: int, identify: str) -> int:
-    """Values the identification sees in a decimated phase (one fewer for frequency data)."""
-    return decimated_rows if identify == "phase" else decimated_rows - 1
-
-
 def variance_from_store(
     store: PhaseStore,
     factors: NDArray[np.int64],
@@ -245,7 +214,7 @@ def variance_from_store(
     factors : numpy.ndarray
         Averaging factors.
     kernel_kind : str
-        Kernel kind (see :data:`allanite.taus.KERNEL_KIND`).
+        Kernel kind (see :data:`allanite.variance.taus.KERNEL_KIND`).
     threads : int
         Worker threads (0: all cores).
     window_bytes : int, optional
@@ -254,7 +223,7 @@ def variance_from_store(
         Largest decimated series kept per factor for noise identification (None: all of it,
         only possible in memory).
     identify : {"frequency", "phase"} or None
-        Identify alpha (the data argument of :func:`allanite.edf.identify_alpha`) or not.
+        Identify alpha (the data argument of :func:`allanite.variance.edf.identify_alpha`) or not.
     progress : callable, optional
         ``progress("variance", done, total)`` as factors complete.
 
@@ -267,15 +236,7 @@ def variance_from_store(
     nc = store.channels
     if store.array is not None:
         phase = store.array
-        if progress is None:
-            var = np.asarray(_core.variance(phase, factors, kernel_kind, threads))
-        else:
-            var = np.empty((nt, nc))
-            group = max(1, nt // 20)
-            for start in range(0, nt, group):
-                sl = slice(start, start + group)
-                var[sl] = _core.variance(phase, factors[sl], kernel_kind, threads)
-                progress("variance", min(start + group, nt), nt)
+        var = variances(phase, factors, kernel_kind, threads=threads, progress=progress)
         return var, _identify(phase, factors, kernel_kind, identify, alpha_rows)
     if kernel_kind not in _WINDOWED:
         raise ValueError(
@@ -303,7 +264,7 @@ def variance_from_store(
         var[i] = (state[:, 0] + state[:, 1]) / (_NORM[order] * md * md * nd)
         if alphas is not None and identify is not None:
             alphas[i] = identify_alpha(decimated, np.array([1]), kernel_kind, data=identify)[0]
-            points[i] = _series_points(decimated.shape[0], identify)
+            points[i] = series_points(decimated.shape[0], identify)
 
     rows = alpha_rows if alpha_rows is not None else 1 << 22
     readers = [_WindowReader(store, order, chunk_terms, rows) for _ in range(workers)]
@@ -357,10 +318,10 @@ def _capped(
 
 
 def avar_large(
-    source: ArrayLike | ChunkedRecord | str | os.PathLike[str],
-    fs: float = 1.0,
+    source: ArrayLike | Record | ChunkedRecord | str | os.PathLike[str],
     *,
-    input: str = "rate",
+    fs: float | None = None,
+    input: str | None = None,
     kind: str = "overlapping",
     taus: TauSpec = "log",
     m: ArrayLike | None = None,
@@ -377,18 +338,19 @@ def avar_large(
 ) -> AllanResult:
     r"""Allan-family variance of a record that may not fit in memory.
 
-    Same estimators, tau grid, EDF and result as :func:`allanite.avar` (for the same phase
+    Same estimators, tau grid, EDF and result as :func:`allanite.variance.avar` (for the same phase
     the variances are identical bit for bit); the record is read in chunks and the phase
     array is kept in a temporary file when it needs more than half of ``memory_limit``.
 
     Parameters
     ----------
-    source : array_like, ChunkedRecord or path
-        Samples ``(N,)``/``(N, C)``, a record from :mod:`allanite.io.large`, or a file path
-        opened with :func:`allanite.io.large.open_large` and ``open_options`` (e.g.
+    source : array_like, Record, ChunkedRecord or path
+        Samples ``(N,)``/``(N, C)``, a :class:`~allanite.io.Record` (its own ``fs``, ``input``
+        and unit), a record from :mod:`allanite.variance.chunked`, or a file path
+        opened with :func:`allanite.variance.chunked.open_large` and ``open_options`` (e.g.
         ``dtype="float32", channels=3, byteorder="<"`` for raw binary).
     fs, input, kind, taus, m, points, alpha, threads, units
-        As for :func:`allanite.avar`.
+        As for :func:`allanite.variance.avar`.
     memory_limit : int, float or str, optional
         Working-memory budget in bytes or as text (``"1GB"``); default: no limit (phase in
         memory). Peak RSS is about this plus the interpreter's ~100 MB.
@@ -400,10 +362,10 @@ def avar_large(
         ``progress(stage, done, total)``, stage ``"phase"`` (samples x passes read) then
         ``"variance"`` (taus done), called on the calling thread.
     fast : bool or int
-        Fast mode (:mod:`allanite.fast`): at ``m >= 2q`` use every ``m // q``-th term
+        Fast mode (:mod:`allanite.variance.fast`): at ``m >= 2q`` use every ``m // q``-th term
         (``q = 16`` for ``True``, or the integer given); overlapping and hadamard kinds,
         phase in memory. The deviation from the exact result is at most ``1.2/q`` of the
-        estimator's own standard deviation for white rate noise (see :mod:`allanite.fast`).
+        estimator's own standard deviation for white rate noise (see :mod:`allanite.variance.fast`).
         The strides used are in ``meta["fast_stride"]``. Exact is the default.
 
     Returns
@@ -415,22 +377,20 @@ def avar_large(
     ----------
     W. J. Riley, *Handbook of Frequency Stability Analysis*, NIST SP1065 (2008), eq. 11-20.
     """
+    source, rate, input, units, meta = resolve_source(source, fs, input, units)
     if kind not in KERNEL_KIND:
         raise ValueError(f"unknown kind {kind!r}; use one of {', '.join(KINDS)}")
     if input not in INPUTS:
         raise ValueError(f"unknown input {input!r}; use 'rate', 'increment' or 'angle'")
     units = record_rate_unit(units, input)  # the same check as avar's
-    rate = _check_fs(fs)
-    nthreads = _check_threads(threads)
+    nthreads = check_threads(threads)
     limit = parse_memory(memory_limit)
     if isinstance(source, (str, Path, os.PathLike)):
-        from allanite.io.large import open_large
-
         record = open_large(source, **open_options)
     else:
         if open_options:
             raise TypeError(f"file options {sorted(open_options)} apply only when source is a path")
-        record = as_chunked(source)
+        record = as_chunked(source)  # type: ignore[arg-type]  # a Record was resolved above
     nc = record.n_channels
     workers = max(1, nthreads or (os.cpu_count() or 1))
     if chunk_rows is None:
@@ -455,11 +415,15 @@ def avar_large(
         )
         window_bytes = None if limit is None else limit // 2
         alpha_rows = None if limit is None else max(1024, limit // (16 * 8 * workers * nc))
-        meta: dict[str, Any] = {"phase_in_memory": store.in_memory, "phase_bytes": store.nbytes}
-        if fast is not False and fast is not None:
-            var, alphas = _fast(
-                store, factors, kernel_kind, fast, nthreads, identify, alpha_rows, meta
-            )
+        meta.update(phase_in_memory=store.in_memory, phase_bytes=store.nbytes)
+        q = fast_q(fast)
+        if q is not None:
+            if store.array is None:
+                raise ValueError(
+                    "fast=True needs the phase array in memory; raise memory_limit or drop fast"
+                )
+            var = variances(store.array, factors, kernel_kind, threads=nthreads, q=q, meta=meta)
+            alphas = _identify(store.array, factors, kernel_kind, identify, alpha_rows)
         else:
             var, alphas = variance_from_store(
                 store,
@@ -474,7 +438,7 @@ def avar_large(
     if alphas is None:
         if identify is not None:  # pragma: no cover - identify was requested above
             raise RuntimeError("noise identification returned nothing")
-        alphas = _given_alpha(alpha, var.shape)
+        alphas = given_alpha(alpha, var.shape)
     elif alpha is None:  # identified: isolated flips smoothed as in allanite.avar
         alphas = smooth_isolated_alpha(alphas, factors)
     return assemble_result(
@@ -492,32 +456,19 @@ def avar_large(
     )
 
 
-def _fast(
-    store: PhaseStore,
+def _identify(
+    phase: NDArray[np.float64],
     factors: NDArray[np.int64],
     kernel_kind: str,
-    fast: bool | int,
-    threads: int,
     identify: str | None,
     alpha_rows: int | None,
-    meta: dict[str, Any],
-) -> tuple[NDArray[np.float64], NDArray[np.int64] | None]:
-    from allanite.fast import DEFAULT_Q, fast_variance
-
-    if store.array is None:
-        raise ValueError(
-            "fast=True needs the phase array in memory; raise memory_limit or drop fast"
-        )
-    if isinstance(fast, bool):
-        q = DEFAULT_Q
-    elif isinstance(fast, (int, np.integer)) and fast >= 1:
-        q = int(fast)
-    else:
-        raise ValueError(f"fast must be True, False or a positive integer q, got {fast!r}")
-    var, strides = fast_variance(store.array, factors, kernel_kind, q=q, threads=threads)
-    meta["fast_q"] = q
-    meta["fast_stride"] = strides
-    return var, _identify(store.array, factors, kernel_kind, identify, alpha_rows)
+) -> NDArray[np.int64] | None:
+    """Identification on an in-memory phase: all of it, or ``alpha_rows`` points per tau."""
+    if identify is None:
+        return None
+    if alpha_rows is None:
+        return identify_alpha(phase, factors, kernel_kind, data=identify)
+    return identify_bounded(phase, factors, kernel_kind, identify, alpha_rows)
 
 
 def _was_1d(source: Any, record: ChunkedRecord) -> bool:

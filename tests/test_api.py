@@ -1,0 +1,104 @@
+"""The public API's conventions: fs keyword-only, Records everywhere, real named deviations."""
+
+from __future__ import annotations
+
+import inspect
+import warnings
+
+import numpy as np
+import pytest
+
+import allanite
+from allanite.io import Record, Segment
+from allanite.variance import estimate
+
+DEVIATIONS = ("adev", "oadev", "mdev", "hdev", "ohdev", "tdev", "totdev")
+
+
+def _white(n: int = 4000, c: int = 1, seed: int = 1) -> np.ndarray:
+    x = np.random.default_rng(seed).standard_normal((n, c))
+    return x[:, 0] if c == 1 else x
+
+
+@pytest.mark.parametrize("name", ("avar", "avar_large", *DEVIATIONS))
+def test_fs_is_keyword_only_and_required_for_raw_samples(name):
+    func = getattr(allanite, name)
+    params = inspect.signature(func).parameters
+    assert params["fs"].kind is inspect.Parameter.KEYWORD_ONLY
+    assert not any(p.kind is inspect.Parameter.VAR_KEYWORD for p in params.values()) or (
+        name == "avar_large"  # its **open_options describe a raw binary file
+    )
+    x = _white()
+    with pytest.raises(TypeError, match="fs .* is required for a raw array"):
+        func(x)
+    with pytest.raises(TypeError, match="positional"):
+        func(x, 10.0)
+
+
+@pytest.mark.parametrize("name", DEVIATIONS)
+def test_named_deviations_are_documented_functions_of_their_kind(name):
+    func = getattr(allanite, name)
+    assert func.__module__ == "allanite.variance.estimate"
+    assert func.__doc__ and "Parameters" in func.__doc__ and "Returns" in func.__doc__
+    x = _white()
+    got = func(x, fs=10.0, alpha=0)
+    kind = inspect.signature(func).return_annotation  # resolved lazily: a string here
+    assert kind == "AllanResult"
+    expected = allanite.avar(x, fs=10.0, alpha=0, kind=got.kind)
+    np.testing.assert_array_equal(got.var, expected.var)
+    assert got.kind in estimate.__doc__ or got.kind in func.__doc__
+
+
+@pytest.mark.parametrize("name", ("avar", "avar_large", *DEVIATIONS))
+def test_every_variance_function_takes_a_record(name):
+    func = getattr(allanite, name)
+    x = _white(3000, c=2)
+    record = Record(samples=x, fs=50.0, input="rate", units="deg/s", channels=("x", "y"))
+    got = func(record)
+    raw = func(x, fs=50.0, input="rate", units="deg/s")
+    np.testing.assert_array_equal(got.var, raw.var)
+    assert got.fs == 50.0
+    assert got.units == "deg/s"
+    assert got.meta["channels"] == ["x", "y"]
+
+
+def test_a_record_brings_input_and_unit_and_its_longest_segment():
+    angle = np.cumsum(_white(5000)) * 0.01
+    record = Record(
+        samples=angle,
+        fs=100.0,
+        input="angle",
+        units="deg",
+        segments=(Segment(0, 1000), Segment(1000, 5000, 10.5)),
+    )
+    got = allanite.avar(record, alpha=0)
+    raw = allanite.avar(angle[1000:], fs=100.0, input="angle", units="deg", alpha=0)
+    np.testing.assert_array_equal(got.var, raw.var)
+    assert got.input == "angle"
+    assert got.units == "deg/s"
+    assert got.var.ndim == 1
+    assert got.meta["segment"] == 1
+
+
+def test_a_record_rejects_contradicting_fs_input_or_units():
+    record = Record(samples=_white(), fs=100.0, input="rate", units="deg/s")
+    assert allanite.avar(record, fs=100.0).fs == 100.0  # agreeing is fine
+    with pytest.raises(ValueError, match="contradicts the record's own fs"):
+        allanite.avar(record, fs=200.0)
+    with pytest.raises(ValueError, match="contradicts the record's input"):
+        allanite.avar(record, input="angle")
+    with pytest.raises(ValueError, match="contradicts the record's unit"):
+        allanite.avar(record, units="rad/s")
+
+
+def test_a_record_without_fs_takes_the_given_one_or_says_how():
+    record = Record(samples=_white(), fs=None, source="log.csv")
+    assert allanite.avar(record, fs=20.0).fs == 20.0
+    with pytest.raises(ValueError, match="log.csv: the sampling frequency is unknown"):
+        allanite.avar(record)
+
+
+def test_no_warning_on_the_plain_path():
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        allanite.oadev(_white(), fs=1.0)
