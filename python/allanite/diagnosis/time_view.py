@@ -240,7 +240,7 @@ def added_level_variance(
     """
     from allanite.model import NoiseModel
 
-    x = NoiseModel((term,)).simulate(n, fs, channels=n_rep, seed=seed, allow_aliasing=True)
+    x = NoiseModel((term,)).simulate(n, fs, n_channels=n_rep, seed=seed, allow_aliasing=True)
     length = n // n_windows
     means = x[: n_windows * length].reshape(n_windows, length, n_rep).mean(axis=1)
     level = means - x.mean(axis=0)

@@ -348,7 +348,7 @@ def avar_large(
         Samples ``(N,)``/``(N, C)``, a :class:`~allanite.io.Record` (its own ``fs``, ``input``
         and unit), a record from :mod:`allanite.variance.chunked`, or a file path
         opened with :func:`allanite.variance.chunked.open_large` and ``open_options`` (e.g.
-        ``dtype="float32", channels=3, byteorder="<"`` for raw binary).
+        ``dtype="float32", n_channels=3, byteorder="<"`` for raw binary).
     fs, input, kind, taus, m, points, alpha, threads, units
         As for :func:`allanite.variance.avar`.
     memory_limit : int, float or str, optional
