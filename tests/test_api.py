@@ -119,3 +119,31 @@ def test_channels_as_a_count_is_n_channels_and_the_old_name_warns():
         assert model.simulate(200, 10.0, channels=2, seed=3).shape == (200, 2)
     with pytest.raises(TypeError, match="give n_channels= only"):
         simulate(model, 10.0, 200, n_channels=2, channels=2)
+
+
+def test_one_confidence_default_everywhere():
+    from allanite.batch import batch
+    from allanite.confidence import DEFAULT_LEVEL
+    from allanite.fit.result import FitResult
+    from allanite.plot.allan import plot_allan
+    from allanite.report.build import build_report
+    from allanite.report.coefficients import coefficient_table
+
+    def default(func):
+        return inspect.signature(func).parameters["level"].default
+
+    for func in (
+        allanite.AllanResult.ci,
+        allanite.AllanResult.var_ci,
+        FitResult.table,
+        FitResult.to_dict,
+        batch,
+        plot_allan,
+        build_report,
+        coefficient_table,
+    ):
+        assert default(func) == DEFAULT_LEVEL, func.__qualname__
+    x = _white()
+    result = allanite.avar(x, fs=1.0, alpha=0)
+    np.testing.assert_array_equal(result.ci()[0], result.ci(DEFAULT_LEVEL)[0])
+    assert "95 % interval" in result._repr_html_()

@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from allanite.cli.progress import progress_bars
+from allanite.confidence import DEFAULT_LEVEL
 from allanite.io.readers import FORMATS, read_record
 from allanite.io.record import INPUT_KINDS, Record
 from allanite.io.timebase import GAP_POLICIES
@@ -131,8 +132,8 @@ def add_grid_arguments(parser: argparse.ArgumentParser) -> None:
     group.add_argument(
         "--level",
         type=float,
-        default=0.683,
-        help="confidence level of the intervals (default 0.683, i.e. 1 sigma)",
+        default=DEFAULT_LEVEL,
+        help="confidence level of the intervals (default 0.95; 0.683 for 1-sigma error bars)",
     )
     group.add_argument("--threads", type=int, help="worker threads (default: all cores)")
     group.add_argument(

@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from allanite.confidence import DEFAULT_LEVEL
 from allanite.io.readers import read_record
 from allanite.io.record import Record
 from allanite.units import convert, rate_unit, sensor_kind
@@ -75,7 +76,7 @@ class Options:
     gaps: str = "error"
     key: str | None = None
     kind: str = "overlapping"
-    level: float = 0.683
+    level: float = DEFAULT_LEVEL
     n_mc: int = 200
 
 

@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from allanite.confidence import DEFAULT_LEVEL
 from allanite.datasheet import Check, Datasheet, adev_at, check_limits
 from allanite.io.atomic import atomic_output
 from allanite.io.record import Record
@@ -464,7 +465,7 @@ def build_report(
     datasheet: Datasheet | None = None,
     diagnosis_html: str | None = None,
     diagnosis_figures: dict[str, Any] | None = None,
-    level: float = 0.683,
+    level: float = DEFAULT_LEVEL,
     title: str | None = None,
 ) -> Report:
     """Render the report.

@@ -17,6 +17,7 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
+from allanite.confidence import DEFAULT_LEVEL
 from allanite.datasheet import Measured
 from allanite.units import (
     ANGLE_UNITS,
@@ -88,7 +89,9 @@ def _customary(rate: str | None, label: str, unit: Unit | None, fallback: str) -
         return fallback
 
 
-def coefficient_table(fit: Any, rate: str | None, level: float = 0.683) -> list[Coefficient]:
+def coefficient_table(
+    fit: Any, rate: str | None, level: float = DEFAULT_LEVEL
+) -> list[Coefficient]:
     """Rows of every coefficient of a fit (or model) in customary units.
 
     Parameters
