@@ -147,3 +147,9 @@ def test_one_confidence_default_everywhere():
     result = allanite.avar(x, fs=1.0, alpha=0)
     np.testing.assert_array_equal(result.ci()[0], result.ci(DEFAULT_LEVEL)[0])
     assert "95 % interval" in result._repr_html_()
+
+
+def test_the_version_is_defined_once():
+    import importlib.metadata
+
+    assert importlib.metadata.version("allanite") == allanite.__version__

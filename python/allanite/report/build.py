@@ -23,7 +23,7 @@ from allanite.datasheet import Check, Datasheet, adev_at, check_limits
 from allanite.io.atomic import atomic_output
 from allanite.io.record import Record
 from allanite.report import html as h
-from allanite.report.coefficients import Coefficient, coefficient_table
+from allanite.report.coefficients import CoefficientRow, coefficient_table
 from allanite.report.slopes import MIN_EDF, slope_table
 from allanite.units import sensor_kind
 from allanite.variance import AllanResult
@@ -264,7 +264,7 @@ def _slope_section(device: DeviceAnalysis) -> str:
 
 
 def _coefficient_section(
-    devices: Sequence[DeviceAnalysis], coefficients: dict[tuple[int, int], list[Coefficient]]
+    devices: Sequence[DeviceAnalysis], coefficients: dict[tuple[int, int], list[CoefficientRow]]
 ) -> str:
     if not coefficients:
         return (
@@ -341,7 +341,7 @@ def _rate_adev(device: DeviceAnalysis, channel: int, level: float) -> tuple[Any,
 def _datasheet_section(
     sheet: Datasheet,
     devices: Sequence[DeviceAnalysis],
-    coefficients: dict[tuple[int, int], list[Coefficient]],
+    coefficients: dict[tuple[int, int], list[CoefficientRow]],
     level: float,
 ) -> tuple[str, list[Check]]:
     checks: list[Check] = []

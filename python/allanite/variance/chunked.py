@@ -83,7 +83,7 @@ def _check_rows(rows: int) -> int:
 
 def _sample_dtype(dtype: Any) -> np.dtype[Any]:
     try:
-        dt = np.dtype(dtype)
+        dt: np.dtype[Any] = np.dtype(dtype)
     except TypeError as exc:
         raise TypeError(
             f"dtype {dtype!r} is not a numpy dtype; use one of {SAMPLE_DTYPES}"
@@ -234,7 +234,8 @@ class BinaryRecord:
     @property
     def dtype(self) -> np.dtype[Any]:
         """Native-endian sample type of the chunks."""
-        return self.dtype_in_file.newbyteorder("=")
+        native: np.dtype[Any] = self.dtype_in_file.newbyteorder("=")
+        return native
 
     def _read_into(self, fd: int, buf: NDArray[Any], byte_offset: int) -> None:
         view = memoryview(buf).cast("B")  # type: ignore[arg-type]
