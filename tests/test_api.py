@@ -153,3 +153,18 @@ def test_the_version_is_defined_once():
     import importlib.metadata
 
     assert importlib.metadata.version("allanite") == allanite.__version__
+
+
+def test_read_record_takes_one_options_object_or_its_fields(tmp_path):
+    from allanite.io import ReadOptions, read_record
+
+    path = tmp_path / "gyro.csv"
+    np.savetxt(path, _white(500, c=2), delimiter=",", header="gx,gy", comments="")
+    options = ReadOptions(fs=50.0, units="deg/s", columns=["gy"])
+    by_object = read_record(path, options)
+    by_keywords = read_record(path, fs=50.0, units="deg/s", columns=["gy"])
+    np.testing.assert_array_equal(by_object.samples, by_keywords.samples)
+    assert by_object.channels == ("gy",)
+    assert read_record(path, options, fs=25.0).fs == 25.0  # keywords override the object
+    with pytest.raises(TypeError, match="unknown reader option"):
+        read_record(path, sampling_rate=50.0)

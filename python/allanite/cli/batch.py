@@ -209,7 +209,8 @@ def run(args: argparse.Namespace) -> int:
     paths = _expand(args.patterns)
     if args.output and Path(args.output).suffix.lower() not in (".csv", ".json"):
         raise ValueError(f"--output {args.output}: use a .csv or .json file name")
-    options = read_options(args)
+    options = read_options(args).as_dict()
+    options.pop("fs")  # given to batch() as its own argument
     with _client(args.dask) as client, progress_bars(args.progress) as bar:
         result = batch(
             paths,
