@@ -140,7 +140,9 @@ def outofcore_worker(path: str, n: int, limit: str, threads: int) -> dict[str, A
     from allanite.variance.outofcore import avar_large
 
     t0 = time.perf_counter()
-    res = avar_large(path, fs=FS, dtype="float32", channels=1, memory_limit=limit, threads=threads)
+    res = avar_large(
+        path, fs=FS, dtype="float32", n_channels=1, memory_limit=limit, threads=threads
+    )
     seconds = time.perf_counter() - t0
     return {
         "method": "allanite avar_large",

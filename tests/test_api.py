@@ -20,7 +20,7 @@ def _white(n: int = 4000, c: int = 1, seed: int = 1) -> np.ndarray:
     return x[:, 0] if c == 1 else x
 
 
-@pytest.mark.parametrize("name", ("avar", "avar_large", *DEVIATIONS))
+@pytest.mark.parametrize("name", ["avar", "avar_large", *DEVIATIONS])
 def test_fs_is_keyword_only_and_required_for_raw_samples(name):
     func = getattr(allanite, name)
     params = inspect.signature(func).parameters
@@ -29,7 +29,7 @@ def test_fs_is_keyword_only_and_required_for_raw_samples(name):
         name == "avar_large"  # its **open_options describe a raw binary file
     )
     x = _white()
-    with pytest.raises(TypeError, match="fs .* is required for a raw array"):
+    with pytest.raises(TypeError, match=r"fs .* is required for a raw array"):
         func(x)
     with pytest.raises(TypeError, match="positional"):
         func(x, 10.0)
@@ -39,7 +39,9 @@ def test_fs_is_keyword_only_and_required_for_raw_samples(name):
 def test_named_deviations_are_documented_functions_of_their_kind(name):
     func = getattr(allanite, name)
     assert func.__module__ == "allanite.variance.estimate"
-    assert func.__doc__ and "Parameters" in func.__doc__ and "Returns" in func.__doc__
+    assert func.__doc__
+    assert "Parameters" in func.__doc__
+    assert "Returns" in func.__doc__
     x = _white()
     got = func(x, fs=10.0, alpha=0)
     kind = inspect.signature(func).return_annotation  # resolved lazily: a string here
@@ -49,7 +51,7 @@ def test_named_deviations_are_documented_functions_of_their_kind(name):
     assert got.kind in estimate.__doc__ or got.kind in func.__doc__
 
 
-@pytest.mark.parametrize("name", ("avar", "avar_large", *DEVIATIONS))
+@pytest.mark.parametrize("name", ["avar", "avar_large", *DEVIATIONS])
 def test_every_variance_function_takes_a_record(name):
     func = getattr(allanite, name)
     x = _white(3000, c=2)
@@ -94,7 +96,7 @@ def test_a_record_rejects_contradicting_fs_input_or_units():
 def test_a_record_without_fs_takes_the_given_one_or_says_how():
     record = Record(samples=_white(), fs=None, source="log.csv")
     assert allanite.avar(record, fs=20.0).fs == 20.0
-    with pytest.raises(ValueError, match="log.csv: the sampling frequency is unknown"):
+    with pytest.raises(ValueError, match=r"log\.csv: the sampling frequency is unknown"):
         allanite.avar(record)
 
 
@@ -102,3 +104,67 @@ def test_no_warning_on_the_plain_path():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         allanite.oadev(_white(), fs=1.0)
+
+
+def test_channels_as_a_count_is_n_channels_and_the_old_name_warns():
+    from allanite.simulation import simulate
+    from allanite.terms import White
+
+    model = allanite.NoiseModel((White(N=0.1),), {"rate": "deg/s", "time": "s"})
+    new = simulate(model, 10.0, 200, n_channels=2, seed=3)
+    with pytest.warns(DeprecationWarning, match=r"channels= is renamed n_channels="):
+        old = simulate(model, 10.0, 200, channels=2, seed=3)
+    np.testing.assert_array_equal(new, old)
+    with pytest.warns(DeprecationWarning, match="n_channels=2"):
+        assert model.simulate(200, 10.0, channels=2, seed=3).shape == (200, 2)
+    with pytest.raises(TypeError, match="give n_channels= only"):
+        simulate(model, 10.0, 200, n_channels=2, channels=2)
+
+
+def test_one_confidence_default_everywhere():
+    from allanite.batch import batch
+    from allanite.confidence import DEFAULT_LEVEL
+    from allanite.fit.result import FitResult
+    from allanite.plot.allan import plot_allan
+    from allanite.report.build import build_report
+    from allanite.report.coefficients import coefficient_table
+
+    def default(func):
+        return inspect.signature(func).parameters["level"].default
+
+    for func in (
+        allanite.AllanResult.ci,
+        allanite.AllanResult.var_ci,
+        FitResult.table,
+        FitResult.to_dict,
+        batch,
+        plot_allan,
+        build_report,
+        coefficient_table,
+    ):
+        assert default(func) == DEFAULT_LEVEL, func.__qualname__
+    x = _white()
+    result = allanite.avar(x, fs=1.0, alpha=0)
+    np.testing.assert_array_equal(result.ci()[0], result.ci(DEFAULT_LEVEL)[0])
+    assert "95 % interval" in result._repr_html_()
+
+
+def test_the_version_is_defined_once():
+    import importlib.metadata
+
+    assert importlib.metadata.version("allanite") == allanite.__version__
+
+
+def test_read_record_takes_one_options_object_or_its_fields(tmp_path):
+    from allanite.io import ReadOptions, read_record
+
+    path = tmp_path / "gyro.csv"
+    np.savetxt(path, _white(500, c=2), delimiter=",", header="gx,gy", comments="")
+    options = ReadOptions(fs=50.0, units="deg/s", columns=["gy"])
+    by_object = read_record(path, options)
+    by_keywords = read_record(path, fs=50.0, units="deg/s", columns=["gy"])
+    np.testing.assert_array_equal(by_object.samples, by_keywords.samples)
+    assert by_object.channels == ("gy",)
+    assert read_record(path, options, fs=25.0).fs == 25.0  # keywords override the object
+    with pytest.raises(TypeError, match="unknown reader option"):
+        read_record(path, sampling_rate=50.0)

@@ -13,6 +13,7 @@ import pytest
 
 import allanite
 from allanite.cli import main
+from allanite.confidence import DEFAULT_LEVEL
 
 RNG = np.random.default_rng(11)
 FS = 100.0
@@ -114,7 +115,7 @@ def test_analyze_every_format_matches_library(
     expected = allanite.avar(RATE, fs=FS, points=12, units="deg/s")
     np.testing.assert_allclose(data["allan"]["tau"], expected.tau)
     np.testing.assert_allclose(data["allan"]["dev"], expected.dev, rtol=1e-12)
-    lo, hi = expected.ci(0.683)
+    lo, hi = expected.ci(DEFAULT_LEVEL)  # the CLI's --level default
     np.testing.assert_allclose(data["allan"]["dev_low"], lo, rtol=1e-12)
     np.testing.assert_allclose(data["allan"]["dev_high"], hi, rtol=1e-12)
     assert data["allan"]["units"] == "deg/s"

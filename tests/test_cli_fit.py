@@ -10,6 +10,7 @@ import pytest
 
 import allanite
 from allanite.cli import main
+from allanite.confidence import DEFAULT_LEVEL
 
 fit_module = pytest.importorskip("allanite.fit", reason="the fitter (issue 3) is not installed")
 if not hasattr(fit_module, "fit"):
@@ -50,10 +51,10 @@ def test_fit_cli_json_model_and_plot(tmp_path: Path, capsys: pytest.CaptureFixtu
     rows = {r["symbol"]: r for r in channel["coefficients"]}
     expected = fit_module.fit(allanite.avar(RATE, fs=FS, points=40, units="deg/s"))
     n = expected["N"]
-    # customary unit: deg/sqrt(s) -> deg/sqrt(h) is a factor 60; intervals at the 68.3 % level
+    # customary unit: deg/sqrt(s) -> deg/sqrt(h) is a factor 60; intervals at the default level
     assert rows["N"]["unit"] == "deg/sqrt(h)"
     assert rows["N"]["value"] == pytest.approx(60 * n.value, rel=1e-12)
-    lo, hi = n.ci(0.683)
+    lo, hi = n.ci(DEFAULT_LEVEL)
     assert rows["N"]["low"] == pytest.approx(60 * lo, rel=1e-12)
     assert rows["N"]["high"] == pytest.approx(60 * hi, rel=1e-12)
     # white noise: the fitted N agrees with the truth within 4 of its standard errors

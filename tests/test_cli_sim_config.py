@@ -164,7 +164,7 @@ def test_a_ros_bag_against_a_gazebo_sdf(loop, tmp_path, capsys):
 
     rate = 100.0
     truth = NoiseModel((White(N=0.002), RateRandomWalk(K=1e-3)), {"rate": "rad/s", "time": "s"})
-    gyro = truth.simulate(N, rate, channels=3, seed=21)
+    gyro = truth.simulate(N, rate, n_channels=3, seed=21)
     data = np.column_stack([gyro, np.zeros((N, 2)), np.full(N, 9.81)])
     write_bag(tmp_path / "flight.bag", "ros1", data, np.arange(N) / rate, topics=("/imu0",))
     stddev = 0.002 * math.sqrt(rate)  # the white noise right, the random walk missing

@@ -174,7 +174,7 @@ def test_twins_select_their_kind() -> None:
         allanite.totdev: "total",
     }
     for twin, kind in pairs.items():
-        res = twin(x, 1.0, taus="octave")
+        res = twin(x, fs=1.0, taus="octave")
         assert res.kind == kind
         np.testing.assert_allclose(res.var, oracle.variance(x, res.m, kind), rtol=RTOL)
 

@@ -114,7 +114,7 @@ def test_raw_binary_file(tmp_path, byteorder, layout):
     )
     path.write_bytes(header + raw)
     rec = BinaryRecord.open(
-        path, "float32", channels=3, byteorder=byteorder, offset=len(header), layout=layout
+        path, "float32", n_channels=3, byteorder=byteorder, offset=len(header), layout=layout
     )
     assert rec.n_samples == 12_345
     blocks = np.concatenate([b.copy() for b in rec.chunks(1000)])
@@ -126,7 +126,7 @@ def test_raw_binary_file(tmp_path, byteorder, layout):
         alpha=0,
         memory_limit="256kB",
         dtype="float32",
-        channels=3,
+        n_channels=3,
         byteorder=byteorder,
         offset=len(header),
         layout=layout,
@@ -246,7 +246,7 @@ def test_raw_file_size_mismatch_is_an_input_error(tmp_path):
     path = tmp_path / "odd.bin"
     path.write_bytes(b"\0" * 10)
     with pytest.raises(InputError, match="whole number"):
-        BinaryRecord.open(path, "float32", channels=1)
+        BinaryRecord.open(path, "float32", n_channels=1)
     with pytest.raises(ValueError, match="dtype="):
         open_large(path)
     with pytest.raises(TypeError, match="not supported"):

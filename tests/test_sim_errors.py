@@ -82,7 +82,7 @@ def test_progress_reports_every_sample(tmp_path):
         ({"fs": 10.0, "duration": 0.01}, ValueError, "positive length"),
         ({"fs": 10.0}, ValueError, "n .samples. or duration"),
         ({"fs": 10.0, "n": 10, "output": "volts"}, ValueError, "unknown output"),
-        ({"fs": 10.0, "n": 10, "channels": 0}, ValueError, "channels"),
+        ({"fs": 10.0, "n": 10, "n_channels": 0}, ValueError, "n_channels"),
         ({"fs": 10.0, "n": 10, "seed": -1}, ValueError, "non-negative"),
         ({"fs": 10.0, "n": 10, "seed": "x"}, TypeError, "seed"),
         ({"fs": 10.0, "n": 2.5}, TypeError, "whole number"),
@@ -146,7 +146,7 @@ def test_cli_writes_the_same_samples_as_the_api(tmp_path, model_file, suffix):
         ]
     )
     assert code == 0
-    expected = example_model().simulate(6000, 100.0, output="angle", channels=2, seed=7)
+    expected = example_model().simulate(6000, 100.0, output="angle", n_channels=2, seed=7)
     if suffix == ".npy":
         got = np.load(out)
     elif suffix == ".csv":

@@ -100,7 +100,7 @@ def test_truncated_law_matches_the_brute_force_expectation():
 
 def test_chi_square_coverage_over_50_seeds():
     n, channels, B = 1 << 14, 50, 1e-3
-    x = simulate([Flicker(B=B)], FS, n, channels=channels, seed=404, flicker_method="kasdin")
+    x = simulate([Flicker(B=B)], FS, n, n_channels=channels, seed=404, flicker_method="kasdin")
     result = allanite.avar(x, fs=FS, taus="octave")
     keep = result.tau <= n * DT / 10.0
     theory = kasdin_avar(result.tau[keep], DT, B, n_samples=n)[:, None]
@@ -144,13 +144,13 @@ def test_stream_is_chunk_independent():
 def test_chunked_model_equals_one_shot_bit_for_bit(chunk):
     model = [White(N=1e-3), Flicker(B=2e-3)]
     n = 3 * 70_001
-    whole = simulate(model, FS, n, channels=3, seed=21, flicker_method="kasdin")
+    whole = simulate(model, FS, n, n_channels=3, seed=21, flicker_method="kasdin")
     pieces = simulate_chunks(
-        model, FS, n, channels=3, seed=21, chunk=chunk, flicker_method="kasdin", output="rate"
+        model, FS, n, n_channels=3, seed=21, chunk=chunk, flicker_method="kasdin", output="rate"
     )
     assert np.array_equal(np.concatenate(list(pieces)), whole)
     # the method is really used: the spectral samples of the same seed differ
-    assert not np.array_equal(whole, simulate(model, FS, n, channels=3, seed=21))
+    assert not np.array_equal(whole, simulate(model, FS, n, n_channels=3, seed=21))
 
 
 def test_model_simulate_passes_the_method():

@@ -55,10 +55,10 @@ N = BLOCK + 123
 @pytest.mark.parametrize("output", ["rate", "angle", "increment"])
 @pytest.mark.parametrize("chunk", [1000, BLOCK + 1])
 def test_chunked_equals_one_shot(output, chunk):
-    whole = EVERY_TERM.simulate(N, 100.0, output=output, channels=CHANNELS, seed=11)
+    whole = EVERY_TERM.simulate(N, 100.0, output=output, n_channels=CHANNELS, seed=11)
     pieces = list(
         simulate_chunks(
-            EVERY_TERM, 100.0, N, output=output, channels=CHANNELS, seed=11, chunk=chunk
+            EVERY_TERM, 100.0, N, output=output, n_channels=CHANNELS, seed=11, chunk=chunk
         )
     )
     assert all(p.shape[0] <= chunk for p in pieces)
@@ -66,9 +66,9 @@ def test_chunked_equals_one_shot(output, chunk):
 
 
 def test_one_sample_chunks_equal_one_shot():
-    whole = EVERY_TERM.simulate(500, 100.0, output="angle", channels=2, seed=3)
+    whole = EVERY_TERM.simulate(500, 100.0, output="angle", n_channels=2, seed=3)
     pieces = list(
-        simulate_chunks(EVERY_TERM, 100.0, 500, output="angle", channels=2, seed=3, chunk=1)
+        simulate_chunks(EVERY_TERM, 100.0, 500, output="angle", n_channels=2, seed=3, chunk=1)
     )
     assert np.array_equal(np.concatenate(pieces), whole)
 
@@ -84,9 +84,9 @@ def test_seed_reproducible_and_terms_independent():
 
 
 def test_output_kinds_are_consistent():
-    rate = EVERY_TERM.simulate(3000, 50.0, seed=2, channels=2)
-    inc = EVERY_TERM.simulate(3000, 50.0, seed=2, channels=2, output="increment")
-    angle = EVERY_TERM.simulate(3000, 50.0, seed=2, channels=2, output="angle")
+    rate = EVERY_TERM.simulate(3000, 50.0, seed=2, n_channels=2)
+    inc = EVERY_TERM.simulate(3000, 50.0, seed=2, n_channels=2, output="increment")
+    angle = EVERY_TERM.simulate(3000, 50.0, seed=2, n_channels=2, output="angle")
     np.testing.assert_allclose(inc, rate / 50.0, rtol=1e-15)
     np.testing.assert_allclose(angle, np.cumsum(rate, axis=0) / 50.0, rtol=1e-9, atol=1e-12)
 

@@ -39,6 +39,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from allanite.confidence import DEFAULT_LEVEL
 from allanite.datasheet import Check, Datasheet, Limit, Measured, check_limits, verdict
 from allanite.errors import InputError
 from allanite.extras import require
@@ -339,7 +340,7 @@ def batch(
     *,
     datasheet: Datasheet | Mapping[str, Any] | str | os.PathLike[str] | None = None,
     terms: Terms = "auto",
-    level: float = 0.95,
+    level: float = DEFAULT_LEVEL,
     client: Any = None,
     taus: Any = "log",
     points: int = 100,
@@ -363,7 +364,8 @@ def batch(
     terms : "auto" or list
         Terms fitted to every channel (see :func:`allanite.fit`); default ``"auto"``.
     level : float
-        Confidence level of the intervals and of the datasheet checks (default 0.95).
+        Confidence level of the intervals and of the datasheet checks (default
+        :data:`allanite.confidence.DEFAULT_LEVEL`, 0.95).
     client : dask.distributed.Client, optional
         Run one task per record on this cluster (``pip install 'allanite[dask]'``); default:
         locally, in order.

@@ -45,7 +45,7 @@ def example_record(**overrides: Any) -> tuple[NDArray[np.float64], float]:
     Parameters
     ----------
     **overrides
-        Optional ``output``, ``duration``, ``channels`` or ``seed`` passed on to
+        Optional ``output``, ``duration``, ``n_channels`` or ``seed`` passed on to
         :meth:`NoiseModel.simulate`.
 
     Returns

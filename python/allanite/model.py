@@ -31,6 +31,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from allanite._deprecation import renamed
 from allanite.terms import TERM_TYPES, Term, term_from_dict
 from allanite.units import Unit, coefficient_unit, convert, rate_unit, sensor_kind
 
@@ -363,15 +364,17 @@ class NoiseModel:
         *,
         duration: str | float | None = None,
         output: str = "rate",
-        channels: int = 1,
+        n_channels: int = 1,
         seed: Any = None,
         allow_aliasing: bool = False,
         flicker_method: str = "auto",
+        channels: int | None = None,
     ) -> NDArray[np.float64]:
         """Simulate ``n`` samples (or ``duration``, e.g. ``"30min"``) at ``fs`` Hz.
 
         Rate samples in the model's rate unit, angle increments or angle
-        (``output="rate"|"increment"|"angle"``); shape ``(n,)`` or ``(n, channels)``. The same
+        (``output="rate"|"increment"|"angle"``); shape ``(n,)`` or ``(n, n_channels)``
+        (``channels=`` is the deprecated name of ``n_channels``). The same
         seed gives the same samples. ``flicker_method`` = ``"auto"|"spectral"|"kasdin"|"bank"``
         chooses how flicker terms are simulated. See :func:`allanite.simulation.simulate`, and
         :func:`allanite.simulation.simulate_chunks` for records that do not fit in memory.
@@ -386,7 +389,7 @@ class NoiseModel:
             n,
             duration=duration,
             output=output,  # type: ignore[arg-type]
-            channels=channels,
+            n_channels=renamed(n_channels, channels, new="n_channels", old="channels", default=1),
             seed=seed,
             allow_aliasing=allow_aliasing,
             flicker_method=flicker_method,

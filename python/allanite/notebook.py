@@ -18,6 +18,8 @@ from typing import Any
 
 import numpy as np
 
+from allanite.confidence import DEFAULT_LEVEL
+
 __all__ = ["allan_html", "diagnosis_html", "fit_html"]
 
 #: longest table shown inline; longer ones show their first and last rows
@@ -84,13 +86,14 @@ def allan_html(result: Any) -> str:
     from allanite.plot.allan import allan_figure
 
     dev = np.asarray(result.dev, dtype=np.float64).reshape(result.tau.size, -1)
-    lo, hi = result.ci(0.683)
+    level = DEFAULT_LEVEL
+    lo, hi = result.ci(level)
     lo, hi = np.reshape(lo, dev.shape), np.reshape(hi, dev.shape)
     unit = f" [{result.units}]" if result.units else ""
     header = ["tau [s]"]
     for c in range(dev.shape[1]):
         tag = f" {c}" if dev.shape[1] > 1 else ""
-        header += [f"deviation{tag}{unit}", f"68 % interval{tag}"]
+        header += [f"deviation{tag}{unit}", f"{100 * level:g} % interval{tag}"]
     rows = []
     for k in range(result.tau.size):
         row: list[Any] = [result.tau[k]]
@@ -123,12 +126,12 @@ def _fit_figure(fit: Any) -> Any:
 
 def fit_html(fit: Any) -> str:
     """HTML of an :class:`allanite.fit.FitResult`: its coefficients, the misfit test, the plot."""
-    level = 0.95
+    level = DEFAULT_LEVEL
     rows = [
         [r["name"], r["value"], r["stderr"], f"{_num(r['low'])} – {_num(r['high'])}", r["unit"]]
         for r in fit.table(None, level)
     ]
-    table = _table(["coefficient", "value", "stderr", "95 % interval", "unit"], rows)
+    table = _table(["coefficient", "value", "stderr", f"{100 * level:g} % interval", "unit"], rows)
     if fit.method == "gls":
         verdict = (
             f"misspecified (p < {fit.misfit_level:g}): intervals include a "

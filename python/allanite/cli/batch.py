@@ -11,6 +11,7 @@ from typing import Any
 
 from allanite.cli.progress import progress_bars
 from allanite.cli.record_options import add_record_arguments, read_options
+from allanite.confidence import DEFAULT_LEVEL
 from allanite.extras import require
 from allanite.io.atomic import atomic_output
 
@@ -66,7 +67,7 @@ def register(subparsers: Any) -> None:
     group.add_argument(
         "--level",
         type=float,
-        default=0.95,
+        default=DEFAULT_LEVEL,
         help="confidence level of the intervals and the datasheet checks (default 0.95)",
     )
     group.add_argument(
@@ -208,7 +209,8 @@ def run(args: argparse.Namespace) -> int:
     paths = _expand(args.patterns)
     if args.output and Path(args.output).suffix.lower() not in (".csv", ".json"):
         raise ValueError(f"--output {args.output}: use a .csv or .json file name")
-    options = read_options(args)
+    options = read_options(args).as_dict()
+    options.pop("fs")  # given to batch() as its own argument
     with _client(args.dask) as client, progress_bars(args.progress) as bar:
         result = batch(
             paths,

@@ -16,6 +16,8 @@ from typing import Any
 import numpy as np
 
 from allanite.cli.progress import progress_bars
+from allanite.confidence import DEFAULT_LEVEL
+from allanite.io.options import ReadOptions
 from allanite.io.readers import FORMATS, read_record
 from allanite.io.record import INPUT_KINDS, Record
 from allanite.io.timebase import GAP_POLICIES
@@ -131,8 +133,8 @@ def add_grid_arguments(parser: argparse.ArgumentParser) -> None:
     group.add_argument(
         "--level",
         type=float,
-        default=0.683,
-        help="confidence level of the intervals (default 0.683, i.e. 1 sigma)",
+        default=DEFAULT_LEVEL,
+        help="confidence level of the intervals (default 0.95; 0.683 for 1-sigma error bars)",
     )
     group.add_argument("--threads", type=int, help="worker threads (default: all cores)")
     group.add_argument(
@@ -252,31 +254,32 @@ def _read(path: str | None, args: argparse.Namespace, **override: Any) -> Record
             record = record.select(chosen) if chosen else record
             return dataclasses.replace(record, units=override["units"]) if override else record
         raise ValueError("give a FILE to analyse, or --example for the built-in example record")
-    record = read_record(path, fs=args.fs, **{**read_options(args), **override})
+    record = read_record(path, read_options(args), **override)
     refuse_constant(record.samples, record.channels, source=record.source)
     return record
 
 
-def read_options(args: argparse.Namespace) -> dict[str, Any]:
-    """Keyword arguments of :func:`allanite.io.readers.read_record` (except ``fs``) from args."""
-    return {
-        "input": args.input or "rate",
-        "units": args.units,
-        "columns": _columns(args.channels),
-        "time_column": _time_column(args.time_column),
-        "time_scale": args.time_scale,
-        "gaps": args.gaps,
-        "scale": args.scale,
-        "format": args.format,
-        "delimiter": args.delimiter,
-        "header": {"auto": None, "yes": True, "no": False}[args.header],
-        "key": args.key,
-        "dtype": args.dtype,
-        "n_channels": args.n_channels,
-        "byteorder": args.byte_order,
-        "offset": args.offset,
-        "topic": getattr(args, "topic", None),
-    }
+def read_options(args: argparse.Namespace) -> ReadOptions:
+    """The :class:`~allanite.io.options.ReadOptions` of the reader flags in ``args``."""
+    return ReadOptions(
+        fs=args.fs,
+        input=args.input or "rate",
+        units=args.units,
+        columns=_columns(args.channels),
+        time_column=_time_column(args.time_column),
+        time_scale=args.time_scale,
+        gaps=args.gaps,
+        scale=args.scale,
+        format=args.format,
+        delimiter=args.delimiter,
+        header={"auto": None, "yes": True, "no": False}[args.header],
+        key=args.key,
+        dtype=args.dtype,
+        n_channels=args.n_channels,
+        byteorder=args.byte_order,
+        offset=args.offset,
+        topic=getattr(args, "topic", None),
+    )
 
 
 #: reader option -> (its flag, its default): what :func:`record_command` writes back

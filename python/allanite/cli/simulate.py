@@ -36,7 +36,14 @@ def register(subparsers: Any) -> None:
         help="rate (model units, default), angle increments or accumulated angle",
     )
     parser.add_argument("--seed", type=int, default=None, help="random seed (non-negative)")
-    parser.add_argument("--channels", type=int, default=1, help="independent channels (axes)")
+    parser.add_argument(
+        "--n-channels",
+        "--channels",
+        dest="n_channels",
+        type=int,
+        default=1,
+        help="number of independent channels (axes); --channels is its old name",
+    )
     parser.add_argument(
         "--allow-aliasing",
         action="store_true",
@@ -91,12 +98,12 @@ def run(args: argparse.Namespace) -> int:
     format_of(args.out)  # fail on a bad suffix before any work
     model = NoiseModel.load(args.model)
     n = record_length(args.fs, args.samples, args.duration)
-    if args.channels < 1:
-        raise ValueError(f"--channels must be at least 1, got {args.channels}")
-    check_free_space(args.out, output_size(args.out, n, args.channels))
+    if args.n_channels < 1:
+        raise ValueError(f"--n-channels must be at least 1, got {args.n_channels}")
+    check_free_space(args.out, output_size(args.out, n, args.n_channels))
     unit = model.units["rate"]
     what = unit if args.output == "rate" else f"{unit}*s"
-    big = n * args.channels >= 10_000_000
+    big = n * args.n_channels >= 10_000_000
     with progress_bars(None if big and not args.quiet else False) as update:
         write_record(
             args.out,
@@ -104,7 +111,7 @@ def run(args: argparse.Namespace) -> int:
             args.fs,
             n,
             output=args.output,
-            channels=args.channels,
+            n_channels=args.n_channels,
             seed=args.seed,
             allow_aliasing=args.allow_aliasing,
             flicker_method=args.flicker_method,
@@ -113,7 +120,7 @@ def run(args: argparse.Namespace) -> int:
         )
     if not args.quiet:
         size = Path(args.out).stat().st_size
-        axes = f" x {args.channels} channels" if args.channels > 1 else ""
+        axes = f" x {args.n_channels} channels" if args.n_channels > 1 else ""
         print(
             f"wrote {args.out}: {n} samples{axes} of {args.output} [{what}] at {args.fs:g} Hz "
             f"({_duration(n / args.fs)}, seed {args.seed if args.seed is not None else 'random'}"

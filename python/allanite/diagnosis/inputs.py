@@ -217,7 +217,7 @@ def simulate_model(
     them.
     """
     out = np.asarray(
-        model.simulate(n, fs, channels=channels, seed=seed, allow_aliasing=True), dtype=np.float64
+        model.simulate(n, fs, n_channels=channels, seed=seed, allow_aliasing=True), dtype=np.float64
     )
     return out.reshape(n, -1)
 

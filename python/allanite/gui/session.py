@@ -13,6 +13,8 @@ from typing import Any
 
 import numpy as np
 
+from allanite.confidence import DEFAULT_LEVEL
+from allanite.io.options import ReadOptions
 from allanite.io.readers import read_record
 from allanite.io.record import Record
 from allanite.units import convert, rate_unit, sensor_kind
@@ -75,7 +77,7 @@ class Options:
     gaps: str = "error"
     key: str | None = None
     kind: str = "overlapping"
-    level: float = 0.683
+    level: float = DEFAULT_LEVEL
     n_mc: int = 200
 
 
@@ -98,8 +100,7 @@ class Session:
         time_column: int | str | None = o.time_column
         if isinstance(time_column, str) and time_column.lstrip("-").isdigit():
             time_column = int(time_column)
-        record = read_record(
-            path,
+        reader = ReadOptions(
             fs=o.fs,
             input=o.input,
             units=o.units,
@@ -108,6 +109,7 @@ class Session:
             gaps=o.gaps,
             key=o.key or None,
         )
+        record = read_record(path, reader)
         self.path = Path(path)
         self.record = record
         self.result = None

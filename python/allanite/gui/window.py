@@ -64,7 +64,31 @@ class MainWindow(QtWidgets.QMainWindow):
         panel = QtWidgets.QWidget()
         side = QtWidgets.QVBoxLayout(panel)
         side.setContentsMargins(8, 8, 8, 8)
+        side.addWidget(self._record_box())
+        side.addWidget(self._channel_box())
+        side.addWidget(self._view_box())
+        side.addWidget(self._diagnosis_box())
+        self.export_button = QtWidgets.QPushButton("Export report…")
+        self.export_button.clicked.connect(self._ask_export)
+        side.addWidget(self.export_button)
+        side.addStretch(1)
+        scroll = QtWidgets.QScrollArea()
+        scroll.setWidget(panel)
+        scroll.setWidgetResizable(True)
+        scroll.setMinimumWidth(330)
+        scroll.setMaximumWidth(380)
+        main = QtWidgets.QSplitter(QtCore.Qt.Orientation.Horizontal)
+        main.addWidget(scroll)
+        main.addWidget(self._results_area())
+        main.setStretchFactor(1, 1)
+        self.setCentralWidget(main)
+        self.status_label = QtWidgets.QLabel()
+        self.statusBar().addWidget(self.status_label, 1)
+        self._build_menu()
+        self._show_figure(self._empty_figure())
 
+    def _record_box(self) -> QtWidgets.QGroupBox:
+        """File, sampling frequency, input kind, units, scale, time column, key, grid."""
         rec_box = QtWidgets.QGroupBox("Record")
         rec = QtWidgets.QFormLayout(rec_box)
         self.open_button = QtWidgets.QPushButton("Open…")
@@ -102,16 +126,20 @@ class MainWindow(QtWidgets.QMainWindow):
         self.compute_button = QtWidgets.QPushButton("Compute")
         self.compute_button.clicked.connect(self._guard(self.compute))
         rec.addRow(self.compute_button)
-        side.addWidget(rec_box)
+        return rec_box
 
+    def _channel_box(self) -> QtWidgets.QGroupBox:
+        """The channels to show (checkable list)."""
         ch_box = QtWidgets.QGroupBox("Channels")
         ch = QtWidgets.QVBoxLayout(ch_box)
         self.channel_list = QtWidgets.QListWidget()
         self.channel_list.setMaximumHeight(110)
         self.channel_list.itemChanged.connect(lambda _item: self._guard(self.redraw)())
         ch.addWidget(self.channel_list)
-        side.addWidget(ch_box)
+        return ch_box
 
+    def _view_box(self) -> QtWidgets.QGroupBox:
+        """Which view (Allan deviation, fit, ...) and the display unit."""
         view_box = QtWidgets.QGroupBox("View")
         view = QtWidgets.QFormLayout(view_box)
         self.view_buttons: dict[str, QtWidgets.QRadioButton] = {}
@@ -129,8 +157,10 @@ class MainWindow(QtWidgets.QMainWindow):
         self.display_combo.addItems(list(DISPLAY_UNITS))
         self.display_combo.currentTextChanged.connect(lambda _t: self._guard(self.redraw)())
         view.addRow("Show in", self.display_combo)
-        side.addWidget(view_box)
+        return view_box
 
+    def _diagnosis_box(self) -> QtWidgets.QGroupBox:
+        """The noise-model file to diagnose the record against."""
         diag_box = QtWidgets.QGroupBox("Diagnosis against a model")
         diag = QtWidgets.QVBoxLayout(diag_box)
         self.model_button = QtWidgets.QPushButton("Model file…")
@@ -139,13 +169,10 @@ class MainWindow(QtWidgets.QMainWindow):
         self.model_label.setWordWrap(True)
         diag.addWidget(self.model_button)
         diag.addWidget(self.model_label)
-        side.addWidget(diag_box)
+        return diag_box
 
-        self.export_button = QtWidgets.QPushButton("Export report…")
-        self.export_button.clicked.connect(self._ask_export)
-        side.addWidget(self.export_button)
-        side.addStretch(1)
-
+    def _results_area(self) -> QtWidgets.QSplitter:
+        """The plot above the table of the current view."""
         self.plot_area = QtWidgets.QWidget()
         self.plot_layout = QtWidgets.QVBoxLayout(self.plot_area)
         self.plot_layout.setContentsMargins(0, 0, 0, 0)
@@ -164,20 +191,10 @@ class MainWindow(QtWidgets.QMainWindow):
         split.addWidget(self.plot_area)
         split.addWidget(lower)
         split.setSizes([560, 240])
+        return split
 
-        scroll = QtWidgets.QScrollArea()
-        scroll.setWidget(panel)
-        scroll.setWidgetResizable(True)
-        scroll.setMinimumWidth(330)
-        scroll.setMaximumWidth(380)
-        main = QtWidgets.QSplitter(QtCore.Qt.Orientation.Horizontal)
-        main.addWidget(scroll)
-        main.addWidget(split)
-        main.setStretchFactor(1, 1)
-        self.setCentralWidget(main)
-
-        self.status_label = QtWidgets.QLabel()
-        self.statusBar().addWidget(self.status_label, 1)
+    def _build_menu(self) -> None:
+        """File menu: the example record, open, export, quit."""
         menu = self.menuBar().addMenu("&File")
         example = menu.addAction("Open the &example record")
         example.triggered.connect(self._open_example)
@@ -189,7 +206,6 @@ class MainWindow(QtWidgets.QMainWindow):
             action = menu.addAction(text)
             action.setShortcut(key)
             action.triggered.connect(slot)
-        self._show_figure(self._empty_figure())
 
     # --- helpers ------------------------------------------------------------------------------
     def _set_status(self, text: str, error: bool = False) -> None:

@@ -33,7 +33,7 @@ def _expm_small(a: NDArray[np.float64]) -> NDArray[np.float64]:
     for k in range(1, 17):
         term = term @ a / k
         out += term
-    return out
+    return np.asarray(out, dtype=np.float64)
 
 
 def _van_loan(

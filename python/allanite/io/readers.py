@@ -20,6 +20,7 @@ from numpy.typing import NDArray
 
 from allanite.errors import InputError, choose_one
 from allanite.extras import require
+from allanite.io.options import Column, ReadOptions
 from allanite.io.record import Record
 from allanite.io.text import read_text_table
 from allanite.io.timebase import resolve_time
@@ -44,7 +45,6 @@ FORMATS: dict[str, tuple[str, ...]] = {
     "ulog": (".ulg", ".ulog"),  # PX4 flight logs
 }
 
-Column = int | str
 Where = Callable[[int], str]
 
 
@@ -134,6 +134,80 @@ def _resolve(names: tuple[str, ...], key: Column, source: str, what: str) -> int
     raise TypeError(f"a {what} is given by index or name, got {key!r}")
 
 
+def _numeric_table(
+    table: NDArray[Any], names: Sequence[str] | None, source: str
+) -> tuple[NDArray[Any], tuple[str, ...]]:
+    """The table as a 2-D real array and one name per column (``col0``, ... by default)."""
+    arr = np.asarray(table)
+    if arr.ndim == 1:
+        arr = arr.reshape(-1, 1)
+    if arr.ndim != 2:
+        raise InputError(
+            f"expected a table of samples (1-D or 2-D), got shape {arr.shape}; select a 2-D array",
+            path=source,
+        )
+    if not (np.issubdtype(arr.dtype, np.number) and not np.iscomplexobj(arr)):
+        raise InputError(f"data type {arr.dtype} is not a real number type", path=source)
+    col_names = (
+        tuple(str(n) for n in names)
+        if names is not None
+        else tuple(f"col{i}" for i in range(arr.shape[1]))
+    )
+    if len(col_names) != arr.shape[1]:
+        raise InputError(f"{len(col_names)} column names for {arr.shape[1]} columns", path=source)
+    return arr, col_names
+
+
+def _sample_columns(
+    col_names: tuple[str, ...],
+    columns: Column | Sequence[Column] | None,
+    time_column: Column | None,
+    source: str,
+) -> tuple[int | None, list[int]]:
+    """Index of the time column (or None) and of the sample columns (default: all others)."""
+    t_index = (
+        None if time_column is None else _resolve(col_names, time_column, source, "time column")
+    )
+    chosen = _as_list(columns)
+    if chosen is None:
+        idx = [i for i in range(len(col_names)) if i != t_index]
+    else:
+        idx = [_resolve(col_names, c, source, "column") for c in chosen]
+    if not idx:
+        raise InputError("no sample columns left after taking the time column", path=source)
+    if t_index is not None and t_index in idx:
+        raise InputError(
+            f"column {col_names[t_index]!r} is both the time column and a sample column; "
+            "leave it out of the columns",
+            path=source,
+        )
+    return t_index, idx
+
+
+def _scaled_samples(samples: NDArray[Any], scale: float | None) -> NDArray[Any]:
+    """``samples * scale`` in float64 (the samples unchanged without a scale)."""
+    if scale is None:
+        return samples
+    if not np.isfinite(scale) or scale == 0:
+        raise ValueError(f"scale must be a finite, non-zero factor, got {scale!r}")
+    return samples.astype(np.float64) * float(scale)
+
+
+def _require_finite(samples: NDArray[Any], names: list[str], locate: Where, source: str) -> None:
+    """Raise an InputError naming the first NaN/inf sample (row and column)."""
+    if samples.dtype.kind != "f":
+        return
+    bad = np.argwhere(~np.isfinite(samples))
+    if bad.size:
+        row, col = (int(v) for v in bad[0])
+        raise InputError(
+            f"{locate(row)}, column {names[col]!r}: sample is "
+            f"{samples[row, col]}; the Allan variance needs every sample: remove or "
+            "repair the row (or drop the column)",
+            path=source,
+        )
+
+
 def make_record(
     table: NDArray[Any],
     names: Sequence[str] | None,
@@ -183,55 +257,11 @@ def make_record(
     -------
     Record
     """
-    arr = np.asarray(table)
-    if arr.ndim == 1:
-        arr = arr.reshape(-1, 1)
-    if arr.ndim != 2:
-        raise InputError(
-            f"expected a table of samples (1-D or 2-D), got shape {arr.shape}; select a 2-D array",
-            path=source,
-        )
-    if not (np.issubdtype(arr.dtype, np.number) and not np.iscomplexobj(arr)):
-        raise InputError(f"data type {arr.dtype} is not a real number type", path=source)
-    col_names = (
-        tuple(str(n) for n in names)
-        if names is not None
-        else tuple(f"col{i}" for i in range(arr.shape[1]))
-    )
-    if len(col_names) != arr.shape[1]:
-        raise InputError(f"{len(col_names)} column names for {arr.shape[1]} columns", path=source)
+    arr, col_names = _numeric_table(table, names, source)
     locate: Where = where if where is not None else (lambda row: f"row {row + 1}")
-    t_index = (
-        None if time_column is None else _resolve(col_names, time_column, source, "time column")
-    )
-    chosen = _as_list(columns)
-    if chosen is None:
-        idx = [i for i in range(arr.shape[1]) if i != t_index]
-    else:
-        idx = [_resolve(col_names, c, source, "column") for c in chosen]
-    if not idx:
-        raise InputError("no sample columns left after taking the time column", path=source)
-    if t_index is not None and t_index in idx:
-        raise InputError(
-            f"column {col_names[t_index]!r} is both the time column and a sample column; "
-            "leave it out of the columns",
-            path=source,
-        )
-    samples = arr[:, idx]
-    if scale is not None:
-        if not np.isfinite(scale) or scale == 0:
-            raise ValueError(f"scale must be a finite, non-zero factor, got {scale!r}")
-        samples = samples.astype(np.float64) * float(scale)
-    if samples.dtype.kind == "f":
-        bad = np.argwhere(~np.isfinite(samples))
-        if bad.size:
-            row, col = (int(v) for v in bad[0])
-            raise InputError(
-                f"{locate(row)}, column {col_names[idx[col]]!r}: sample is "
-                f"{samples[row, col]}; the Allan variance needs every sample: remove or "
-                "repair the row (or drop the column)",
-                path=source,
-            )
+    t_index, idx = _sample_columns(col_names, columns, time_column, source)
+    samples = _scaled_samples(arr[:, idx], scale)
+    _require_finite(samples, [col_names[i] for i in idx], locate, source)
     if arr.shape[0] < 3:
         raise InputError(f"only {arr.shape[0]} sample(s); need at least 3", path=source)
     channels = tuple(col_names[i] for i in idx)
@@ -490,82 +520,36 @@ def from_frame(frame: Any, *, source: str = "DataFrame", **options: Any) -> Reco
 
 def read_record(
     source: str | os.PathLike[str] | Any,
-    *,
-    fs: float | None = None,
-    input: str = "rate",
-    units: str | None = None,
-    columns: Column | Sequence[Column] | None = None,
-    time_column: Column | None = None,
-    time_scale: float = 1.0,
-    gaps: str = "error",
-    scale: float | None = None,
-    format: str | None = None,
-    delimiter: str | None = None,
-    header: bool | None = None,
-    key: str | None = None,
-    dtype: str | None = None,
-    n_channels: int | None = None,
-    byteorder: str | None = None,
-    offset: int | None = None,
-    topic: str | None = None,
+    options: ReadOptions | None = None,
+    **changes: Any,
 ) -> Record:
     """Read a record from a file or a pandas DataFrame.
 
     Parameters
     ----------
     source : path or pandas.DataFrame
-        The file (format from its suffix unless ``format`` is given; unknown suffixes are read
-        as text) or a DataFrame.
-    fs : float, optional
-        Sampling frequency in Hz (inferred from ``time_column`` when omitted).
-    input : {"rate", "increment", "angle"}
-        What the samples are.
-    units : str, optional
-        Unit of the samples after ``scale`` (e.g. ``"deg/s"``).
-    columns : int, str or sequence, optional
-        Channels by 0-based index or name (header names, Parquet/DataFrame columns).
-    time_column : int or str, optional
-        Column of time stamps (seconds times ``time_scale``).
-    time_scale : float
-        Seconds per time-stamp unit.
-    gaps : {"error", "split", "fill"}
-        What to do about gaps in the time column.
-    scale : float, optional
-        Counts-to-units factor.
-    format : {"text", "npy", "npz", "raw", "hdf5", "parquet"}, optional
-        Override the suffix-based detection. Any raw-layout option (``dtype``,
-        ``n_channels``, ``byteorder``, ``offset``) means raw binary whatever the suffix,
-        except a self-describing one (.npy, .npz, HDF5, Parquet), which is refused.
-    delimiter : str, optional
-        Text field separator (detected when omitted).
-    header : bool, optional
-        Whether a text file starts with column names (detected when omitted).
-    key : str, optional
-        Array in an .npz archive or dataset path in an HDF5 file.
-    dtype, n_channels, byteorder, offset
-        Raw binary layout: sample type, interleaved channels (default 1),
-        ``"little"`` (default), ``"big"`` or ``"native"``, bytes to skip at the start
-        (default 0).
-    topic : str, optional
-        ROS bag IMU topic, or ULog topic (``sensor_combined``, ``sensor_gyro[:instance]``,
-        ``sensor_accel``); see :mod:`allanite.io.robot_logs`.
+        The file (format from its suffix unless ``options.format`` is given; unknown suffixes
+        are read as text) or a DataFrame.
+    options : ReadOptions, optional
+        How to read it (:class:`~allanite.io.options.ReadOptions`: sampling frequency, input
+        kind, unit, columns, time column, gaps, scale, format and layout); default: all
+        defaults.
+    **changes
+        Any field of :class:`~allanite.io.options.ReadOptions` by name, overriding
+        ``options`` (e.g. ``read_record("gyro.csv", fs=100.0, units="deg/s")``).
 
     Returns
     -------
     Record
+
+    Raises
+    ------
+    TypeError
+        For a keyword that is not a reader option (the message lists them).
     """
-    options: dict[str, Any] = {
-        "fs": fs,
-        "input": input,
-        "units": units,
-        "columns": columns,
-        "time_column": time_column,
-        "time_scale": time_scale,
-        "gaps": gaps,
-        "scale": scale,
-    }
+    opts = (options if options is not None else ReadOptions()).replace(**changes)
     if not isinstance(source, (str, os.PathLike)):
-        return from_frame(source, **options)
+        return from_frame(source, **opts.table())
     path = Path(source)
     if not path.exists():
         raise InputError("no such file; check the path", path=str(path))
@@ -573,33 +557,34 @@ def read_record(
 
     if path.is_dir() and not is_ros2_bag_dir(path):
         raise InputError("is a directory; give a file (or a ROS 2 bag directory)", path=str(path))
-    raw = {"dtype": dtype, "n_channels": n_channels, "byteorder": byteorder, "offset": offset}
-    given = [name for name, value in raw.items() if value is not None]
-    fmt = "rosbag" if path.is_dir() else _format_of(path, format, given)
+    fmt = "rosbag" if path.is_dir() else _format_of(path, opts.format, list(opts.raw_layout()))
     if fmt in ("rosbag", "ulog"):
-        return _read_robot_log(path, fmt, topic, options)
+        return _read_robot_log(path, fmt, opts.topic, opts.table())
     if path.stat().st_size == 0:
         raise InputError("the file is empty; check that the recording was written", path=str(path))
+    table, names, where = _load(path, fmt, opts)
+    return make_record(table, names, source=str(path), where=where, **opts.table())
+
+
+def _load(path: Path, fmt: str, opts: ReadOptions) -> Loaded:
+    """The table, column names and row locator of a file in format ``fmt``."""
     if fmt == "text":
-        loaded = _load_text(path, delimiter=delimiter, header=header)
-    elif fmt == "npy":
-        loaded = _load_npy(path)
-    elif fmt == "npz":
-        loaded = _load_npz(path, key)
-    elif fmt == "raw":
-        loaded = _load_raw(
+        return _load_text(path, delimiter=opts.delimiter, header=opts.header)
+    if fmt == "npy":
+        return _load_npy(path)
+    if fmt == "npz":
+        return _load_npz(path, opts.key)
+    if fmt == "raw":
+        return _load_raw(
             path,
-            dtype=dtype,
-            n_channels=1 if n_channels is None else n_channels,
-            byteorder=byteorder or "little",
-            offset=offset or 0,
+            dtype=opts.dtype,
+            n_channels=1 if opts.n_channels is None else opts.n_channels,
+            byteorder=opts.byteorder or "little",
+            offset=opts.offset or 0,
         )
-    elif fmt == "hdf5":
-        loaded = _load_hdf5(path, key)
-    else:
-        loaded = _load_parquet(path, _as_list(columns), time_column)
-    table, names, where = loaded
-    return make_record(table, names, source=str(path), where=where, **options)
+    if fmt == "hdf5":
+        return _load_hdf5(path, opts.key)
+    return _load_parquet(path, _as_list(opts.columns), opts.time_column)
 
 
 def _read_robot_log(path: Path, fmt: str, topic: str | None, options: dict[str, Any]) -> Record:

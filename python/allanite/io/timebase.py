@@ -78,6 +78,59 @@ def resolve_time(
     if policy not in GAP_POLICIES:
         raise ValueError(f"unknown gap policy {policy!r}; use one of {', '.join(GAP_POLICIES)}")
     t = np.asarray(t, dtype=np.float64)
+    _check_stamps(t, source, where)
+    dt = np.diff(t)
+    is_gap = dt >= GAP_FACTOR * float(np.median(dt))
+    regular = dt[~is_gap]
+    dt_nominal = float(regular.mean())
+    deviation = regular - dt_nominal
+    jitter_rms = float(np.sqrt(np.mean(deviation**2)))
+    jitter_max = float(np.max(np.abs(deviation)))
+    gap_idx = np.flatnonzero(is_gap)
+    missing = np.rint(dt[gap_idx] / dt_nominal).astype(np.int64) - 1
+    gaps = tuple((int(i) + 1, float(dt[i]), int(k)) for i, k in zip(gap_idx, missing, strict=True))
+    inferred = 1.0 / dt_nominal
+    warnings: list[str] = []
+    if jitter_rms > JITTER_WARN * dt_nominal:
+        warnings.append(
+            f"time stamps jitter by {100 * jitter_rms / dt_nominal:.2g} % rms of the period "
+            f"(largest {100 * jitter_max / dt_nominal:.2g} %); the Allan variance assumes even "
+            "sampling"
+        )
+    rate = inferred
+    if fs is not None:
+        if abs(fs - inferred) > 0.01 * inferred:
+            warnings.append(
+                f"the given fs = {fs:g} Hz differs from the {inferred:.6g} Hz of the time column; "
+                "using the given value"
+            )
+        rate = float(fs)
+    samples, segments, filled = _apply_gap_policy(
+        t,
+        samples,
+        gaps,
+        gap_idx,
+        missing,
+        policy=policy,
+        source=source,
+        where=where,
+        warnings=warnings,
+    )
+    timing = Timing(
+        fs=inferred,
+        dt_nominal=dt_nominal,
+        jitter_rms=jitter_rms,
+        jitter_max=jitter_max,
+        gaps=gaps,
+        filled=filled,
+    )
+    return TimeBase(
+        samples=samples, fs=rate, segments=segments, timing=timing, warnings=tuple(warnings)
+    )
+
+
+def _check_stamps(t: NDArray[np.float64], source: str, where: Callable[[int], str]) -> None:
+    """Refuse too few, non-finite, unsorted or duplicated time stamps, naming the row."""
     if t.size < 3:
         raise InputError(
             f"only {t.size} time stamps; a record needs at least 3 samples", path=source
@@ -107,72 +160,48 @@ def resolve_time(
             "remove the repeated rows (e.g. uniq) before the analysis",
             path=source,
         )
-    median = float(np.median(dt))
-    is_gap = dt >= GAP_FACTOR * median
-    regular = dt[~is_gap]
-    dt_nominal = float(regular.mean())
-    deviation = regular - dt_nominal
-    jitter_rms = float(np.sqrt(np.mean(deviation**2)))
-    jitter_max = float(np.max(np.abs(deviation)))
-    gap_idx = np.flatnonzero(is_gap)
-    missing = np.rint(dt[gap_idx] / dt_nominal).astype(np.int64) - 1
-    gaps = tuple((int(i) + 1, float(dt[i]), int(k)) for i, k in zip(gap_idx, missing, strict=True))
-    inferred = 1.0 / dt_nominal
-    warnings: list[str] = []
-    if jitter_rms > JITTER_WARN * dt_nominal:
-        warnings.append(
-            f"time stamps jitter by {100 * jitter_rms / dt_nominal:.2g} % rms of the period "
-            f"(largest {100 * jitter_max / dt_nominal:.2g} %); the Allan variance assumes even "
-            "sampling"
-        )
-    rate = inferred
-    if fs is not None:
-        if abs(fs - inferred) > 0.01 * inferred:
-            warnings.append(
-                f"the given fs = {fs:g} Hz differs from the {inferred:.6g} Hz of the time column; "
-                "using the given value"
-            )
-        rate = float(fs)
 
+
+def _apply_gap_policy(
+    t: NDArray[np.float64],
+    samples: NDArray[np.float64],
+    gaps: tuple[tuple[int, float, int], ...],
+    gap_idx: NDArray[np.int64],
+    missing: NDArray[np.int64],
+    *,
+    policy: str,
+    source: str,
+    where: Callable[[int], str],
+    warnings: list[str],
+) -> tuple[NDArray[np.float64], tuple[Segment, ...], int]:
+    """Samples, segments and filled count after the gap policy (a warning says what was done)."""
     n = t.size
-    filled = 0
-    segments: tuple[Segment, ...] = (Segment(0, n, float(t[0])),)
-    if gaps:
-        first = gaps[0]
-        described = (
-            f"{len(gaps)} gap(s) in the time column, the first at {where(first[0])} "
-            f"({first[1]:.6g} s, about {first[2]} missing sample(s))"
+    if not gaps:
+        return samples, (Segment(0, n, float(t[0])),), 0
+    first = gaps[0]
+    described = (
+        f"{len(gaps)} gap(s) in the time column, the first at {where(first[0])} "
+        f"({first[1]:.6g} s, about {first[2]} missing sample(s))"
+    )
+    if policy == "error":
+        raise InputError(
+            f"{described}; choose a gap policy: split into segments (--gaps split, "
+            "gaps='split') or fill by interpolation (--gaps fill, gaps='fill')",
+            path=source,
         )
-        if policy == "error":
-            raise InputError(
-                f"{described}; choose a gap policy: split into segments (--gaps split, "
-                "gaps='split') or fill by interpolation (--gaps fill, gaps='fill')",
-                path=source,
-            )
-        if policy == "split":
-            starts = [0, *(g[0] for g in gaps)]
-            stops = [*(g[0] for g in gaps), n]
-            segments = tuple(Segment(a, b, float(t[a])) for a, b in zip(starts, stops, strict=True))
-            warnings.append(f"{described}; split into {len(segments)} segments")
-        else:
-            steps = np.ones(n - 1, dtype=np.int64)
-            steps[gap_idx] = missing + 1
-            slots = np.concatenate([[0], np.cumsum(steps)])
-            grid = np.arange(slots[-1] + 1, dtype=np.float64)
-            samples = np.column_stack(
-                [np.interp(grid, slots, samples[:, c]) for c in range(samples.shape[1])]
-            )
-            filled = int(grid.size - n)
-            segments = (Segment(0, grid.size, float(t[0])),)
-            warnings.append(f"{described}; filled {filled} sample(s) by linear interpolation")
-    timing = Timing(
-        fs=inferred,
-        dt_nominal=dt_nominal,
-        jitter_rms=jitter_rms,
-        jitter_max=jitter_max,
-        gaps=gaps,
-        filled=filled,
+    if policy == "split":
+        starts = [0, *(g[0] for g in gaps)]
+        stops = [*(g[0] for g in gaps), n]
+        segments = tuple(Segment(a, b, float(t[a])) for a, b in zip(starts, stops, strict=True))
+        warnings.append(f"{described}; split into {len(segments)} segments")
+        return samples, segments, 0
+    steps = np.ones(n - 1, dtype=np.int64)
+    steps[gap_idx] = missing + 1
+    slots = np.concatenate([[0], np.cumsum(steps)])
+    grid = np.arange(slots[-1] + 1, dtype=np.float64)
+    filled_samples = np.column_stack(
+        [np.interp(grid, slots, samples[:, c]) for c in range(samples.shape[1])]
     )
-    return TimeBase(
-        samples=samples, fs=rate, segments=segments, timing=timing, warnings=tuple(warnings)
-    )
+    filled = int(grid.size - n)
+    warnings.append(f"{described}; filled {filled} sample(s) by linear interpolation")
+    return filled_samples, (Segment(0, grid.size, float(t[0])),), filled

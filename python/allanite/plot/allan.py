@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any, cast
 import numpy as np
 from numpy.typing import NDArray
 
+from allanite.confidence import DEFAULT_LEVEL
 from allanite.extras import require
 
 if TYPE_CHECKING:
@@ -63,7 +64,7 @@ def plot_allan(
     results: AllanResult | Sequence[AllanResult],
     *,
     labels: Sequence[str] | None = None,
-    level: float = 0.683,
+    level: float = DEFAULT_LEVEL,
     errorbars: bool = True,
 ) -> list[Any]:
     """Draw deviations with confidence error bars on ``ax`` (every channel of every result).
@@ -233,7 +234,7 @@ def allan_figure(
     results: AllanResult | Sequence[AllanResult],
     *,
     labels: Sequence[str] | None = None,
-    level: float = 0.683,
+    level: float = DEFAULT_LEVEL,
     title: str | None = None,
     model: Any = None,
     channel: int = 0,

@@ -8,12 +8,12 @@ from __future__ import annotations
 
 from allanite.datasheet import Check, Datasheet, Limit, check_limits
 from allanite.report.build import DeviceAnalysis, Report, build_report
-from allanite.report.coefficients import Coefficient, coefficient_table, customary_rate
+from allanite.report.coefficients import CoefficientRow, coefficient_table, customary_rate
 from allanite.report.slopes import SlopeRow, slope_table
 
 __all__ = [
     "Check",
-    "Coefficient",
+    "CoefficientRow",
     "Datasheet",
     "DeviceAnalysis",
     "Limit",

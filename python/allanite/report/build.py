@@ -18,11 +18,12 @@ from typing import Any
 
 import numpy as np
 
+from allanite.confidence import DEFAULT_LEVEL
 from allanite.datasheet import Check, Datasheet, adev_at, check_limits
 from allanite.io.atomic import atomic_output
 from allanite.io.record import Record
 from allanite.report import html as h
-from allanite.report.coefficients import Coefficient, coefficient_table
+from allanite.report.coefficients import CoefficientRow, coefficient_table
 from allanite.report.slopes import MIN_EDF, slope_table
 from allanite.units import sensor_kind
 from allanite.variance import AllanResult
@@ -263,7 +264,7 @@ def _slope_section(device: DeviceAnalysis) -> str:
 
 
 def _coefficient_section(
-    devices: Sequence[DeviceAnalysis], coefficients: dict[tuple[int, int], list[Coefficient]]
+    devices: Sequence[DeviceAnalysis], coefficients: dict[tuple[int, int], list[CoefficientRow]]
 ) -> str:
     if not coefficients:
         return (
@@ -340,7 +341,7 @@ def _rate_adev(device: DeviceAnalysis, channel: int, level: float) -> tuple[Any,
 def _datasheet_section(
     sheet: Datasheet,
     devices: Sequence[DeviceAnalysis],
-    coefficients: dict[tuple[int, int], list[Coefficient]],
+    coefficients: dict[tuple[int, int], list[CoefficientRow]],
     level: float,
 ) -> tuple[str, list[Check]]:
     checks: list[Check] = []
@@ -457,6 +458,87 @@ def _fit_figures(devices: Sequence[DeviceAnalysis], level: float) -> dict[str, A
     return figures
 
 
+def _summary_section(devices: Sequence[DeviceAnalysis]) -> str:
+    """Record summary: file, channels, samples, fs, units, estimator; the reader's warnings."""
+    summary = "".join(
+        (f"<h3>{h.escape(d.label)}</h3>" if len(devices) > 1 else "")
+        + h.table(None, _summary_rows(d), text_columns=2, css_class="summary")
+        + "".join(f'<div class="warn">{h.escape(w)}</div>' for w in d.record.warnings)
+        for d in devices
+    )
+    return h.section("Record summary", summary, anchor="summary")
+
+
+def _allan_section(figures: dict[str, Any], level: float) -> str:
+    """The Allan deviation plots (with the level of their error bars) and the fitted models."""
+    from allanite.plot import figure_bytes
+
+    return h.section(
+        "Allan deviation",
+        "".join(
+            h.figure(
+                figure_bytes(fig),
+                f"Error bars: {100 * level:.3g} % chi-square confidence intervals "
+                "from the equivalent degrees of freedom.",
+                "Allan deviation plot",
+            )
+            for key, fig in figures.items()
+            if key.startswith("adev")
+        )
+        + "".join(
+            h.figure(
+                figure_bytes(fig),
+                "Dashed: each term's exact Allan deviation with its "
+                "log-log slope; black: their sum.",
+                f"fitted model {key}",
+            )
+            for key, fig in figures.items()
+            if key.startswith("fit")
+        ),
+        anchor="adev",
+    )
+
+
+def _slope_table_section(devices: Sequence[DeviceAnalysis]) -> str:
+    """Measured log-log slopes per band, assigned to the canonical noise terms."""
+    return h.section(
+        "Slope table",
+        "".join(_slope_section(d) for d in devices)
+        + '<p class="note">Least-squares log-log slope in a half-decade window, '
+        "assigned to the nearest canonical slope (IEEE Std 952-1997, Annex C); points "
+        f"with fewer than {MIN_EDF:g} equivalent degrees of freedom are left out.</p>",
+        anchor="slopes",
+    )
+
+
+def _adev_table_section(devices: Sequence[DeviceAnalysis], level: float) -> str:
+    """The Allan deviation of every device as a table with its intervals."""
+    return h.section(
+        "Allan deviation table",
+        "".join(
+            (f"<h3>{h.escape(d.label)}</h3>" if len(devices) > 1 else "") + _adev_table(d, level)
+            for d in devices
+        ),
+        anchor="table",
+    )
+
+
+def _diagnosis_section(diagnosis_html: str, figures: dict[str, Any]) -> str:
+    """The sim-to-real diagnosis text followed by its figures."""
+    from allanite.plot import figure_bytes
+
+    extra = "".join(
+        h.figure(
+            figure_bytes(fig),
+            f"Sim-vs-real {name}: real record against the Monte Carlo "
+            "band of the simulated sensor.",
+            f"diagnosis {name}",
+        )
+        for name, fig in figures.items()
+    )
+    return h.section("Sim-to-real diagnosis", diagnosis_html + extra, anchor="diagnosis")
+
+
 def build_report(
     devices: Sequence[DeviceAnalysis],
     *,
@@ -464,7 +546,7 @@ def build_report(
     datasheet: Datasheet | None = None,
     diagnosis_html: str | None = None,
     diagnosis_figures: dict[str, Any] | None = None,
-    level: float = 0.683,
+    level: float = DEFAULT_LEVEL,
     title: str | None = None,
 ) -> Report:
     """Render the report.
@@ -491,7 +573,6 @@ def build_report(
     Report
     """
     from allanite import __version__
-    from allanite.plot import figure_bytes
 
     if not devices:
         raise ValueError("a report needs at least one analysed record")
@@ -513,65 +594,15 @@ def build_report(
             f'<p class="verdict">Datasheet check ({h.escape(datasheet.device)}): '
             f"{h.badge(verdict)}</p>"
         )
-    summary = "".join(
-        (f"<h3>{h.escape(d.label)}</h3>" if len(devices) > 1 else "")
-        + h.table(None, _summary_rows(d), text_columns=2, css_class="summary")
-        + "".join(f'<div class="warn">{h.escape(w)}</div>' for w in d.record.warnings)
-        for d in devices
-    )
-    body.append(h.section("Record summary", summary, anchor="summary"))
-    body.append(
-        h.section(
-            "Allan deviation",
-            "".join(
-                h.figure(
-                    figure_bytes(fig),
-                    f"Error bars: {100 * level:.3g} % chi-square confidence intervals "
-                    "from the equivalent degrees of freedom.",
-                    "Allan deviation plot",
-                )
-                for key, fig in figures.items()
-                if key.startswith("adev")
-            )
-            + "".join(
-                h.figure(
-                    figure_bytes(fig),
-                    "Dashed: each term's exact Allan deviation with its "
-                    "log-log slope; black: their sum.",
-                    f"fitted model {key}",
-                )
-                for key, fig in figures.items()
-                if key.startswith("fit")
-            ),
-            anchor="adev",
-        )
-    )
+    body.append(_summary_section(devices))
+    body.append(_allan_section(figures, level))
     body.append(
         h.section(
             "Noise coefficients", _coefficient_section(devices, coefficients), anchor="coefficients"
         )
     )
-    body.append(
-        h.section(
-            "Slope table",
-            "".join(_slope_section(d) for d in devices)
-            + '<p class="note">Least-squares log-log slope in a half-decade window, '
-            "assigned to the nearest canonical slope (IEEE Std 952-1997, Annex C); points "
-            f"with fewer than {MIN_EDF:g} equivalent degrees of freedom are left out.</p>",
-            anchor="slopes",
-        )
-    )
-    body.append(
-        h.section(
-            "Allan deviation table",
-            "".join(
-                (f"<h3>{h.escape(d.label)}</h3>" if len(devices) > 1 else "")
-                + _adev_table(d, level)
-                for d in devices
-            ),
-            anchor="table",
-        )
-    )
+    body.append(_slope_table_section(devices))
+    body.append(_adev_table_section(devices, level))
     if datasheet is not None:
         body.append(h.section("Datasheet comparison", sheet_html, anchor="datasheet"))
     if reference is not None:
@@ -583,16 +614,7 @@ def build_report(
             )
         )
     if diagnosis_html is not None:
-        extra = "".join(
-            h.figure(
-                figure_bytes(fig),
-                f"Sim-vs-real {name}: real record against the Monte Carlo "
-                "band of the simulated sensor.",
-                f"diagnosis {name}",
-            )
-            for name, fig in (diagnosis_figures or {}).items()
-        )
-        body.append(h.section("Sim-to-real diagnosis", diagnosis_html + extra, anchor="diagnosis"))
+        body.append(_diagnosis_section(diagnosis_html, diagnosis_figures or {}))
         figures.update({f"diagnosis-{k}": v for k, v in (diagnosis_figures or {}).items()})
     stamp = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
     page_title = title or "Noise report: " + ", ".join(d.label for d in devices)

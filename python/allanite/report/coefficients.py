@@ -17,6 +17,7 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
+from allanite.confidence import DEFAULT_LEVEL
 from allanite.datasheet import Measured
 from allanite.units import (
     ANGLE_UNITS,
@@ -28,14 +29,17 @@ from allanite.units import (
     sensor_kind,
 )
 
-__all__ = ["Coefficient", "coefficient_table", "customary_rate"]
+__all__ = ["CoefficientRow", "coefficient_table", "customary_rate"]
 
 _SLOPES = {"Q": "−1", "N": "−1/2", "B": "0", "K": "+1/2", "R": "+1"}
 
 
 @dataclass(frozen=True)
-class Coefficient:
-    """One fitted parameter with its interval, in a display unit.
+class CoefficientRow:
+    """One row of the report's coefficient table: a fitted parameter and interval, displayed.
+
+    Not :class:`allanite.fit.Coefficient` (the fitted value with its standard error, in the
+    model's units): this is that value converted to a display unit, with its name and level.
 
     ``quantity`` is its customary name for the model's sensor (``angle random walk`` for a
     gyro's N, ``velocity random walk`` for an accelerometer's) and ``sensor`` that sensor
@@ -88,7 +92,9 @@ def _customary(rate: str | None, label: str, unit: Unit | None, fallback: str) -
         return fallback
 
 
-def coefficient_table(fit: Any, rate: str | None, level: float = 0.683) -> list[Coefficient]:
+def coefficient_table(
+    fit: Any, rate: str | None, level: float = DEFAULT_LEVEL
+) -> list[CoefficientRow]:
     """Rows of every coefficient of a fit (or model) in customary units.
 
     Parameters
@@ -102,14 +108,14 @@ def coefficient_table(fit: Any, rate: str | None, level: float = 0.683) -> list[
 
     Returns
     -------
-    list of Coefficient
+    list of CoefficientRow
     """
     model = getattr(fit, "model", fit)
     units = getattr(model, "units", None)
     model_rate = units.get("rate") if isinstance(units, dict) else rate
     sensor = _sensor(model_rate)
     labelled = {label: (term, spec) for label, term, spec in model.labelled_parameters()}
-    rows: list[Coefficient] = []
+    rows: list[CoefficientRow] = []
     if hasattr(fit, "table") and hasattr(fit, "coefficients"):
         for row in fit.table(None, level):
             label = row["name"]
@@ -118,7 +124,7 @@ def coefficient_table(fit: Any, rate: str | None, level: float = 0.683) -> list[
             unit = _customary(model_rate, label, own, row["unit"])
             values = [convert(row[k], row["unit"], unit) for k in ("value", "low", "high")]
             rows.append(
-                Coefficient(
+                CoefficientRow(
                     term=getattr(term, "type", label),
                     symbol=label,
                     value=values[0],
@@ -139,7 +145,7 @@ def coefficient_table(fit: Any, rate: str | None, level: float = 0.683) -> list[
         if base is not None and unit != "model units":
             value = convert(value, base, unit)
         rows.append(
-            Coefficient(
+            CoefficientRow(
                 term=term.type,
                 symbol=label,
                 value=value,

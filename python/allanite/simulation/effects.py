@@ -101,7 +101,9 @@ class ConstantStream(TermStream):
         self.value = float(sigma) * self.rng.standard_normal(self.n_channels)
 
     def _generate(self, start: int, n: int) -> NDArray[np.float64]:
-        return np.broadcast_to(self.value, (n, self.n_channels)).copy()
+        return np.asarray(
+            np.broadcast_to(self.value, (n, self.n_channels)).copy(), dtype=np.float64
+        )
 
 
 class WarmUpStream(TermStream):
@@ -197,4 +199,4 @@ class TelegraphStream(TermStream):
         state = self.state[None, :] * np.where(before % 2 == 0, 1.0, -1.0)
         parity = np.where(counts % 2 == 0, 1.0, -1.0)
         self.state = self.state * np.where(counts.sum(axis=0) % 2 == 0, 1.0, -1.0)
-        return self.amplitude * state * (parity + 2.0 * sums)
+        return np.asarray(self.amplitude * state * (parity + 2.0 * sums), dtype=np.float64)

@@ -22,6 +22,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from allanite import _core
+from allanite._deprecation import renamed
 from allanite.simulation.flicker import FLICKER_METHODS
 from allanite.simulation.streams import SumStream, check_fs, seed_sequence
 from allanite.terms.base import Term
@@ -129,14 +130,18 @@ def _open(
     model: Any,
     fs: float,
     n: int,
-    channels: int,
+    n_channels: int,
     seed: Any,
     allow_aliasing: bool,
     flicker_method: str = "auto",
 ) -> SumStream:
     terms = model_terms(model)
-    if isinstance(channels, bool) or not isinstance(channels, numbers.Integral) or channels < 1:
-        raise ValueError(f"channels must be a positive integer, got {channels!r}")
+    if (
+        isinstance(n_channels, bool)
+        or not isinstance(n_channels, numbers.Integral)
+        or n_channels < 1
+    ):
+        raise ValueError(f"n_channels must be a positive integer, got {n_channels!r}")
     if flicker_method not in FLICKER_METHODS:
         raise ValueError(
             f"unknown flicker_method {flicker_method!r}; use one of "
@@ -148,10 +153,10 @@ def _open(
     options: dict[str, dict[str, Any]] = {Flicker.type: {"method": flicker_method}}
     children = seed_sequence(seed).spawn(len(terms))
     streams = [
-        term.stream(fs, int(channels), child, n_samples=n, **options.get(term.type, {}))
+        term.stream(fs, int(n_channels), child, n_samples=n, **options.get(term.type, {}))
         for term, child in zip(terms, children, strict=True)
     ]
-    return SumStream(streams, fs, int(channels))
+    return SumStream(streams, fs, int(n_channels))
 
 
 def simulate_chunks(
@@ -161,11 +166,12 @@ def simulate_chunks(
     *,
     duration: str | float | None = None,
     output: Output = "rate",
-    channels: int = 1,
+    n_channels: int = 1,
     seed: Any = None,
     chunk: int = DEFAULT_CHUNK,
     allow_aliasing: bool = False,
     flicker_method: str = "auto",
+    channels: int | None = None,
 ) -> Iterator[NDArray[np.float64]]:
     """Yield the simulated record in ``(chunk, channels)`` pieces (the last may be shorter).
 
@@ -174,13 +180,14 @@ def simulate_chunks(
     AR(1) bank + FIR generator). Parameters as in :func:`simulate`; ``chunk`` only sets the
     piece size, never the samples.
     """
+    n_channels = renamed(n_channels, channels, new="n_channels", old="channels", default=1)
     rate = check_fs(fs)
     total = record_length(rate, n, duration)
     if output not in OUTPUTS:
         raise ValueError(f"unknown output {output!r}; use 'rate', 'angle' or 'increment'")
     if isinstance(chunk, bool) or not isinstance(chunk, numbers.Integral) or chunk < 1:
         raise ValueError(f"chunk must be a positive number of samples, got {chunk!r}")
-    stream = _open(model, rate, total, channels, seed, allow_aliasing, flicker_method)
+    stream = _open(model, rate, total, n_channels, seed, allow_aliasing, flicker_method)
     dt = 1.0 / rate
     # compensated running sum carried across chunks (C++): identical for any chunking
     angle_hi, angle_lo = np.zeros(stream.n_channels), np.zeros(stream.n_channels)
@@ -203,10 +210,11 @@ def simulate(
     *,
     duration: str | float | None = None,
     output: Output = "rate",
-    channels: int = 1,
+    n_channels: int = 1,
     seed: Any = None,
     allow_aliasing: bool = False,
     flicker_method: str = "auto",
+    channels: int | None = None,
 ) -> NDArray[np.float64]:
     r"""Simulate a record of ``n`` samples (or ``duration``) at ``fs`` Hz from a noise model.
 
@@ -224,7 +232,7 @@ def simulate(
         Rate samples (means over each period, model units), angle increments
         :math:`\bar\omega_k\Delta t` or accumulated angle :math:`\Delta t\sum_{i\le k}
         \bar\omega_i`.
-    channels : int
+    n_channels : int
         Independent channels (axes or Monte Carlo runs) simulated at once.
     seed : None, int or numpy.random.SeedSequence
         Same seed, same samples (whatever the chunking).
@@ -235,11 +243,14 @@ def simulate(
         ``auto`` = exact spectral synthesis up to ``SPECTRAL_MAX_SAMPLES``, else the streaming
         AR(1) bank + FIR generator (the same law to about 1e-6); ``kasdin`` = Kasdin's
         fractional filter (law: :func:`allanite.terms.flicker_laws.kasdin_avar`).
+    channels : int, optional
+        Deprecated name of ``n_channels`` (``channels`` means channel names elsewhere, as in
+        :class:`allanite.io.Record`); warns.
 
     Returns
     -------
     numpy.ndarray
-        Shape ``(n,)`` for one channel, else ``(n, channels)``.
+        Shape ``(n,)`` for one channel, else ``(n, n_channels)``.
 
     Raises
     ------
@@ -247,6 +258,7 @@ def simulate(
         For ``fs <= 0``, a zero length, an unknown output or flicker method, a tone above
         Nyquist, or a flicker method that cannot serve the record.
     """
+    n_channels = renamed(n_channels, channels, new="n_channels", old="channels", default=1)
     rate = check_fs(fs)
     total = record_length(rate, n, duration)
     pieces = list(
@@ -255,7 +267,7 @@ def simulate(
             rate,
             total,
             output=output,
-            channels=channels,
+            n_channels=n_channels,
             seed=seed,
             chunk=total,
             allow_aliasing=allow_aliasing,

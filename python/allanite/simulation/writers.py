@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from allanite._deprecation import renamed
 from allanite.io.atomic import atomic_output
 from allanite.simulation.record import record_length, simulate_chunks
 
@@ -153,12 +154,13 @@ def write_record(
     *,
     duration: str | float | None = None,
     output: str = "rate",
-    channels: int = 1,
+    n_channels: int = 1,
     seed: Any = None,
     allow_aliasing: bool = False,
     flicker_method: str = "auto",
     units: str = "rate",
     progress: Callable[[str, int, int], None] | None = None,
+    channels: int | None = None,
 ) -> Path:
     """Simulate a record from ``model`` straight into a file, in bounded memory.
 
@@ -169,19 +171,24 @@ def write_record(
     before anything is simulated.
     """
     format_of(path)  # fail on a bad suffix before any work
+    n_channels = renamed(n_channels, channels, new="n_channels", old="channels", default=1)
     total = record_length(fs, n, duration)
-    if isinstance(channels, bool) or not isinstance(channels, (int, np.integer)) or channels < 1:
-        raise ValueError(f"channels must be a positive integer, got {channels!r}")
-    check_free_space(path, output_size(path, total, int(channels)))
+    if (
+        isinstance(n_channels, bool)
+        or not isinstance(n_channels, (int, np.integer))
+        or n_channels < 1
+    ):
+        raise ValueError(f"n_channels must be a positive integer, got {n_channels!r}")
+    check_free_space(path, output_size(path, total, int(n_channels)))
     chunks = simulate_chunks(
         model,
         fs,
         total,
         output=output,  # type: ignore[arg-type]
-        channels=channels,
+        n_channels=n_channels,
         seed=seed,
         allow_aliasing=allow_aliasing,
         flicker_method=flicker_method,
     )
-    names = ",".join(f"{output}_{c}[{units}]" for c in range(channels))
-    return write_chunks(path, chunks, total, channels, header=names, progress=progress)
+    names = ",".join(f"{output}_{c}[{units}]" for c in range(n_channels))
+    return write_chunks(path, chunks, total, n_channels, header=names, progress=progress)

@@ -235,7 +235,7 @@ def gaussian_estimate_variance(
         cov = np.fft.irfft(density * response, n=size)[:terms] / (2.0 * dt)
         k = np.arange(1, terms)
         sums = terms * cov[0] ** 2 + 2.0 * float(np.sum((terms - k) * cov[1:] ** 2))
-        return 2.0 * sums / (2.0 * terms) ** 2
+        return float(2.0 * sums / (2.0 * terms) ** 2)
 
     return _per_factor(factors, n, one)
 

@@ -128,4 +128,4 @@ def flicker_shape(x: NDArray[np.float64]) -> NDArray[np.float64]:
     _, ci4 = special.sici(4.0 * x)
     s, c = np.sin(x), np.cos(x)
     bracket = math.log(2.0) - s**3 * (s + 4.0 * x * c) / (2.0 * x**2) + ci2 - ci4
-    return (2.0 / np.pi) * bracket
+    return np.asarray((2.0 / np.pi) * bracket, dtype=np.float64)

@@ -118,7 +118,7 @@ def given_alpha(alpha: int | ArrayLike | str | None, shape: tuple[int, ...]) -> 
     if values.ndim == 1:
         values = values.reshape(-1, 1)
     try:
-        return np.broadcast_to(values, shape).copy()
+        return np.asarray(np.broadcast_to(values, shape).copy(), dtype=np.int64)
     except ValueError:
         raise ValueError(
             f"alpha has shape {given.shape}; give a scalar, one value per tau ({shape[0]}) or a "

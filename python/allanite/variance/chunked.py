@@ -28,6 +28,7 @@ from typing import Any, Literal, Protocol, runtime_checkable
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from allanite._deprecation import renamed
 from allanite.errors import InputError
 from allanite.variance.checks import prepare_record
 
@@ -82,7 +83,7 @@ def _check_rows(rows: int) -> int:
 
 def _sample_dtype(dtype: Any) -> np.dtype[Any]:
     try:
-        dt = np.dtype(dtype)
+        dt: np.dtype[Any] = np.dtype(dtype)
     except TypeError as exc:
         raise TypeError(
             f"dtype {dtype!r} is not a numpy dtype; use one of {SAMPLE_DTYPES}"
@@ -154,8 +155,8 @@ class BinaryRecord:
     dtype : str or numpy.dtype
         Sample type, e.g. ``"float32"``, ``"<i2"`` (one of float64, float32, int16, int32,
         int64).
-    channels : int
-        Number of channels.
+    n_channels : int
+        Number of channels (``channels=`` is its deprecated name).
     byteorder : {"<", ">", "=", "little", "big", "native"}, optional
         Byte order of the file; overrides any order in ``dtype``. Default: that of ``dtype``.
     offset : int
@@ -183,12 +184,14 @@ class BinaryRecord:
         path: str | os.PathLike[str],
         dtype: Any,
         *,
-        channels: int = 1,
+        n_channels: int = 1,
         byteorder: str | None = None,
         offset: int = 0,
         layout: Literal["interleaved", "planar"] = "interleaved",
+        channels: int | None = None,
     ) -> BinaryRecord:
         """Describe a raw file; validates its size against dtype, channels and offset."""
+        channels = renamed(n_channels, channels, new="n_channels", old="channels", default=1)
         p = Path(path)
         dt = _sample_dtype(dtype)
         if byteorder is not None:
@@ -203,7 +206,7 @@ class BinaryRecord:
             or not isinstance(channels, (int, np.integer))
             or channels < 1
         ):
-            raise ValueError(f"channels must be a positive integer, got {channels!r}")
+            raise ValueError(f"n_channels must be a positive integer, got {channels!r}")
         if isinstance(offset, bool) or not isinstance(offset, (int, np.integer)) or offset < 0:
             raise ValueError(f"offset must be a non-negative number of bytes, got {offset!r}")
         if layout not in ("interleaved", "planar"):
@@ -231,7 +234,8 @@ class BinaryRecord:
     @property
     def dtype(self) -> np.dtype[Any]:
         """Native-endian sample type of the chunks."""
-        return self.dtype_in_file.newbyteorder("=")
+        native: np.dtype[Any] = self.dtype_in_file.newbyteorder("=")
+        return native
 
     def _read_into(self, fd: int, buf: NDArray[Any], byte_offset: int) -> None:
         view = memoryview(buf).cast("B")  # type: ignore[arg-type]
@@ -305,7 +309,7 @@ def npy_record(path: str | os.PathLike[str]) -> BinaryRecord:
     layout: Literal["interleaved", "planar"] = (
         "planar" if fortran and channels > 1 else "interleaved"
     )
-    rec = BinaryRecord.open(p, dtype, channels=channels, offset=offset, layout=layout)
+    rec = BinaryRecord.open(p, dtype, n_channels=channels, offset=offset, layout=layout)
     if rec.n_samples != shape[0]:
         raise InputError(
             f"header says {shape[0]} samples but the file holds {rec.n_samples}; the file is "
@@ -448,13 +452,14 @@ def open_large(
     path: str | os.PathLike[str],
     *,
     dtype: Any = None,
-    channels: int = 1,
+    n_channels: int = 1,
     byteorder: str | None = None,
     offset: int = 0,
     layout: Literal["interleaved", "planar"] = "interleaved",
     delimiter: str | None = None,
     columns: Sequence[int] | None = None,
     skiprows: int = 0,
+    channels: int | None = None,
 ) -> ChunkedRecord:
     """Open a file as a chunked record, choosing the reader from the suffix.
 
@@ -465,11 +470,13 @@ def open_large(
     ----------
     path : path-like
         The file.
-    dtype, channels, byteorder, offset, layout
+    dtype, n_channels, byteorder, offset, layout
         Raw binary description (see :class:`BinaryRecord`); ``dtype`` is required for raw files.
+        ``channels=`` is the deprecated name of ``n_channels``.
     delimiter, columns, skiprows
         Text description (see :class:`TextRecord`).
     """
+    n_channels = renamed(n_channels, channels, new="n_channels", old="channels", default=1)
     p = Path(path)
     suffix = p.suffix.lower()
     if suffix == ".npy":
@@ -478,9 +485,9 @@ def open_large(
         if suffix in _TEXT_SUFFIXES:
             return TextRecord.open(p, delimiter=delimiter, columns=columns, skiprows=skiprows)
         raise ValueError(
-            f"{p}: raw binary needs dtype= (e.g. 'float32'), channels= and byteorder=; "
+            f"{p}: raw binary needs dtype= (e.g. 'float32'), n_channels= and byteorder=; "
             f"or use .npy or a text file ({', '.join(_TEXT_SUFFIXES)})"
         )
     return BinaryRecord.open(
-        p, dtype, channels=channels, byteorder=byteorder, offset=offset, layout=layout
+        p, dtype, n_channels=n_channels, byteorder=byteorder, offset=offset, layout=layout
     )

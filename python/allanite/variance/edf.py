@@ -422,7 +422,7 @@ def lag1_acf(z: NDArray[np.float64]) -> float:
     den = float(np.dot(z0, z0))
     if den == 0.0:
         return 0.0
-    return float(np.dot(z0[:-1], z0[1:])) / den * (z0.size - 1) / z0.size
+    return float(np.dot(z0[:-1], z0[1:]) / den * (z0.size - 1) / z0.size)
 
 
 def _acf_decision(r1_of_level: Callable[[int], float], dmax: int, n: int, *, phase: bool) -> int:
@@ -485,7 +485,7 @@ def _b1_expected(n: int, mu: int) -> float:
         return 1.0
     if mu == -2:
         return (n * n - 1.0) / (1.5 * n * (n - 1.0))
-    return n * (1.0 - n**mu) / (2.0 * (n - 1.0) * (1.0 - 2.0**mu))
+    return float(n * (1.0 - n**mu) / (2.0 * (n - 1.0) * (1.0 - 2.0**mu)))
 
 
 def _rn_expected(m: int, alpha: int) -> float:

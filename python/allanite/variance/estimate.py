@@ -10,6 +10,7 @@ memory (a ``memory_limit``, a file path or a chunked record) go to
 from __future__ import annotations
 
 import os
+from typing import Any
 
 from numpy.typing import ArrayLike
 
@@ -186,6 +187,12 @@ def avar(
     )
 
 
+def _named(kind: Kind, arguments: dict[str, Any]) -> AllanResult:
+    """:func:`avar` of ``kind`` with a named deviation's arguments (its ``locals()``)."""
+    options = dict(arguments)
+    return avar(options.pop("x"), kind=kind, **options)
+
+
 def adev(
     x: ArrayLike | Record | ChunkedRecord | str | os.PathLike[str],
     *,
@@ -217,21 +224,7 @@ def adev(
         The variance in ``var``; the deviation is ``result.dev`` and its confidence interval
         ``result.ci(level)``.
     """
-    return avar(
-        x,
-        fs=fs,
-        input=input,
-        kind="standard",
-        taus=taus,
-        m=m,
-        points=points,
-        alpha=alpha,
-        threads=threads,
-        units=units,
-        memory_limit=memory_limit,
-        progress=progress,
-        fast=fast,
-    )
+    return _named("standard", locals())
 
 
 def oadev(
@@ -265,21 +258,7 @@ def oadev(
         The variance in ``var``; the deviation is ``result.dev`` and its confidence interval
         ``result.ci(level)``.
     """
-    return avar(
-        x,
-        fs=fs,
-        input=input,
-        kind="overlapping",
-        taus=taus,
-        m=m,
-        points=points,
-        alpha=alpha,
-        threads=threads,
-        units=units,
-        memory_limit=memory_limit,
-        progress=progress,
-        fast=fast,
-    )
+    return _named("overlapping", locals())
 
 
 def mdev(
@@ -313,21 +292,7 @@ def mdev(
         The variance in ``var``; the deviation is ``result.dev`` and its confidence interval
         ``result.ci(level)``.
     """
-    return avar(
-        x,
-        fs=fs,
-        input=input,
-        kind="modified",
-        taus=taus,
-        m=m,
-        points=points,
-        alpha=alpha,
-        threads=threads,
-        units=units,
-        memory_limit=memory_limit,
-        progress=progress,
-        fast=fast,
-    )
+    return _named("modified", locals())
 
 
 def hdev(
@@ -361,21 +326,7 @@ def hdev(
         The variance in ``var``; the deviation is ``result.dev`` and its confidence interval
         ``result.ci(level)``.
     """
-    return avar(
-        x,
-        fs=fs,
-        input=input,
-        kind="standard_hadamard",
-        taus=taus,
-        m=m,
-        points=points,
-        alpha=alpha,
-        threads=threads,
-        units=units,
-        memory_limit=memory_limit,
-        progress=progress,
-        fast=fast,
-    )
+    return _named("standard_hadamard", locals())
 
 
 def ohdev(
@@ -409,21 +360,7 @@ def ohdev(
         The variance in ``var``; the deviation is ``result.dev`` and its confidence interval
         ``result.ci(level)``.
     """
-    return avar(
-        x,
-        fs=fs,
-        input=input,
-        kind="hadamard",
-        taus=taus,
-        m=m,
-        points=points,
-        alpha=alpha,
-        threads=threads,
-        units=units,
-        memory_limit=memory_limit,
-        progress=progress,
-        fast=fast,
-    )
+    return _named("hadamard", locals())
 
 
 def tdev(
@@ -457,21 +394,7 @@ def tdev(
         The variance in ``var``; the deviation is ``result.dev`` and its confidence interval
         ``result.ci(level)``.
     """
-    return avar(
-        x,
-        fs=fs,
-        input=input,
-        kind="time",
-        taus=taus,
-        m=m,
-        points=points,
-        alpha=alpha,
-        threads=threads,
-        units=units,
-        memory_limit=memory_limit,
-        progress=progress,
-        fast=fast,
-    )
+    return _named("time", locals())
 
 
 def totdev(
@@ -505,18 +428,4 @@ def totdev(
         The variance in ``var``; the deviation is ``result.dev`` and its confidence interval
         ``result.ci(level)``.
     """
-    return avar(
-        x,
-        fs=fs,
-        input=input,
-        kind="total",
-        taus=taus,
-        m=m,
-        points=points,
-        alpha=alpha,
-        threads=threads,
-        units=units,
-        memory_limit=memory_limit,
-        progress=progress,
-        fast=fast,
-    )
+    return _named("total", locals())

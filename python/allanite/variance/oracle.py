@@ -48,7 +48,7 @@ def phase_from_record(x: ArrayLike, input: str = "rate") -> NDArray[np.float64]:
     if input == "angle":
         k = np.arange(y.size, dtype=np.float64)
         slope, intercept = np.polyfit(k, y, 1)
-        return y - (intercept + slope * k)
+        return np.asarray(y - (intercept + slope * k), dtype=np.float64)
     raise ValueError(f"unknown input kind {input!r}")
 
 

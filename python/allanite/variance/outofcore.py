@@ -25,7 +25,9 @@ channels)`` points of the decimated phase ``x[::m]`` at each tau.
 from __future__ import annotations
 
 import os
+import queue
 import re
+from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
@@ -268,18 +270,30 @@ def variance_from_store(
 
     rows = alpha_rows if alpha_rows is not None else 1 << 22
     readers = [_WindowReader(store, order, chunk_terms, rows) for _ in range(workers)]
-    order_idx = list(range(nt))
-    if workers == 1:
-        for done, i in enumerate(order_idx, start=1):
+    _run_factors(nt, readers, one, progress)
+    return var, _capped(alphas, factors, points)
+
+
+def _run_factors(
+    nt: int,
+    readers: list[_WindowReader],
+    one: Callable[[int, _WindowReader], None],
+    progress: ProgressCallback | None,
+) -> None:
+    """Call ``one(i, reader)`` for every factor index, one worker thread per reader.
+
+    Each worker owns one reader and takes factors from a shared queue; progress is reported
+    on the calling thread as factors complete, and a failed worker ends the wait at once
+    (its exception is raised here).
+    """
+    if len(readers) == 1:
+        for done, i in enumerate(range(nt), start=1):
             one(i, readers[0])
             if progress is not None:
                 progress("variance", done, nt)
-        return var, _capped(alphas, factors, points)
-    # each worker owns one reader; hand out factors round-robin from a shared queue
-    import queue
-
+        return
     todo: queue.SimpleQueue[int] = queue.SimpleQueue()
-    for i in order_idx:
+    for i in range(nt):
         todo.put(i)
     finished: queue.SimpleQueue[int] = queue.SimpleQueue()
 
@@ -292,10 +306,9 @@ def variance_from_store(
             one(i, reader)
             finished.put(i)
 
-    with ThreadPoolExecutor(max_workers=workers) as pool:
+    with ThreadPoolExecutor(max_workers=len(readers)) as pool:
         futures = [pool.submit(worker, r) for r in readers]
         done = 0
-        # report each factor as it completes; a failed worker ends the wait at once
         while done < nt and not any(f.done() and f.exception() for f in futures):
             try:
                 finished.get(timeout=0.2)
@@ -308,7 +321,6 @@ def variance_from_store(
                 progress("variance", done, nt)
         for fut in futures:
             fut.result()
-    return var, _capped(alphas, factors, points)
 
 
 def _capped(
@@ -348,7 +360,7 @@ def avar_large(
         Samples ``(N,)``/``(N, C)``, a :class:`~allanite.io.Record` (its own ``fs``, ``input``
         and unit), a record from :mod:`allanite.variance.chunked`, or a file path
         opened with :func:`allanite.variance.chunked.open_large` and ``open_options`` (e.g.
-        ``dtype="float32", channels=3, byteorder="<"`` for raw binary).
+        ``dtype="float32", n_channels=3, byteorder="<"`` for raw binary).
     fs, input, kind, taus, m, points, alpha, threads, units
         As for :func:`allanite.variance.avar`.
     memory_limit : int, float or str, optional
@@ -385,12 +397,7 @@ def avar_large(
     units = record_rate_unit(units, input)  # the same check as avar's
     nthreads = check_threads(threads)
     limit = parse_memory(memory_limit)
-    if isinstance(source, (str, Path, os.PathLike)):
-        record = open_large(source, **open_options)
-    else:
-        if open_options:
-            raise TypeError(f"file options {sorted(open_options)} apply only when source is a path")
-        record = as_chunked(source)  # type: ignore[arg-type]  # a Record was resolved above
+    record = _chunked(source, open_options)
     nc = record.n_channels
     workers = max(1, nthreads or (os.cpu_count() or 1))
     if chunk_rows is None:
@@ -413,28 +420,19 @@ def avar_large(
         identify = (
             ("phase" if input == "angle" else "frequency") if wants_identification(alpha) else None
         )
-        window_bytes = None if limit is None else limit // 2
-        alpha_rows = None if limit is None else max(1024, limit // (16 * 8 * workers * nc))
         meta.update(phase_in_memory=store.in_memory, phase_bytes=store.nbytes)
-        q = fast_q(fast)
-        if q is not None:
-            if store.array is None:
-                raise ValueError(
-                    "fast=True needs the phase array in memory; raise memory_limit or drop fast"
-                )
-            var = variances(store.array, factors, kernel_kind, threads=nthreads, q=q, meta=meta)
-            alphas = _identify(store.array, factors, kernel_kind, identify, alpha_rows)
-        else:
-            var, alphas = variance_from_store(
-                store,
-                factors,
-                kernel_kind,
-                threads=nthreads,
-                window_bytes=window_bytes,
-                alpha_rows=alpha_rows,
-                identify=identify,
-                progress=progress,
-            )
+        var, alphas = _store_variances(
+            store,
+            factors,
+            kernel_kind,
+            q=fast_q(fast),
+            threads=nthreads,
+            identify=identify,
+            alpha_rows=None if limit is None else max(1024, limit // (16 * 8 * workers * nc)),
+            window_bytes=None if limit is None else limit // 2,
+            progress=progress,
+            meta=meta,
+        )
     if alphas is None:
         if identify is not None:  # pragma: no cover - identify was requested above
             raise RuntimeError("noise identification returned nothing")
@@ -454,6 +452,48 @@ def avar_large(
         was_1d=nc == 1 and _was_1d(source, record),
         meta=meta,
     )
+
+
+def _chunked(source: Any, open_options: dict[str, Any]) -> ChunkedRecord:
+    """A chunked record of a path (opened with ``open_options``), array or chunked record."""
+    if isinstance(source, (str, Path, os.PathLike)):
+        return open_large(source, **open_options)
+    if open_options:
+        raise TypeError(f"file options {sorted(open_options)} apply only when source is a path")
+    return as_chunked(source)
+
+
+def _store_variances(
+    store: PhaseStore,
+    factors: NDArray[np.int64],
+    kernel_kind: str,
+    *,
+    q: int | None,
+    threads: int,
+    identify: str | None,
+    alpha_rows: int | None,
+    window_bytes: int | None,
+    progress: ProgressCallback | None,
+    meta: dict[str, Any],
+) -> tuple[NDArray[np.float64], NDArray[np.int64] | None]:
+    """Variances and identified exponents from a phase store: fast mode (in memory) or exact."""
+    if q is None:
+        return variance_from_store(
+            store,
+            factors,
+            kernel_kind,
+            threads=threads,
+            window_bytes=window_bytes,
+            alpha_rows=alpha_rows,
+            identify=identify,
+            progress=progress,
+        )
+    if store.array is None:
+        raise ValueError(
+            "fast=True needs the phase array in memory; raise memory_limit or drop fast"
+        )
+    var = variances(store.array, factors, kernel_kind, threads=threads, q=q, meta=meta)
+    return var, _identify(store.array, factors, kernel_kind, identify, alpha_rows)
 
 
 def _identify(

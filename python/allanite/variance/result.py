@@ -13,6 +13,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy import stats
 
 from allanite import _core
+from allanite.confidence import DEFAULT_LEVEL, ONE_SIGMA, check_level
 from allanite.extras import require
 from allanite.notebook import allan_html
 from allanite.variance.edf import equivalent_dof
@@ -76,7 +77,9 @@ class AllanResult:
         """Number of channels (1 for a 1-D record)."""
         return 1 if self.var.ndim == 1 else int(self.var.shape[1])
 
-    def var_ci(self, level: float = 0.683) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    def var_ci(
+        self, level: float = DEFAULT_LEVEL
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Chi-square confidence limits of the variance.
 
         ``var * edf / chi2.ppf((1 + level) / 2, edf)`` to ``var * edf / chi2.ppf((1 - level) / 2,
@@ -85,20 +88,20 @@ class AllanResult:
         Parameters
         ----------
         level : float
-            Two-sided confidence level in (0, 1), e.g. 0.683 or 0.95.
+            Two-sided confidence level in (0, 1); default
+            :data:`allanite.confidence.DEFAULT_LEVEL` (0.95), 0.683 for 1-sigma error bars.
 
         Returns
         -------
         tuple of numpy.ndarray
             Lower and upper limits, shaped like :attr:`var`.
         """
-        if not 0.0 < level < 1.0:
-            raise ValueError(f"level must lie in (0, 1), got {level}")
+        level = check_level(level)
         lo = self.var * self.edf / stats.chi2.ppf(0.5 + level / 2.0, self.edf)
         hi = self.var * self.edf / stats.chi2.ppf(0.5 - level / 2.0, self.edf)
         return lo, hi
 
-    def ci(self, level: float = 0.683) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    def ci(self, level: float = DEFAULT_LEVEL) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Confidence limits of the deviation (the square roots of :meth:`var_ci`)."""
         lo, hi = self.var_ci(level)
         return np.sqrt(lo), np.sqrt(hi)
@@ -205,7 +208,7 @@ class AllanResult:
 
     def to_dict(self) -> dict[str, Any]:
         """Plain-Python dictionary (lists), suitable for JSON."""
-        lo, hi = self.ci()
+        lo, hi = self.ci(ONE_SIGMA)  # the dev_low_68/dev_high_68 columns
         return {
             "kind": self.kind,
             "input": self.input,
@@ -228,7 +231,7 @@ class AllanResult:
         return json.dumps(self.to_dict(), **kwargs)
 
     def _columns(self) -> dict[str, NDArray[Any]]:
-        lo, hi = self.ci()
+        lo, hi = self.ci(ONE_SIGMA)  # the dev_low_68/dev_high_68 columns
         cols: dict[str, NDArray[Any]] = {"tau": self.tau, "m": self.m, "n_terms": self.n_terms}
         var2 = self.var.reshape(self.tau.size, -1)
         parts = {
