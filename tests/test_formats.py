@@ -243,7 +243,7 @@ def test_matlab_default_noise_density_reads_as_n_over_sqrt2():
     (white,) = cfg.model("gyro").terms
     assert math.isclose(white.N, 0.1 / math.sqrt(2.0))  # 0.0707
     x = sim_laws.matlab_imu({"NoiseDensity": 0.1}, 10**5, 100.0, np.random.default_rng(8))
-    res = allanite.avar(x, 100.0, taus="octave")
+    res = allanite.avar(x, fs=100.0, taus="octave")
     i = int(np.argmin(np.abs(res.tau - 1.0)))
     lo, hi = res.var_ci(LEVEL)
     assert lo[i] < white.N**2 / res.tau[i] < hi[i]
@@ -295,7 +295,7 @@ def test_matlab_fractalcoef_is_flicker_over_the_stated_range(poles):
     rate, n, bi = 100.0, 2**18, 2e-3
     p = {"BiasInstability": bi, "Denominator": list(den)}
     x = sim_laws.matlab_imu(p, n, rate, np.random.default_rng(9))
-    res = allanite.avar(x, rate, taus="octave")
+    res = allanite.avar(x, fs=rate, taus="octave")
     keep = res.tau <= n / rate * 0.1
     lo, hi = res.var_ci(LEVEL)
     exact = bi**2 * sim_laws.filtered_white_avar([1.0], den, np.round(res.tau * rate))

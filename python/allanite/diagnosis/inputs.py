@@ -172,7 +172,7 @@ class SimSource:
         done = 0
         while done < count:
             k = min(batch, count - done)
-            block = simulate_model(self.model, n, self.fs, seed + done, channels=k)
+            block = simulate_model(self.model, n, self.fs, seed + done, n_channels=k)
             for j in range(k):
                 yield np.ascontiguousarray(block[:, j])
             done += k
@@ -209,15 +209,15 @@ def _smooth_spectrum(power: NDArray[np.float64]) -> NDArray[np.float64]:
 
 
 def simulate_model(
-    model: Any, n: int, fs: float, seed: int, *, channels: int = 1
+    model: Any, n: int, fs: float, seed: int, *, n_channels: int = 1
 ) -> NDArray[np.float64]:
-    """``channels`` independent rate records of ``n`` samples from a NoiseModel, ``(n, C)``.
+    """``n_channels`` independent rate records of ``n`` samples from a NoiseModel, ``(n, C)``.
 
     Tones above the Nyquist frequency are simulated aliased, as a real sampled sensor sees
     them.
     """
     out = np.asarray(
-        model.simulate(n, fs, n_channels=channels, seed=seed, allow_aliasing=True), dtype=np.float64
+        model.simulate(n, fs, n_channels=n_channels, seed=seed, allow_aliasing=True), dtype=np.float64
     )
     return out.reshape(n, -1)
 

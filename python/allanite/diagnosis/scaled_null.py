@@ -87,7 +87,7 @@ def _replicates(
     step = max(1, total // 10)
     while len(out) < count:
         k = min(batch, count - len(out))
-        block = simulate_model(model, n, fs, seed + len(out), channels=k)
+        block = simulate_model(model, n, fs, seed + len(out), n_channels=k)
         for j in range(k):
             out.append(features(np.ascontiguousarray(block[:, j])))
             i = done0 + len(out)
