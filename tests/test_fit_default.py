@@ -133,6 +133,56 @@ def test_ramp_cross_term_matches_monte_carlo():
     assert mc[-1] / noise_only[-1] > 1 + tol  # without it the longest tau is far off
 
 
+def test_six_axis_newcomer_record_keeps_the_random_walks(tmp_path, capsys):
+    # formerly (CLI, default fit): gyro K dropped on gx, gy and read as a ramp on gz; a ramp
+    # on az. K dominates at most the last half decade of the fitted taus (2000 s at 200 Hz):
+    # the ramp won on log det C alone (it has no variance of its own); it must now be
+    # significant against the random walk (allanite.fit.select._ramp_against_rrw)
+    from allanite.cli import main
+
+    fs, duration = 200.0, 2000.0
+    gyro = NoiseModel((White(N=0.01), RateRandomWalk(K=1e-4)), UNITS)
+    accel = NoiseModel((White(N=0.002), RateRandomWalk(K=5e-5)), {"rate": "m/s^2", "time": "s"})
+    g = np.asarray(gyro.simulate(fs=fs, duration=duration, channels=3, seed=1))
+    a = np.asarray(accel.simulate(fs=fs, duration=duration, channels=3, seed=2))
+    t = np.arange(g.shape[0]) / fs
+    path = tmp_path / "imu.csv"
+    np.savetxt(
+        path,
+        np.column_stack([t, g, a]),
+        delimiter=",",
+        header="t,gx,gy,gz,ax,ay,az",
+        comments="",
+        fmt="%.10g",
+    )
+    argv = ["fit", str(path), "--time-column", "t", "--channels", "gx,gy,gz,ax,ay,az"]
+    # 12 coefficients on one seed: 99.7 % (3 sigma) intervals, so that an honest fit fails
+    # the whole check with a few % probability (at 95 % that would be about 45 %)
+    argv += ["--units", "deg/s,m/s^2", "--json", "--level", "0.997"]
+    assert main(argv) == 0
+    channels = json.loads(capsys.readouterr().out)["channels"]
+    # truths in the displayed units: deg/sqrt(h), deg/h/sqrt(h); m/s/sqrt(h), m/s/h^1.5
+    truth = {"gyro": {"N": 0.01 * 60, "K": 1e-4 * 3600 * 60}}
+    truth["accel"] = {"N": 0.002 * 60, "K": 5e-5 * 3600 * 60}
+    for j, channel in enumerate(channels):
+        coef = {c["symbol"]: c for c in channel["coefficients"]}
+        sensor = "gyro" if j < 3 else "accel"
+        assert not channel["rejected"], channel
+        assert "R" not in coef, (channel["channel"], coef)
+        assert set(coef) <= {"N", "K"}, (channel["channel"], coef)
+        for symbol, c in coef.items():
+            assert c["low"] <= truth[sensor][symbol] <= c["high"], (channel["channel"], c)
+        assert "N" in coef
+        if "K" not in coef:
+            # only where the record cannot show it: the explicit N + K fit of the channel
+            # finds K below the selection's standard (penalty 9: three standard errors)
+            x = g[:, j] if j < 3 else a[:, j - 3]
+            explicit = fit(allanite.avar(x, fs, units="deg/s"), ["N", "K"])
+            assert explicit["K"].value < 3 * explicit["K"].stderr, explicit.format_table()
+    kept = [j for j, c in enumerate(channels) if any(x["symbol"] == "K" for x in c["coefficients"])]
+    assert kept == [2, 3, 4, 5]  # K resolved on gz and the three accelerometers
+
+
 def _rejected_record(tmp_path: Path) -> Path:
     # a Gauss-Markov process: no subset of Q, N, B, K, R describes its peaked Allan curve
     model = NoiseModel((GaussMarkov(sigma=0.1, tau_c=2.0), White(N=0.001)), UNITS)
