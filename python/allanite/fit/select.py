@@ -41,7 +41,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import stats
 
-from allanite.fit.gls import GLSData, GLSSolution, solve
+from allanite.fit.gls import GLSData, GLSSolution, _covariance, solve
 from allanite.fit.spec import TermSpec
 
 __all__ = ["Candidate", "n_params", "score", "select_terms"]
@@ -181,7 +181,13 @@ def _ramp_against_rrw(
         return None
     alt_specs = alt.solution.specs
     union = tuple(s for s in specs if s.cls.type in alternative | {RAMP})
+    # the covariance of the fitted alternative itself: the reweighting can stop with a
+    # covariance of another iterate (on a ramp record, N + K ended at K = 0 with the wide
+    # covariance of the slope-method start, and the ramp looked insignificant)
     cov0 = alt.solution.model_cov
+    if alt.solution.basis is not None:
+        own = _covariance(alt.solution.basis, alt.solution.theta)
+        cov0 = cov0 if own is None else own
     without = solve(alt_specs, data, edf, cov=cov0, misfit_level=0.0)
     with_ramp = solve(union, data, edf, cov=cov0, misfit_level=0.0)
     delta = float(without.chi2_fit - with_ramp.chi2_fit)
