@@ -106,6 +106,23 @@ def test_ramp_interval_carries_the_ramp_noise_cross_term():
     assert covered >= 2  # P(<= 1 of 3 | 95 %) = 0.007
 
 
+def test_a_clear_ramp_survives_the_test_against_the_random_walk():
+    # same record, seed 111: the N + K alternative's reweighting stopped at K = 0 with the
+    # wide covariance of its start, under which the ramp looked insignificant (delta chi2
+    # 2.9) and K replaced a ramp 1000 times above the noise; the test now uses the
+    # covariance of the fitted alternative itself
+    fs, n, big_r = 200.0, 2_000_000, 1e-5
+    rng = np.random.default_rng(111)
+    x = 0.01 * math.sqrt(fs) * rng.standard_normal(n) + big_r * np.arange(n) / fs
+    f = fit(allanite.avar(x, fs, units="deg/s"))
+    assert set(f.coefficients) == {"N", "R"}
+    (entry,) = [s for s in f.selection if s["term"] == "ramp"]
+    test = entry["ramp_test"]
+    assert test["kept"]
+    assert test["alternative"] == ["rrw", "white"]
+    assert test["delta_chi2"] > 100 * 9.0  # far beyond the penalty, not a close call
+
+
 def test_ramp_cross_term_matches_monte_carlo():
     # rate random walk + ramp: the cross term doubles the variance at the longest taus
     dt, n, reps = 0.01, 20_000, 300
