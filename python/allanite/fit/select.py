@@ -19,7 +19,17 @@ number of parameters. The choice is lexicographic:
    wins; the fit then reports itself as rejected.
 
 So the result is never rejected when a subset that is not rejected exists, and it never has
-a worse score than any subset evaluated, simpler ones included.
+a worse score than any subset evaluated, simpler ones included, with one exception:
+
+3. a chosen ramp must be significant against the rate random walk, its stationary
+   look-alike at the end of the tau range (:func:`_ramp_against_rrw`): the ramp has no
+   variance of its own, so the ``log det C`` of the score favours it wherever the two
+   cannot be told apart, typically when either dominates only the last, low-EDF taus.
+   If adding the ramp to the alternative (ramp replaced by K) lowers the chi-square under
+   the alternative's covariance by less than the penalty, the alternative is returned
+   (when it is not rejected). Where the record cannot tell them apart, K is the safer
+   reading: a random walk fitted to a ramp is a conservative model of it for a filter,
+   a ramp fitted to a random walk sets K = 0.
 
 The reweighted fit of one subset is not convex (the covariance depends on the estimate), so
 each subset is fitted from several starting covariances and the best score is kept: the
