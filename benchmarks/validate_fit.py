@@ -47,7 +47,7 @@ import numpy as np
 import allanite
 from allanite.fit import fit
 from allanite.model import NoiseModel
-from allanite.terms import Flicker, Quantization, RateRamp, RateRandomWalk, Term, White
+from allanite.terms import Flicker, Quantization, RateRamp, RateRandomWalk, White
 from allanite.terms.flicker import PLATEAU
 
 RESULTS = Path(__file__).resolve().parent / "results"
@@ -148,7 +148,7 @@ def design(case: Case) -> NoiseModel:
         coef[cur] = math.sqrt(level / _avar_unit(cur, tau))
         log_tau += spans[j] if j < k - 1 else 0.0
     factor = 1.0 if case.unit == "deg/s" else math.pi / 180.0
-    build: dict[str, type[Term]] = {
+    build: dict[str, Any] = {
         "Q": Quantization,
         "N": White,
         "B": Flicker,
@@ -163,6 +163,7 @@ def grid(quick: bool, long: bool = True) -> list[Case]:
     """The designed grid (deterministic); ``long`` appends the 1e8-sample records (full grid)."""
     rng = np.random.default_rng(12)
     cases: list[Case] = []
+    lengths: tuple[int, ...]
     if quick:
         lengths, rates, reps = (100_000, 300_000), (10.0, 100.0, 1000.0, 10_000.0), 1
     else:
@@ -232,7 +233,13 @@ def run_case(case: Case) -> dict[str, Any]:
         dtype=np.float64,
     ).ravel()
     t1 = time.perf_counter()
-    res = allanite.avar(x, case.fs, input=case.input, taus=case.taus, units=case.unit)
+    res = allanite.avar(
+        x,
+        case.fs,
+        input=case.input,  # type: ignore[arg-type]
+        taus=case.taus,
+        units=case.unit,
+    )
     f = fit(res)
     t2 = time.perf_counter()
     truth = model.coefficients()
