@@ -106,6 +106,23 @@ def test_ramp_interval_carries_the_ramp_noise_cross_term():
     assert covered >= 2  # P(<= 1 of 3 | 95 %) = 0.007
 
 
+def test_a_clear_ramp_survives_the_test_against_the_random_walk():
+    # same record, seed 111: the N + K alternative's reweighting stopped at K = 0 with the
+    # wide covariance of its start, under which the ramp looked insignificant (delta chi2
+    # 2.9) and K replaced a ramp 1000 times above the noise; the test now uses the
+    # covariance of the fitted alternative itself
+    fs, n, big_r = 200.0, 2_000_000, 1e-5
+    rng = np.random.default_rng(111)
+    x = 0.01 * math.sqrt(fs) * rng.standard_normal(n) + big_r * np.arange(n) / fs
+    f = fit(allanite.avar(x, fs=fs, units="deg/s"))
+    assert set(f.coefficients) == {"N", "R"}
+    (entry,) = [s for s in f.selection if s["term"] == "ramp"]
+    test = entry["ramp_test"]
+    assert test["kept"]
+    assert test["alternative"] == ["rrw", "white"]
+    assert test["delta_chi2"] > 100 * 9.0  # far beyond the penalty, not a close call
+
+
 def test_ramp_cross_term_matches_monte_carlo():
     # rate random walk + ramp: the cross term doubles the variance at the longest taus
     dt, n, reps = 0.01, 20_000, 300
@@ -131,6 +148,56 @@ def test_ramp_cross_term_matches_monte_carlo():
     tol = 4 * math.sqrt(2 / (reps - 1)) + 0.05
     assert np.all(np.abs(mc / with_cross - 1) < tol), mc / with_cross
     assert mc[-1] / noise_only[-1] > 1 + tol  # without it the longest tau is far off
+
+
+def test_six_axis_newcomer_record_keeps_the_random_walks(tmp_path, capsys):
+    # formerly (CLI, default fit): gyro K dropped on gx, gy and read as a ramp on gz; a ramp
+    # on az. K dominates at most the last half decade of the fitted taus (2000 s at 200 Hz):
+    # the ramp won on log det C alone (it has no variance of its own); it must now be
+    # significant against the random walk (allanite.fit.select._ramp_against_rrw)
+    from allanite.cli import main
+
+    fs, duration = 200.0, 2000.0
+    gyro = NoiseModel((White(N=0.01), RateRandomWalk(K=1e-4)), UNITS)
+    accel = NoiseModel((White(N=0.002), RateRandomWalk(K=5e-5)), {"rate": "m/s^2", "time": "s"})
+    g = np.asarray(gyro.simulate(fs=fs, duration=duration, n_channels=3, seed=1))
+    a = np.asarray(accel.simulate(fs=fs, duration=duration, n_channels=3, seed=2))
+    t = np.arange(g.shape[0]) / fs
+    path = tmp_path / "imu.csv"
+    np.savetxt(
+        path,
+        np.column_stack([t, g, a]),
+        delimiter=",",
+        header="t,gx,gy,gz,ax,ay,az",
+        comments="",
+        fmt="%.10g",
+    )
+    argv = ["fit", str(path), "--time-column", "t", "--channels", "gx,gy,gz,ax,ay,az"]
+    # 12 coefficients on one seed: 99.7 % (3 sigma) intervals, so that an honest fit fails
+    # the whole check with a few % probability (at 95 % that would be about 45 %)
+    argv += ["--units", "deg/s,m/s^2", "--json", "--level", "0.997"]
+    assert main(argv) == 0
+    channels = json.loads(capsys.readouterr().out)["channels"]
+    # truths in the displayed units: deg/sqrt(h), deg/h/sqrt(h); m/s/sqrt(h), m/s/h^1.5
+    truth = {"gyro": {"N": 0.01 * 60, "K": 1e-4 * 3600 * 60}}
+    truth["accel"] = {"N": 0.002 * 60, "K": 5e-5 * 3600 * 60}
+    for j, channel in enumerate(channels):
+        coef = {c["symbol"]: c for c in channel["coefficients"]}
+        sensor = "gyro" if j < 3 else "accel"
+        assert not channel["rejected"], channel
+        assert "R" not in coef, (channel["channel"], coef)
+        assert set(coef) <= {"N", "K"}, (channel["channel"], coef)
+        for symbol, c in coef.items():
+            assert c["low"] <= truth[sensor][symbol] <= c["high"], (channel["channel"], c)
+        assert "N" in coef
+        if "K" not in coef:
+            # only where the record cannot show it: the explicit N + K fit of the channel
+            # finds K below the selection's standard (penalty 9: three standard errors)
+            x = g[:, j] if j < 3 else a[:, j - 3]
+            explicit = fit(allanite.avar(x, fs=fs, units="deg/s"), ["N", "K"])
+            assert explicit["K"].value < 3 * explicit["K"].stderr, explicit.format_table()
+    kept = [j for j, c in enumerate(channels) if any(x["symbol"] == "K" for x in c["coefficients"])]
+    assert kept == [2, 3, 4, 5]  # K resolved on gz and the three accelerometers
 
 
 def _rejected_record(tmp_path: Path) -> Path:

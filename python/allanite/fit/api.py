@@ -325,7 +325,10 @@ def fit(
         among the subsets the goodness-of-fit test does not reject, the lowest penalized
         Gaussian -2 log-likelihood ``chi2 + log det C + penalty * parameters`` wins (so absent
         terms are not invented); only when every subset is rejected is the best one with a
-        model discrepancy returned, and ``FitResult.rejected`` says so. Every evaluated
+        model discrepancy returned, and ``FitResult.rejected`` says so. A chosen ramp must
+        also lower the chi-square by ``penalty`` against the rate random walk under the
+        no-ramp covariance, else K is kept (the ramp, without variance of its own, wins the
+        likelihood where the two cannot be told apart). Every evaluated
         subset is in ``FitResult.meta["subsets"]``, the per-term gains in
         ``FitResult.selection``.
         Or a list of names (``"white"``/``"N"``, ``"quantization"``/``"Q"``, ``"flicker"``/

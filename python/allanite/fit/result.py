@@ -126,7 +126,9 @@ class FitResult:
     selection : tuple of dict
         For ``terms="auto"``: each candidate with ``score_gain``, how much the penalized
         -2 log-likelihood drops when the term is added to the chosen terms without it
-        (positive for a kept term), and whether it was kept. ``meta["subsets"]`` lists every
+        (positive for a kept term), and whether it was kept; when a ramp was chosen, its
+        entry also holds ``ramp_test`` (``alternative``, ``delta_chi2``, ``kept``: the ramp's
+        significance against the rate random walk). ``meta["subsets"]`` lists every
         subset evaluated by the search (:mod:`allanite.fit.select`) with its score, chi2,
         p-value and whether it is rejected.
     discrepancy : float
