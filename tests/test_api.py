@@ -168,3 +168,10 @@ def test_read_record_takes_one_options_object_or_its_fields(tmp_path):
     assert read_record(path, options, fs=25.0).fs == 25.0  # keywords override the object
     with pytest.raises(TypeError, match="unknown reader option"):
         read_record(path, sampling_rate=50.0)
+
+
+def test_batch_takes_fs_by_keyword_too():
+    params = inspect.signature(allanite.batch).parameters
+    assert params["fs"].kind is inspect.Parameter.KEYWORD_ONLY
+    with pytest.raises(TypeError, match="positional"):
+        allanite.batch([_white()], 10.0)
