@@ -119,7 +119,9 @@ def _fit_resonance(
 
     def resid(p: NDArray[np.float64]) -> NDArray[np.float64]:
         term = Resonance(
-            N=float(np.exp(p[0])), frequency=float(np.exp(p[1])), damping=float(1 / (1 + np.exp(-p[2])))
+            N=float(np.exp(p[0])),
+            frequency=float(np.exp(p[1])),
+            damping=float(1 / (1 + np.exp(-p[2]))),
         )
         return np.log(sim + term.psd_sampled(fb, dt)) - target
 

@@ -10,6 +10,12 @@ ratio test ``Delta T > chi2_{1-alpha}(k)`` or significant evidence explained, wi
 Selection stops when the tau view is consistent with chance and no significant evidence is
 left, when no candidate passes the test, or after :data:`MAX_EFFECTS` effects.
 
+Exchange: each chosen effect is then refitted, with every candidate, on top of the others
+(the same ranking against the evidence the others leave); when another candidate ranks
+first it replaces the effect (greedy forward selection can start from an effect that only
+mimics two true ones, e.g. a rate random walk for a ramp plus Gauss-Markov noise). Two passes
+at most.
+
 Backward check: an effect is dropped again when removing it (the others kept) raises ``T`` by
 less than the ``chi2_{1-alpha}(k)`` quantile and it is the only one to explain none of the
 evidence, i.e. it no longer earns its parameters in the presence of the later effects.
@@ -172,6 +178,38 @@ def explain(
         extras.append(_extra(nxt, tm_bg))
         explained |= set(nxt.evidence.get("explained", []))
         gaps.append(tm.gap(np.sum(extras, axis=0)))
+    # exchange: each effect refitted against every candidate on top of the others
+    for _ in range(2):
+        swapped = False
+        for i in range(len(chosen)):
+            others_c = [c for j, c in enumerate(chosen_c) if j != i]
+            others = [e for j, e in enumerate(extras) if j != i]
+            bg = np.sum(others, axis=0) if others else np.zeros_like(tm.sim_avar)
+            tm_bg = with_background(tm, bg)
+            told = set().union(
+                *(set(a.evidence.get("explained", [])) for j, a in enumerate(chosen) if j != i)
+            )
+            left = {e: bool(s) and e not in told for e, s in significant.items()}
+            pool = [c for c in candidates if not _same_slot(c, others_c)]
+            kept = rank(
+                pool,
+                tm_bg,
+                alpha=alpha,
+                evidence_p=evidence_p,
+                significant=left,
+                time_view=time_view,
+                duration=duration,
+            )
+            worse = float(stats.chi2.isf(alpha, 1))
+            kept = [a for a in kept if a.evidence["tau"]["delta_T"] > -worse]
+            if not kept or kept[0].effect == chosen[i].effect:
+                continue
+            chosen[i], chosen_c[i] = kept[0], by_effect[kept[0].effect]
+            extras[i] = _extra(kept[0], tm_bg)
+            swapped = True
+        if not swapped:
+            break
+    gaps = [gaps[0]] + [tm.gap(np.sum(extras[: j + 1], axis=0)) for j in range(len(extras))]
     # backward check
     i = 0
     while len(chosen) > 1 and i < len(chosen):
