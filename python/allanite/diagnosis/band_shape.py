@@ -13,8 +13,11 @@ not. Two effects make such a shape, and the time view tells them apart:
   (``A^2 / 2``);
 * **resonance** -- otherwise: a second-order band-pass (:class:`~allanite.terms.Resonance`)
   whose frequency, damping and level are fitted by least squares to the log PSD of the
-  simulated sensor plus the resonance against the real log PSD over the band (started from
-  the peak, the half-power width ``2 zeta f0`` and ``N = sqrt(peak / 2)``).
+  simulated sensor plus a flat local continuum plus the resonance against the real log PSD
+  around the band (started from the peak, the half-power width ``2 zeta f0`` and ``N =
+  sqrt(peak / 2)``); the continuum (e.g. more white noise) is left to the other candidates.
+  The peak must earn its three parameters: an F test of the fit against the flat continuum
+  alone at level :data:`PEAK_ALPHA` (a flat excess such as bursts has no resonance).
 
 The candidates then fit only their amplitude on the tau view, like the sinusoid of a
 detected line.
@@ -26,17 +29,19 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy import ndimage, optimize, signal
+from scipy import ndimage, optimize, signal, stats
 
 from allanite.diagnosis.frequency_view import FrequencyView
 from allanite.terms import Resonance
 
-__all__ = ["MIN_BINS", "N_SEGMENTS", "BandShape", "band_shape"]
+__all__ = ["MIN_BINS", "N_SEGMENTS", "PEAK_ALPHA", "BandShape", "band_shape"]
 
 #: spectrogram segments of the drifting-line test
 N_SEGMENTS = 16
 #: a drifting line moves by more than this many spectrogram bins over the record
 MIN_BINS = 3.0
+#: level of the F test of a resonance peak against a flat excess on the log PSD
+PEAK_ALPHA = 1e-3
 
 
 @dataclass(frozen=True)
@@ -123,13 +128,25 @@ def _fit_resonance(
             frequency=float(np.exp(p[1])),
             damping=float(1 / (1 + np.exp(-p[2]))),
         )
-        return np.log(sim + term.psd_sampled(fb, dt)) - target
+        return np.log(sim + np.exp(p[3]) + term.psd_sampled(fb, dt)) - target
 
-    start = np.array([np.log(n0), np.log(f0), np.log(zeta0 / (1 - zeta0))])
+    # the fourth parameter is a flat excess under the peak (more white noise, say): the local
+    # continuum, which must not pull the resonance's frequency and width
+    floor = max(float(np.median(exc[lo : hi + 1])), 0.01 * float(np.median(sim)))
+    start = np.array([np.log(n0), np.log(f0), np.log(zeta0 / (1 - zeta0)), np.log(floor)])
     try:
         with np.errstate(all="ignore"):
-            res = optimize.least_squares(resid, start, method="lm", max_nfev=400)
+            res = optimize.least_squares(resid, start, method="lm", max_nfev=800)
     except (ValueError, FloatingPointError):
+        return None
+    # the peak must earn its three parameters over a flat excess alone (F test on the log PSD)
+    flat = np.log(sim[:, None] + np.exp(np.linspace(-12.0, 2.0, 141))[None, :] * np.median(sim))
+    rss0 = float(np.min(np.sum((flat - target[:, None]) ** 2, axis=0)))
+    rss1 = float(np.sum(res.fun**2))
+    dof = fb.size - 4
+    if dof < 4 or rss1 <= 0:
+        return None
+    if stats.f.sf((rss0 - rss1) / 3.0 / (rss1 / dof), 3, dof) > PEAK_ALPHA:
         return None
     n, freq, zeta = np.exp(res.x[0]), np.exp(res.x[1]), 1 / (1 + np.exp(-res.x[2]))
     if not (np.isfinite(n) and f[0] <= freq <= 0.5 / dt and 0.005 <= zeta <= 0.7):
