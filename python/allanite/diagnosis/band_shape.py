@@ -64,13 +64,15 @@ class BandShape:
     params: dict[str, float]
 
 
-def _half_power(exc: NDArray[np.float64], k: int) -> tuple[int, int] | None:
-    half = 0.5 * exc[k]
-    left = np.flatnonzero(exc[:k] < half)
-    right = np.flatnonzero(exc[k + 1 :] < half)
+def _half_power(exc: NDArray[np.float64], k: int, run: int = 4) -> tuple[int, int] | None:
+    """Nearest bins on both sides of ``k`` where ``run`` consecutive bins lie below half."""
+    below = (exc < 0.5 * exc[k]).astype(np.int64)
+    full = np.convolve(below, np.ones(run, dtype=np.int64), mode="valid") == run  # [i, i+run)
+    left = np.flatnonzero(full[: max(k - run + 1, 0)])
+    right = np.flatnonzero(full[k + 1 :])
     if left.size == 0 or right.size == 0:
         return None
-    return int(left[-1]), int(k + 1 + right[0])
+    return int(left[-1] + run - 1), int(k + 1 + right[0])
 
 
 def _ridge(
@@ -117,7 +119,9 @@ def _fit_resonance(
     zeta0 = float(np.clip((f[b] - f[a]) / (2.0 * f0), 0.01, 0.9))
     n0 = float(np.sqrt(max(exc[k], 1e-300) / 2.0))
     span = b - a + 1
-    lo, hi = max(a - 2 * span, 0), min(b + 2 * span, f.size - 1)
+    # the fit sees the continuum on both sides: at least f0/2 .. 3 f0/2
+    lo = max(min(a - 2 * span, int(np.searchsorted(f, 0.5 * f0))), 0)
+    hi = min(max(b + 2 * span, int(np.searchsorted(f, 1.5 * f0))), f.size - 1)
     fb = f[lo : hi + 1]
     target = np.log(fv.real_psd[lo : hi + 1])
     sim = fv.sim_psd[lo : hi + 1]
@@ -172,7 +176,9 @@ def band_shape(x: NDArray[np.float64], fs: float, fv: FrequencyView) -> BandShap
     if up.size == 0:
         return None
     f = fv.f
-    exc = ndimage.median_filter(fv.real_psd - fv.sim_psd, size=5, mode="nearest")
+    # a running median over 1/128 of the spectrum: Welch bins scatter by ~1/sqrt(nu) each
+    size = max(5, f.size // 128)
+    exc = ndimage.median_filter(fv.real_psd - fv.sim_psd, size=size, mode="nearest")
     in_band = np.zeros(f.size, dtype=bool)
     for i in up:
         in_band |= (f >= fv.band_edges_hz[i]) & (f < fv.band_edges_hz[i + 1])

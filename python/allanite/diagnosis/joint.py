@@ -260,9 +260,7 @@ def explain(
                 alpha=alpha,
                 evidence_p=evidence_p,
                 significant=left,
-                time_view=with_level_background(
-                    time_view, others_a, others_c, tm, duration, cache
-                ),
+                time_view=with_level_background(time_view, others_a, others_c, tm, duration, cache),
                 duration=duration,
             )
             worse = float(stats.chi2.isf(alpha, 1))
