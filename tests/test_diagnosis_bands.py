@@ -194,3 +194,26 @@ def test_resonance_and_more_white_are_both_named():
     assert named & {"white", "rescale:white"}
     res = next(a for a in d.explanation.effects if a.effect == "resonance")
     assert res.params["frequency"] == pytest.approx(20.0, rel=0.05)
+
+
+def test_warmup_under_gauss_markov_noise_is_named_with_it():
+    """The level shape is judged against the Gauss-Markov noise already in the set.
+
+    Without the chosen effect's slow noise in the window-mean spreads, a rate random walk
+    (which explains the level wander by itself) was chosen instead of the warm-up.
+    """
+    from allanite.terms import Flicker, GaussMarkov, Quantization, WarmUp
+
+    n = 2**16
+    base = NoiseModel(
+        (White(N=0.05), Quantization(Q=0.002), Flicker(B=0.01), RateRandomWalk(K=0.0008)), UNITS
+    )
+    warm = WarmUp(amplitude=0.5553, tau_w=16.384, duration=n / FS)
+    real = base.simulate(n, FS, seed=1153)
+    real = real + NoiseModel((warm,), UNITS).simulate(n, FS, seed=1160, allow_aliasing=True)
+    gm = GaussMarkov(sigma=0.04524, tau_c=2.0)
+    real = real + NoiseModel((gm,), UNITS).simulate(n, FS, seed=1166, allow_aliasing=True)
+    d = diagnose(real, base, FS, units="deg/s", holdout=0.5, n_mc=40, seed=1154)
+    assert d.explanation is not None
+    named = {a.effect for a in d.explanation.effects}
+    assert {"warmup", "markov"} <= named
