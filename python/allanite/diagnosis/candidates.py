@@ -20,8 +20,8 @@ telegraph      kurtosis of block means, dyn, jump, level       kurtosis of block
 bursts         hf, kurtosis of differences, spike statistic    hf (noise-level changes)
 resonance      --                                              a band-pass shaped excess
                                                                whose peak stays put
-drifting_line  --                                              a band-pass shaped excess
-                                                               whose peak moves linearly
+drifting_line  kurtosis of differences and of block means      a band-pass shaped excess
+               (a sinusoid is platykurtic)                     whose peak moves linearly
 =============  ==============================================  ==========================
 
 The last two come from :func:`allanite.diagnosis.band_shape.band_shape` (frequency view and
@@ -79,6 +79,9 @@ EXPLAINS: dict[str, frozenset[str]] = {
     "spikes": frozenset({"spike", "kurt_hf", "hf"}),
     "telegraph": frozenset({"kurt_lf", "dyn", "jump", "level"}),
     "bursts": frozenset({"hf", "kurt_hf", "spike"}),
+    # a sinusoid's amplitude follows the arcsine law: platykurtic samples, differences and
+    # short block means
+    "drifting_line": frozenset({"kurt_hf", "kurt_lf"}),
 }
 
 #: evidence an effect needs before it is proposed (any of)
