@@ -10,6 +10,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from allanite.diagnosis.analysis import Analysis, Progress, analyze
 from allanite.diagnosis.attribution import rank
+from allanite.diagnosis.band_shape import band_shape
 from allanite.diagnosis.candidates import candidate_library, check_effects
 from allanite.diagnosis.holdout import holdout_check, holdout_set, tau_model_for
 from allanite.diagnosis.inputs import (
@@ -201,6 +202,7 @@ def diagnose(
             spikes=spikes,
             effects=effects,
             bursts=_bursts(analysis.time),
+            band=band_shape(x_fit, rate, analysis.frequency),
         )
         # the same calibrated test ranks single effects and selects the joint set
         test: dict[str, Any] = {
