@@ -421,7 +421,7 @@ def pair_clear(case: Case, real: np.ndarray, effects: tuple[Any, Any], seed: int
     source = SimSource(fs=case.fs, model=case.base)
     tm = tau_model_for(real[:half], source, n_mc=40, seed=seed + 3)
     m = np.rint(tm.tau * case.fs).astype(np.int64)
-    avars = [allanite.avar(e[:half], case.fs, taus=m / case.fs).var for e in effects]
+    avars = [allanite.avar(e[:half], fs=case.fs, taus=m / case.fs).var for e in effects]
     names = str(case.effect)[5:].split("+")
     terms = (case.extra, case.extra2)
     out: dict[str, Any] = {}

@@ -49,10 +49,10 @@ def _sampled_psd_integral(term, m: int, breaks=()) -> float:
 
 def _channel_ratio(term, n: int, taus: np.ndarray, channels: int = 8, seed: int = 5):
     """Mean over channels of measured / exact AVAR and its standard error."""
-    x = NoiseModel((term,), UNITS).simulate(n, FS, seed=seed, channels=channels)
+    x = NoiseModel((term,), UNITS).simulate(n, FS, seed=seed, n_channels=channels)
     x = np.asarray(x).reshape(n, channels)
     exact = term.avar(taus, DT)
-    r = np.array([allanite.avar(x[:, c], FS, taus=taus).var / exact for c in range(channels)])
+    r = np.array([allanite.avar(x[:, c], fs=FS, taus=taus).var / exact for c in range(channels)])
     return r.mean(axis=0), r.std(axis=0, ddof=1) / np.sqrt(channels)
 
 
