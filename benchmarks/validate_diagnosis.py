@@ -358,17 +358,17 @@ def simulate_case(case: Case, seed: int) -> tuple[np.ndarray, np.ndarray | None,
     """The real record and the effects' own samples (for the truth)."""
     model = case.real_model or case.base
     real = case.base_record if case.base_record is not None else model.simulate(
-        case.n, case.fs, seed=seed
+        case.n, fs=case.fs, seed=seed
     )  # fmt: skip
     effect = effect2 = None
     if case.extra is not None:
         effect = NoiseModel((case.extra,), UNITS).simulate(
-            case.n, case.fs, seed=seed + 7, allow_aliasing=True
+            case.n, fs=case.fs, seed=seed + 7, allow_aliasing=True
         )
         real = real + effect
     if case.extra2 is not None:
         effect2 = NoiseModel((case.extra2,), UNITS).simulate(
-            case.n, case.fs, seed=seed + 13, allow_aliasing=True
+            case.n, fs=case.fs, seed=seed + 13, allow_aliasing=True
         )
         real = real + effect2
     if case.transform is not None:
@@ -445,7 +445,7 @@ def pair_clear(case: Case, real: np.ndarray, effects: tuple[Any, Any], seed: int
 def evaluate(case: Case, seed: int, n_mc: int) -> dict[str, Any]:
     real, effect, effect2 = simulate_case(case, seed)
     t0 = time.perf_counter()
-    d = diagnose(real, case.base, case.fs, units="deg/s", holdout=0.5, n_mc=n_mc, seed=seed + 1)
+    d = diagnose(real, case.base, fs=case.fs, units="deg/s", holdout=0.5, n_mc=n_mc, seed=seed + 1)
     elapsed = time.perf_counter() - t0
     row: dict[str, Any] = {
         "case": case.name,

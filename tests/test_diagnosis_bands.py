@@ -49,7 +49,7 @@ def _sampled_psd_integral(term, m: int, breaks=()) -> float:
 
 def _channel_ratio(term, n: int, taus: np.ndarray, channels: int = 8, seed: int = 5):
     """Mean over channels of measured / exact AVAR and its standard error."""
-    x = NoiseModel((term,), UNITS).simulate(n, FS, seed=seed, n_channels=channels)
+    x = NoiseModel((term,), UNITS).simulate(n, fs=FS, seed=seed, n_channels=channels)
     x = np.asarray(x).reshape(n, channels)
     exact = term.avar(taus, DT)
     r = np.array([allanite.avar(x[:, c], fs=FS, taus=taus).var / exact for c in range(channels)])
@@ -154,7 +154,7 @@ def _view(x: np.ndarray, lines: list | None = None):
 
 
 def test_band_shape_finds_a_resonance():
-    x = BASE.plus(Resonance(N=0.1, frequency=20.0, damping=0.1)).simulate(N, FS, seed=11)
+    x = BASE.plus(Resonance(N=0.1, frequency=20.0, damping=0.1)).simulate(N, fs=FS, seed=11)
     shape = _view(np.asarray(x, dtype=float))
     assert shape is not None
     assert shape.kind == "resonance"
@@ -164,7 +164,7 @@ def test_band_shape_finds_a_resonance():
 
 def test_band_shape_finds_a_drifting_line():
     line = DriftingLine(amplitude=0.3, f_start=5.0, f_end=8.0, duration=N / FS)
-    x = BASE.plus(line).simulate(N, FS, seed=12)
+    x = BASE.plus(line).simulate(N, fs=FS, seed=12)
     shape = _view(np.asarray(x, dtype=float))
     assert shape is not None
     assert shape.kind == "drifting_line"
@@ -174,7 +174,7 @@ def test_band_shape_finds_a_drifting_line():
 
 
 def test_band_shape_none_on_null_and_on_bursts():
-    x = np.asarray(BASE.simulate(N, FS, seed=13), dtype=float)
+    x = np.asarray(BASE.simulate(N, fs=FS, seed=13), dtype=float)
     assert _view(x) is None
     y = x.copy()
     rng = np.random.default_rng(3)
@@ -190,8 +190,8 @@ def test_band_shape_none_on_null_and_on_bursts():
 
 def test_resonance_and_more_white_are_both_named():
     real = BASE.plus(Resonance(N=0.1, frequency=20.0, damping=0.1)).plus(White(N=0.08))
-    x = real.simulate(2 * N, FS, seed=21)
-    d = diagnose(x, BASE, FS, units="deg/s", n_mc=30, seed=4)
+    x = real.simulate(2 * N, fs=FS, seed=21)
+    d = diagnose(x, BASE, fs=FS, units="deg/s", n_mc=30, seed=4)
     assert d.explanation is not None
     named = {a.effect for a in d.explanation.effects}
     assert "resonance" in named
@@ -213,11 +213,11 @@ def test_warmup_under_gauss_markov_noise_is_named_with_it():
         (White(N=0.05), Quantization(Q=0.002), Flicker(B=0.01), RateRandomWalk(K=0.0008)), UNITS
     )
     warm = WarmUp(amplitude=0.5553, tau_w=16.384, duration=n / FS)
-    real = base.simulate(n, FS, seed=1153)
-    real = real + NoiseModel((warm,), UNITS).simulate(n, FS, seed=1160, allow_aliasing=True)
+    real = base.simulate(n, fs=FS, seed=1153)
+    real = real + NoiseModel((warm,), UNITS).simulate(n, fs=FS, seed=1160, allow_aliasing=True)
     gm = GaussMarkov(sigma=0.04524, tau_c=2.0)
-    real = real + NoiseModel((gm,), UNITS).simulate(n, FS, seed=1166, allow_aliasing=True)
-    d = diagnose(real, base, FS, units="deg/s", holdout=0.5, n_mc=40, seed=1154)
+    real = real + NoiseModel((gm,), UNITS).simulate(n, fs=FS, seed=1166, allow_aliasing=True)
+    d = diagnose(real, base, fs=FS, units="deg/s", holdout=0.5, n_mc=40, seed=1154)
     assert d.explanation is not None
     named = {a.effect for a in d.explanation.effects}
     assert {"warmup", "markov"} <= named
