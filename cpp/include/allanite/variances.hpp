@@ -41,7 +41,10 @@
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__)
 #define ALLANITE_TARGET_CLONES __attribute__((target_clones("avx2", "default")))
 #define ALLANITE_ALWAYS_INLINE inline __attribute__((always_inline))
+// for 4-lane bodies that vectorise as they are (SLP), where loop vectorisation adds shuffles
+#define ALLANITE_SLP_ONLY __attribute__((optimize("no-tree-loop-vectorize")))
 #else
+#define ALLANITE_SLP_ONLY
 #define ALLANITE_TARGET_CLONES
 #define ALLANITE_ALWAYS_INLINE inline
 #endif
