@@ -33,8 +33,6 @@ import argparse
 import json
 import os
 import platform
-import time
-from collections.abc import Callable
 from pathlib import Path
 from typing import Any, Literal
 
@@ -43,6 +41,7 @@ import numpy as np
 import allanite
 from allanite import _core, reference
 from allanite.taus import log_grid
+from bench_core import _best  # the benchmarks' one best-of-N timer (same folder)
 
 try:  # the identification moves with the variance package; either path measures the same code
     from allanite.variance.edf import identify_alpha  # type: ignore[import-not-found,unused-ignore]
@@ -58,15 +57,6 @@ GOAL_OVERLAPPING_LARGE = 20.0  # at 1e7 samples and 100 log taus
 GOAL_PER_TAU = 2.0
 GOAL_IDENTIFICATION = 0.5
 ORACLE_MODIFIED_MAX_M = 64
-
-
-def _best(fn: Callable[[], Any], repeat: int) -> tuple[float, Any]:
-    best, out = float("inf"), None
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        out = fn()
-        best = min(best, time.perf_counter() - t0)
-    return best, out
 
 
 def copy_bandwidth(n_bytes: int, repeat: int) -> float:
