@@ -24,7 +24,8 @@ before and after each record size, since the machine may be shared.
 
 Writes benchmarks/results/bench_kinds.json and .md.
 
-Usage: ``python benchmarks/bench_kinds.py [--sizes 1000000:50 10000000:100] [--repeat 3]``.
+Usage: ``python benchmarks/bench_kinds.py [--sizes 1000000:50 10000000:100:1] [--repeat 3]``
+(``N:points[:repeat]``; the default runs 1e7 samples once).
 """
 
 from __future__ import annotations
@@ -217,7 +218,7 @@ def markdown(records: list[dict[str, Any]]) -> str:
         load = rec["load_average_1min"]
         lines += [
             f"## N = {rec['n_samples']:,}, {rec['n_taus']} taus (m = {rec['m_min']} .. "
-            f"{rec['m_max']}), {rec['threads']} threads",
+            f"{rec['m_max']}), {rec['threads']} threads, best of {rec['repeat']}",
             "",
             f"load average (1 min) {load['before']:.2f} before, {load['after']:.2f} after; "
             f"numpy copy bandwidth {rec['copy_bandwidth_GBps']:.1f} GB/s; phase "
@@ -256,8 +257,8 @@ def main() -> None:
     parser.add_argument(
         "--sizes",
         nargs="+",
-        default=["1000000:50", "10000000:100"],
-        help="record sizes as N:points of the log grid",
+        default=["1000000:50", "10000000:100:1"],
+        help="record sizes as N:points of the log grid[:repeat]",
     )
     parser.add_argument("--repeat", type=int, default=3, help="best of this many runs")
     parser.add_argument("--threads", type=int, default=0, help="worker threads (0: all cores)")
@@ -268,14 +269,16 @@ def main() -> None:
 
     records = []
     for spec in args.sizes:
-        n, points = (int(float(v)) for v in spec.split(":"))
+        fields = [int(float(v)) for v in spec.split(":")]
+        n, points = fields[0], fields[1]
+        repeat = fields[2] if len(fields) > 2 else args.repeat
         threads = args.threads if args.threads > 0 else (os.cpu_count() or 1)
-        rec = bench_size(n, points, args.repeat, threads, oracle=not args.no_oracle)
+        rec = bench_size(n, points, repeat, threads, oracle=not args.no_oracle)
+        rec["repeat"] = repeat
         records.append(rec)
         print(markdown([rec]), flush=True)
     result = {
         "benchmark": "every variance kind: allanite vs allantools, oracle and memory floor",
-        "repeat": args.repeat,
         "records": records,
         "machine": {
             "python": platform.python_version(),
