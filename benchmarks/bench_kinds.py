@@ -10,7 +10,7 @@ Hadamard and total:
   and ``identification`` (``identify_alpha`` on the same phase, lag-1 and B1/R(n) passes);
 * ``allantools``: ``oadev``/``mdev``/``ohdev``/``totdev`` on the same frequency data and taus;
 * ``reference``: the numpy oracle (:mod:`allanite.reference`, vectorised per tau; its modified
-  variance is O(N m) per tau, so there only the taus with m <= 64 are timed, against the
+  variance is O(N m) per tau, so there only the taus with m <= 16 are timed, against the
   kernel on the same taus);
 
 and derives the ratios of the goals of issue 17: allantools / end-to-end (>= 10 for every
@@ -57,7 +57,7 @@ GOAL_VS_ALLANTOOLS = 10.0
 GOAL_OVERLAPPING_LARGE = 20.0  # at 1e7 samples and 100 log taus
 GOAL_PER_TAU = 2.0
 GOAL_IDENTIFICATION = 0.5
-ORACLE_MODIFIED_MAX_M = 64
+ORACLE_MODIFIED_MAX_M = 16
 
 
 def copy_bandwidth(n_bytes: int, repeat: int) -> float:
@@ -117,7 +117,7 @@ def bench_kind(
         "memory_floor_seconds": floor_per_tau * m.size,
     }
     if oracle:
-        # the oracle's modified variance is O(N m) per tau: there it runs on m <= 64 only,
+        # the oracle's modified variance is O(N m) per tau: there it runs on m <= 16 only,
         # and its ratio is taken against the kernel on the same taus
         sub = m <= ORACLE_MODIFIED_MAX_M if kind == "modified" else np.ones(m.size, bool)
         t_ref, v_ref = _best(

@@ -288,11 +288,10 @@ RowMatrix lag1_acf_levels(const StridedMap<T>& x, const std::vector<std::int64_t
 }
 
 /// R(n) = MVAR(m) / AVAR(m) (overlapping) of every channel at each factor, the ratio that
-/// separates white from flicker phase noise (SP1065 section 5.6), in one pass per factor:
-/// with d2(k) = x[k+2m] - 2 x[k+m] + x[k], AVAR sums d2(k)^2 (k < M - 2m), and the MVAR window
-/// w_j = sum_{i=j}^{j+m-1} d2(i) advances by the third difference
-/// w_{j+1} = w_j + (x[j+3m] - 3 x[j+2m] + 3 x[j+m] - x[j]) (compensated), summing w_j^2 over
-/// j <= M - 3m. Result (len(ms), C); NaN where the Allan variance is zero. Each factor is
+/// separates white from flicker phase noise (SP1065 section 5.6): the two variances from
+/// variance() (modified: prefix sums, O(1) per term; see variances.hpp), so the ratio is
+/// sum w_j^2 / (m^2 (M - 3m + 1)) over sum d2(k)^2 / (M - 2m), w_j the window of m second
+/// differences. Result (len(ms), C); NaN where the Allan variance is zero. Each factor is
 /// computed by one thread, so the result does not depend on `threads`.
 inline RowMatrix mvar_avar_ratio(const PhaseRef& phase, const std::vector<std::int64_t>& ms, int threads) {
   const std::int64_t M = phase.rows();
@@ -301,45 +300,11 @@ inline RowMatrix mvar_avar_ratio(const PhaseRef& phase, const std::vector<std::i
       throw std::invalid_argument("averaging factor m = " + std::to_string(m) + " is outside [1, " +
                                   std::to_string(M / 3) + "] for " + std::to_string(M) +
                                   " phase points (R(n) needs 3m <= M)");
-  const Eigen::Index nc = phase.cols();
-  const double* x = phase.data();
-  const std::int64_t rs = phase.outerStride();
-  RowMatrix out(static_cast<Eigen::Index>(ms.size()), nc);
-  parallel_for(ms.size(), resolve_threads(threads), [&](std::size_t t) {
-    const std::int64_t m = ms[t];
-    const std::int64_t n_avar = M - 2 * m, n_mvar = M - 3 * m + 1;
-    // channels inside the loop over terms: one pass over the rows for all of them
-    const auto at = [&](std::int64_t k, Eigen::Index c) { return x[k * rs + c]; };
-    const auto d2 = [&](std::int64_t k, Eigen::Index c) {
-      return detail::diff2(at(k, c), at(k + m, c), at(k + 2 * m, c));
-    };
-    const auto unc = static_cast<std::size_t>(nc);
-    std::vector<NeumaierSum> window(unc);
-    std::vector<BlockedSum> avar(unc), mvar(unc);
-    for (Eigen::Index c = 0; c < nc; ++c)
-      for (std::int64_t i = 0; i < m; ++i) window[static_cast<std::size_t>(c)].add(d2(i, c));
-    for (std::int64_t j = 0; j < n_avar; ++j) {
-      for (Eigen::Index c = 0; c < nc; ++c) {
-        const auto cc = static_cast<std::size_t>(c);
-        const double a = d2(j, c);
-        avar[cc].add(a * a);
-        if (j < n_mvar) {
-          const double w = window[cc].value();
-          mvar[cc].add(w * w);
-          if (j + 1 < n_mvar)
-            window[cc].add(detail::diff3(at(j, c), at(j + m, c), at(j + 2 * m, c), at(j + 3 * m, c)));
-        }
-      }
-    }
-    const double md = static_cast<double>(m);
-    for (Eigen::Index c = 0; c < nc; ++c) {
-      const auto cc = static_cast<std::size_t>(c);
-      const double av = avar[cc].value();
-      out(static_cast<Eigen::Index>(t), c) =
-          av > 0.0 ? (mvar[cc].value() / (md * md * static_cast<double>(n_mvar))) / (av / static_cast<double>(n_avar))
-                   : std::numeric_limits<double>::quiet_NaN();
-    }
-  });
+  RowMatrix out = variance(phase, ms, VarianceKind::Modified, threads);
+  const RowMatrix avar = variance(phase, ms, VarianceKind::Overlapping, threads);
+  for (Eigen::Index t = 0; t < out.rows(); ++t)
+    for (Eigen::Index c = 0; c < out.cols(); ++c)
+      out(t, c) = avar(t, c) > 0.0 ? out(t, c) / avar(t, c) : std::numeric_limits<double>::quiet_NaN();
   return out;
 }
 
