@@ -16,8 +16,8 @@ term               error-law input
                    (:func:`allanite.simulation.flicker.flicker_bank`), one budget row
 =================  ==========================================================================
 
-Quantization, rate ramp, sines, warm-up, bias steps and spikes have no error law here; they
-are listed in :attr:`SensorNoise.ignored`.
+Quantization, rate ramp, sines, drifting lines, resonances, warm-up, bias steps and spikes have no
+error law here; they are listed in :attr:`SensorNoise.ignored`.
 """
 
 from __future__ import annotations
