@@ -283,3 +283,41 @@ def test_grid_slice():
             if entry["dominant"] and entry["value"] is not None:
                 # a 5-sigma miss has probability 6e-7 per term for an honest interval
                 assert abs(entry["z"]) < 5, (case, name, entry)
+
+
+def test_a_term_significant_against_the_chosen_model_is_added():
+    # record 90 of the full validation grid (Q+N+B+K+R, 1e6 samples at 100 Hz, angle): the
+    # ramp lowers the chi-square by 10.3 under the covariance of Q+N+B+K (above the penalty
+    # 9) but raised log det C, and the score alone kept Q+N+B+K (p = 0.045); the test of
+    # a left-out term against the chosen model's covariance adds it
+    vf = _validate_fit_module()
+    (case,) = [c for c in vf.grid(quick=False, long=False) if c.index == 90]
+    row = vf.run_case(case)
+    assert row["fitted_terms"] == ["Q", "N", "B", "K", "R"], row
+    assert not row["missing_dominant"], row
+    res = allanite.avar(
+        np.asarray(
+            vf.design(case).simulate(
+                case.n, case.fs, output=case.input, seed=case.seed, flicker_method=vf.FLICKER_METHOD
+            )
+        ).ravel(),
+        fs=case.fs,
+        input=case.input,
+        taus=case.taus,
+        units=case.unit,
+    )
+    f = fit(res)
+    (entry,) = [s for s in f.selection if s["term"] == "ramp"]
+    assert entry["kept"]
+    assert entry["added"]["delta_chi2"] >= 9.0
+    assert entry["score_gain"] < 0  # the score alone would have left it out
+
+
+def test_no_term_added_to_white_noise():
+    # the added-term test is a likelihood-ratio test at the penalty: on white noise alone
+    # (3 records) nothing is added (the chance per left-out term is about 0.1 %)
+    for seed in range(3):
+        rng = np.random.default_rng(40 + seed)
+        x = 0.01 * math.sqrt(100.0) * rng.standard_normal(200_000)
+        f = fit(allanite.avar(x, fs=100.0, units="deg/s"))
+        assert not any("added" in s for s in f.selection), f.selection
