@@ -87,7 +87,7 @@ def sine(seeds: int) -> dict[str, float]:
     The first 100 seeds covered 89 (z sd 1.16) and every later look at this term reused
     seeds from 0 to 149 (sd 1.14-1.30): not independent confirmations. On 150 fresh seeds
     (1000-1149) and 150 records of a plain NumPy sine + white generator, z sd 0.93 and 0.99,
-    covered 144 and 142; hence the large run.
+    covered 144 and 142; on seeds 0-499: 473 covered (94.6 %), z sd 0.99.
     """
     amplitude, f0, fs, n = 0.02, 0.05, 100.0, 200_000
     model = NoiseModel(
