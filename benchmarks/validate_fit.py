@@ -40,7 +40,7 @@ import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal, cast
 
 import numpy as np
 
@@ -239,7 +239,8 @@ def run_case(case: Case) -> dict[str, Any]:
         dtype=np.float64,
     ).ravel()
     t1 = time.perf_counter()
-    res = allanite.avar(x, fs=case.fs, input=case.input, taus=case.taus, units=case.unit)
+    kind = cast(Literal["rate", "angle"], case.input)
+    res = allanite.avar(x, fs=case.fs, input=kind, taus=case.taus, units=case.unit)
     f = fit(res)
     t2 = time.perf_counter()
     truth = model.coefficients()
