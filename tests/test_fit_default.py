@@ -334,12 +334,11 @@ def test_a_term_significant_against_the_chosen_model_is_added():
     row = vf.run_case(case)
     assert row["fitted_terms"] == ["Q", "N", "B", "K", "R"], row
     assert not row["missing_dominant"], row
+    x = vf.design(case).simulate(
+        case.n, fs=case.fs, output=case.input, seed=case.seed, flicker_method=vf.FLICKER_METHOD
+    )
     res = allanite.avar(
-        np.asarray(
-            vf.design(case).simulate(
-                case.n, case.fs, output=case.input, seed=case.seed, flicker_method=vf.FLICKER_METHOD
-            )
-        ).ravel(),
+        np.asarray(x).ravel(),
         fs=case.fs,
         input=case.input,
         taus=case.taus,
