@@ -51,7 +51,7 @@ def main() -> None:
     with tempfile.TemporaryDirectory(prefix="allanite-lot-") as tmp:
         paths = write_lot(tmp, args.records, args.samples)
         t0 = time.perf_counter()
-        local = allanite.batch(paths, FS, datasheet=SHEET, threads=2)
+        local = allanite.batch(paths, fs=FS, datasheet=SHEET, threads=2)
         t_local = time.perf_counter() - t0
         with (
             distributed.LocalCluster(
@@ -60,7 +60,7 @@ def main() -> None:
             distributed.Client(cluster) as client,
         ):
             t0 = time.perf_counter()
-            remote = allanite.batch(paths, FS, datasheet=SHEET, client=client, threads=1)
+            remote = allanite.batch(paths, fs=FS, datasheet=SHEET, client=client, threads=1)
             t_dask = time.perf_counter() - t0
     identical = remote == local
     result = {

@@ -77,7 +77,7 @@ def run(n: int, args: argparse.Namespace) -> None:
         real_model = m
         if args.gap:
             real_model = m.without("white").plus(TERM_TYPES["white"](N=0.075))
-        x = np.asarray(real_model.simulate(n, args.fs, seed=1), dtype=np.float64).ravel()
+        x = np.asarray(real_model.simulate(n, fs=args.fs, seed=1), dtype=np.float64).ravel()
         np.save(real, x)
         del x
         m.save(path)
@@ -87,7 +87,7 @@ def run(n: int, args: argparse.Namespace) -> None:
         t_sim = t_feat = None
         if not args.no_replicate_split:
             t0 = time.perf_counter()
-            rep = np.asarray(m.simulate(n, args.fs, seed=2), dtype=np.float64).ravel()
+            rep = np.asarray(m.simulate(n, fs=args.fs, seed=2), dtype=np.float64).ravel()
             t_sim = time.perf_counter() - t0
             t0 = time.perf_counter()
             record_features(rep, Plan.for_length(n, args.fs))

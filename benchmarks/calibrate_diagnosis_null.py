@@ -100,7 +100,7 @@ def main_() -> None:
             t_null += time.perf_counter() - t0
             for r in range(args.records):
                 seed = 10_000_000 + 100_000 * k + 1000 * e + r
-                x = np.asarray(model.simulate(n, args.fs, seed=seed), dtype=np.float64).ravel()
+                x = np.asarray(model.simulate(n, fs=args.fs, seed=seed), dtype=np.float64).ravel()
                 ps.append(views(x, plan, ens, args.alpha))
         count = len(ps)
         row: dict[str, object] = {

@@ -74,7 +74,7 @@ def refine(
     """
     steps = []
     for r in range(rounds):
-        d = diagnose(x, model, FS, units="deg/s", n_mc=n_mc, seed=100 + r, effects=effects)
+        d = diagnose(x, model, fs=FS, units="deg/s", n_mc=n_mc, seed=100 + r, effects=effects)
         steps.append(
             {"G": d.statistic, "p_value": d.p_value, "best": d.best.to_dict() if d.best else None}
         )
@@ -123,7 +123,7 @@ def main() -> None:
         out: dict[str, Any] = {"axis": args.axis, "sim": "run 1 record", "runs": {}}
         for run in (2, 3):
             t0 = time.perf_counter()
-            d = diagnose(load(run, args.axis), run1, FS, units="deg/s", sim_units="deg/s",
+            d = diagnose(load(run, args.axis), run1, fs=FS, units="deg/s", sim_units="deg/s",
                          n_mc=args.n_mc, seed=run)  # fmt: skip
             out["runs"][f"run{run}"] = {"seconds": time.perf_counter() - t0, **summary(d)}
             print(f"run {run} vs run-1 record: G = {d.statistic:.4g}, p = {d.p_value:.3g}, "
@@ -150,7 +150,7 @@ def main() -> None:
     for run in (2, 3):
         x = load(run, args.axis)
         t0 = time.perf_counter()
-        d = diagnose(x, model, FS, units="deg/s", holdout=0.5, n_mc=args.n_mc, seed=run)
+        d = diagnose(x, model, fs=FS, units="deg/s", holdout=0.5, n_mc=args.n_mc, seed=run)
         seconds = time.perf_counter() - t0
         report["runs"][f"run{run}"] = {"seconds": seconds, **summary(d)}
         print(

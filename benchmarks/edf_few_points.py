@@ -37,7 +37,7 @@ def coverage(records: int = 300, batch: int = 100, alpha: str | None = None) -> 
     hits = []
     everywhere = []
     for s in range(records // batch):
-        x = model.simulate(n, EXAMPLE_FS, n_channels=batch, seed=100 + s, output="angle")
+        x = model.simulate(n, fs=EXAMPLE_FS, n_channels=batch, seed=100 + s, output="angle")
         r = allanite.avar(x, fs=EXAMPLE_FS, input="angle", alpha=alpha)
         few = (r.n_samples - 1) // r.m < edf.ACF_MIN_POINTS
         theory = model.avar(r.tau, 1.0 / EXAMPLE_FS)[:, None]

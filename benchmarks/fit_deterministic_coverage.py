@@ -66,7 +66,7 @@ def ramp_design(terms: tuple[str, ...], design_seed: int, records: int) -> dict[
     truth = model.coefficients()["R"]
     covered, z = 0, []
     for seed in range(records):
-        x = np.asarray(model.simulate(n, fs, seed=5000 + seed)).ravel()
+        x = np.asarray(model.simulate(n, fs=fs, seed=5000 + seed)).ravel()
         f = fit(allanite.avar(x, fs=fs, taus="octave", units="deg/s"), list(terms))
         lo, hi = f["R"].ci(0.95)
         covered += lo <= truth <= hi
@@ -95,7 +95,7 @@ def sine(seeds: int) -> dict[str, float]:
     )
     covered, z = 0, []
     for seed in range(seeds):
-        x = np.asarray(model.simulate(n, fs, seed=seed)).ravel()
+        x = np.asarray(model.simulate(n, fs=fs, seed=seed)).ravel()
         f = fit(allanite.avar(x, fs=fs, units="deg/s"), ["white", "sine"])
         name = next(k for k in f.coefficients if k.startswith("amp"))
         lo, hi = f[name].ci(0.95)

@@ -16,8 +16,8 @@ m = base_model(100.0)
 ps, sig, closed = [], 0, 0
 t = time.time()
 for i in range(60):
-    x = m.simulate(2**14, 100.0, seed=5000 + i)
-    d = diagnose(x, m, 100.0, units="deg/s", n_mc=40, seed=i)
+    x = m.simulate(2**14, fs=100.0, seed=5000 + i)
+    d = diagnose(x, m, fs=100.0, units="deg/s", n_mc=40, seed=i)
     ps.append(d.frequency.line_p_value)
     sig += d.significant
     closed += d.closed

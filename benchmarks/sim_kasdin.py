@@ -60,7 +60,9 @@ def truncation() -> list[dict[str, float]]:
 def coverage(seeds: range = range(10), n: int = 1 << 14, channels: int = 50) -> dict[str, object]:
     own, term_law = [], []
     for seed in seeds:
-        x = simulate([Flicker(B=B)], FS, n, n_channels=channels, seed=seed, flicker_method="kasdin")
+        x = simulate(
+            [Flicker(B=B)], n, fs=FS, n_channels=channels, seed=seed, flicker_method="kasdin"
+        )
         r = allanite.avar(x, fs=FS, taus="octave")
         keep = r.tau <= n * DT / 10.0
         lo, hi = r.var_ci(0.95)

@@ -87,11 +87,11 @@ def main() -> int:
     for k in range(ROUNDS + 1):
         config = read_config(path, rate=FS)
         model = config.model("gyro").in_units("deg/s")
-        d = allanite.diagnose(x, model, FS, units="deg/s", n_mc=N_MC, seed=k)
+        d = allanite.diagnose(x, model, fs=FS, units="deg/s", n_mc=N_MC, seed=k)
         sim_x = sim_laws.px4_plugin(
             plugin_parameters(path.read_text()), x.size, FS, np.random.default_rng(100 + k)
         )
-        d_rec = allanite.diagnose(x, sim_x * R2D, FS, units="deg/s", n_mc=N_MC, seed=k)
+        d_rec = allanite.diagnose(x, sim_x * R2D, fs=FS, units="deg/s", n_mc=N_MC, seed=k)
         entry = {
             "config": path.name,
             "gyro_model_deg_s": model.to_dict(),

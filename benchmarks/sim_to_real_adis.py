@@ -44,7 +44,7 @@ def compare(x: np.ndarray, *, seed: int = SEED, level: float = 0.99):
     real = allanite.avar(x, fs=FS, taus="octave", units="deg/s")
     fitted = allanite.fit(real)
     model = fitted.model
-    sim_x = model.simulate(x.size, FS, seed=seed)
+    sim_x = model.simulate(x.size, fs=FS, seed=seed)
     sim = allanite.avar(sim_x, fs=FS, m=real.m)
     keep = real.tau <= x.size / FS / 10.0
     fit_ok = dict(zip(fitted.tau.tolist(), (~fitted.misfit).tolist(), strict=True))

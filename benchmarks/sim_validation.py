@@ -74,7 +74,7 @@ def estimate_variance(records: int = 1000) -> dict[str, dict[str, list[float]]]:
         model = NoiseModel(tuple(CASES[name]))
         blocks = []
         for block in range(records // CHANNELS):
-            x = model.simulate(N, FS, n_channels=CHANNELS, seed=2000 + block)
+            x = model.simulate(N, fs=FS, n_channels=CHANNELS, seed=2000 + block)
             r = allanite.avar(x, fs=FS, taus="octave", alpha=0)
             blocks.append(r.var)
         keep = r.tau <= N / FS / 10.0
@@ -101,7 +101,7 @@ def main() -> None:
     table: dict[str, object] = {}
     for i, (name, terms) in enumerate(CASES.items()):
         model = NoiseModel(tuple(terms))
-        x = model.simulate(N, FS, n_channels=CHANNELS, seed=1000 + i)
+        x = model.simulate(N, fs=FS, n_channels=CHANNELS, seed=1000 + i)
         r = allanite.avar(x, fs=FS, taus="octave")
         keep = r.tau <= N / FS / 10.0
         expected = model.avar(r.tau, 1.0 / FS)

@@ -234,7 +234,7 @@ def run_case(case: Case) -> dict[str, Any]:
     t0 = time.perf_counter()
     x = np.asarray(
         model.simulate(
-            case.n, case.fs, output=case.input, seed=case.seed, flicker_method=FLICKER_METHOD
+            case.n, fs=case.fs, output=case.input, seed=case.seed, flicker_method=FLICKER_METHOD
         ),
         dtype=np.float64,
     ).ravel()

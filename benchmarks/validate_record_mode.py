@@ -41,10 +41,10 @@ def clopper_pearson(k: int, n: int, level: float = 0.95) -> tuple[float, float, 
 def run_case(n: int, i: int, n_mc: int) -> dict[str, object]:
     """One null case: real and simulated record from the same model, different seeds."""
     base = base_model(FS)
-    real = base.simulate(n, FS, seed=50_000 + i)
-    sim = base.simulate(n, FS, seed=90_000 + i)
+    real = base.simulate(n, fs=FS, seed=50_000 + i)
+    sim = base.simulate(n, fs=FS, seed=90_000 + i)
     t0 = time.perf_counter()
-    d = diagnose(real, sim, FS, units="deg/s", n_mc=n_mc, seed=i)
+    d = diagnose(real, sim, fs=FS, units="deg/s", n_mc=n_mc, seed=i)
     fam = d.time.family_p
     worst = min(fam, key=lambda k: fam[k])
     return {

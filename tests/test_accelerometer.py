@@ -37,7 +37,7 @@ def _run(argv: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str,
 
 @pytest.fixture(scope="module")
 def accel_record() -> np.ndarray:
-    return ACCEL_MODEL.simulate(200_000, FS, seed=5)
+    return ACCEL_MODEL.simulate(200_000, fs=FS, seed=5)
 
 
 def test_accelerometer_fit_recovers_the_model_in_any_acceleration_unit(accel_record):
@@ -68,7 +68,7 @@ def test_accelerometer_fit_recovers_the_model_in_any_acceleration_unit(accel_rec
 
 def test_velocity_increments_are_an_accelerometer_record(accel_record):
     # delta-velocity samples in m/s: their rate is m/s/s = m/s^2
-    dv = ACCEL_MODEL.simulate(200_000, FS, seed=5, output="increment")
+    dv = ACCEL_MODEL.simulate(200_000, fs=FS, seed=5, output="increment")
     res = allanite.oadev(dv, fs=FS, input="increment", units="m/s", taus="octave")
     ref = allanite.oadev(accel_record, fs=FS, units="m/s^2", taus="octave")
     assert res.units == "m/s^2"

@@ -111,14 +111,14 @@ def test_channels_as_a_count_is_n_channels_and_the_old_name_warns():
     from allanite.terms import White
 
     model = allanite.NoiseModel((White(N=0.1),), {"rate": "deg/s", "time": "s"})
-    new = simulate(model, 10.0, 200, n_channels=2, seed=3)
+    new = simulate(model, 200, fs=10.0, n_channels=2, seed=3)
     with pytest.warns(DeprecationWarning, match=r"channels= is renamed n_channels="):
-        old = simulate(model, 10.0, 200, channels=2, seed=3)
+        old = simulate(model, 200, fs=10.0, channels=2, seed=3)
     np.testing.assert_array_equal(new, old)
     with pytest.warns(DeprecationWarning, match="n_channels=2"):
-        assert model.simulate(200, 10.0, channels=2, seed=3).shape == (200, 2)
+        assert model.simulate(200, fs=10.0, channels=2, seed=3).shape == (200, 2)
     with pytest.raises(TypeError, match="give n_channels= only"):
-        simulate(model, 10.0, 200, n_channels=2, channels=2)
+        simulate(model, 200, fs=10.0, n_channels=2, channels=2)
 
 
 def test_one_confidence_default_everywhere():
@@ -168,3 +168,45 @@ def test_read_record_takes_one_options_object_or_its_fields(tmp_path):
     assert read_record(path, options, fs=25.0).fs == 25.0  # keywords override the object
     with pytest.raises(TypeError, match="unknown reader option"):
         read_record(path, sampling_rate=50.0)
+
+
+def test_batch_takes_fs_by_keyword_too():
+    params = inspect.signature(allanite.batch).parameters
+    assert params["fs"].kind is inspect.Parameter.KEYWORD_ONLY
+    with pytest.raises(TypeError, match="positional"):
+        allanite.batch([_white()], 10.0)
+
+
+def test_fit_takes_a_record_with_its_own_fs_input_and_unit():
+    from allanite.io import Record
+
+    rng = np.random.default_rng(31)
+    x = rng.standard_normal(100_000) * 0.1  # N = 0.01 deg/sqrt(s) at 100 Hz
+    angle = Record(samples=np.cumsum(x)[:, None] / 100.0, fs=100.0, input="angle", units="deg")
+    from_record = allanite.fit(angle)
+    from_array = allanite.fit(np.cumsum(x) / 100.0, fs=100.0, input="angle", units="deg/s")
+    assert from_record.model.units == from_array.model.units
+    assert from_record["N"].value == from_array["N"].value
+    with pytest.raises(ValueError, match="contradicts"):
+        allanite.fit(angle, input="rate")
+    two = Record(samples=np.column_stack([x, x]), fs=100.0, input="rate", units="deg/s")
+    with pytest.raises(ValueError, match="one channel at a time"):
+        allanite.fit(two)
+
+
+@pytest.mark.parametrize("call", ["simulate", "simulate_chunks", "method"])
+def test_simulate_takes_fs_by_keyword(call):
+    from allanite.simulation import simulate, simulate_chunks
+    from allanite.terms import White
+
+    model = allanite.NoiseModel((White(N=0.1),), {"rate": "deg/s", "time": "s"})
+    run = {
+        "simulate": lambda *a, **k: simulate(model, *a, **k),
+        "simulate_chunks": lambda *a, **k: np.concatenate(list(simulate_chunks(model, *a, **k)))[
+            :, 0
+        ],
+        "method": model.simulate,
+    }[call]
+    assert run(500, fs=100.0, seed=1).shape == (500,)
+    with pytest.raises(TypeError):
+        run(500, 100.0, seed=1)

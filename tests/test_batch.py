@@ -31,7 +31,7 @@ def _true_n(i: int) -> float:
 
 def test_table_holds_the_fit_with_intervals_and_pass_fail():
     lot = _lot(5)
-    res = batch(lot, FS, datasheet={"N": 0.0015}, units="deg/s")
+    res = batch(lot, fs=FS, datasheet={"N": 0.0015}, units="deg/s")
     assert isinstance(res, BatchResult)
     assert len(res) == 5
     assert res.column("record") == [name for name, _ in lot]
@@ -59,20 +59,20 @@ def test_table_holds_the_fit_with_intervals_and_pass_fail():
 
 def test_marginal_when_only_the_interval_crosses_the_limit():
     lot = _lot(1)
-    first = batch(lot, FS)
+    first = batch(lot, fs=FS)
     n, high = first.column("N")[0], first.column("N_high")[0]
-    inside = batch(lot, FS, datasheet={"N": (n + high) / 2})
+    inside = batch(lot, fs=FS, datasheet={"N": (n + high) / 2})
     assert inside.column("check_N") == ["marginal"]
     assert inside.column("status") == ["marginal"]
     assert inside.passed  # marginal is not a failure
     # just above the 95 % interval (1.25 x 1.96 = 2.45 standard errors above the estimate)
     limit = n + 1.25 * (high - n)
-    above = batch(lot, FS, datasheet={"N": limit})
+    above = batch(lot, fs=FS, datasheet={"N": limit})
     assert above.column("status") == ["pass"]
-    below = batch(lot, FS, datasheet={"N": {"min": limit}})
+    below = batch(lot, fs=FS, datasheet={"N": {"min": limit}})
     assert below.column("status") == ["fail"]
     # a higher level widens the interval (3.29 standard errors): the limit becomes undecided
-    wide = batch(lot, FS, datasheet={"N": limit}, level=0.999)
+    wide = batch(lot, fs=FS, datasheet={"N": limit}, level=0.999)
     assert wide.column("check_N") == ["marginal"]
     assert wide.column("N_high")[0] > high
 
@@ -81,7 +81,7 @@ def test_multichannel_rows_and_minimum_limits():
     lot = _lot(2, channels=3)
     res = batch(
         lot,
-        FS,
+        fs=FS,
         datasheet={"N": {"min": 0.0005, "max": 0.002}, "R": {"min": 1.0}, "K": {"min": 0.0}},
     )
     assert len(res) == 6
@@ -104,12 +104,12 @@ def test_full_datasheet_with_units_and_adev_limit():
             {"quantity": "adev", "tau": 1, "max": 0.0015, "unit": "deg/s"},
         ],
     }
-    res = batch(lot, FS, datasheet=sheet, units="deg/s")
+    res = batch(lot, fs=FS, datasheet=sheet, units="deg/s")
     assert res.column("check_N") == ["pass", "pass", "pass", "fail"]
     assert res.column("check_adev@1s") == ["pass", "pass", "pass", "fail"]
     assert res.to_dict()["datasheet"]["device"] == "lot spec"
     # limits in physical units need the record's units
-    unknown = batch(lot[:1], FS, datasheet=sheet)
+    unknown = batch(lot[:1], fs=FS, datasheet=sheet)
     assert unknown.column("status") == ["error"]
     assert "units are unknown" in unknown.column("error")[0]
 
@@ -117,7 +117,7 @@ def test_full_datasheet_with_units_and_adev_limit():
 def test_errors_are_rows_not_crashes(tmp_path):
     missing = tmp_path / "nope.csv"
     flat = np.zeros(1000)  # an Allan curve of zeros: nothing to fit
-    res = batch([("ok", _lot(1)[0][1]), missing, ("flat", flat)], FS)
+    res = batch([("ok", _lot(1)[0][1]), missing, ("flat", flat)], fs=FS)
     assert res.column("pass") == [True, False, False]
     assert res.column("status") == ["pass", "error", "error"]
     error = res.column("error")[1].lower()
@@ -134,12 +134,12 @@ def test_paths_and_datasheet_files(tmp_path):
         paths.append(p)
     sheet = tmp_path / "sheet.json"
     sheet.write_text(json.dumps({"N": 0.0015, "B": {"max": 0.01}}))
-    res = batch(paths, FS, datasheet=sheet)
+    res = batch(paths, fs=FS, datasheet=sheet)
     assert res.column("record") == [str(p) for p in paths]
     assert res.passed
     yml = tmp_path / "sheet.yaml"
     yml.write_text("N: 0.0015\nB:\n  max: 0.01\n")
-    assert batch(paths, FS, datasheet=str(yml)) == res
+    assert batch(paths, fs=FS, datasheet=str(yml)) == res
     out = tmp_path / "table.csv"
     res.to_csv(out)
     head = out.read_text().splitlines()[0]
@@ -152,19 +152,19 @@ def test_paths_and_datasheet_files(tmp_path):
 
 def test_bad_datasheets_and_options():
     with pytest.raises(InputError, match="must be a number"):
-        batch(_lot(1), FS, datasheet={"N": {}})
+        batch(_lot(1), fs=FS, datasheet={"N": {}})
     with pytest.raises(InputError, match=r"unknown quantity 'ARW' \(did you mean 'N'\?\)"):
-        batch(_lot(1), FS, datasheet={"ARW": 1.0})
+        batch(_lot(1), fs=FS, datasheet={"ARW": 1.0})
     with pytest.raises(ValueError, match="not coefficients"):
-        batch(_lot(1), FS, datasheet={"sigma": 1.0}, terms=["N"])
+        batch(_lot(1), fs=FS, datasheet={"sigma": 1.0}, terms=["N"])
     with pytest.raises(InputError, match="must be a number"):
-        batch(_lot(1), FS, datasheet={"N": "small"})
+        batch(_lot(1), fs=FS, datasheet={"N": "small"})
     with pytest.raises(TypeError, match="datasheet must be"):
-        batch(_lot(1), FS, datasheet=3.0)  # type: ignore[arg-type]
+        batch(_lot(1), fs=FS, datasheet=3.0)  # type: ignore[arg-type]
     with pytest.raises(ValueError, match="level must lie"):
-        batch(_lot(1), FS, level=95)
+        batch(_lot(1), fs=FS, level=95)
     with pytest.raises(ValueError, match="no records"):
-        batch([], FS)
+        batch([], fs=FS)
 
 
 def test_explicit_terms_and_progress():
@@ -174,7 +174,7 @@ def test_explicit_terms_and_progress():
     x = 0.01 * rng.standard_normal(N_SAMPLES) + 1e-5 * np.cumsum(rng.standard_normal(N_SAMPLES))
     res = batch(
         [("a", x), ("b", x[::-1].copy()), ("c", x)],
-        FS,
+        fs=FS,
         terms=["N", "K"],
         datasheet={"K": 1.0},
         progress=lambda stage, done, total: seen.append((stage, done, total)),
@@ -194,7 +194,7 @@ def test_explicit_terms_and_progress():
     se = (k_high - k_low) / (2 * 1.96)
     assert abs(k - 1e-5 * np.sqrt(FS)) < 4 * se
     with pytest.raises(ValueError, match="not coefficients"):
-        batch([("a", x)], FS, terms=["N"], datasheet={"K": 1.0})
+        batch([("a", x)], fs=FS, terms=["N"], datasheet={"K": 1.0})
 
 
 @pytest.mark.slow
@@ -207,7 +207,7 @@ def test_local_and_dask_cluster_give_identical_tables():
             {"quantity": "adev", "tau": 1, "max": 0.0015, "unit": "deg/s"},
         ]
     }
-    local = batch(lot, FS, datasheet=sheet, units="deg/s")
+    local = batch(lot, fs=FS, datasheet=sheet, units="deg/s")
     with (
         distributed.LocalCluster(
             n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
@@ -217,7 +217,7 @@ def test_local_and_dask_cluster_give_identical_tables():
         seen = []
         remote = batch(
             lot,
-            FS,
+            fs=FS,
             datasheet=sheet,
             units="deg/s",
             client=client,

@@ -68,7 +68,7 @@ def test_samples_given_as_a_config_are_named_not_decoded(tmp_path, capsys):
 def loop(tmp_path_factory):
     root = tmp_path_factory.mktemp("loop")
     truth = NoiseModel((White(N=0.03), RateRandomWalk(K=0.002)), {"rate": "deg/s", "time": "s"})
-    np.save(root / "real.npy", truth.simulate(N, FS, seed=11))
+    np.save(root / "real.npy", truth.simulate(N, fs=FS, seed=11))
     # a simulator config with the white noise 3x too low (densities in SI units)
     d2r = math.pi / 180
     (root / "kalibr.yaml").write_text(
@@ -115,7 +115,7 @@ def test_diagnose_config_without_units_says_so(loop, capsys):
 
 def test_accelerometer_of_a_config_is_chosen_by_the_record_unit(loop, capsys):
     truth = NoiseModel((White(N=0.004), RateRandomWalk(K=3e-4)), {"rate": "m/s^2", "time": "s"})
-    np.save(loop / "accel.npy", truth.simulate(N, FS, seed=12))
+    np.save(loop / "accel.npy", truth.simulate(N, fs=FS, seed=12))
     out = loop / "fixed.yaml"
     argv = [
         "diagnose", str(loop / "accel.npy"), "--fs", "100", "--units", "m/s^2",
@@ -164,7 +164,7 @@ def test_a_ros_bag_against_a_gazebo_sdf(loop, tmp_path, capsys):
 
     rate = 100.0
     truth = NoiseModel((White(N=0.002), RateRandomWalk(K=1e-3)), {"rate": "rad/s", "time": "s"})
-    gyro = truth.simulate(N, rate, n_channels=3, seed=21)
+    gyro = truth.simulate(N, fs=rate, n_channels=3, seed=21)
     data = np.column_stack([gyro, np.zeros((N, 2)), np.full(N, 9.81)])
     write_bag(tmp_path / "flight.bag", "ros1", data, np.arange(N) / rate, topics=("/imu0",))
     stddev = 0.002 * math.sqrt(rate)  # the white noise right, the random walk missing

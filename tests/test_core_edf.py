@@ -308,7 +308,7 @@ def test_lag1_acf_kernel_bad_arguments() -> None:
 
 
 def test_mvar_avar_ratio_kernel_equals_reference() -> None:
-    """R(n) in one pass (window advanced by third differences) = reference MVAR / AVAR."""
+    """R(n) from the compiled modified and overlapping variances = reference MVAR / AVAR."""
     from allanite.variance import oracle
 
     rng = np.random.default_rng(12)

@@ -197,3 +197,38 @@ def test_reference_definitions_on_a_hand_example() -> None:
     assert oracle.overlapping_variance(x, 2) == pytest.approx(64.0 / (2 * 4))
     assert oracle.hadamard_variance(x, 1) == pytest.approx(0.0)
     assert oracle.modified_variance(x, 1) == pytest.approx(2.0)
+
+
+@pytest.mark.parametrize("kind", ["modified", "total", "overlapping"])
+def test_long_record_paths_match_reference_and_each_other(kind: str) -> None:
+    """Every path of variances.hpp on a record longer than a tile (8192 terms).
+
+    Factors up to 8192 share tiles (for ``modified`` through a window of prefix sums
+    regenerated tile by tile), larger ones run alone (``modified``: four lanes of a running
+    window started from exact prefix sums), ``total`` adds the reflected end terms. Channels:
+    white noise on a 1e10 bias, and a rate random walk (large prefix sums). Each factor
+    computed alone must give the bits it gets within the list, whatever the thread count.
+    (Not Hadamard: a rate random walk makes it cancel a drift, and the naive oracle is then
+    only good to its own rounding, see _base.)
+    """
+    rng = np.random.default_rng(2024)
+    n = 26_000
+    x = np.column_stack(
+        [1e10 + rng.standard_normal(n), 5.0 + np.cumsum(rng.standard_normal(n)) * 0.01]
+    )
+    phase = _core.phase(x, "rate")
+    top = int(_core.max_m(kind, phase.shape[0]))
+    factors = np.array([m for m in (1, 3, 64, 1000, 4097, 8192, 8193, 8333, top) if m <= top])
+    got = np.asarray(_core.variance(phase, factors, kind, 2))
+    want = np.column_stack(
+        [np.asarray(oracle.variance(x[:, c], factors, kind, input="rate")) for c in range(2)]
+    )
+    np.testing.assert_allclose(got, want, rtol=RTOL, atol=0)
+    assert np.array_equal(np.asarray(_core.variance(phase, factors, kind, 1)), got)
+    alone = np.vstack(
+        [
+            np.asarray(_core.variance(phase, factors[i : i + 1], kind, 1))
+            for i in range(factors.size)
+        ]
+    )
+    assert np.array_equal(alone, got)

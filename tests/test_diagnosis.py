@@ -34,33 +34,33 @@ def base() -> NoiseModel:
 def run(real, sim, **kw) -> Diagnosis:
     kw.setdefault("n_mc", 60)
     kw.setdefault("units", "deg/s")
-    return diagnose(real, sim, FS, **kw)
+    return diagnose(real, sim, fs=FS, **kw)
 
 
 # --- bad input ---------------------------------------------------------------------------------
 @pytest.fixture(scope="module")
 def null_record(base: NoiseModel) -> np.ndarray:
-    return base.simulate(N, FS, seed=11)
+    return base.simulate(N, fs=FS, seed=11)
 
 
 def test_units_mismatch_is_an_error(base, null_record):
     with pytest.raises(ValueError, match="unit mismatch"):
-        diagnose(null_record, base, FS, units="rad/s", n_mc=20)
+        diagnose(null_record, base, fs=FS, units="rad/s", n_mc=20)
 
 
 def test_sample_rate_mismatch_is_an_error(null_record):
     with pytest.raises(ValueError, match="sample-rate mismatch"):
-        diagnose(null_record, null_record, FS, sim_fs=200.0, n_mc=20)
+        diagnose(null_record, null_record, fs=FS, sim_fs=200.0, n_mc=20)
 
 
 def test_too_short_record_is_an_error(base):
     with pytest.raises(ValueError, match="too short"):
-        diagnose(np.zeros(100), base, FS, n_mc=20)
+        diagnose(np.zeros(100), base, fs=FS, n_mc=20)
 
 
 def test_short_sim_record_is_an_error(null_record):
     with pytest.raises(ValueError, match="shorter than the real"):
-        diagnose(null_record, null_record[: N // 2], FS, n_mc=20)
+        diagnose(null_record, null_record[: N // 2], fs=FS, n_mc=20)
 
 
 @pytest.mark.parametrize("where", ["real", "sim"])
@@ -69,7 +69,7 @@ def test_nan_is_an_error(null_record, where):
     bad[123] = np.nan
     real, sim = (bad, null_record) if where == "real" else (null_record, bad)
     with pytest.raises(ValueError, match="NaN"):
-        diagnose(real, sim, FS, n_mc=20)
+        diagnose(real, sim, fs=FS, n_mc=20)
 
 
 @pytest.mark.parametrize(
@@ -78,22 +78,47 @@ def test_nan_is_an_error(null_record, where):
         ({"holdout": 1.5}, "holdout"),
         ({"holdout": 0.99}, "each part"),
         ({"n_mc": 5}, "n_mc"),
-        ({"alpha": 0.7}, "alpha"),
+        ({"significance": 0.7}, "significance"),
     ],
 )
 def test_bad_options(base, null_record, kwargs, message):
     with pytest.raises(ValueError, match=message):
-        diagnose(null_record, base, FS, **kwargs)
+        diagnose(null_record, base, fs=FS, **kwargs)
+
+
+def test_alpha_is_the_deprecated_name_of_significance(base, null_record):
+    with pytest.warns(DeprecationWarning, match="significance="):
+        old = diagnose(null_record, base, fs=FS, n_mc=20, alpha=0.1)
+    new = diagnose(null_record, base, fs=FS, n_mc=20, significance=0.1)
+    assert old.p_value == new.p_value
+    assert old.meta["significance"] == new.meta["significance"] == 0.1
+    with pytest.raises(TypeError, match="give significance= only"):
+        diagnose(null_record, base, fs=FS, n_mc=20, alpha=0.1, significance=0.2)
+
+
+def test_fs_is_keyword_only_and_a_record_brings_its_own(base, null_record):
+    from allanite.io import Record
+
+    with pytest.raises(TypeError):
+        diagnose(null_record, base, FS)  # type: ignore[misc]
+    with pytest.raises(TypeError, match="fs"):
+        diagnose(null_record, base)
+    record = Record(samples=null_record[:, None], fs=FS, input="rate", units="deg/s")
+    from_record = diagnose(record, base, n_mc=20)
+    from_array = diagnose(null_record, base, fs=FS, units="deg/s", n_mc=20)
+    assert from_record.p_value == from_array.p_value
+    with pytest.raises(ValueError, match="contradicts"):
+        diagnose(record, base, fs=2 * FS, n_mc=20)
 
 
 def test_multichannel_real_needs_one_channel(base, null_record):
     with pytest.raises(ValueError, match="one channel"):
-        diagnose(np.column_stack([null_record, null_record]), base, FS, n_mc=20)
+        diagnose(np.column_stack([null_record, null_record]), base, fs=FS, n_mc=20)
 
 
 def test_bad_fs(base, null_record):
     with pytest.raises(ValueError, match="fs"):
-        diagnose(null_record, base, -1.0)
+        diagnose(null_record, base, fs=-1.0)
 
 
 # --- calibration helpers -----------------------------------------------------------------------
@@ -125,7 +150,7 @@ def test_null_case_is_not_significant(base, null_record):
 # --- clear effects -----------------------------------------------------------------------------
 def test_sine_line_located_and_attributed(base):
     truth = term("sine", amplitude=0.15, frequency=7.3)
-    real = base.plus(truth).simulate(N, FS, seed=21)
+    real = base.plus(truth).simulate(N, fs=FS, seed=21)
     d = run(real, base)
     assert d.significant
     assert d.frequency.lines, "the line must be detected"
@@ -142,7 +167,7 @@ def test_sine_line_located_and_attributed(base):
 def test_aliased_line_is_found_at_its_alias(base):
     # 83 Hz sampled at 100 Hz appears at 17 Hz
     truth = term("sine", amplitude=0.15, frequency=83.0)
-    real = base.plus(truth).simulate(N, FS, seed=22, allow_aliasing=True)
+    real = base.plus(truth).simulate(N, fs=FS, seed=22, allow_aliasing=True)
     d = run(real, base, effects=["sine", "white"])
     line = d.frequency.lines[0]
     assert line.frequency_hz == pytest.approx(17.0, rel=0.02)
@@ -153,7 +178,7 @@ def test_white_noise_too_small_in_the_sim(base):
     truth_n = 0.1  # the sim's N is 2x too small
     real = NoiseModel(
         (term("white", N=truth_n), term("flicker", B=0.005), term("rrw", K=0.001)), UNITS
-    ).simulate(N, FS, seed=23)
+    ).simulate(N, fs=FS, seed=23)
     d = run(real, base, holdout=0.5)
     assert d.significant
     assert d.tau.bands_s
@@ -178,7 +203,7 @@ def test_white_noise_too_small_in_the_sim(base):
 
 def test_bias_step_is_localised(base):
     n = N
-    real = base.simulate(n, FS, seed=24)
+    real = base.simulate(n, fs=FS, seed=24)
     t_step = 0.6 * n / FS
     real[int(0.6 * n) :] += 0.5
     d = run(real, base)
@@ -195,7 +220,7 @@ def test_rate_random_walk_wander_is_not_a_step(base):
     # mean near its ends; the random walk itself must explain that level evidence
     real = NoiseModel(
         (term("white", N=0.05), term("flicker", B=0.005), term("rrw", K=0.015)), UNITS
-    ).simulate(N, FS, seed=31)
+    ).simulate(N, fs=FS, seed=31)
     d = run(real, base)
     assert d.significant
     assert d.best is not None
@@ -206,7 +231,7 @@ def test_rate_random_walk_wander_is_not_a_step(base):
 def test_warm_up_is_not_a_staircase_of_steps(base):
     duration = N / FS
     warm = term("warmup", amplitude=1.0, tau_w=0.05 * duration, duration=duration)
-    real = base.simulate(N, FS, seed=32) + NoiseModel((warm,), UNITS).simulate(N, FS, seed=1)
+    real = base.simulate(N, fs=FS, seed=32) + NoiseModel((warm,), UNITS).simulate(N, fs=FS, seed=1)
     d = run(real, base)
     assert d.significant
     assert d.best is not None
@@ -238,7 +263,7 @@ def test_added_level_variance_matches_the_exact_random_walk():
 
 
 def test_spikes_are_found_and_attributed(base):
-    real = base.simulate(N, FS, seed=25)
+    real = base.simulate(N, fs=FS, seed=25)
     where = np.array([1000, 9000, 17000, 25000, 31000])
     real[where] += np.array([4.0, -4.0, 4.0, 4.0, -4.0])
     d = run(real, base)
@@ -250,8 +275,8 @@ def test_spikes_are_found_and_attributed(base):
 
 
 def test_simulated_record_as_sim(base):
-    sim = base.simulate(N, FS, seed=26)
-    real = base.plus(term("sine", amplitude=0.15, frequency=11.0)).simulate(N, FS, seed=27)
+    sim = base.simulate(N, fs=FS, seed=26)
+    real = base.plus(term("sine", amplitude=0.15, frequency=11.0)).simulate(N, fs=FS, seed=27)
     d = run(real, sim, effects=["sine", "white", "markov"])
     assert d.meta["sim"] == "record"
     assert d.frequency.lines[0].frequency_hz == pytest.approx(11.0, rel=0.02)
@@ -261,8 +286,8 @@ def test_simulated_record_as_sim(base):
 
 def test_second_record_holdout_and_json(base):
     model = base.plus(term("markov", sigma=0.08, tau_c=1.0))
-    real = model.simulate(N, FS, seed=28)
-    second = model.simulate(N, FS, seed=29)
+    real = model.simulate(N, fs=FS, seed=28)
+    second = model.simulate(N, fs=FS, seed=29)
     d = run(real, base.to_json(), holdout=second)
     assert d.significant
     assert d.holdout is not None
@@ -303,8 +328,8 @@ def test_false_alarm_rate_is_calibrated(base):
     alarms = 0
     tau_p = []
     for i in range(n_trials):
-        real = base.simulate(2**13, FS, seed=1000 + i)
-        d = diagnose(real, base, FS, n_mc=40, seed=2000 + i)
+        real = base.simulate(2**13, fs=FS, seed=1000 + i)
+        d = diagnose(real, base, fs=FS, n_mc=40, seed=2000 + i)
         alarms += d.significant
         tau_p.append(d.tau.p_value)
     assert alarms <= 5

@@ -24,7 +24,7 @@ def files(tmp_path_factory) -> dict[str, Path]:
     base = NoiseModel(
         (TERM_TYPES["white"](N=0.05), TERM_TYPES["rrw"](K=0.001)), {"rate": "deg/s", "time": "s"}
     )
-    real = base.plus(TERM_TYPES["sine"](amplitude=0.2, frequency=13.0)).simulate(N, FS, seed=3)
+    real = base.plus(TERM_TYPES["sine"](amplitude=0.2, frequency=13.0)).simulate(N, fs=FS, seed=3)
     paths = {
         "model": root / "model.json",
         "real": root / "real.npy",
@@ -34,7 +34,7 @@ def files(tmp_path_factory) -> dict[str, Path]:
     }
     base.save(paths["model"])
     np.save(paths["real"], real)
-    np.save(paths["sim"], base.simulate(N, FS, seed=4))
+    np.save(paths["sim"], base.simulate(N, fs=FS, seed=4))
     np.save(paths["short"], real[: N // 4])
     bad = real.copy()
     bad[10] = np.nan

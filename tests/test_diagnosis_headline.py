@@ -27,7 +27,7 @@ BURSTS_S = ((100, 160), (400, 460), (700, 760), (1000, 1060))
 
 def bursty_record(seed: int, n: int = 2**17) -> np.ndarray:
     """The issue's case: white x2.5 in 60-s bursts (inside the record), N 0.01 + K 1e-5."""
-    x = np.asarray(MODEL.simulate(n, FS, seed=seed), dtype=float).ravel()
+    x = np.asarray(MODEL.simulate(n, fs=FS, seed=seed), dtype=float).ravel()
     rng = np.random.default_rng(seed + 100)
     for a, b in BURSTS_S:
         i, j = int(a * FS), int(b * FS)
@@ -39,14 +39,14 @@ def bursty_record(seed: int, n: int = 2**17) -> np.ndarray:
 
 @pytest.fixture(scope="module")
 def bursty():
-    return diagnose(bursty_record(7), MODEL, FS, units="deg/s", n_mc=60, seed=1)
+    return diagnose(bursty_record(7), MODEL, fs=FS, units="deg/s", n_mc=60, seed=1)
 
 
 @pytest.fixture(scope="module")
 def bursty_no_vocab():
     """The issue's report: a vocabulary without the bursts candidate."""
     effects = [e for e in EFFECTS if e != "bursts"] + ["rescale"]
-    return diagnose(bursty_record(7), MODEL, FS, units="deg/s", n_mc=60, seed=1, effects=effects)
+    return diagnose(bursty_record(7), MODEL, fs=FS, units="deg/s", n_mc=60, seed=1, effects=effects)
 
 
 def test_bursts_are_not_read_as_closed(bursty_no_vocab):
@@ -96,7 +96,7 @@ def test_bursts_candidate_explains_the_noise_level_changes(bursty):
 def test_no_spurious_lines_in_bursty_records(bursty):
     assert bursty.frequency.lines == []
     for seed in (21, 22, 23):
-        d = diagnose(bursty_record(seed, 2**16), MODEL, FS, units="deg/s", n_mc=40, seed=seed)
+        d = diagnose(bursty_record(seed, 2**16), MODEL, fs=FS, units="deg/s", n_mc=40, seed=seed)
         assert d.frequency.lines == [], [ln.frequency_hz for ln in d.frequency.lines]
 
 
@@ -105,7 +105,7 @@ def test_a_line_is_still_found_in_a_bursty_record():
     x = bursty_record(5, n)
     t = np.arange(n) / FS
     x += 0.05 * np.sin(2 * np.pi * 7.3 * t)
-    d = diagnose(x, MODEL, FS, units="deg/s", n_mc=40, seed=2)
+    d = diagnose(x, MODEL, fs=FS, units="deg/s", n_mc=40, seed=2)
     assert any(abs(ln.frequency_hz - 7.3) < 0.02 * 7.3 for ln in d.frequency.lines)
 
 
@@ -113,8 +113,8 @@ def test_rescaled_white_noise_is_closed_in_all_views():
     real = MODEL.without("white").plus(White(N=0.015))
     closed = 0
     for seed in (3, 4, 5):
-        x = real.simulate(2**16, FS, seed=seed)
-        d = diagnose(x, MODEL, FS, units="deg/s", n_mc=60, seed=seed)
+        x = real.simulate(2**16, fs=FS, seed=seed)
+        d = diagnose(x, MODEL, fs=FS, units="deg/s", n_mc=60, seed=seed)
         assert d.significant
         closed += d.closed
         if d.closed:
@@ -126,8 +126,8 @@ def test_rescaled_white_noise_is_closed_in_all_views():
 
 
 def test_no_gap_headline():
-    x = MODEL.simulate(2**15, FS, seed=11)
-    d = diagnose(x, MODEL, FS, units="deg/s", n_mc=40, seed=12)
+    x = MODEL.simulate(2**15, fs=FS, seed=11)
+    d = diagnose(x, MODEL, fs=FS, units="deg/s", n_mc=40, seed=12)
     assert not d.significant
     assert d.closed
     assert d.unexplained == []
@@ -176,8 +176,8 @@ def test_joint_attribution_names_both_effects():
     term list is ready for the model JSON and its held-out check is reported."""
     sine = TERM_TYPES["sine"](amplitude=0.03, frequency=7.3)
     real = MODEL.without("white").plus(White(N=0.015), sine)
-    x = real.simulate(2**16, FS, seed=1)
-    d = diagnose(x, MODEL, FS, units="deg/s", n_mc=60, seed=1, holdout=0.5)
+    x = real.simulate(2**16, fs=FS, seed=1)
+    d = diagnose(x, MODEL, fs=FS, units="deg/s", n_mc=60, seed=1, holdout=0.5)
     e = d.explanation
     assert e is not None
     names = {a.effect for a in e.effects}
@@ -202,7 +202,7 @@ def test_joint_attribution_names_both_effects():
 
 def test_joint_attribution_stops_at_one_effect_when_one_suffices():
     real = MODEL.without("white").plus(White(N=0.015))
-    d = diagnose(real.simulate(2**16, FS, seed=3), MODEL, FS, units="deg/s", n_mc=60, seed=3)
+    d = diagnose(real.simulate(2**16, fs=FS, seed=3), MODEL, fs=FS, units="deg/s", n_mc=60, seed=3)
     assert d.explanation is not None
     assert [a.effect for a in d.explanation.effects] == [d.best.effect]
 
@@ -211,7 +211,7 @@ def test_cli_progress_goes_to_stderr(tmp_path, capsys):
     model = tmp_path / "model.json"
     MODEL.save(model)
     real = tmp_path / "real.npy"
-    np.save(real, MODEL.simulate(2**14, FS, seed=4))
+    np.save(real, MODEL.simulate(2**14, fs=FS, seed=4))
     rc = main(
         ["diagnose", str(real), "--fs", "100", "--units", "deg/s", "--sim-model", str(model),
          "--n-mc", "20", "--json", "--progress", "on"]
@@ -234,7 +234,7 @@ def test_report_leads_with_the_headline(bursty_no_vocab):
 def test_white_bursts_term_simulates_its_allan_variance():
     """duty N^2 / tau, realised: ~1600 on/off cycles, realised duty within ~4 % (1 sd)."""
     term = WhiteBursts(N=0.02, duty=0.3, burst_s=0.5)
-    x = NoiseModel((term,), MODEL.units).simulate(2**18, FS, seed=3)
+    x = NoiseModel((term,), MODEL.units).simulate(2**18, fs=FS, seed=3)
     on = np.mean(x != 0)
     assert on == pytest.approx(0.3, rel=0.12)
     taus = np.array([0.01, 0.1, 1.0])

@@ -37,7 +37,7 @@ def test_gaussian_tau_null_matches_monte_carlo_and_T_is_calibrated() -> None:
     mod = model()
     m = octave_factors(n)
     ref, avar, draws = gaussian_tau_null(mod, m, fs, n, n_draw=4000, seed=3)
-    x = mod.simulate(n, fs, n_channels=reps, seed=11)
+    x = mod.simulate(n, fs=fs, n_channels=reps, seed=11)
     mc = np.stack([tau_features(np.ascontiguousarray(x[:, j]), fs, m) for j in range(reps)])
     sd_mc = mc.std(axis=0, ddof=1)
     # mean: within 3.5 standard errors at every tau (familywise over ~11 taus)
@@ -121,8 +121,8 @@ def test_window_statistics_of_decimated_replicates_match_the_real_rate() -> None
     mod = model()
     plan = time_plan(n)
     plan_d = TimePlan(plan.n_windows, plan.length // d, (plan.length // d) // 16)
-    full = mod.simulate(n, fs, n_channels=reps, seed=21)
-    coarse = mod.simulate(n // d, fs / d, n_channels=reps, seed=22)
+    full = mod.simulate(n, fs=fs, n_channels=reps, seed=21)
+    coarse = mod.simulate(n // d, fs=fs / d, n_channels=reps, seed=22)
     f = [time_features(np.ascontiguousarray(full[:, j]), plan) for j in range(reps)]
     c = [time_features(np.ascontiguousarray(coarse[:, j]), plan_d) for j in range(reps)]
     # F test of the pooled spreads over the windows (windows share the law up to the ends)

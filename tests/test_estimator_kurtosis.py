@@ -197,7 +197,7 @@ def _monte_carlo(term, seed):
     model = NoiseModel((term,))
     est = []
     for block in range(RECORDS // 50):
-        x = model.simulate(N, FS, n_channels=50, seed=1000 * seed + block)
+        x = model.simulate(N, fs=FS, n_channels=50, seed=1000 * seed + block)
         result = allanite.avar(x, fs=FS, taus="octave", alpha=0)
         est.append(result.var)
     keep = result.tau <= N * DT / 10.0
@@ -280,7 +280,7 @@ def test_with_excess_variance_formula():
 def test_with_model_edf():
     """The model's excess and Gaussian variance; a Gaussian model leaves the EDF as it is."""
     model = NoiseModel((White(N=1e-3), Telegraph(amplitude=1e-3, tau_c=0.2)))
-    x = model.simulate(4096, FS, n_channels=2, seed=8)
+    x = model.simulate(4096, fs=FS, n_channels=2, seed=8)
     result = allanite.avar(x, fs=FS, taus="octave")
     corrected = result.with_model_edf(model)
     excess = model.avar_excess_variance(result.tau, DT, 4096)

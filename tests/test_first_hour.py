@@ -31,11 +31,11 @@ def test_unknown_diagnose_effects_are_refused_with_the_known_ones(
     x = RNG.standard_normal(4000) * 0.01
     model = NoiseModel([White(0.001)], units={"rate": "deg/s", "time": "s"})
     with pytest.raises(ValueError, match=r"unknown effect\(s\) 'bogus'; known effects: white, "):
-        diagnose(x, model, FS, effects=["white", "bogus"])
+        diagnose(x, model, fs=FS, effects=["white", "bogus"])
     with pytest.raises(ValueError, match=r"rescale:<term type> \(.*white"):
-        diagnose(x, model, FS, effects=["rescale:nonsense"])
+        diagnose(x, model, fs=FS, effects=["rescale:nonsense"])
     with pytest.raises(ValueError, match="no effect given"):
-        diagnose(x, model, FS, effects=[])
+        diagnose(x, model, fs=FS, effects=[])
     rec = tmp_path / "real.npy"
     np.save(rec, x)
     path = tmp_path / "model.json"
@@ -103,7 +103,7 @@ def test_simulate_refuses_an_output_larger_than_the_free_space(
     assert "has 5 GB free; write fewer samples (-n, --duration)" in line
     assert sorted(p.name for p in tmp_path.iterdir()) == ["model.json"]
     with pytest.raises(OSError, match="needs 8 TB"):
-        write_record(out, NoiseModel.load(model), 100.0, 10**12)
+        write_record(out, NoiseModel.load(model), 10**12, fs=100.0)
     # sizes: exact for .npy/raw, an upper bound for CSV
     assert output_size("a.bin", 1000, 3) == 24_000
     assert output_size("a.npy", 1000, 3) == 24_128

@@ -40,7 +40,7 @@ def _covers(f, name: str, truth: float, level: float = 0.95) -> bool:
 def test_example_model_30min_seed_102():
     # formerly: white noise alone, N = 0.658 deg/sqrt(h) (truth 0.369), p = 0, not flagged
     model = example_model()
-    x = np.asarray(model.simulate(180_000, 100.0, seed=102)).ravel()
+    x = np.asarray(model.simulate(180_000, fs=100.0, seed=102)).ravel()
     f = fit(x, fs=100.0, units="deg/s")  # a record: the octave grid
     g = fit(allanite.avar(x, fs=100.0, units="deg/s"))  # the default log grid
     truth = model.coefficients()
@@ -69,7 +69,7 @@ def test_quantization_white_flicker_rrw_1khz_1e7():
         ),
         UNITS,
     )
-    x = np.asarray(model.simulate(10_000_000, 1000.0, output="rate", seed=1)).ravel()
+    x = np.asarray(model.simulate(10_000_000, fs=1000.0, output="rate", seed=1)).ravel()
     truth = model.coefficients()
     f = fit(allanite.avar(x, fs=1000.0, taus="log", units="deg/s"))  # the default grid
     assert not f.rejected
@@ -85,7 +85,7 @@ def test_dense_and_sparse_log_grids_agree():
     model = NoiseModel(
         (White(N=0.006153), Quantization(Q=0.00245), RateRandomWalk(K=0.00081)), UNITS
     )
-    x = np.asarray(model.simulate(1_000_000, 1000.0, seed=1)).ravel()
+    x = np.asarray(model.simulate(1_000_000, fs=1000.0, seed=1)).ravel()
     for points in (20, 300):
         f = fit(allanite.avar(x, fs=1000.0, taus="log", points=points, units="deg/s"))
         assert not f.rejected, points
@@ -242,7 +242,7 @@ def test_six_axis_newcomer_record_keeps_the_random_walks(tmp_path, capsys):
 def _rejected_record(tmp_path: Path) -> Path:
     # a Gauss-Markov process: no subset of Q, N, B, K, R describes its peaked Allan curve
     model = NoiseModel((GaussMarkov(sigma=0.1, tau_c=2.0), White(N=0.001)), UNITS)
-    x = np.asarray(model.simulate(200_000, 100.0, seed=3)).ravel()
+    x = np.asarray(model.simulate(200_000, fs=100.0, seed=3)).ravel()
     path = tmp_path / "gm.npy"
     np.save(path, x)
     return path
@@ -280,7 +280,7 @@ def test_rejected_model_is_said_plainly(tmp_path, capsys):
 def test_not_rejected_is_said_too(tmp_path, capsys):
     from allanite.cli import main
 
-    x = np.asarray(example_model().simulate(180_000, 100.0, seed=102)).ravel()
+    x = np.asarray(example_model().simulate(180_000, fs=100.0, seed=102)).ravel()
     path = tmp_path / "ex.npy"
     np.save(path, x)
     assert main(["fit", str(path), "--fs", "100", "--units", "deg/s", "--level", "0.95"]) == 0

@@ -30,7 +30,7 @@ RECORDS = 20
 @pytest.fixture(scope="module")
 def angle_records() -> np.ndarray:
     """Twenty 30-minute angle records (deg) from the library's own simulator."""
-    return ORIGINAL.simulate(int(1800 * FS), FS, output="angle", n_channels=RECORDS, seed=2024)
+    return ORIGINAL.simulate(int(1800 * FS), fs=FS, output="angle", n_channels=RECORDS, seed=2024)
 
 
 @pytest.mark.slow

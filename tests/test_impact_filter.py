@@ -36,8 +36,8 @@ def simulated():
     # static stand (true rate and tilt 0): white gyro and accelerometer noise from the
     # simulation package (the accelerometer model's "rad/s" stands for m/s^2: only numbers)
     si = {"rate": "rad/s", "time": "s"}
-    rate = NoiseModel((White(N=ARW),), si).simulate(N, FS, n_channels=K, seed=20261121)
-    accel = NoiseModel((White(N=VRW),), si).simulate(N, FS, n_channels=K, seed=20261122)
+    rate = NoiseModel((White(N=ARW),), si).simulate(N, fs=FS, n_channels=K, seed=20261121)
+    accel = NoiseModel((White(N=VRW),), si).simulate(N, fs=FS, n_channels=K, seed=20261122)
     return filt, filt.apply(rate, accel)
 
 

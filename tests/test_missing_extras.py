@@ -105,7 +105,7 @@ def test_without_dask(
     line = _one_line_rc2(argv, capsys, "dask", "batch")
     assert "--dask needs distributed" in line
     with pytest.raises(MissingExtraError, match=r'pip install "allanite\[dask\]"'):
-        allanite.batch([("a", SAMPLES[:, 0])], 100.0, client=object())
+        allanite.batch([("a", SAMPLES[:, 0])], fs=100.0, client=object())
 
 
 def test_without_tqdm(

@@ -145,7 +145,7 @@ def test_load_names_the_file_and_what_a_model_is(tmp_path, capsys):
         NoiseModel.load(broken)
     # the API of diagnose and the simulate command go through the same load
     with pytest.raises(InputError, match=r"rec.npy: this is a NumPy .npy array"):
-        diagnose(np.random.default_rng(0).standard_normal(2000), samples, 100.0)
+        diagnose(np.random.default_rng(0).standard_normal(2000), samples, fs=100.0)
     argv = ["simulate", str(samples), "--fs", "100", "-n", "100", "-o", str(tmp_path / "s.npy")]
     assert main(argv) == 2
     err = capsys.readouterr().err

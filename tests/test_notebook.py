@@ -62,7 +62,7 @@ def test_diagnosis_table_with_attribution() -> None:
     t = np.arange(8000) / FS
     real = RNG.standard_normal(t.size) * 0.01 + 0.01 * np.sin(2 * np.pi * 3.0 * t)
     model = NoiseModel([White(0.001)], units={"rate": "deg/s", "time": "s"})
-    diagnosis = allanite.diagnose(real, model, FS, n_mc=20, seed=1)
+    diagnosis = allanite.diagnose(real, model, fs=FS, n_mc=20, seed=1)
     html = diagnosis._repr_html_()
     assert "<strong>Diagnosis</strong>" in html
     assert f"<td>p-value</td><td>{diagnosis.p_value:.4g}</td>" in html

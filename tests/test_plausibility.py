@@ -38,7 +38,7 @@ def _random_model(rng: np.random.Generator) -> NoiseModel:
 def _gyro(seed: int, n: int = 60_000) -> np.ndarray:
     rng = np.random.default_rng(seed)
     bias = rng.uniform(-1, 1) * 10 ** rng.uniform(-3, 0)
-    return simulate(_random_model(rng), n, 1 / FS, seed=seed)[:, 0] + bias
+    return simulate(_random_model(rng), 1 / FS, fs=n, seed=seed)[:, 0] + bias
 
 
 def _codes(findings: list) -> set[str]:

@@ -377,7 +377,7 @@ def test_slope_table_says_why_a_bias_instability_band_is_not_in_the_model() -> N
     # fitted model has no B term; the table must say so next to that band
     model = NoiseModel((White(N=0.5 / np.sqrt(FS)), RateRandomWalk(K=0.002 * np.sqrt(FS))),
                        {"rate": "deg/s", "time": "s"})  # fmt: skip
-    samples = model.simulate(200_000, FS, n_channels=1, seed=4)
+    samples = model.simulate(200_000, fs=FS, n_channels=1, seed=4)
     record = Record(samples=samples, fs=FS, units="deg/s", channels=("gx",), source="dut.npy")
     result = allanite.avar(samples, fs=FS, units="deg/s")
     bands = slope_table(result.tau, result.dev, result.edf)

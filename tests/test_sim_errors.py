@@ -31,8 +31,8 @@ def test_bad_coefficients(make, match):
 def test_tone_above_nyquist_needs_the_aliasing_flag():
     model = [Sine(amplitude=1.0, frequency=80.0)]
     with pytest.raises(ValueError, match="above the Nyquist frequency"):
-        simulate(model, 100.0, 100, seed=1)
-    aliased = simulate(model, 100.0, 100, seed=1, allow_aliasing=True)
+        simulate(model, 100, fs=100.0, seed=1)
+    aliased = simulate(model, 100, fs=100.0, seed=1, allow_aliasing=True)
     # an 80 Hz tone sampled at 100 Hz shows up at its alias, 20 Hz
     spectrum = np.abs(np.fft.rfft(aliased))
     assert np.fft.rfftfreq(100, 0.01)[np.argmax(spectrum)] == pytest.approx(20.0)
@@ -42,19 +42,19 @@ def test_events_far_faster_than_the_sampling_are_refused():
     from allanite.terms import BiasSteps
 
     with pytest.raises(ValueError, match="events per sample"):
-        simulate([Telegraph(amplitude=1.0, tau_c=1e-6)], 100.0, 100, seed=1)
+        simulate([Telegraph(amplitude=1.0, tau_c=1e-6)], 100, fs=100.0, seed=1)
     with pytest.raises(ValueError, match="events per sample"):
-        simulate([BiasSteps(size=1.0, interval=1e-5)], 100.0, 100, seed=1)
+        simulate([BiasSteps(size=1.0, interval=1e-5)], 100, fs=100.0, seed=1)
 
 
 def test_flicker_cutoff_above_nyquist_is_refused():
     from allanite.terms import Flicker
 
     with pytest.raises(ValueError, match="Nyquist"):
-        simulate([Flicker(B=1.0, f0=80.0)], 100.0, 100, seed=1)
+        simulate([Flicker(B=1.0, f0=80.0)], 100, fs=100.0, seed=1)
     with pytest.raises(ValueError, match="aliased part is not simulated"):
-        simulate([Flicker(B=1.0, f0=80.0)], 100.0, 100, seed=1, allow_aliasing=True)
-    assert simulate([Flicker(B=1.0, f0=20.0)], 100.0, 100, seed=1).shape == (100,)
+        simulate([Flicker(B=1.0, f0=80.0)], 100, fs=100.0, seed=1, allow_aliasing=True)
+    assert simulate([Flicker(B=1.0, f0=20.0)], 100, fs=100.0, seed=1).shape == (100,)
 
 
 def test_progress_reports_every_sample(tmp_path):
@@ -65,7 +65,7 @@ def test_progress_reports_every_sample(tmp_path):
     calls = []
     model = NoiseModel((White(N=1.0),), {"rate": "deg/s", "time": "s"})
     write_record(
-        tmp_path / "x.npy", model, 100.0, 1000, seed=1, progress=lambda *a: calls.append(a)
+        tmp_path / "x.npy", model, 1000, fs=100.0, seed=1, progress=lambda *a: calls.append(a)
     )
     assert calls
     assert calls[-1] == ("simulate", 1000, 1000)
@@ -100,7 +100,7 @@ def test_model_simulate_needs_fs():
 
 def test_empty_model():
     with pytest.raises(ValueError, match="no terms"):
-        simulate(NoiseModel(()), 10.0, 10)
+        simulate(NoiseModel(()), 10, fs=10.0)
 
 
 @pytest.mark.parametrize(
@@ -146,7 +146,7 @@ def test_cli_writes_the_same_samples_as_the_api(tmp_path, model_file, suffix):
         ]
     )
     assert code == 0
-    expected = example_model().simulate(6000, 100.0, output="angle", n_channels=2, seed=7)
+    expected = example_model().simulate(6000, fs=100.0, output="angle", n_channels=2, seed=7)
     if suffix == ".npy":
         got = np.load(out)
     elif suffix == ".csv":

@@ -100,7 +100,7 @@ def test_truncated_law_matches_the_brute_force_expectation():
 
 def test_chi_square_coverage_over_50_seeds():
     n, channels, B = 1 << 14, 50, 1e-3
-    x = simulate([Flicker(B=B)], FS, n, n_channels=channels, seed=404, flicker_method="kasdin")
+    x = simulate([Flicker(B=B)], n, fs=FS, n_channels=channels, seed=404, flicker_method="kasdin")
     result = allanite.avar(x, fs=FS, taus="octave")
     keep = result.tau <= n * DT / 10.0
     theory = kasdin_avar(result.tau[keep], DT, B, n_samples=n)[:, None]
@@ -144,18 +144,18 @@ def test_stream_is_chunk_independent():
 def test_chunked_model_equals_one_shot_bit_for_bit(chunk):
     model = [White(N=1e-3), Flicker(B=2e-3)]
     n = 3 * 70_001
-    whole = simulate(model, FS, n, n_channels=3, seed=21, flicker_method="kasdin")
+    whole = simulate(model, n, fs=FS, n_channels=3, seed=21, flicker_method="kasdin")
     pieces = simulate_chunks(
-        model, FS, n, n_channels=3, seed=21, chunk=chunk, flicker_method="kasdin", output="rate"
+        model, n, fs=FS, n_channels=3, seed=21, chunk=chunk, flicker_method="kasdin", output="rate"
     )
     assert np.array_equal(np.concatenate(list(pieces)), whole)
     # the method is really used: the spectral samples of the same seed differ
-    assert not np.array_equal(whole, simulate(model, FS, n, n_channels=3, seed=21))
+    assert not np.array_equal(whole, simulate(model, n, fs=FS, n_channels=3, seed=21))
 
 
 def test_model_simulate_passes_the_method():
     model = NoiseModel((Flicker(B=1.0),))
-    via_model = model.simulate(5000, FS, seed=8, flicker_method="kasdin")
+    via_model = model.simulate(5000, fs=FS, seed=8, flicker_method="kasdin")
     direct = flicker_stream(
         Flicker(B=1.0),
         FS,
@@ -197,7 +197,7 @@ def test_model_simulate_passes_the_method():
             "no cutoff",
         ),
         (
-            lambda: simulate([Flicker(B=1.0)], FS, 100, flicker_method="fft"),
+            lambda: simulate([Flicker(B=1.0)], 100, fs=FS, flicker_method="fft"),
             ValueError,
             "unknown flicker_method",
         ),
@@ -222,10 +222,10 @@ def test_cli_flicker_method(tmp_path):
     out = tmp_path / "kasdin.npy"
     argv = ["simulate", str(path), "--fs", "100", "-n", "3000", "--seed", "3", "-o", str(out)]
     assert main([*argv, "--flicker-method", "kasdin"]) == 0
-    expected = model.simulate(3000, FS, seed=3, flicker_method="kasdin")
+    expected = model.simulate(3000, fs=FS, seed=3, flicker_method="kasdin")
     assert np.array_equal(np.load(out), expected)
     assert main(argv) == 0  # default auto: spectral synthesis for this length
-    assert np.array_equal(np.load(out), model.simulate(3000, FS, seed=3))
+    assert np.array_equal(np.load(out), model.simulate(3000, fs=FS, seed=3))
 
 
 def test_cli_refuses_kasdin_with_a_cutoff_and_unknown_methods(tmp_path, capsys):

@@ -28,7 +28,7 @@ def _band(variance):
 
 def _mc_variance():
     model = NoiseModel((White(N=N), RateRandomWalk(K=K), TurnOnBias(sigma=M)))
-    angle = model.simulate(1000, 1.0 / T, output="angle", n_channels=RUNS, seed=2024)
+    angle = model.simulate(1000, fs=1.0 / T, output="angle", n_channels=RUNS, seed=2024)
     return angle[STEPS].var(axis=1, ddof=0)  # the error has mean zero by construction
 
 

@@ -45,7 +45,7 @@ CHANNELS = 50
 
 def _estimate(terms, seed, *, n=N, alpha=None):
     model = NoiseModel(tuple(terms))
-    x = model.simulate(n, FS, n_channels=CHANNELS, seed=seed)
+    x = model.simulate(n, fs=FS, n_channels=CHANNELS, seed=seed)
     result = allanite.avar(x, fs=FS, taus="octave", alpha=alpha)
     keep = result.tau <= n * DT / 10.0
     return model, result, keep
@@ -121,7 +121,7 @@ def test_warmup_is_exact():
 
 def test_turn_on_bias_constant_per_run():
     sigma = 0.2
-    x = NoiseModel((TurnOnBias(sigma=sigma),)).simulate(1000, FS, n_channels=400, seed=5)
+    x = NoiseModel((TurnOnBias(sigma=sigma),)).simulate(1000, fs=FS, n_channels=400, seed=5)
     assert np.all(x == x[0])  # constant within each run
     sample_var = x[0].var(ddof=1)
     # chi-square 99.9% band of the sample variance of 400 normal draws

@@ -55,10 +55,10 @@ N = BLOCK + 123
 @pytest.mark.parametrize("output", ["rate", "angle", "increment"])
 @pytest.mark.parametrize("chunk", [1000, BLOCK + 1])
 def test_chunked_equals_one_shot(output, chunk):
-    whole = EVERY_TERM.simulate(N, 100.0, output=output, n_channels=CHANNELS, seed=11)
+    whole = EVERY_TERM.simulate(N, fs=100.0, output=output, n_channels=CHANNELS, seed=11)
     pieces = list(
         simulate_chunks(
-            EVERY_TERM, 100.0, N, output=output, n_channels=CHANNELS, seed=11, chunk=chunk
+            EVERY_TERM, N, fs=100.0, output=output, n_channels=CHANNELS, seed=11, chunk=chunk
         )
     )
     assert all(p.shape[0] <= chunk for p in pieces)
@@ -66,27 +66,27 @@ def test_chunked_equals_one_shot(output, chunk):
 
 
 def test_one_sample_chunks_equal_one_shot():
-    whole = EVERY_TERM.simulate(500, 100.0, output="angle", n_channels=2, seed=3)
+    whole = EVERY_TERM.simulate(500, fs=100.0, output="angle", n_channels=2, seed=3)
     pieces = list(
-        simulate_chunks(EVERY_TERM, 100.0, 500, output="angle", n_channels=2, seed=3, chunk=1)
+        simulate_chunks(EVERY_TERM, 500, fs=100.0, output="angle", n_channels=2, seed=3, chunk=1)
     )
     assert np.array_equal(np.concatenate(pieces), whole)
 
 
 def test_seed_reproducible_and_terms_independent():
-    a = EVERY_TERM.simulate(2000, 100.0, seed=5)
-    assert np.array_equal(a, EVERY_TERM.simulate(2000, 100.0, seed=5))
-    assert not np.array_equal(a, EVERY_TERM.simulate(2000, 100.0, seed=6))
+    a = EVERY_TERM.simulate(2000, fs=100.0, seed=5)
+    assert np.array_equal(a, EVERY_TERM.simulate(2000, fs=100.0, seed=5))
+    assert not np.array_equal(a, EVERY_TERM.simulate(2000, fs=100.0, seed=6))
     # appending a term leaves the earlier terms' samples unchanged (one child seed per term)
-    base = NoiseModel((White(N=0.01),)).simulate(2000, 100.0, seed=5)
-    extra = NoiseModel((White(N=0.01), White(N=0.0))).simulate(2000, 100.0, seed=5)
+    base = NoiseModel((White(N=0.01),)).simulate(2000, fs=100.0, seed=5)
+    extra = NoiseModel((White(N=0.01), White(N=0.0))).simulate(2000, fs=100.0, seed=5)
     assert np.array_equal(base, extra)
 
 
 def test_output_kinds_are_consistent():
-    rate = EVERY_TERM.simulate(3000, 50.0, seed=2, n_channels=2)
-    inc = EVERY_TERM.simulate(3000, 50.0, seed=2, n_channels=2, output="increment")
-    angle = EVERY_TERM.simulate(3000, 50.0, seed=2, n_channels=2, output="angle")
+    rate = EVERY_TERM.simulate(3000, fs=50.0, seed=2, n_channels=2)
+    inc = EVERY_TERM.simulate(3000, fs=50.0, seed=2, n_channels=2, output="increment")
+    angle = EVERY_TERM.simulate(3000, fs=50.0, seed=2, n_channels=2, output="angle")
     np.testing.assert_allclose(inc, rate / 50.0, rtol=1e-15)
     np.testing.assert_allclose(angle, np.cumsum(rate, axis=0) / 50.0, rtol=1e-9, atol=1e-12)
 
@@ -97,14 +97,14 @@ def test_angle_is_summed_without_rounding_drift():
     import math
 
     model = NoiseModel((TurnOnBias(sigma=1e3), White(N=1e-4)))
-    rate = model.simulate(20_000, 100.0, seed=4)
-    angle = model.simulate(20_000, 100.0, seed=4, output="angle")
+    rate = model.simulate(20_000, fs=100.0, seed=4)
+    angle = model.simulate(20_000, fs=100.0, seed=4, output="angle")
     exact = np.array([math.fsum(rate[: k + 1]) for k in range(0, 20_000, 997)]) / 100.0
     np.testing.assert_allclose(angle[::997], exact, rtol=2.3e-16, atol=0)
 
 
 def test_duration_and_single_channel_shape():
-    x = simulate([White(N=1.0)], 10.0, duration="1.5min", seed=1)
+    x = simulate([White(N=1.0)], fs=10.0, duration="1.5min", seed=1)
     assert x.shape == (900,)
 
 

@@ -206,10 +206,9 @@ def test_ar1_bank_core_is_thread_count_independent():
 
 
 def test_simulated_lowpass_has_the_negative_quantization_signature():
-    # a white + quantization fit of a low-pass record's AVAR curve returns Q^2 < 0
-    # (docs/architecture.md)
+    # a white + quantization fit of a low-pass record's AVAR returns Q^2 < 0 (docs/architecture.md)
     term = LowPassWhite(N=0.01, bandwidth=2.0)
-    x = allanite.model.NoiseModel((term,)).simulate(1 << 16, 100.0, seed=3)
+    x = allanite.model.NoiseModel((term,)).simulate(1 << 16, fs=100.0, seed=3)
     r = allanite.avar(x, fs=100.0, taus="octave", alpha=0)
     keep = (r.tau > 0.15) & (r.tau < 6.0)
     weight = 1.0 / r.var[keep]  # relative errors

@@ -90,7 +90,7 @@ void register_variances(py::module_& m) {
         },
         py::arg("phase"), py::arg("m"), py::arg("threads") = 0,
         "R(n) = modified / overlapping Allan variance of each channel at each factor (3m <= "
-        "rows), one pass per factor; NaN where the Allan variance is zero. Returns (len(m), C).");
+        "rows), both from variance(); NaN where the Allan variance is zero. Returns (len(m), C).");
   m.def("n_terms",
         [](const std::string& kind, std::int64_t M, std::int64_t mm) {
           return allanite::n_terms(parse_variance_kind(kind), M, mm);

@@ -27,7 +27,9 @@ def variance(
     """Allan-family variance in sample units (tau0 = 1), shape ``(len(m), C)``.
 
     ``kind``: overlapping, standard, modified, hadamard, standard_hadamard, total.
-    ``threads`` = 0 uses every core; results are bit-identical for any thread count.
+    ``threads`` = 0 uses every core; results are bit-identical for any thread count. Every
+    kind costs O(rows) per factor: modified from the prefix sums of the phase, total as the
+    overlapping sum plus its reflected end terms (no extended series is built).
     """
 
 def lag1_acf(
@@ -50,8 +52,8 @@ def mvar_avar_ratio(
 ) -> NDArray[np.float64]:
     """R(n) = modified / overlapping Allan variance, shape ``(len(m), C)`` (``3m <= rows``).
 
-    One pass per factor (the MVAR window advanced by third differences); NaN where the Allan
-    variance is zero. Bit-identical for any ``threads``.
+    The two variances of :func:`variance` (``"modified"`` and ``"overlapping"``) divided; NaN
+    where the Allan variance is zero. Bit-identical for any ``threads``.
     """
 
 def n_terms(kind: str, n_phase: int, m: int) -> int:

@@ -10,7 +10,15 @@ __all__ = ["renamed"]
 T = TypeVar("T")
 
 
-def renamed(new_value: T, old_value: T | None, *, new: str, old: str, default: T) -> T:
+def renamed(
+    new_value: T,
+    old_value: T | None,
+    *,
+    new: str,
+    old: str,
+    default: T,
+    why: str = "a count; 'channels' now always means channel names",
+) -> T:
     """The value of a keyword renamed from ``old`` to ``new``.
 
     Parameters
@@ -21,6 +29,8 @@ def renamed(new_value: T, old_value: T | None, *, new: str, old: str, default: T
         The two names, for the messages.
     default
         The default of ``new``: giving ``old`` together with a non-default ``new`` is an error.
+    why : str
+        Why the name changed, for the warning.
 
     Returns
     -------
@@ -37,8 +47,7 @@ def renamed(new_value: T, old_value: T | None, *, new: str, old: str, default: T
     if new_value != default:
         raise TypeError(f"give {new}= only ({old}= is its old name)")
     warnings.warn(
-        f"{old}= is renamed {new}= (a count; 'channels' now always means channel names); "
-        f"write {new}={old_value!r}",
+        f"{old}= is renamed {new}= ({why}); write {new}={old_value!r}",
         DeprecationWarning,
         stacklevel=3,
     )

@@ -336,8 +336,8 @@ def _name(item: Any, index: int) -> tuple[str, Any]:
 
 def batch(
     records: Iterable[Any],
-    fs: float | None = None,
     *,
+    fs: float | None = None,
     datasheet: Datasheet | Mapping[str, Any] | str | os.PathLike[str] | None = None,
     terms: Terms = "auto",
     level: float = DEFAULT_LEVEL,
@@ -358,7 +358,8 @@ def batch(
         :class:`~allanite.io.record.Record` objects, arrays (``fs`` required), or
         ``(name, array_or_path)`` pairs.
     fs : float, optional
-        Sampling frequency in Hz for arrays (and files without a time column).
+        Sampling frequency in Hz, keyword only: required for arrays (and files without a time
+        column); Records and files with a time column bring their own.
     datasheet : Datasheet, mapping or path, optional
         Limits in either form of :mod:`allanite.datasheet`, or a JSON/YAML file of them.
     terms : "auto" or list

@@ -360,8 +360,8 @@ class NoiseModel:
     def simulate(
         self,
         n: int | None = None,
-        fs: float | None = None,
         *,
+        fs: float | None = None,
         duration: str | float | None = None,
         output: str = "rate",
         n_channels: int = 1,
@@ -370,7 +370,7 @@ class NoiseModel:
         flicker_method: str = "auto",
         channels: int | None = None,
     ) -> NDArray[np.float64]:
-        """Simulate ``n`` samples (or ``duration``, e.g. ``"30min"``) at ``fs`` Hz.
+        """Simulate ``n`` samples (or ``duration``, e.g. ``"30min"``) at ``fs`` Hz (keyword).
 
         Rate samples in the model's rate unit, angle increments or angle
         (``output="rate"|"increment"|"angle"``); shape ``(n,)`` or ``(n, n_channels)``
@@ -385,8 +385,8 @@ class NoiseModel:
             raise TypeError("simulate() needs the sampling frequency fs in Hz, e.g. fs=100.0")
         return simulate(
             self,
-            fs,
             n,
+            fs=fs,
             duration=duration,
             output=output,  # type: ignore[arg-type]
             n_channels=renamed(n_channels, channels, new="n_channels", old="channels", default=1),

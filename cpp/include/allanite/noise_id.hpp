@@ -31,7 +31,7 @@
 #include "allanite/compensated.hpp"
 #include "allanite/parallel.hpp"
 #include "allanite/phase.hpp"
-#include "allanite/variances.hpp"
+#include "allanite/variances.hpp"  // also ALLANITE_TARGET_CLONES
 
 namespace allanite {
 
@@ -59,10 +59,55 @@ constexpr std::int64_t kAcfBlock = 1024;
 /// Bytes of phase rows per tile: every factor of a group reads the tile while it is in L2.
 constexpr std::int64_t kAcfTileBytes = 256 * 1024;
 
+/// Sums of u = v[k] - centre, u^2 and u[k] u[k-1] over k in [lo, hi) (k = 0 has no
+/// predecessor: v[-1] is never read), then v[k] = v[k+1] - v[k] for k < hi - 1: one level of
+/// a block of the difference cascade. Four interleaved partial sums each, so that the loops
+/// vectorise (as one 4-wide body: loop vectorisation would interleave 4 iterations through
+/// shuffles); compiled for AVX2 and the baseline ISA with the same arithmetic.
+ALLANITE_TARGET_CLONES ALLANITE_SLP_ONLY static void acf_level(double* v, std::int64_t lo, std::int64_t hi, double centre,
+                                             double* sums) noexcept {
+  double a1[4] = {}, a2[4] = {}, ac[4] = {};
+  std::int64_t k = lo;
+  if (k == 0 && k < hi) {
+    const double u = v[0] - centre;
+    a1[0] += u;
+    a2[0] += u * u;
+    ++k;
+  }
+  for (; k + 4 <= hi; k += 4) {
+    double u[4], p[4];
+    for (int r = 0; r < 4; ++r) {
+      u[r] = v[k + r] - centre;
+      p[r] = v[k + r - 1] - centre;
+    }
+    for (int r = 0; r < 4; ++r) {
+      a1[r] += u[r];
+      a2[r] += u[r] * u[r];
+      ac[r] += u[r] * p[r];
+    }
+  }
+  for (; k < hi; ++k) {
+    const double u = v[k] - centre;
+    a1[0] += u;
+    a2[0] += u * u;
+    ac[0] += u * (v[k - 1] - centre);
+  }
+  sums[0] = (a1[0] + a1[1]) + (a1[2] + a1[3]);
+  sums[1] = (a2[0] + a2[1]) + (a2[2] + a2[3]);
+  sums[2] = (ac[0] + ac[1]) + (ac[2] + ac[3]);
+}
+
+ALLANITE_TARGET_CLONES static void acf_difference(double* v, std::int64_t len) noexcept {
+  for (std::int64_t k = 0; k + 1 < len; ++k) v[k] = v[k + 1] - v[k];
+}
+
 /// Streaming lag-1 statistics of one channel at one factor. The decimated points
 /// p_j = x[j m] (j < J) enter a cascade of differences of depth Off + L; levels
 /// Off ... Off + L - 1 are accumulated (Off = 0: phase series, Off = 1: frequency series,
 /// whose values p_{j+1} - p_j are the m-sample averages times m; r1 is scale free).
+/// Points are collected in blocks of kAcfBlock behind the last D points of the previous
+/// block; a full block is differenced level by level in place and summed (vectorised),
+/// the block sums go to compensated totals.
 template <int L, int Off>
 struct AcfState {
   static constexpr int D = L + Off;
@@ -70,16 +115,15 @@ struct AcfState {
   std::int64_t j = 0;  // points fed so far
   double centre[L] = {};
   double first[L] = {}, last[L] = {};
-  double prev_value[D] = {};
-  double prev_u[L] = {};
-  double b1[L] = {}, b2[L] = {}, bc[L] = {};
   NeumaierSum s1[L], s2[L], cross[L];
-  std::int64_t in_block = 0;
+  std::vector<double> buf;  // history (D points after the first block), then pending points
+  std::int64_t history = 0, size = 0;
 
   /// Centres and end values of every level from the first and last D points.
   template <class Point>
   void start(std::int64_t points, Point&& point) {
     J = points;
+    buf.assign(static_cast<std::size_t>(kAcfBlock + D), 0.0);
     double head[D][D], tail[D][D];
     for (int i = 0; i < D; ++i) {
       head[0][i] = point(i);
@@ -100,38 +144,32 @@ struct AcfState {
     }
   }
 
-  void feed(double p) noexcept {
-    double v = p;
-    for (int d = 0; d < D; ++d) {
-      const std::int64_t idx = j - d;  // index of v within level d
-      if (d >= Off) {
-        const int a = d - Off;
-        const double u = v - centre[a];
-        b1[a] += u;
-        b2[a] += u * u;
-        if (idx >= 1) bc[a] += u * prev_u[a];
-        prev_u[a] = u;
-      }
-      const double next = v - prev_value[d];
-      prev_value[d] = v;
-      if (idx < 1) break;  // level d + 1 starts with level d's second value
-      v = next;
-    }
-    ++j;
-    if (++in_block == kAcfBlock) fold();
-  }
-
+  /// Difference and sum the pending points in place; keep the last D points as history.
   void fold() noexcept {
-    for (int a = 0; a < L; ++a) {
-      s1[a].add(b1[a]);
-      s2[a].add(b2[a]);
-      cross[a].add(bc[a]);
-      b1[a] = b2[a] = bc[a] = 0.0;
+    if (size == history) return;
+    double tail[D];
+    const std::int64_t keep = std::min<std::int64_t>(D, size);
+    std::copy(buf.begin() + (size - keep), buf.begin() + size, tail);
+    double* v = buf.data();
+    std::int64_t len = size;
+    for (int d = 0; d < D; ++d) {
+      if (d >= Off) {
+        // level d entry k is value j0 - history + k; new are k >= history - d (>= 0 at first)
+        const int a = d - Off;
+        double sums[3];
+        acf_level(v, std::max<std::int64_t>(0, history - d), len, centre[a], sums);
+        s1[a].add(sums[0]);
+        s2[a].add(sums[1]);
+        cross[a].add(sums[2]);
+      }
+      if (d + 1 < D) acf_difference(v, len);
+      --len;
     }
-    in_block = 0;
+    std::copy(tail, tail + keep, buf.begin());
+    history = size = keep;
   }
 
-  void finish(double* r1) noexcept {
+  void finish(double* r1) {
     fold();
     for (int a = 0; a < L; ++a) {
       const double n = static_cast<double>(J - (a + Off));
@@ -168,7 +206,19 @@ void lag1_acf_group(const StridedMap<T>& x, const std::vector<std::int64_t>& ms,
       const std::int64_t m = ms[group[g]];
       for (Eigen::Index c = 0; c < nc; ++c) {
         auto& s = states[g * static_cast<std::size_t>(nc) + static_cast<std::size_t>(c)];
-        for (std::int64_t row = s.j * m; row < r1; row += m) s.feed(static_cast<double>(x(row, c)));
+        const T* col = x.data() + c * x.colStride();
+        const std::int64_t step = m * x.rowStride();
+        for (std::int64_t row = s.j * m; row < r1;) {
+          // a run of points up to the block's end or the tile's, copied without checks
+          const std::int64_t n = std::min((r1 - row + m - 1) / m, kAcfBlock - (s.size - s.history));
+          double* dst = s.buf.data() + s.size;
+          const T* in = col + row * x.rowStride();
+          for (std::int64_t i = 0; i < n; ++i) dst[i] = static_cast<double>(in[i * step]);
+          s.size += n;
+          s.j += n;
+          row += n * m;
+          if (s.size - s.history == kAcfBlock) s.fold();
+        }
       }
     }
   }
@@ -238,11 +288,10 @@ RowMatrix lag1_acf_levels(const StridedMap<T>& x, const std::vector<std::int64_t
 }
 
 /// R(n) = MVAR(m) / AVAR(m) (overlapping) of every channel at each factor, the ratio that
-/// separates white from flicker phase noise (SP1065 section 5.6), in one pass per factor:
-/// with d2(k) = x[k+2m] - 2 x[k+m] + x[k], AVAR sums d2(k)^2 (k < M - 2m), and the MVAR window
-/// w_j = sum_{i=j}^{j+m-1} d2(i) advances by the third difference
-/// w_{j+1} = w_j + (x[j+3m] - 3 x[j+2m] + 3 x[j+m] - x[j]) (compensated), summing w_j^2 over
-/// j <= M - 3m. Result (len(ms), C); NaN where the Allan variance is zero. Each factor is
+/// separates white from flicker phase noise (SP1065 section 5.6): the two variances from
+/// variance() (modified: prefix sums, O(1) per term; see variances.hpp), so the ratio is
+/// sum w_j^2 / (m^2 (M - 3m + 1)) over sum d2(k)^2 / (M - 2m), w_j the window of m second
+/// differences. Result (len(ms), C); NaN where the Allan variance is zero. Each factor is
 /// computed by one thread, so the result does not depend on `threads`.
 inline RowMatrix mvar_avar_ratio(const PhaseRef& phase, const std::vector<std::int64_t>& ms, int threads) {
   const std::int64_t M = phase.rows();
@@ -251,45 +300,11 @@ inline RowMatrix mvar_avar_ratio(const PhaseRef& phase, const std::vector<std::i
       throw std::invalid_argument("averaging factor m = " + std::to_string(m) + " is outside [1, " +
                                   std::to_string(M / 3) + "] for " + std::to_string(M) +
                                   " phase points (R(n) needs 3m <= M)");
-  const Eigen::Index nc = phase.cols();
-  const double* x = phase.data();
-  const std::int64_t rs = phase.outerStride();
-  RowMatrix out(static_cast<Eigen::Index>(ms.size()), nc);
-  parallel_for(ms.size(), resolve_threads(threads), [&](std::size_t t) {
-    const std::int64_t m = ms[t];
-    const std::int64_t n_avar = M - 2 * m, n_mvar = M - 3 * m + 1;
-    // channels inside the loop over terms: one pass over the rows for all of them
-    const auto at = [&](std::int64_t k, Eigen::Index c) { return x[k * rs + c]; };
-    const auto d2 = [&](std::int64_t k, Eigen::Index c) {
-      return detail::diff2(at(k, c), at(k + m, c), at(k + 2 * m, c));
-    };
-    const auto unc = static_cast<std::size_t>(nc);
-    std::vector<NeumaierSum> window(unc);
-    std::vector<BlockedSum> avar(unc), mvar(unc);
-    for (Eigen::Index c = 0; c < nc; ++c)
-      for (std::int64_t i = 0; i < m; ++i) window[static_cast<std::size_t>(c)].add(d2(i, c));
-    for (std::int64_t j = 0; j < n_avar; ++j) {
-      for (Eigen::Index c = 0; c < nc; ++c) {
-        const auto cc = static_cast<std::size_t>(c);
-        const double a = d2(j, c);
-        avar[cc].add(a * a);
-        if (j < n_mvar) {
-          const double w = window[cc].value();
-          mvar[cc].add(w * w);
-          if (j + 1 < n_mvar)
-            window[cc].add(detail::diff3(at(j, c), at(j + m, c), at(j + 2 * m, c), at(j + 3 * m, c)));
-        }
-      }
-    }
-    const double md = static_cast<double>(m);
-    for (Eigen::Index c = 0; c < nc; ++c) {
-      const auto cc = static_cast<std::size_t>(c);
-      const double av = avar[cc].value();
-      out(static_cast<Eigen::Index>(t), c) =
-          av > 0.0 ? (mvar[cc].value() / (md * md * static_cast<double>(n_mvar))) / (av / static_cast<double>(n_avar))
-                   : std::numeric_limits<double>::quiet_NaN();
-    }
-  });
+  RowMatrix out = variance(phase, ms, VarianceKind::Modified, threads);
+  const RowMatrix avar = variance(phase, ms, VarianceKind::Overlapping, threads);
+  for (Eigen::Index t = 0; t < out.rows(); ++t)
+    for (Eigen::Index c = 0; c < out.cols(); ++c)
+      out(t, c) = avar(t, c) > 0.0 ? out(t, c) / avar(t, c) : std::numeric_limits<double>::quiet_NaN();
   return out;
 }
 

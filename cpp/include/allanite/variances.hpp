@@ -2,7 +2,12 @@
 //
 // Every kernel works in "sample units": tau0 = 1, phase in rate * samples. The caller scales by
 // 1 / tau0^2 where the phase carries angle units. Each averaging factor m costs O(M) work and
-// one streaming pass over the phase rows; all channels are handled in the same pass.
+// one streaming pass over the phase rows (factors up to kTileMaxM share passes, tile by tile);
+// all channels are handled in the same pass. Every term is O(1): the modified AVAR reads the
+// prefix sums of the phase (its window of m second differences is a third difference of them,
+// detail::PrefixPlan), and the total variance is the overlapping AVAR's sum plus the
+// 2 (m - 1) end terms that read the reflected extension (detail::add_total_ends), so no
+// extended series is built.
 //
 // Definitions (x = phase, M rows, d2(k) = x[k+2m] - 2 x[k+m] + x[k]):
 //   overlapping AVAR   sum_{k=0}^{M-2m-1} d2(k)^2 / (2 m^2 (M-2m))
@@ -18,6 +23,8 @@
 
 #include <Eigen/Core>
 #include <algorithm>
+#include <cmath>
+#include <optional>
 #include <cstdint>
 #include <stdexcept>
 #include <string>
@@ -26,6 +33,21 @@
 #include "allanite/compensated.hpp"
 #include "allanite/parallel.hpp"
 #include "allanite/phase.hpp"
+
+// The hot loops are compiled twice, for AVX2 and for the baseline ISA, and picked at load time
+// (GCC function multi-versioning). Each lane performs the same IEEE operations in the same
+// order either way (no FMA contraction: -ffp-contract=off), so the clones agree bit for bit.
+// The loop bodies are forced inline into the clones: otherwise both call one baseline copy.
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__)
+#define ALLANITE_TARGET_CLONES __attribute__((target_clones("avx2", "default")))
+#define ALLANITE_ALWAYS_INLINE inline __attribute__((always_inline))
+// for 4-lane bodies that vectorise as they are (SLP), where loop vectorisation adds shuffles
+#define ALLANITE_SLP_ONLY __attribute__((optimize("no-tree-loop-vectorize")))
+#else
+#define ALLANITE_SLP_ONLY
+#define ALLANITE_TARGET_CLONES
+#define ALLANITE_ALWAYS_INLINE inline
+#endif
 
 namespace allanite {
 
@@ -108,8 +130,8 @@ void add_squares(std::int64_t count, Eigen::Index nc, Fn&& value, NeumaierSum* t
 
 /// Second difference (x2 - 2 x1) + x0 and third difference ((x3 - 3 x2) + 3 x1) - x0: the
 /// one place where the arithmetic of the Allan and Hadamard terms is written down.
-inline double diff2(double x0, double x1, double x2) noexcept { return (x2 - 2.0 * x1) + x0; }
-inline double diff3(double x0, double x1, double x2, double x3) noexcept {
+ALLANITE_ALWAYS_INLINE double diff2(double x0, double x1, double x2) noexcept { return (x2 - 2.0 * x1) + x0; }
+ALLANITE_ALWAYS_INLINE double diff3(double x0, double x1, double x2, double x3) noexcept {
   return ((x3 - 3.0 * x2) + 3.0 * x1) - x0;
 }
 
@@ -121,8 +143,17 @@ struct Taps {
   std::int64_t step;  // elements between consecutive terms (row stride x term stride)
 };
 
+/// Taps of the modified estimator: the third difference at lag m of the prefix sums
+/// S = H + L of the phase (see PrefixPlan), term j of channel c at h[i][j * step + c] and
+/// l[i][j * step + c].
+struct SplitTaps {
+  const double* h[4];
+  const double* l[4];
+  std::int64_t step;
+};
+
 template <int Order>
-inline double tap_diff(const Taps<Order>& t, std::int64_t i) noexcept {
+ALLANITE_ALWAYS_INLINE double tap_diff(const Taps<Order>& t, std::int64_t i) noexcept {
   if constexpr (Order == 2) {
     return diff2(t.p[0][i], t.p[1][i], t.p[2][i]);
   } else {
@@ -130,18 +161,33 @@ inline double tap_diff(const Taps<Order>& t, std::int64_t i) noexcept {
   }
 }
 
-// The hot loops are compiled twice, for AVX2 and for the baseline ISA, and picked at load time
-// (GCC function multi-versioning). Each lane performs the same IEEE operations in the same
-// order either way (no FMA contraction: -ffp-contract=off), so the clones agree bit for bit.
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__)
-#define ALLANITE_TARGET_CLONES __attribute__((target_clones("avx2", "default")))
-#else
-#define ALLANITE_TARGET_CLONES
-#endif
+/// diff3 of H is exact (multiples of one power of two below 2^51 of it), so the term is the
+/// third difference of S rounded about once: no cancellation of the large prefix sums.
+ALLANITE_ALWAYS_INLINE double tap_diff(const SplitTaps& t, std::int64_t i) noexcept {
+  return diff3(t.h[0][i], t.h[1][i], t.h[2][i], t.h[3][i]) +
+         diff3(t.l[0][i], t.l[1][i], t.l[2][i], t.l[3][i]);
+}
+
+/// The taps moved on by k elements.
+template <int Order>
+ALLANITE_ALWAYS_INLINE Taps<Order> advanced(const Taps<Order>& t, std::int64_t k) noexcept {
+  Taps<Order> out = t;
+  for (int i = 0; i <= Order; ++i) out.p[i] = t.p[i] + k;
+  return out;
+}
+ALLANITE_ALWAYS_INLINE SplitTaps advanced(const SplitTaps& t, std::int64_t k) noexcept {
+  SplitTaps out = t;
+  for (int i = 0; i < 4; ++i) {
+    out.h[i] = t.h[i] + k;
+    out.l[i] = t.l[i] + k;
+  }
+  return out;
+}
+
 
 /// Single-channel, unit-step hot path of add_squares (same arithmetic and order, unrolled).
-template <int Order>
-inline void add_diff_squares_1ch_impl(const Taps<Order>& t, std::int64_t count, NeumaierSum& total) {
+template <class TapsT>
+ALLANITE_ALWAYS_INLINE void add_diff_squares_1ch_impl(const TapsT& t, std::int64_t count, NeumaierSum& total) {
   for (std::int64_t start = 0; start < count; start += kSumBlock) {
     const std::int64_t end = std::min(count, start + kSumBlock);
     double a[4] = {0.0, 0.0, 0.0, 0.0};
@@ -172,11 +218,15 @@ ALLANITE_TARGET_CLONES static void add_diff_squares_1ch(const Taps<3>& t, std::i
                                                         NeumaierSum& total) {
   add_diff_squares_1ch_impl(t, count, total);
 }
+ALLANITE_TARGET_CLONES static void add_diff_squares_1ch(const SplitTaps& t, std::int64_t count,
+                                                        NeumaierSum& total) {
+  add_diff_squares_1ch_impl(t, count, total);
+}
 
 /// Few-channel path of add_squares with the channel count known at compile time: the
 /// 4 x NC partial sums live in registers (same arithmetic and order as add_squares).
-template <int Order, int NC>
-inline void add_diff_squares_nc_impl(const Taps<Order>& t, std::int64_t count, NeumaierSum* totals) {
+template <int NC, class TapsT>
+ALLANITE_ALWAYS_INLINE void add_diff_squares_nc_impl(const TapsT& t, std::int64_t count, NeumaierSum* totals) {
   const std::int64_t step = t.step;
   for (std::int64_t start = 0; start < count; start += kSumBlock) {
     const std::int64_t end = std::min(count, start + kSumBlock);
@@ -186,9 +236,8 @@ inline void add_diff_squares_nc_impl(const Taps<Order>& t, std::int64_t count, N
       // consecutive rows: four terms of every channel are 4 NC adjacent values, and a[r][c]
       // is laid out in the same order, so this loop vectorises
       double flat[4 * NC] = {};
-      Taps<Order> local = t;  // pointers in registers: stores to flat cannot alias them
       for (; j + 4 <= end; j += 4) {
-        for (int i = 0; i <= Order; ++i) local.p[i] = t.p[i] + j * NC;
+        const TapsT local = advanced(t, j * NC);  // in registers: stores to flat cannot alias
         for (int k = 0; k < 4 * NC; ++k) {
           const double d = tap_diff(local, k);
           flat[k] += d * d;
@@ -218,162 +267,377 @@ inline void add_diff_squares_nc_impl(const Taps<Order>& t, std::int64_t count, N
 
 ALLANITE_TARGET_CLONES static void add_diff_squares_3ch(const Taps<2>& t, std::int64_t count,
                                                         NeumaierSum* totals) {
-  add_diff_squares_nc_impl<2, 3>(t, count, totals);
+  add_diff_squares_nc_impl<3>(t, count, totals);
 }
 ALLANITE_TARGET_CLONES static void add_diff_squares_3ch(const Taps<3>& t, std::int64_t count,
                                                         NeumaierSum* totals) {
-  add_diff_squares_nc_impl<3, 3>(t, count, totals);
+  add_diff_squares_nc_impl<3>(t, count, totals);
+}
+ALLANITE_TARGET_CLONES static void add_diff_squares_3ch(const SplitTaps& t, std::int64_t count,
+                                                        NeumaierSum* totals) {
+  add_diff_squares_nc_impl<3>(t, count, totals);
 }
 
 /// Add the squared differences of `count` terms to totals[0..nc).
-template <int Order>
-inline void add_diff_squares(const Taps<Order>& t, std::int64_t count, Eigen::Index nc,
+template <class TapsT>
+inline void add_diff_squares(const TapsT& t, std::int64_t count, Eigen::Index nc,
                              NeumaierSum* totals) {
   if (nc == 1 && t.step == 1) {
     add_diff_squares_1ch(t, count, totals[0]);
     return;
   }
   switch (nc) {
-    case 1: add_diff_squares_nc_impl<Order, 1>(t, count, totals); return;
-    case 2: add_diff_squares_nc_impl<Order, 2>(t, count, totals); return;
+    case 1: add_diff_squares_nc_impl<1>(t, count, totals); return;
+    case 2: add_diff_squares_nc_impl<2>(t, count, totals); return;
     case 3: add_diff_squares_3ch(t, count, totals); return;
-    case 4: add_diff_squares_nc_impl<Order, 4>(t, count, totals); return;
+    case 4: add_diff_squares_nc_impl<4>(t, count, totals); return;
     default: break;
   }
   add_squares(count, nc, [&t](std::int64_t j, Eigen::Index c) { return tap_diff(t, j * t.step + c); },
               totals);
 }
 
-}  // namespace detail
+/// Prefix sums S[k] = sum_{i<k} x[i] of the phase (rows 0..M) for the modified estimator:
+/// sum_{i=j}^{j+m-1} d2(i) = S[j+3m] - 3 S[j+2m] + 3 S[j+m] - S[j], so a term costs O(1) and
+/// the factors share passes as the Hadamard ones do. S is accumulated with TwoSum (value
+/// sum + comp) and handed to the kernel split per channel as S = H + L: H is sum rounded to a
+/// multiple of a power of two q with |H| <= 2^48 q, so every third difference of H is exact,
+/// and L = (sum - H) + comp carries the rest to O(eps |L|); no cancellation of the large S.
+/// Nothing of size M is stored: the plan keeps the state every kSumBlock rows (one serial
+/// pass), and cursors regenerate S, bit for bit the same wherever they start.
+struct PrefixPlan {
+  Eigen::Index nc = 0;
+  std::vector<double> sum, comp;  // state at rows 0, kSumBlock, 2 kSumBlock, ... (x nc)
+  std::vector<double> big;        // per channel: (v + big) - big rounds v to a multiple of q
+};
 
-/// Variance of the given kind for one averaging factor m, all channels, into out[0..nc).
-inline void variance_one(const PhaseRef& phase, VarianceKind kind, std::int64_t m, double* out) {
+inline PrefixPlan prefix_plan(const PhaseRef& phase) {
   const std::int64_t M = phase.rows();
   const Eigen::Index nc = phase.cols();
-  const double* x = phase.data();
-  const Eigen::Index row_stride = phase.outerStride();
-  const auto at = [x, row_stride](std::int64_t k, Eigen::Index c) { return x[k * row_stride + c]; };
-  const std::int64_t n = n_terms(kind, M, m);
-  if (m < 1 || m > max_m(kind, M) || n < 1)
-    throw std::invalid_argument("averaging factor m = " + std::to_string(m) + " is outside [1, " +
-                                std::to_string(max_m(kind, M)) + "] for " + std::to_string(M) +
-                                " phase points");
-  const double md = static_cast<double>(m);
-  const double nd = static_cast<double>(n);
-  switch (kind) {
-    case VarianceKind::Overlapping:
-    case VarianceKind::Standard: {
-      const std::int64_t stride = kind == VarianceKind::Overlapping ? 1 : m;
-      const detail::Taps<2> taps{{x, x + m * row_stride, x + 2 * m * row_stride}, stride * row_stride};
-      std::vector<NeumaierSum> totals(static_cast<std::size_t>(nc));
-      detail::add_diff_squares(taps, n, nc, totals.data());
-      for (Eigen::Index c = 0; c < nc; ++c)
-        out[c] = totals[static_cast<std::size_t>(c)].value() / (2.0 * md * md * nd);
-      return;
+  const auto unc = static_cast<std::size_t>(nc);
+  PrefixPlan p;
+  p.nc = nc;
+  const std::size_t marks = static_cast<std::size_t>(M / kSumBlock + 1);
+  p.sum.assign(marks * unc, 0.0);
+  p.comp.assign(marks * unc, 0.0);
+  p.big.assign(unc, 0.0);
+  for (Eigen::Index c = 0; c < nc; ++c) {
+    const auto uc = static_cast<std::size_t>(c);
+    double sum = 0.0, comp = 0.0, top = 0.0;
+    for (std::int64_t k = 0; k < M; ++k) {
+      if (k % kSumBlock == 0) {
+        p.sum[static_cast<std::size_t>(k / kSumBlock) * unc + uc] = sum;
+        p.comp[static_cast<std::size_t>(k / kSumBlock) * unc + uc] = comp;
+      }
+      double t, e;
+      two_sum(sum, phase(k, c), t, e);  // branch free: the only chain is sum += x
+      sum = t;
+      comp += e;
+      top = std::max(top, std::fabs(sum));
     }
-    case VarianceKind::Hadamard:
-    case VarianceKind::StandardHadamard: {
-      const std::int64_t stride = kind == VarianceKind::Hadamard ? 1 : m;
-      const detail::Taps<3> taps{
-          {x, x + m * row_stride, x + 2 * m * row_stride, x + 3 * m * row_stride}, stride * row_stride};
-      std::vector<NeumaierSum> totals(static_cast<std::size_t>(nc));
-      detail::add_diff_squares(taps, n, nc, totals.data());
-      for (Eigen::Index c = 0; c < nc; ++c)
-        out[c] = totals[static_cast<std::size_t>(c)].value() / (6.0 * md * md * nd);
-      return;
+    if (M % kSumBlock == 0) {
+      p.sum[static_cast<std::size_t>(M / kSumBlock) * unc + uc] = sum;
+      p.comp[static_cast<std::size_t>(M / kSumBlock) * unc + uc] = comp;
     }
-    case VarianceKind::Modified: {
-      // sliding window of m second differences, kept compensated so that it does not drift
-      const auto d2 = [&](std::int64_t i, Eigen::Index c) {
-        return detail::diff2(at(i, c), at(i + m, c), at(i + 2 * m, c));
-      };
-      for (Eigen::Index c = 0; c < nc; ++c) {
-        NeumaierSum window;
-        for (std::int64_t i = 0; i < m; ++i) window.add(d2(i, c));
-        BlockedSum total;
-        for (std::int64_t j = 0; j < n; ++j) {
-          const double w = window.value();
-          total.add(w * w);
-          if (j + 1 < n) {
-            window.add(d2(j + m, c));
-            window.add(-d2(j, c));
+    int e2 = 0;
+    std::frexp(top, &e2);                 // top < 2^e2 = 2^48 q
+    p.big[uc] = std::ldexp(1.5, e2 + 4);  // 1.5 * 2^52 q: exact rounding for |v| < 2^51 q
+  }
+  return p;
+}
+
+/// Regenerates S[row], S[row+1], ... of every channel from the plan (see fill_prefix).
+struct PrefixCursor {
+  PrefixCursor(const PhaseRef& phase, const PrefixPlan& plan, std::int64_t start)
+      : x(phase.data()), rs(phase.outerStride()), nc(phase.cols()), big(plan.big.data()),
+        sum(plan.sum.begin() + (start / kSumBlock) * nc, plan.sum.begin() + (start / kSumBlock + 1) * nc),
+        comp(plan.comp.begin() + (start / kSumBlock) * nc, plan.comp.begin() + (start / kSumBlock + 1) * nc),
+        row(start / kSumBlock * kSumBlock) {}
+  const double* x;
+  std::int64_t rs;
+  Eigen::Index nc;
+  const double* big;
+  std::vector<double> sum, comp;  // TwoSum state of S[row], per channel
+  std::int64_t row;
+};
+
+/// Advance K cursors together by `rows` rows (interleaved: K independent chains), writing
+/// the split S of the rows passed to hi[i], lo[i] (rows x nc, row-major) unless null.
+template <int K>
+inline void fill_prefix(PrefixCursor* const* cur, std::int64_t rows, double* const* hi, double* const* lo) {
+  const Eigen::Index nc = cur[0]->nc;
+  for (Eigen::Index c = 0; c < nc; ++c) {
+    const auto uc = static_cast<std::size_t>(c);
+    double sum[K], comp[K], big[K];
+    const double* x[K];
+    for (int i = 0; i < K; ++i) {
+      sum[i] = cur[i]->sum[uc];
+      comp[i] = cur[i]->comp[uc];
+      big[i] = cur[i]->big[uc];
+      x[i] = cur[i]->x + cur[i]->row * cur[i]->rs + c;
+    }
+    const std::int64_t rs = cur[0]->rs;
+    for (std::int64_t r = 0; r < rows; ++r) {
+      for (int i = 0; i < K; ++i) {
+        if (hi[i] != nullptr) {
+          const double h = (sum[i] + big[i]) - big[i];  // exact rounding (no fast-math)
+          hi[i][r * nc + c] = h;
+          lo[i][r * nc + c] = (sum[i] - h) + comp[i];  // sum - h is exact
+        }
+        double t, e;
+        two_sum(sum[i], x[i][r * rs], t, e);  // branch free: the only chain is sum += x
+        sum[i] = t;
+        comp[i] += e;
+      }
+    }
+    for (int i = 0; i < K; ++i) {
+      cur[i]->sum[uc] = sum[i];
+      cur[i]->comp[uc] = comp[i];
+    }
+  }
+  for (int i = 0; i < K; ++i) cur[i]->row += rows;
+}
+
+/// A cursor at row `start`: from the plan's state at the block below, moved on.
+inline PrefixCursor prefix_cursor(const PhaseRef& phase, const PrefixPlan& plan, std::int64_t start) {
+  PrefixCursor cur(phase, plan, start);
+  PrefixCursor* one[1] = {&cur};
+  double* none[1] = {nullptr};
+  fill_prefix<1>(one, start - cur.row, none, none);
+  return cur;
+}
+
+/// Modified AVAR sums of one factor beyond kTileMaxM (no other factor shares its rows). The
+/// terms are cut into four lanes of whole blocks; in each lane the window
+/// w_j = S[j+3m] - 3 S[j+2m] + 3 S[j+m] - S[j] starts from prefix cursors and moves on by the
+/// third difference of the phase, w_{j+1} = w_j + d3(j), kept as a TwoSum pair. The lanes are
+/// independent dependency chains run side by side; no prefix sums are stored. The lanes'
+/// block sums go to per-lane compensated totals, added to totals in lane order.
+inline void add_modified_single(const PhaseRef& phase, const PrefixPlan& plan, std::int64_t m,
+                                std::int64_t count, NeumaierSum* totals) {
+  constexpr int kLanes = 4;
+  const Eigen::Index nc = phase.cols();
+  const std::int64_t rs = phase.outerStride();
+  const std::int64_t chunk = kSumBlock;
+  const std::int64_t blocks = (count + chunk - 1) / chunk;
+  const std::int64_t lane_len = (blocks + kLanes - 1) / kLanes * chunk;  // whole blocks
+  std::int64_t first[kLanes], len[kLanes];
+  for (int k = 0; k < kLanes; ++k) {
+    first[k] = std::min(count, k * lane_len);
+    len[k] = std::min(count, first[k] + lane_len) - first[k];
+  }
+  // the window at each lane's first term, from the exact prefix sums
+  std::vector<double> w0(static_cast<std::size_t>(kLanes * nc));
+  for (int k = 0; k < kLanes; ++k) {
+    if (len[k] == 0) continue;
+    PrefixCursor c0 = prefix_cursor(phase, plan, first[k]), c1 = prefix_cursor(phase, plan, first[k] + m),
+                 c2 = prefix_cursor(phase, plan, first[k] + 2 * m), c3 = prefix_cursor(phase, plan, first[k] + 3 * m);
+    PrefixCursor* cur[4] = {&c0, &c1, &c2, &c3};
+    std::vector<double> buf(static_cast<std::size_t>(8 * nc));
+    double* hi[4];
+    double* lo[4];
+    for (int i = 0; i < 4; ++i) {
+      hi[i] = buf.data() + 2 * i * nc;
+      lo[i] = buf.data() + (2 * i + 1) * nc;
+    }
+    fill_prefix<4>(cur, 1, hi, lo);
+    const SplitTaps t{{hi[0], hi[1], hi[2], hi[3]}, {lo[0], lo[1], lo[2], lo[3]}, nc};
+    for (Eigen::Index c = 0; c < nc; ++c) w0[static_cast<std::size_t>(k * nc + c)] = tap_diff(t, c);
+  }
+  std::vector<double> d3(static_cast<std::size_t>(kLanes * chunk));
+  for (Eigen::Index c = 0; c < nc; ++c) {
+    double hi[kLanes], lo[kLanes];
+    NeumaierSum lane_total[kLanes];
+    for (int k = 0; k < kLanes; ++k) {
+      hi[k] = w0[static_cast<std::size_t>(k * nc + c)];
+      lo[k] = 0.0;
+    }
+    const double* x = phase.data() + c;
+    for (std::int64_t start = 0; start < lane_len; start += chunk) {
+      std::int64_t n[kLanes];
+      for (int k = 0; k < kLanes; ++k) {
+        n[k] = std::max<std::int64_t>(0, std::min(chunk, len[k] - start));
+        const double* b = x + (first[k] + start) * rs;
+        const Taps<3> t{{b, b + m * rs, b + 2 * m * rs, b + 3 * m * rs}, rs};
+        double* out = d3.data() + k * chunk;
+        if (rs == 1) {
+          for (std::int64_t j = 0; j < n[k]; ++j) out[j] = tap_diff(t, j);
+        } else {
+          for (std::int64_t j = 0; j < n[k]; ++j) out[j] = tap_diff(t, j * rs);
+        }
+      }
+      double a[kLanes][4] = {};
+      const std::int64_t common = *std::min_element(n, n + kLanes) / 4 * 4;
+      std::int64_t j = 0;
+      for (; j < common; j += 4) {  // the lanes' chains side by side, four terms each
+        for (int r = 0; r < 4; ++r) {
+          double w[kLanes];
+          for (int k = 0; k < kLanes; ++k) w[k] = hi[k] + lo[k];
+          for (int k = 0; k < kLanes; ++k) a[k][r] += w[k] * w[k];
+          for (int k = 0; k < kLanes; ++k) {
+            const double v = d3[static_cast<std::size_t>(k * chunk + j + r)];
+            const double sum = hi[k] + v;
+            const double bb = sum - hi[k];
+            lo[k] += (hi[k] - (sum - bb)) + (v - bb);  // TwoSum error
+            hi[k] = sum;
           }
         }
-        out[c] = total.value() / (2.0 * md * md * md * md * nd);
       }
-      return;
+      for (int k = 0; k < kLanes; ++k)
+        for (std::int64_t i = j; i < n[k]; ++i) {
+          const double w = hi[k] + lo[k];
+          a[k][i & 3] += w * w;
+          double sum, e;
+          two_sum(hi[k], d3[static_cast<std::size_t>(k * chunk + i)], sum, e);
+          hi[k] = sum;
+          lo[k] += e;
+        }
+      for (int k = 0; k < kLanes; ++k)
+        if (n[k] > 0) lane_total[k].add((a[k][0] + a[k][1]) + (a[k][2] + a[k][3]));
     }
-    case VarianceKind::Total: {
-      const std::int64_t last = M - 1;
-      const auto ext = [&](std::int64_t j, Eigen::Index c) {
-        if (j < 0) return 2.0 * at(0, c) - at(-j, c);
-        if (j > last) return 2.0 * at(last, c) - at(2 * last - j, c);
-        return at(j, c);
-      };
-      std::vector<NeumaierSum> totals(static_cast<std::size_t>(nc));
-      detail::add_squares(n, nc, [&](std::int64_t j, Eigen::Index c) {
-        const std::int64_t i = j + 1;
-        return detail::diff2(ext(i - m, c), at(i, c), ext(i + m, c));
-      }, totals.data());
-      for (Eigen::Index c = 0; c < nc; ++c)
-        out[c] = totals[static_cast<std::size_t>(c)].value() / (2.0 * md * md * nd);
-      return;
-    }
+    for (int k = 0; k < kLanes; ++k) totals[c].add(lane_total[k].value());
   }
 }
 
-namespace detail {
+/// The end terms of the total variance, which read the reflected extension: term j of the
+/// left end is i = j + 1 (x*[i-m] = 2 x[0] - x[m-i]), of the right end i = M - m + j
+/// (x*[i+m] = 2 x[M-1] - x[M-2-j]); j < m - 1 on either side. One channel, row stride rs.
+struct LeftEnd {
+  const double* x;
+  std::int64_t rs, m;
+  double twice_first;
+};
+struct RightEnd {
+  const double* x;
+  std::int64_t rs, m, M;
+  double twice_last;
+};
+ALLANITE_ALWAYS_INLINE double tap_diff(const LeftEnd& t, std::int64_t j) noexcept {
+  return diff2(t.twice_first - t.x[(t.m - 1 - j) * t.rs], t.x[(j + 1) * t.rs], t.x[(j + 1 + t.m) * t.rs]);
+}
+ALLANITE_ALWAYS_INLINE double tap_diff(const RightEnd& t, std::int64_t j) noexcept {
+  return diff2(t.x[(t.M - 2 * t.m + j) * t.rs], t.x[(t.M - t.m + j) * t.rs], t.twice_last - t.x[(t.M - 2 - j) * t.rs]);
+}
+
+/// Add the 2 (m - 1) end terms of the total variance to totals (the others are the
+/// overlapping AVAR's terms): per channel, the left end's blocks, then the right end's.
+inline void add_total_ends(const PhaseRef& phase, std::int64_t m, NeumaierSum* totals) {
+  const std::int64_t M = phase.rows();
+  const std::int64_t rs = phase.outerStride();
+  for (Eigen::Index c = 0; c < phase.cols(); ++c) {
+    const double* x = phase.data() + c;
+    add_diff_squares_1ch_impl(LeftEnd{x, rs, m, 2.0 * x[0]}, m - 1, totals[c]);
+    add_diff_squares_1ch_impl(RightEnd{x, rs, m, M, 2.0 * x[(M - 1) * rs]}, m - 1, totals[c]);
+  }
+}
 
 /// Terms per tile of the tau-blocked pass (a multiple of kSumBlock, so the block grid of
-/// every factor is unchanged and the sums are bit-for-bit those of variance_one).
+/// every factor is unchanged and the sums are bit-for-bit those of a single pass).
 constexpr std::int64_t kTileTerms = 8 * kSumBlock;
 /// Largest factor tiled: the tile's rows (kTileTerms + 3m) x channels stay in L2.
 constexpr std::int64_t kTileMaxM = 8192;
 
-/// Overlapping AVAR/HVAR of the factors ms[idx[...]] in one pass over the phase: tile by
-/// tile, every factor adds the tile's terms to its own compensated sums.
-inline void variance_tiled(const PhaseRef& phase, VarianceKind kind, const std::vector<std::int64_t>& ms,
-                           const std::vector<std::size_t>& idx, RowMatrix& out) {
+/// Difference terms a kind sums with its taps: all of them, except for the total variance,
+/// whose taps cover the M - 2m terms equal to the overlapping AVAR's (add_total_ends adds
+/// the others).
+inline std::int64_t tap_terms(VarianceKind kind, std::int64_t M, std::int64_t m) {
+  return kind == VarianceKind::Total ? M - 2 * m : n_terms(kind, M, m);
+}
+
+/// Variances of the factors ms[idx[...]] in one pass over the rows: tile by tile of
+/// kTileTerms terms, every factor adds the tile's terms to its own compensated sums (for a
+/// single factor that is one plain pass). `plan`: the prefix sums (modified only), regenerated
+/// tile by tile into a window of kTileTerms + 3 max(m) rows.
+inline void variance_group(const PhaseRef& phase, const PrefixPlan* plan, VarianceKind kind,
+                           const std::vector<std::int64_t>& ms, const std::vector<std::size_t>& idx,
+                           RowMatrix& out) {
   const std::int64_t M = phase.rows();
   const Eigen::Index nc = phase.cols();
   const double* x = phase.data();
   const std::int64_t rs = phase.outerStride();
-  const bool had = kind == VarianceKind::Hadamard;
   std::vector<std::vector<NeumaierSum>> totals(idx.size(), std::vector<NeumaierSum>(static_cast<std::size_t>(nc)));
   std::vector<std::int64_t> n(idx.size());
   std::int64_t longest = 0;
   for (std::size_t a = 0; a < idx.size(); ++a) {
-    n[a] = n_terms(kind, M, ms[idx[a]]);
+    n[a] = tap_terms(kind, M, ms[idx[a]]);
     longest = std::max(longest, n[a]);
   }
+  const bool strided = kind == VarianceKind::Standard || kind == VarianceKind::StandardHadamard;
+  // modified: the window holds S[k0 .. k0 + kTileTerms + 3 max(m)) of the current tile
+  std::int64_t top_m = 0;
+  for (const std::size_t i : idx) top_m = std::max(top_m, ms[i]);
+  // modified beyond kTileMaxM (a factor alone): four cursors instead, add_modified_single
+  const bool windowed = kind == VarianceKind::Modified && top_m <= kTileMaxM;
+  if (kind == VarianceKind::Modified && !windowed) longest = 0;
+  const std::int64_t window = windowed ? std::min(kTileTerms + 3 * top_m, M + 1) : 0;
+  std::vector<double> win_hi(static_cast<std::size_t>(window * nc)), win_lo(win_hi.size());
+  std::int64_t filled = 0;  // rows of the window holding S[k0 ...]
+  std::optional<PrefixCursor> cursor;
+  if (windowed) cursor.emplace(prefix_cursor(phase, *plan, 0));
   for (std::int64_t k0 = 0; k0 < longest; k0 += kTileTerms) {
-    const double* base = x + k0 * rs;
+    if (windowed) {
+      if (k0 > 0) {  // drop the previous tile's rows, keep the overlap
+        const std::int64_t keep = filled - kTileTerms;
+        std::copy(win_hi.begin() + kTileTerms * nc, win_hi.begin() + filled * nc, win_hi.begin());
+        std::copy(win_lo.begin() + kTileTerms * nc, win_lo.begin() + filled * nc, win_lo.begin());
+        filled = keep;
+      }
+      const std::int64_t want = std::min(window, M + 1 - k0);
+      PrefixCursor* one[1] = {&*cursor};
+      double* hi[1] = {win_hi.data() + filled * nc};
+      double* lo[1] = {win_lo.data() + filled * nc};
+      fill_prefix<1>(one, want - filled, hi, lo);
+      filled = want;
+    }
     for (std::size_t a = 0; a < idx.size(); ++a) {
       if (k0 >= n[a]) continue;
       const std::int64_t m = ms[idx[a]];
       const std::int64_t count = std::min(kTileTerms, n[a] - k0);
-      if (had) {
-        const Taps<3> t{{base, base + m * rs, base + 2 * m * rs, base + 3 * m * rs}, rs};
-        add_diff_squares(t, count, nc, totals[a].data());
-      } else {
-        const Taps<2> t{{base, base + m * rs, base + 2 * m * rs}, rs};
-        add_diff_squares(t, count, nc, totals[a].data());
+      const std::int64_t step = (strided ? m : 1) * rs;
+      NeumaierSum* tot = totals[a].data();
+      switch (kind) {
+        case VarianceKind::Modified: {
+          const double* h = win_hi.data();
+          const double* l = win_lo.data();
+          const std::int64_t s = m * nc;
+          add_diff_squares(SplitTaps{{h, h + s, h + 2 * s, h + 3 * s}, {l, l + s, l + 2 * s, l + 3 * s}, nc},
+                           count, nc, tot);
+          break;
+        }
+        case VarianceKind::Hadamard:
+        case VarianceKind::StandardHadamard: {
+          const double* b = x + k0 * step;
+          add_diff_squares(Taps<3>{{b, b + m * rs, b + 2 * m * rs, b + 3 * m * rs}, step}, count, nc, tot);
+          break;
+        }
+        default: {
+          const double* b = x + k0 * step;
+          add_diff_squares(Taps<2>{{b, b + m * rs, b + 2 * m * rs}, step}, count, nc, tot);
+          break;
+        }
       }
     }
   }
-  const double norm = had ? 6.0 : 2.0;
   for (std::size_t a = 0; a < idx.size(); ++a) {
-    const double md = static_cast<double>(ms[idx[a]]);
-    const double nd = static_cast<double>(n[a]);
+    const std::int64_t m = ms[idx[a]];
+    if (kind == VarianceKind::Modified && top_m > kTileMaxM)
+      add_modified_single(phase, *plan, m, n[a], totals[a].data());
+    if (kind == VarianceKind::Total) add_total_ends(phase, m, totals[a].data());
+    const double md = static_cast<double>(m);
+    const double nd = static_cast<double>(n_terms(kind, M, m));
+    double norm = 2.0 * md * md * nd;
+    if (kind == VarianceKind::Hadamard || kind == VarianceKind::StandardHadamard) norm = 6.0 * md * md * nd;
+    if (kind == VarianceKind::Modified) norm = 2.0 * md * md * md * md * nd;
     for (Eigen::Index c = 0; c < nc; ++c)
-      out(static_cast<Eigen::Index>(idx[a]), c) = totals[a][static_cast<std::size_t>(c)].value() / (norm * md * md * nd);
+      out(static_cast<Eigen::Index>(idx[a]), c) = totals[a][static_cast<std::size_t>(c)].value() / norm;
   }
 }
 
 }  // namespace detail
 
 /// Variances for a list of averaging factors (rows of the result), threaded over factors.
-/// Bit-for-bit independent of `threads`: each factor is computed by one thread.
+/// Bit-for-bit independent of `threads`: each factor is computed by one thread, and its sums
+/// run in the same order whichever group it falls in.
 inline RowMatrix variance(const PhaseRef& phase, const std::vector<std::int64_t>& ms,
                           VarianceKind kind, int threads) {
   const std::int64_t M = phase.rows();
@@ -385,13 +649,16 @@ inline RowMatrix variance(const PhaseRef& phase, const std::vector<std::int64_t>
                                   " phase points; use a shorter averaging time");
   }
   RowMatrix out(static_cast<Eigen::Index>(ms.size()), phase.cols());
+  if (ms.empty()) return out;
   const int nthreads = resolve_threads(threads);
-  // Cache blocking over taus: the overlapping estimators at small m read the same rows, so
-  // they share passes (detail::variance_tiled); one group per thread, the other factors are
-  // one task each. Longest tasks first keeps both cores busy to the end.
+  detail::PrefixPlan plan;
+  if (kind == VarianceKind::Modified) plan = detail::prefix_plan(phase);
+  // Cache blocking over taus: the overlapping-type estimators at small m read the same rows,
+  // so they share passes (detail::variance_group); one group per thread, the other factors
+  // are one task each. Longest tasks first keeps both cores busy to the end.
   std::vector<std::vector<std::size_t>> groups;
   std::vector<std::size_t> single;
-  const bool tiled = (kind == VarianceKind::Overlapping || kind == VarianceKind::Hadamard);
+  const bool tiled = kind != VarianceKind::Standard && kind != VarianceKind::StandardHadamard;
   std::vector<std::size_t> small;
   for (std::size_t i = 0; i < ms.size(); ++i) {
     if (tiled && ms[i] <= detail::kTileMaxM)
@@ -408,10 +675,9 @@ inline RowMatrix variance(const PhaseRef& phase, const std::vector<std::int64_t>
   }
   parallel_for(groups.size() + single.size(), nthreads, [&](std::size_t task) {
     if (task < groups.size()) {
-      detail::variance_tiled(phase, kind, ms, groups[task], out);
+      detail::variance_group(phase, &plan, kind, ms, groups[task], out);
     } else {
-      const std::size_t i = single[task - groups.size()];
-      variance_one(phase, kind, ms[i], out.data() + static_cast<Eigen::Index>(i) * phase.cols());
+      detail::variance_group(phase, &plan, kind, ms, {single[task - groups.size()]}, out);
     }
   });
   return out;

@@ -214,7 +214,7 @@ def run(args: argparse.Namespace) -> int:
     with _client(args.dask) as client, progress_bars(args.progress) as bar:
         result = batch(
             paths,
-            args.fs,
+            fs=args.fs,
             datasheet=args.datasheet,
             terms=_terms(args.terms),
             level=args.level,

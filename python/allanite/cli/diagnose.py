@@ -80,7 +80,14 @@ def register(subparsers: Any) -> None:
     diag.add_argument(
         "--n-mc", type=int, default=200, help="Monte Carlo replicates of the null (default 200)"
     )
-    diag.add_argument("--alpha", type=float, default=0.05, help="significance level (0.05)")
+    diag.add_argument(
+        "--significance",
+        "--alpha",
+        dest="significance",
+        type=float,
+        default=0.05,
+        help="significance level of the tests (default 0.05; --alpha is its old name)",
+    )
     diag.add_argument("--seed", type=int, default=0, help="Monte Carlo seed (default 0)")
     diag.add_argument(
         "--progress",
@@ -219,7 +226,7 @@ def run(args: argparse.Namespace) -> int:
     result = diagnose(
         real,
         sim,
-        fs,
+        fs=fs,
         input=part.input,
         units=rate_unit(part),
         sim_units=args.sim_units,
@@ -228,7 +235,7 @@ def run(args: argparse.Namespace) -> int:
         holdout=_holdout(args),
         effects=effects,
         n_mc=args.n_mc,
-        alpha=args.alpha,
+        significance=args.significance,
         seed=args.seed,
         progress=_progress_printer() if show else None,
     )

@@ -108,8 +108,8 @@ def run(args: argparse.Namespace) -> int:
         write_record(
             args.out,
             model,
-            args.fs,
             n,
+            fs=args.fs,
             output=args.output,
             n_channels=args.n_channels,
             seed=args.seed,

@@ -18,7 +18,14 @@ warmup         level, level jump, kurtosis of block means      level or jump
 spikes         spike statistic, kurtosis of differences, hf    the spike statistic
 telegraph      kurtosis of block means, dyn, jump, level       kurtosis of block means
 bursts         hf, kurtosis of differences, spike statistic    hf (noise-level changes)
+resonance      --                                              a band-pass shaped excess
+                                                               whose peak stays put
+drifting_line  kurtosis of differences and of block means      a band-pass shaped excess
+               (a sinusoid is platykurtic)                     whose peak moves linearly
 =============  ==============================================  ==========================
+
+The last two come from :func:`allanite.diagnosis.band_shape.band_shape` (frequency view and
+spectrogram); their shape parameters are fixed there and only the level is fitted.
 
 An effect whose signature is absent is not proposed (a telegraph without a non-Gaussian
 amplitude distribution is a Gauss-Markov process; the simpler term is the answer).
@@ -57,6 +64,8 @@ EFFECTS: dict[str, str] = {
     "telegraph": "telegraph",
     "lowpass": "lowpass_white",
     "bursts": "white_bursts",
+    "resonance": "resonance",
+    "drifting_line": "drifting_line",
 }
 
 #: evidence (non-tau statistics) each effect can explain
@@ -70,6 +79,9 @@ EXPLAINS: dict[str, frozenset[str]] = {
     "spikes": frozenset({"spike", "kurt_hf", "hf"}),
     "telegraph": frozenset({"kurt_lf", "dyn", "jump", "level"}),
     "bursts": frozenset({"hf", "kurt_hf", "spike"}),
+    # a sinusoid's amplitude follows the arcsine law: platykurtic samples, differences and
+    # short block means
+    "drifting_line": frozenset({"kurt_hf", "kurt_lf"}),
 }
 
 #: evidence an effect needs before it is proposed (any of)
@@ -199,6 +211,7 @@ def candidate_library(
     warmup_tau: float | None = None,
     effects: list[str] | None = None,
     bursts: tuple[float, float] | None = None,
+    band: Any = None,
 ) -> tuple[list[Candidate], list[str]]:
     """Candidates to fit, and the effects that cannot be tried (no Term class, no model term).
 
@@ -226,6 +239,10 @@ def candidate_library(
         fitted, like the single free parameter of a bias step).
     effects : list of str, optional
         Restrict the library to these effects (``rescale`` selects every rescale).
+    band : BandShape, optional
+        A band-pass shaped excess of the frequency view
+        (:func:`allanite.diagnosis.band_shape.band_shape`): ``resonance`` or
+        ``drifting_line`` is proposed with its shape fixed and its level free.
     """
     wanted = effects if effects is not None else list(EFFECTS)
     terms = _model_terms(model)
@@ -264,6 +281,14 @@ def candidate_library(
                 continue
             # the time view locates the bursts: their share of the time and mean length
             fixed["duty"], fixed["burst_s"] = bursts
+        elif effect in ("resonance", "drifting_line"):
+            if band is None or band.kind != effect:
+                continue
+            level = "N" if effect == "resonance" else "amplitude"
+            fixed.update({k: v for k, v in band.params.items() if k != level})
+            start[level] = band.params[level]
+            if effect == "drifting_line":
+                fixed["duration"] = duration
         elif effect == "lowpass":
             replaces = whites[0]
             fixed["N"] = float(replaces.values()["N"])

@@ -2,14 +2,16 @@
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from allanite._deprecation import renamed
 from allanite.diagnosis.analysis import Analysis, Progress, analyze
-from allanite.diagnosis.attribution import rank
+from allanite.diagnosis.attribution import Attribution, rank
+from allanite.diagnosis.band_shape import band_shape
 from allanite.diagnosis.candidates import candidate_library, check_effects
 from allanite.diagnosis.holdout import holdout_check, holdout_set, tau_model_for
 from allanite.diagnosis.inputs import (
@@ -24,8 +26,10 @@ from allanite.diagnosis.level_shape import warmup_time_constant
 from allanite.diagnosis.null import runs
 from allanite.diagnosis.result import Diagnosis, Holdout
 from allanite.diagnosis.verdict import verdict
+from allanite.io.record import Record
 from allanite.terms import term_from_dict
 from allanite.variance.checks import check_fs as _check_fs
+from allanite.variance.checks import resolve_source
 
 __all__ = ["diagnose"]
 
@@ -78,11 +82,11 @@ def _evidence(analysis: Analysis) -> dict[str, float]:
 
 
 def diagnose(
-    real: ArrayLike,
+    real: ArrayLike | Record,
     sim: Any,
-    fs: float,
     *,
-    input: str = "rate",
+    fs: float | None = None,
+    input: str | None = None,
     units: str | None = None,
     sim_units: str | None = None,
     sim_input: str = "rate",
@@ -90,9 +94,10 @@ def diagnose(
     holdout: float | ArrayLike | None = None,
     effects: list[str] | None = None,
     n_mc: int = 200,
-    alpha: float = 0.05,
+    significance: float = 0.05,
     seed: int = 0,
     progress: Progress | None = None,
+    alpha: float | None = None,
 ) -> Diagnosis:
     r"""Where and why a simulated sensor differs from a real record.
 
@@ -112,15 +117,17 @@ def diagnose(
 
     Parameters
     ----------
-    real : array_like
-        The real record, one channel.
+    real : array_like or Record
+        The real record, one channel. A :class:`~allanite.io.Record` brings its own ``fs``,
+        ``input`` and unit (giving them as well is allowed only when they agree).
     sim : NoiseModel, str, dict, path or array_like
         The simulated sensor: a NoiseModel (or its JSON text, dict or file path) or a
         simulated record at least as long as ``real``.
     fs : float
-        Sampling frequency in Hz of both records.
-    input : {"rate", "increment", "angle"}
-        What the real samples are.
+        Sampling frequency in Hz of both records (keyword-only; required for a raw array,
+        taken from a Record).
+    input : {"rate", "increment", "angle"}, optional
+        What the real samples are (default ``"rate"``, or the Record's).
     units : str, optional
         Rate unit of the real record; must agree with the model's or ``sim_units``.
     sim_units : str, optional
@@ -139,8 +146,9 @@ def diagnose(
         :data:`allanite.diagnosis.candidates.EFFECTS`).
     n_mc : int
         Monte Carlo replicates of the null (at least 20; 200 gives p-values to ~0.005).
-    alpha : float
-        Significance level of every test.
+    significance : float
+        Significance level of every test (``alpha=`` is its deprecated name: ``alpha`` means
+        the noise exponent in :func:`allanite.avar`).
     seed : int
         Seed of the Monte Carlo replicates (results are reproducible).
     progress : callable, optional
@@ -158,10 +166,23 @@ def diagnose(
     D. W. Allan (1966); C. A. Greenhall, W. J. Riley (2003); P. D. Welch (1967); L. Galleani,
     P. Tavella, "The dynamic Allan variance" (2009).
     """
-    rate = _check_fs(fs)
+    significance = renamed(
+        significance,
+        alpha,
+        new="significance",
+        old="alpha",
+        default=0.05,
+        why="alpha is the noise exponent in avar",
+    )
+    samples, rate, input_kind, units, _ = resolve_source(real, fs, input, units)
+    if np.ndim(samples) != 1:
+        raise ValueError(
+            f"diagnose takes one channel, the record has {np.shape(samples)[1]}: pick one, "
+            "e.g. record.select([0])"
+        )
     effects = check_effects(effects)
-    if not 0.0 < alpha < 0.5:
-        raise ValueError(f"alpha must lie in (0, 0.5), got {alpha}")
+    if not 0.0 < significance < 0.5:
+        raise ValueError(f"significance must lie in (0, 0.5), got {significance}")
     if isinstance(n_mc, bool) or not isinstance(n_mc, (int, np.integer)) or n_mc < 20:
         raise ValueError(f"n_mc must be an integer >= 20, got {n_mc!r}")
     if sim_fs is not None and not np.isclose(_check_fs(sim_fs), rate, rtol=1e-9, atol=0.0):
@@ -169,111 +190,34 @@ def diagnose(
             f"sample-rate mismatch: the real record has fs = {rate} Hz but the simulated record "
             f"fs = {sim_fs} Hz; simulate at the real rate (or resample one of them)"
         )
-    x = as_rate(real, rate, input, name="real")
+    x = as_rate(samples, rate, input_kind, name="real")
     source = make_source(sim, rate, x.size, sim_units=sim_units, sim_input=sim_input)
     common_units = check_units(units, source.units)
-    x_fit, x_hold, hold_kind = _split(x, holdout, rate, input)
-    analysis = analyze(x_fit, source, n_mc=int(n_mc), seed=seed, alpha=alpha, progress=progress)
+    x_fit, x_hold, hold_kind = _split(x, holdout, rate, input_kind)
+    run = _Run(x_fit, rate, source, int(n_mc), seed, significance, progress)
+    analysis = analyze(
+        x_fit, source, n_mc=run.n_mc, seed=seed, alpha=significance, progress=progress
+    )
     p = analysis.p_value
-    significant = bool(p < alpha)
-    attribution = []
-    unavailable: list[str] = []
-    by_effect: dict[str, Any] = {}
-    explanation: Explanation | None = None
+    significant = bool(p < significance)
     ev_p = _evidence(analysis)
-    sig: dict[str, bool] = {}
-    if significant:
-        sig = {k: v < alpha / len(ev_p) for k, v in ev_p.items()}
-        spikes = None
-        if analysis.time.spike_times_s:
-            duration = x_fit.size / rate
-            height = float(np.sqrt(np.mean(np.square(analysis.time.spike_amplitudes))))
-            spikes = (len(analysis.time.spike_times_s) / duration, height)
-        if progress is not None:
-            progress("fitting candidate effects", 0, 1)
-        cands, unavailable = candidate_library(
-            sig,
-            duration=x_fit.size / rate,
-            n_changes=len(analysis.time.change_points_s),
-            warmup_tau=warmup_time_constant(analysis.time, x_fit.size / rate),
-            model=source.model,
-            lines=[(ln.frequency_hz, ln.amplitude) for ln in analysis.frequency.lines],
-            spikes=spikes,
-            effects=effects,
-            bursts=_bursts(analysis.time),
-        )
-        # the same calibrated test ranks single effects and selects the joint set
-        test: dict[str, Any] = {
-            "alpha": alpha,
-            "evidence_p": ev_p,
-            "significant": sig,
-            "time_view": analysis.time,
-            "duration": x_fit.size / rate,
-        }
-        attribution = rank(cands, analysis.tau_model, **test)
-        by_effect = {c.effect: c for c in cands}
-        if attribution:
-            explanation = explain(attribution[0], cands, analysis.tau_model, **test)
-    after: Analysis | None = None
-    if explanation is not None and source.model is not None:
-        # the frequency and time views re-run against the simulated sensor WITH the effects:
-        # their statistics (bursts, kurtosis, band levels) depend on the whole noise, so only
-        # a null of the augmented model says whether they are consistent after the effects
-        combined = replace(
-            source.model,
-            terms=tuple(term_from_dict(t) for t in combined_terms(explanation, source.model)),
-        )
-        after = analyze(
-            x_fit,
-            SimSource(fs=rate, model=combined, units=source.units),
-            n_mc=int(n_mc),
-            seed=seed + 2_000_003,
-            alpha=alpha,
-            progress=progress,
-            stage="re-analysis with the effects",
-        )
+    found = _attribute(run, analysis, ev_p, effects) if significant else _Found()
+    after = _reanalysis(run, found.explanation)
     head = verdict(
         significant=significant,
         p_value=p,
-        alpha=alpha,
+        alpha=significance,
         tau_model=analysis.tau_model,
         tau=analysis.tau,
         frequency=analysis.frequency,
         time=analysis.time,
         evidence_p=ev_p,
-        evidence_significant=sig,
-        explanation=explanation,
+        evidence_significant=found.significant,
+        explanation=found.explanation,
         units=common_units,
         after=after,
     )
-    held: Holdout | None = None
-    if explanation is not None:
-        explanation = replace(explanation, terms=combined_terms(explanation, source.model))
-    starts_only = explanation is not None and any(
-        a.effect in START_EFFECTS for a in explanation.effects
-    )
-    if x_hold is not None and attribution and not starts_only:
-        if progress is not None:
-            progress("held-out null", 0, 1)
-        tm_hold = tau_model_for(x_hold, source, n_mc=int(n_mc), seed=seed + 1_000_003)
-        best = attribution[0]
-        if best.effect not in START_EFFECTS:
-            held = holdout_check(
-                best,
-                by_effect[best.effect],
-                x_hold,
-                source,
-                n_mc=int(n_mc),
-                seed=seed + 1_000_003,
-                alpha=alpha,
-                kind=hold_kind,
-                tm=tm_hold,
-            )
-        if explanation is not None:
-            pairs = list(zip(explanation.effects, explanation.candidates, strict=True))
-            explanation = replace(
-                explanation, holdout=holdout_set(pairs, tm_hold, alpha=alpha, kind=hold_kind)
-            )
+    explanation, held = _held_out(run, found, x_hold, hold_kind)
     return Diagnosis(
         statistic=analysis.tau.gap,
         p_value=p,
@@ -281,7 +225,7 @@ def diagnose(
         tau=analysis.tau,
         frequency=analysis.frequency,
         time=analysis.time,
-        attribution=attribution,
+        attribution=found.attribution,
         holdout=held,
         explanation=explanation,
         closed=head.closed,
@@ -293,11 +237,140 @@ def diagnose(
             "n_fit": int(x_fit.size),
             "units": common_units,
             "sim": source.kind,
-            "n_mc": int(n_mc),
+            "n_mc": run.n_mc,
             "n_null": analysis.n_null,
-            "alpha": alpha,
+            "significance": significance,
             "seed": seed,
             "evidence_p_values": ev_p,
-            "unavailable_effects": unavailable,
+            "unavailable_effects": found.unavailable,
         },
     )
+
+
+@dataclass(frozen=True)
+class _Run:
+    """What every stage of one diagnosis shares: the fitted part, the sensor, the settings."""
+
+    x_fit: NDArray[np.float64]
+    fs: float
+    source: Any
+    n_mc: int
+    seed: int
+    significance: float
+    progress: Progress | None
+
+    @property
+    def duration(self) -> float:
+        return self.x_fit.size / self.fs
+
+
+@dataclass(frozen=True)
+class _Found:
+    """The candidates' outcome: ranked single effects, the joint explanation, the evidence."""
+
+    attribution: list[Attribution] = field(default_factory=list)
+    explanation: Explanation | None = None
+    by_effect: dict[str, Any] = field(default_factory=dict)
+    significant: dict[str, bool] = field(default_factory=dict)
+    unavailable: list[str] = field(default_factory=list)
+
+
+def _attribute(
+    run: _Run, analysis: Analysis, ev_p: dict[str, float], effects: list[str] | None
+) -> _Found:
+    """Fit every candidate effect on top of the sensor, rank them and select the joint set."""
+    sig = {k: v < run.significance / len(ev_p) for k, v in ev_p.items()}
+    spikes = None
+    if analysis.time.spike_times_s:
+        height = float(np.sqrt(np.mean(np.square(analysis.time.spike_amplitudes))))
+        spikes = (len(analysis.time.spike_times_s) / run.duration, height)
+    if run.progress is not None:
+        run.progress("fitting candidate effects", 0, 1)
+    cands, unavailable = candidate_library(
+        sig,
+        duration=run.duration,
+        n_changes=len(analysis.time.change_points_s),
+        warmup_tau=warmup_time_constant(analysis.time, run.duration),
+        model=run.source.model,
+        lines=[(ln.frequency_hz, ln.amplitude) for ln in analysis.frequency.lines],
+        spikes=spikes,
+        effects=effects,
+        bursts=_bursts(analysis.time),
+        band=band_shape(run.x_fit, run.fs, analysis.frequency),
+    )
+    # the same calibrated test ranks single effects and selects the joint set
+    test: dict[str, Any] = {
+        "alpha": run.significance,
+        "evidence_p": ev_p,
+        "significant": sig,
+        "time_view": analysis.time,
+        "duration": run.duration,
+    }
+    attribution = rank(cands, analysis.tau_model, **test)
+    explanation = None
+    if attribution:
+        explanation = explain(attribution[0], cands, analysis.tau_model, **test)
+    return _Found(attribution, explanation, {c.effect: c for c in cands}, sig, unavailable)
+
+
+def _reanalysis(run: _Run, explanation: Explanation | None) -> Analysis | None:
+    """The three views again, against the sensor WITH the explanation's effects.
+
+    The frequency and time views' statistics (bursts, kurtosis, band levels) depend on the
+    whole noise, so only a null of the augmented model says whether they are consistent
+    after the effects.
+    """
+    if explanation is None or run.source.model is None:
+        return None
+    model = run.source.model
+    combined = replace(
+        model, terms=tuple(term_from_dict(t) for t in combined_terms(explanation, model))
+    )
+    return analyze(
+        run.x_fit,
+        SimSource(fs=run.fs, model=combined, units=run.source.units),
+        n_mc=run.n_mc,
+        seed=run.seed + 2_000_003,
+        alpha=run.significance,
+        progress=run.progress,
+        stage="re-analysis with the effects",
+    )
+
+
+def _held_out(
+    run: _Run, found: _Found, x_hold: NDArray[np.float64] | None, hold_kind: str
+) -> tuple[Explanation | None, Holdout | None]:
+    """The explanation with its pasteable terms, and the check of the effects on held-out data."""
+    explanation = found.explanation
+    if explanation is not None:
+        explanation = replace(explanation, terms=combined_terms(explanation, run.source.model))
+    starts_only = explanation is not None and any(
+        a.effect in START_EFFECTS for a in explanation.effects
+    )
+    if x_hold is None or not found.attribution or starts_only:
+        return explanation, None
+    if run.progress is not None:
+        run.progress("held-out null", 0, 1)
+    seed = run.seed + 1_000_003
+    tm_hold = tau_model_for(x_hold, run.source, n_mc=run.n_mc, seed=seed)
+    best = found.attribution[0]
+    held = None
+    if best.effect not in START_EFFECTS:
+        held = holdout_check(
+            best,
+            found.by_effect[best.effect],
+            x_hold,
+            run.source,
+            n_mc=run.n_mc,
+            seed=seed,
+            alpha=run.significance,
+            kind=hold_kind,
+            tm=tm_hold,
+        )
+    if explanation is not None:
+        pairs = list(zip(explanation.effects, explanation.candidates, strict=True))
+        explanation = replace(
+            explanation,
+            holdout=holdout_set(pairs, tm_hold, alpha=run.significance, kind=hold_kind),
+        )
+    return explanation, held

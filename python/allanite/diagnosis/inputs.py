@@ -216,7 +216,7 @@ def simulate_model(
     Tones above the Nyquist frequency are simulated aliased, as a real sampled sensor sees
     them.
     """
-    out = model.simulate(n, fs, n_channels=n_channels, seed=seed, allow_aliasing=True)
+    out = model.simulate(n, fs=fs, n_channels=n_channels, seed=seed, allow_aliasing=True)
     out = np.asarray(out, dtype=np.float64)
     return out.reshape(n, -1)
 

@@ -10,6 +10,16 @@ ratio test ``Delta T > chi2_{1-alpha}(k)`` or significant evidence explained, wi
 Selection stops when the tau view is consistent with chance and no significant evidence is
 left, when no candidate passes the test, or after :data:`MAX_EFFECTS` effects.
 
+Exchange: each chosen effect is then refitted, with every candidate, on top of the others
+(the same ranking against the evidence the others leave); when another candidate ranks
+first it replaces the effect (greedy forward selection can start from an effect that only
+mimics two true ones, e.g. a rate random walk for a ramp plus Gauss-Markov noise). Two passes
+at most.
+
+In both steps the time view's window-mean spreads include the slow noise of the stationary
+effects already in the set (:func:`with_level_background`): a ramp or a warm-up on top of
+Gauss-Markov noise is judged against that noise, not against the bare simulation.
+
 Backward check: an effect is dropped again when removing it (the others kept) raises ``T`` by
 less than the ``chi2_{1-alpha}(k)`` quantile and it is the only one to explain none of the
 evidence, i.e. it no longer earns its parameters in the presence of the later effects.
@@ -30,9 +40,17 @@ from scipy import stats
 from allanite.diagnosis.attribution import Attribution, rank
 from allanite.diagnosis.candidates import Candidate
 from allanite.diagnosis.tau_view import TauModel
-from allanite.diagnosis.time_view import TimeView
+from allanite.diagnosis.time_view import TimeView, added_level_variance
 
-__all__ = ["MAX_EFFECTS", "Explanation", "combined_terms", "explain", "with_background"]
+__all__ = [
+    "LEVEL_SHAPES",
+    "MAX_EFFECTS",
+    "Explanation",
+    "combined_terms",
+    "explain",
+    "with_background",
+    "with_level_background",
+]
 
 #: at most this many effects in one explanation
 MAX_EFFECTS = 4
@@ -107,6 +125,55 @@ def with_background(tm: TauModel, extra: NDArray[np.float64]) -> TauModel:
     return replace(tm, ref=tm.ref + np.log(ratio), sim_avar=tm.sim_avar * ratio)
 
 
+#: effects whose window means are a deterministic shape, not noise (see level_shape)
+LEVEL_SHAPES = ("ramp", "step", "warmup")
+
+
+def with_level_background(
+    tv: TimeView | None,
+    chosen: list[Attribution],
+    chosen_c: list[Candidate],
+    tm: TauModel,
+    duration: float,
+    cache: dict[str, NDArray[np.float64]],
+) -> TimeView | None:
+    """The time view with the chosen stationary effects' slow noise added to its null spreads.
+
+    A Gauss-Markov or flicker effect already in the set scatters the window means: the level
+    spreads become ``sqrt(s_w^2 + v_w)`` (``v_w`` the effect's own level variance per window,
+    :func:`~allanite.diagnosis.time_view.added_level_variance`) and the jump spreads
+    ``sqrt(s^2 + 2 A(window))``, so a level shape (ramp, warm-up, step) fitted on top of them
+    is judged against the noise the set already has, not against the bare simulation.
+    """
+    if tv is None or "level" not in tv.spread or "jump" not in tv.spread:
+        return tv
+    fs, n_fit = 1.0 / tm.dt, round(duration / tm.dt)
+    w = tv.level.size
+    if n_fit < 2 * w:
+        return tv
+    v = np.zeros(w)
+    a_w = 0.0
+    for a, c in zip(chosen, chosen_c, strict=True):
+        if c.effect in LEVEL_SHAPES:
+            continue
+        added = c.added_term({k: a.params[k] for k in c.free})
+        if added is None:
+            continue
+        key = repr(added)
+        if key not in cache:
+            cache[key] = added_level_variance(added, fs, n_fit, w)
+        v = v + cache[key]
+        with np.errstate(all="ignore"):
+            aw = float(np.asarray(added.avar(np.array([tv.window_s]), tm.dt))[0])
+        a_w += aw if np.isfinite(aw) else 0.0
+    if not np.any(v > 0) and a_w <= 0:
+        return tv
+    spread = dict(tv.spread)
+    spread["level"] = np.sqrt(spread["level"] ** 2 + v)
+    spread["jump"] = np.sqrt(spread["jump"] ** 2 + 2.0 * a_w)
+    return replace(tv, level_sd=np.sqrt(tv.level_sd**2 + v), spread=spread)
+
+
 def _extra(a: Attribution, tm: TauModel) -> NDArray[np.float64]:
     return np.asarray(a.sim_avar_after, dtype=np.float64) - tm.sim_avar
 
@@ -143,6 +210,7 @@ def explain(
     extras = [best.sim_avar_after - tm.sim_avar]
     explained = set(best.evidence.get("explained", []))
     gaps = [tm.gap(), tm.gap(extras[0])]
+    cache: dict[str, NDArray[np.float64]] = {}
     while len(chosen) < MAX_EFFECTS:
         total = np.sum(extras, axis=0)
         k_total = sum(len(c.free) for c in chosen_c)
@@ -157,7 +225,7 @@ def explain(
             alpha=alpha,
             evidence_p=evidence_p,
             significant=left,
-            time_view=time_view,
+            time_view=with_level_background(time_view, chosen, chosen_c, tm, duration, cache),
             duration=duration,
         )
         # an effect that explains time/frequency evidence but makes the tau view significantly
@@ -172,6 +240,39 @@ def explain(
         extras.append(_extra(nxt, tm_bg))
         explained |= set(nxt.evidence.get("explained", []))
         gaps.append(tm.gap(np.sum(extras, axis=0)))
+    # exchange: each effect refitted against every candidate on top of the others
+    for _ in range(2):
+        swapped = False
+        for i in range(len(chosen)):
+            others_c = [c for j, c in enumerate(chosen_c) if j != i]
+            others = [e for j, e in enumerate(extras) if j != i]
+            bg = np.sum(others, axis=0) if others else np.zeros_like(tm.sim_avar)
+            tm_bg = with_background(tm, bg)
+            told = set().union(
+                *(set(a.evidence.get("explained", [])) for j, a in enumerate(chosen) if j != i)
+            )
+            left = {e: bool(s) and e not in told for e, s in significant.items()}
+            pool = [c for c in candidates if not _same_slot(c, others_c)]
+            others_a = [a for j, a in enumerate(chosen) if j != i]
+            kept = rank(
+                pool,
+                tm_bg,
+                alpha=alpha,
+                evidence_p=evidence_p,
+                significant=left,
+                time_view=with_level_background(time_view, others_a, others_c, tm, duration, cache),
+                duration=duration,
+            )
+            worse = float(stats.chi2.isf(alpha, 1))
+            kept = [a for a in kept if a.evidence["tau"]["delta_T"] > -worse]
+            if not kept or kept[0].effect == chosen[i].effect:
+                continue
+            chosen[i], chosen_c[i] = kept[0], by_effect[kept[0].effect]
+            extras[i] = _extra(kept[0], tm_bg)
+            swapped = True
+        if not swapped:
+            break
+    gaps = [gaps[0]] + [tm.gap(np.sum(extras[: j + 1], axis=0)) for j in range(len(extras))]
     # backward check
     i = 0
     while len(chosen) > 1 and i < len(chosen):

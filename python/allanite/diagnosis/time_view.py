@@ -265,7 +265,7 @@ def added_level_variance(
     model = NoiseModel((term,))
     d = decimation(model, n, fs) if n > 4 * 2**16 else 1
     n_d = n // d
-    x = model.simulate(n_d, fs / d, n_channels=n_rep, seed=seed, allow_aliasing=True)
+    x = model.simulate(n_d, fs=fs / d, n_channels=n_rep, seed=seed, allow_aliasing=True)
     length = (n // n_windows) // d
     means = x[: n_windows * length].reshape(n_windows, length, n_rep).mean(axis=1)
     level = means - x.mean(axis=0)

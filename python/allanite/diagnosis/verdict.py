@@ -52,6 +52,8 @@ TERM_NAMES = {
     "telegraph": "random telegraph noise",
     "lowpass": "low-pass filter on the white noise",
     "bursts": "white noise in bursts (a time-varying noise level)",
+    "resonance": "a resonance (white noise through a second-order band-pass)",
+    "drifting_line": "a vibration line whose frequency drifts",
 }
 
 #: what each piece of time/frequency evidence means, in words

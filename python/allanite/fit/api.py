@@ -17,6 +17,7 @@ from allanite.fit.result import Coefficient, FitResult
 from allanite.fit.seed import SCALE, coefficient_bounds, seed_fit
 from allanite.fit.select import n_params, select_terms
 from allanite.fit.spec import TermSpec, resolve_terms
+from allanite.io.record import Record
 from allanite.model import NoiseModel
 from allanite.terms import Flicker, Quantization, RateRamp, RateRandomWalk, Term, White
 from allanite.units import RECORD_UNIT, SYMBOL_POWERS, coefficient_unit, rate_unit
@@ -28,8 +29,13 @@ Method = Literal["gls", "seed"]
 
 
 def _curve(
-    source: AllanResult | ArrayLike, fs: float | None, input: str, units: str | None, method: str
+    source: AllanResult | Record | ArrayLike,
+    fs: float | None,
+    input: str | None,
+    units: str | None,
+    method: str,
 ) -> AllanResult:
+    taus = "octave" if method == "gls" else "log"
     if isinstance(source, AllanResult):
         if fs is not None and not math.isclose(float(fs), source.fs, rel_tol=1e-9):
             raise ValueError(f"fs={fs} contradicts the AllanResult's fs={source.fs}; leave fs out")
@@ -41,13 +47,19 @@ def _curve(
                 "fit(result.channel(i))"
             )
         return source
+    if isinstance(source, Record):
+        if source.n_channels != 1:
+            raise ValueError(
+                f"fit one channel at a time; the Record has {source.n_channels}: "
+                "fit(record.select([0]))"
+            )
+        return avar(source, fs=fs, input=input, taus=taus, units=units)  # type: ignore[arg-type]
     if fs is None:
         raise ValueError("fitting a record needs its sampling frequency: fit(x, fs=100.0)")
     x = np.asarray(source)
     if x.ndim != 1:
         raise ValueError(f"fit one channel at a time; got a record of shape {x.shape}")
-    taus = "octave" if method == "gls" else "log"
-    return avar(x, fs=fs, input=input, taus=taus, units=units)  # type: ignore[arg-type]
+    return avar(x, fs=fs, input=input or "rate", taus=taus, units=units)  # type: ignore[arg-type]
 
 
 def _points(result: AllanResult, method: str, max_fraction: float) -> NDArray[np.bool_]:
@@ -292,11 +304,11 @@ def _fit_seed(result: AllanResult, units: str) -> FitResult:
 
 
 def fit(
-    result_or_record: AllanResult | ArrayLike,
+    result_or_record: AllanResult | Record | ArrayLike,
     terms: str | Sequence[Any] = "auto",
     *,
     fs: float | None = None,
-    input: str = "rate",
+    input: str | None = None,
     method: Method = "gls",
     units: str | None = None,
     penalty: float = 9.0,
@@ -315,9 +327,10 @@ def fit(
 
     Parameters
     ----------
-    result_or_record : AllanResult or array_like
-        An overlapping Allan variance (one channel) or a 1-D record (then ``fs`` is needed and
-        the octave grid is used).
+    result_or_record : AllanResult, Record or array_like
+        An overlapping Allan variance (one channel), a one-channel
+        :class:`~allanite.io.Record` (its ``fs``, input and unit are used) or a 1-D record
+        (then ``fs`` is needed); records are analysed on the octave grid.
     terms : "auto" or list
         ``"auto"``: Q, N, B, K, R chosen by an exhaustive search over their 31 subsets
         (:mod:`allanite.fit.select`): every subset with a noise term is fitted from several
@@ -338,8 +351,8 @@ def fit(
         or Term instances (starting values; a Flicker's ``f0`` is kept).
     fs : float, optional
         Sampling frequency in Hz (records only).
-    input : {"rate", "increment", "angle"}
-        What a record holds.
+    input : {"rate", "increment", "angle"}, optional
+        What a record holds (default ``"rate"``, or the Record's own).
     method : {"gls", "seed"}
         ``"gls"`` (default) or ``"seed"``, the original program's unweighted nonlinear least
         squares on sigma^2 with five squared coefficients and 95 % bounds (always the five

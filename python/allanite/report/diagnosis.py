@@ -18,7 +18,7 @@ def run_diagnosis(record: Record, model: Any, channel: int = 0, **options: Any) 
     return diagnose(
         part.samples[:, channel],
         model,
-        part.require_fs(),
+        fs=part.require_fs(),
         input=part.input,
         units=part.rate_unit(),
         **options,

@@ -161,9 +161,9 @@ def _open(
 
 def simulate_chunks(
     model: Any,
-    fs: float,
     n: int | None = None,
     *,
+    fs: float,
     duration: str | float | None = None,
     output: Output = "rate",
     n_channels: int = 1,
@@ -205,9 +205,9 @@ def simulate_chunks(
 
 def simulate(
     model: Any,
-    fs: float,
     n: int | None = None,
     *,
+    fs: float,
     duration: str | float | None = None,
     output: Output = "rate",
     n_channels: int = 1,
@@ -222,10 +222,10 @@ def simulate(
     ----------
     model : NoiseModel, Term or sequence of Term
         The effects to add up.
-    fs : float
-        Sampling frequency in Hz.
     n : int, optional
         Number of samples (or give ``duration``).
+    fs : float
+        Sampling frequency in Hz (keyword-only, as everywhere in allanite).
     duration : float or str, optional
         Record length in seconds or with a unit: ``"90s"``, ``"30min"``, ``"24h"``.
     output : {"rate", "angle", "increment"}
@@ -264,8 +264,8 @@ def simulate(
     pieces = list(
         simulate_chunks(
             model,
-            rate,
             total,
+            fs=rate,
             output=output,
             n_channels=n_channels,
             seed=seed,

@@ -149,9 +149,9 @@ def write_chunks(
 def write_record(
     path: str | os.PathLike[str],
     model: Any,
-    fs: float,
     n: int | None = None,
     *,
+    fs: float,
     duration: str | float | None = None,
     output: str = "rate",
     n_channels: int = 1,
@@ -182,8 +182,8 @@ def write_record(
     check_free_space(path, output_size(path, total, int(n_channels)))
     chunks = simulate_chunks(
         model,
-        fs,
         total,
+        fs=fs,
         output=output,  # type: ignore[arg-type]
         n_channels=n_channels,
         seed=seed,

@@ -4,10 +4,12 @@ from __future__ import annotations
 
 from allanite.terms.base import TERM_TYPES, ParamSpec, Term, term_from_dict
 from allanite.terms.bursts import WhiteBursts
+from allanite.terms.drifting_line import DriftingLine
 from allanite.terms.flicker import Flicker
 from allanite.terms.markov import GaussMarkov
 from allanite.terms.quantization import Quantization
 from allanite.terms.ramp import RateRamp
+from allanite.terms.resonance import Resonance
 from allanite.terms.rrw import RateRandomWalk
 from allanite.terms.sine import Sine
 from allanite.terms.transients import (
@@ -27,6 +29,7 @@ __all__ = [
     "POWER_LAW_TERMS",
     "TERM_TYPES",
     "BiasSteps",
+    "DriftingLine",
     "Flicker",
     "GaussMarkov",
     "LowPassWhite",
@@ -34,6 +37,7 @@ __all__ = [
     "Quantization",
     "RateRamp",
     "RateRandomWalk",
+    "Resonance",
     "Sine",
     "Spikes",
     "Telegraph",

@@ -76,7 +76,7 @@ def relaxation_bracket(x: ArrayLike) -> NDArray[np.float64]:
     series = np.zeros_like(x)
     for c in reversed(coefficients):
         series = series * x + c
-    return np.where(x < 0.1, series * x**3, direct)
+    return np.asarray(np.where(x < 0.1, series * x**3, direct), dtype=np.float64)
 
 
 def markov_psd_sampled(

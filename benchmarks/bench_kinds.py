@@ -1,0 +1,294 @@
+"""Speed of every variance kind against allantools, the numpy oracle and the memory floor.
+
+One run measures, for each record size (white rate noise with a bias, log grid of averaging
+factors common to all kinds, i.e. m <= M/3), and for the kinds overlapping, modified,
+Hadamard and total:
+
+* ``end_to_end``: ``allanite.avar`` with the noise type identified (``alpha=None``), and
+  ``given_alpha``: with ``alpha=0`` (no identification); all cores;
+* the compiled parts alone: ``phase`` (``_core.phase``), ``kernel`` (``_core.variance``)
+  and ``identification`` (``identify_alpha`` on the same phase, lag-1 and B1/R(n) passes);
+* ``allantools``: ``oadev``/``mdev``/``ohdev``/``totdev`` on the same frequency data and taus;
+* ``reference``: the numpy oracle (:mod:`allanite.variance.oracle`, vectorised per tau; its modified
+  variance is O(N m) per tau, so there only the taus with m <= 16 are timed, against the
+  kernel on the same taus);
+
+and derives the ratios of the goals of issue 17: allantools / end-to-end (>= 10 for every
+kind, >= 20 for the overlapping kind at 1e7 samples and 100 taus), kernel time per tau of each
+kind / the overlapping kernel's (<= 2), identification / kernel (<= 0.5). The memory floor of
+a kernel is the time to stream the phase once per tau (``8 M`` bytes per tau) at the
+bandwidth of a numpy copy measured in the same run (read + write bytes / time); a kernel
+below its floor shares passes between taus (tiles in cache). Every timing is the best of
+``--repeat`` (allantools and the oracle included); the 1-minute load average is recorded
+before and after each record size, since the machine may be shared.
+
+Writes benchmarks/results/bench_kinds.json and .md.
+
+Usage: ``python benchmarks/bench_kinds.py [--sizes 1000000:50 10000000:100:1] [--repeat 3]``
+(``N:points[:repeat]``; the default runs 1e7 samples once).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+
+import allanite
+from allanite import _core
+from allanite.variance import oracle as reference
+from allanite.variance.edf import identify_alpha
+from allanite.variance.taus import log_grid
+from bench_core import _best  # the benchmarks' one best-of-N timer (same folder)
+
+RESULTS = Path(__file__).resolve().parent / "results"
+KindName = Literal["overlapping", "modified", "hadamard", "total"]
+KINDS: tuple[KindName, ...] = ("overlapping", "modified", "hadamard", "total")
+ALLANTOOLS = {"overlapping": "oadev", "modified": "mdev", "hadamard": "ohdev", "total": "totdev"}
+GOAL_VS_ALLANTOOLS = 10.0
+GOAL_OVERLAPPING_LARGE = 20.0  # at 1e7 samples and 100 log taus
+GOAL_PER_TAU = 2.0
+GOAL_IDENTIFICATION = 0.5
+ORACLE_MODIFIED_MAX_M = 16
+
+
+def copy_bandwidth(n_bytes: int, repeat: int) -> float:
+    """Bytes per second of ``np.copyto`` on an array of ``n_bytes`` (read + write counted)."""
+    src = np.ones(n_bytes // 8)
+    dst = np.empty_like(src)
+    np.copyto(dst, src)  # touch both
+    seconds, _ = _best(lambda: np.copyto(dst, src), max(repeat, 3))
+    return 2.0 * src.nbytes / seconds
+
+
+def _allantools(kind: str, y: np.ndarray, m: np.ndarray) -> np.ndarray:
+    import allantools
+
+    fn = getattr(allantools, ALLANTOOLS[kind])
+    tau, dev = fn(y, rate=1.0, data_type="freq", taus=m.astype(float))[:2]
+    if tau.size != m.size:
+        raise RuntimeError(f"allantools.{ALLANTOOLS[kind]} returned {tau.size} of {m.size} taus")
+    return np.asarray(dev, dtype=np.float64) ** 2
+
+
+def bench_kind(
+    kind: KindName,
+    y: np.ndarray,
+    phase: np.ndarray,
+    m: np.ndarray,
+    *,
+    repeat: int,
+    threads: int,
+    oracle: bool,
+    floor_per_tau: float,
+) -> dict[str, Any]:
+    """Timings and differences of one kind on one record (see the module docstring)."""
+    t_kernel, var = _best(lambda: np.asarray(_core.variance(phase, m, kind, threads)), repeat)
+    var1 = np.asarray(_core.variance(phase, m, kind, 1))
+    t_id, _ = _best(
+        lambda: identify_alpha(phase, m, kind, data="frequency", threads=threads), repeat
+    )
+    t_e2e, res = _best(lambda: allanite.avar(y, fs=1.0, kind=kind, m=m, threads=threads), repeat)
+    t_given, _ = _best(
+        lambda: allanite.avar(y, fs=1.0, kind=kind, m=m, alpha=0, threads=threads), repeat
+    )
+    t_at, v_at = _best(lambda: _allantools(kind, y, m), repeat)
+    entry: dict[str, Any] = {
+        "seconds": {
+            "kernel": t_kernel,
+            "identification": t_id,
+            "end_to_end": t_e2e,
+            "given_alpha": t_given,
+            "allantools": t_at,
+        },
+        "bit_identical_1_vs_all_threads": bool(np.array_equal(var[:, 0], var1[:, 0])),
+        "max_rel_diff": {
+            "end_to_end_vs_kernel": float(np.max(np.abs(res.var / var[:, 0] - 1))),
+            "allantools": float(np.max(np.abs(v_at / var[:, 0] - 1))),
+        },
+        "memory_floor_seconds": floor_per_tau * m.size,
+    }
+    if oracle:
+        # the oracle's modified variance is O(N m) per tau: there it runs on m <= 16 only,
+        # and its ratio is taken against the kernel on the same taus
+        sub = m <= ORACLE_MODIFIED_MAX_M if kind == "modified" else np.ones(m.size, bool)
+        t_ref, v_ref = _best(
+            lambda: np.asarray(reference.variance(y, m[sub], kind, input="rate")).reshape(-1),
+            repeat,
+        )
+        t_sub = t_kernel
+        if not sub.all():
+            t_sub, _ = _best(lambda: _core.variance(phase, m[sub], kind, threads), repeat)
+        entry["seconds"]["reference"] = t_ref
+        entry["reference_taus"] = int(sub.sum())
+        entry["max_rel_diff"]["reference"] = float(np.max(np.abs(v_ref / var[sub, 0] - 1)))
+        entry["reference_over_kernel_same_taus"] = t_ref / t_sub
+    return entry
+
+
+def bench_size(n: int, points: int, repeat: int, threads: int, oracle: bool) -> dict[str, Any]:
+    """Every timing and ratio for one record size."""
+    load_before = os.getloadavg()[0]
+    rng = np.random.default_rng(12345)
+    y = 0.01 + rng.standard_normal(n)  # rate samples, fs = 1 Hz
+    x2 = y.reshape(-1, 1)
+    m = log_grid(n, points)
+    m = m[m <= min(_core.max_m(k, n + 1) for k in KINDS)]
+    bandwidth = copy_bandwidth(8 * (n + 1), repeat)
+    floor_per_tau = 8.0 * (n + 1) / bandwidth
+    t_phase, phase = _best(lambda: _core.phase(x2, "rate"), repeat)
+    kinds = {
+        kind: bench_kind(
+            kind,
+            y,
+            phase,
+            m,
+            repeat=repeat,
+            threads=threads,
+            oracle=oracle,
+            floor_per_tau=floor_per_tau,
+        )
+        for kind in KINDS
+    }
+    t_over = kinds["overlapping"]["seconds"]["kernel"]
+    for entry in kinds.values():
+        s = entry["seconds"]
+        ratios = {
+            "allantools_over_end_to_end": s["allantools"] / s["end_to_end"],
+            "allantools_over_given_alpha": s["allantools"] / s["given_alpha"],
+            "kernel_per_tau_over_overlapping": s["kernel"] / t_over,
+            "identification_over_kernel": s["identification"] / s["kernel"],
+            "kernel_over_memory_floor": s["kernel"] / entry["memory_floor_seconds"],
+        }
+        if "reference" in s:
+            ratios["reference_over_kernel"] = entry["reference_over_kernel_same_taus"]
+        entry["ratios"] = ratios
+    return {
+        "n_samples": n,
+        "points": points,
+        "n_taus": int(m.size),
+        "m_min": int(m[0]),
+        "m_max": int(m[-1]),
+        "threads": threads,
+        "phase_seconds": t_phase,
+        "copy_bandwidth_GBps": bandwidth / 1e9,
+        "load_average_1min": {"before": load_before, "after": os.getloadavg()[0]},
+        "kinds": kinds,
+    }
+
+
+def goals(record: dict[str, Any]) -> list[tuple[str, float, float, bool]]:
+    """(goal, measured, bound, met) of issue 17 for one record size."""
+    out = []
+    large = record["n_samples"] >= 10_000_000 and record["n_taus"] >= 90
+    for kind, entry in record["kinds"].items():
+        r = entry["ratios"]
+        bound = GOAL_OVERLAPPING_LARGE if (kind == "overlapping" and large) else GOAL_VS_ALLANTOOLS
+        out.append(
+            (
+                f"{kind}: allantools / allanite (identified)",
+                r["allantools_over_end_to_end"],
+                bound,
+                r["allantools_over_end_to_end"] >= bound,
+            )
+        )
+        if kind in ("modified", "total"):
+            v = r["kernel_per_tau_over_overlapping"]
+            out.append(
+                (f"{kind}: kernel per tau / overlapping", v, GOAL_PER_TAU, v <= GOAL_PER_TAU)
+            )
+        v = r["identification_over_kernel"]
+        out.append(
+            (f"{kind}: identification / kernel", v, GOAL_IDENTIFICATION, v <= GOAL_IDENTIFICATION)
+        )
+    return out
+
+
+def markdown(records: list[dict[str, Any]]) -> str:
+    lines = ["# Every variance kind against allantools (benchmarks/bench_kinds.py)", ""]
+    for rec in records:
+        load = rec["load_average_1min"]
+        lines += [
+            f"## N = {rec['n_samples']:,}, {rec['n_taus']} taus (m = {rec['m_min']} .. "
+            f"{rec['m_max']}), {rec['threads']} threads, best of {rec['repeat']}",
+            "",
+            f"load average (1 min) {load['before']:.2f} before, {load['after']:.2f} after; "
+            f"numpy copy bandwidth {rec['copy_bandwidth_GBps']:.1f} GB/s; phase "
+            f"{rec['phase_seconds'] * 1e3:.1f} ms",
+            "",
+            "| kind | kernel ms | floor ms | ident ms | allanite ms | given alpha ms | "
+            "allantools ms | oracle ms | vs allantools | (alpha given) | per tau / overl. | "
+            "ident / kernel | oracle / kernel | bit-identical threads |",
+            "|---|" + "---:|" * 13 + "---|",
+        ]
+        for kind, e in rec["kinds"].items():
+            s, r = e["seconds"], e["ratios"]
+            ref = f"{s['reference'] * 1e3:.0f}" if "reference" in s else "-"
+            vs_ref = f"{r['reference_over_kernel']:.1f}x" if "reference" in s else "-"
+            if "reference" in s and e["reference_taus"] < rec["n_taus"]:
+                ref += f" ({e['reference_taus']} taus)"
+            lines.append(
+                f"| {kind} | {s['kernel'] * 1e3:.1f} | {e['memory_floor_seconds'] * 1e3:.1f} | "
+                f"{s['identification'] * 1e3:.1f} | {s['end_to_end'] * 1e3:.1f} | "
+                f"{s['given_alpha'] * 1e3:.1f} | {s['allantools'] * 1e3:.0f} | {ref} | "
+                f"{r['allantools_over_end_to_end']:.1f}x | "
+                f"{r['allantools_over_given_alpha']:.1f}x | "
+                f"{r['kernel_per_tau_over_overlapping']:.2f} | "
+                f"{r['identification_over_kernel']:.2f} | {vs_ref} | "
+                f"{e['bit_identical_1_vs_all_threads']} |"
+            )
+        lines += ["", "| goal | measured | bound | met |", "|---|---:|---:|---|"]
+        for name, value, bound, met in goals(rec):
+            lines.append(f"| {name} | {value:.2f} | {bound:g} | {'yes' if met else 'NO'} |")
+        lines.append("")
+    return "\n".join(lines)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument(
+        "--sizes",
+        nargs="+",
+        default=["1000000:50", "10000000:100:1"],
+        help="record sizes as N:points of the log grid[:repeat]",
+    )
+    parser.add_argument("--repeat", type=int, default=3, help="best of this many runs")
+    parser.add_argument("--threads", type=int, default=0, help="worker threads (0: all cores)")
+    parser.add_argument("--no-oracle", action="store_true", help="skip the numpy oracle")
+    parser.add_argument("--out", default="bench_kinds", help="stem of the result files")
+    parser.add_argument("--results", type=Path, default=RESULTS, help="directory of the results")
+    args = parser.parse_args()
+
+    records = []
+    for spec in args.sizes:
+        fields = [int(float(v)) for v in spec.split(":")]
+        n, points = fields[0], fields[1]
+        repeat = fields[2] if len(fields) > 2 else args.repeat
+        threads = args.threads if args.threads > 0 else (os.cpu_count() or 1)
+        rec = bench_size(n, points, repeat, threads, oracle=not args.no_oracle)
+        rec["repeat"] = repeat
+        records.append(rec)
+        print(markdown([rec]), flush=True)
+    result = {
+        "benchmark": "every variance kind: allanite vs allantools, oracle and memory floor",
+        "records": records,
+        "machine": {
+            "python": platform.python_version(),
+            "platform": platform.platform(),
+            "cpus": os.cpu_count(),
+            "niceness": os.nice(0),
+        },
+    }
+    args.results.mkdir(parents=True, exist_ok=True)
+    (args.results / f"{args.out}.json").write_text(json.dumps(result, indent=2) + "\n")
+    (args.results / f"{args.out}.md").write_text(markdown(records) + "\n")
+    print(f"written to {args.results / args.out}.json and .md")
+
+
+if __name__ == "__main__":
+    main()
