@@ -9,7 +9,8 @@
   taus), fitted with their true terms, one seed per record; the grid itself has too few R
   records (59) to tell 100 % coverage from 95 %.
 
-Usage: ``nice python benchmarks/fit_deterministic_coverage.py [--seeds 100] [--designs 300]``;
+Usage: ``nice python benchmarks/fit_deterministic_coverage.py [--seeds 100] [--designs 300]``,
+or ``--sine-seeds 500`` for the sine part alone (the stored other parts are kept);
 results in
 ``benchmarks/results/fit_deterministic_coverage.json``.
 """
@@ -81,7 +82,13 @@ def ramp_design(terms: tuple[str, ...], design_seed: int, records: int) -> dict[
 
 
 def sine(seeds: int) -> dict[str, float]:
-    """Coverage of the sine amplitude."""
+    """Coverage of the sine amplitude, simulation seeds ``0 .. seeds - 1``.
+
+    The first 100 seeds covered 89 (z sd 1.16) and every later look at this term reused
+    seeds from 0 to 149 (sd 1.14-1.30): not independent confirmations. On 150 fresh seeds
+    (1000-1149) and 150 records of a plain NumPy sine + white generator, z sd 0.93 and 0.99,
+    covered 144 and 142; on seeds 0-499: 473 covered (94.6 %), z sd 0.99.
+    """
     amplitude, f0, fs, n = 0.02, 0.05, 100.0, 200_000
     model = NoiseModel(
         (White(N=0.01), Sine(amplitude=amplitude, frequency=f0)), {"rate": "deg/s", "time": "s"}
@@ -109,9 +116,20 @@ def main() -> int:
     parser.add_argument(
         "--designs", type=int, default=0, help="records per validation-grid ramp design"
     )
+    parser.add_argument(
+        "--sine-seeds", type=int, default=0, help="only the sine part, on this many seeds"
+    )
     args = parser.parse_args()
-    out: dict[str, Any] = {"ramp": ramp(args.seeds), "sine": sine(args.seeds)}
-    if args.designs:
+    out: dict[str, Any] = (
+        json.loads(RESULTS.read_text(encoding="utf-8"))
+        if args.sine_seeds and RESULTS.exists()
+        else {}
+    )
+    if args.sine_seeds:  # only the sine, on more seeds; the other parts are kept
+        out["sine"] = sine(args.sine_seeds)
+    else:
+        out = {"ramp": ramp(args.seeds), "sine": sine(args.seeds)}
+    if args.designs and not args.sine_seeds:
         out["ramp_designs"] = [
             ramp_design(("N", "R"), 8, args.designs),
             ramp_design(("N", "K", "R"), 5, args.designs),

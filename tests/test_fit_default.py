@@ -19,7 +19,15 @@ from allanite.examples import example_model
 from allanite.fit import fit
 from allanite.fit.covariance import avar_covariance
 from allanite.model import NoiseModel
-from allanite.terms import Flicker, GaussMarkov, Quantization, RateRamp, RateRandomWalk, White
+from allanite.terms import (
+    Flicker,
+    GaussMarkov,
+    Quantization,
+    RateRamp,
+    RateRandomWalk,
+    Sine,
+    White,
+)
 
 UNITS = {"rate": "deg/s", "time": "s"}
 
@@ -148,6 +156,37 @@ def test_ramp_cross_term_matches_monte_carlo():
     tol = 4 * math.sqrt(2 / (reps - 1)) + 0.05
     assert np.all(np.abs(mc / with_cross - 1) < tol), mc / with_cross
     assert mc[-1] / noise_only[-1] > 1 + tol  # without it the longest tau is far off
+
+
+def test_sine_cross_term_matches_monte_carlo():
+    # white noise + sinusoid: the signal x noise term (the noise component in phase with the
+    # line, 2 mean(d_sine d_noise)) is the main spread of the estimates near the ADEV peak,
+    # fully correlated between taus along the sine's own shape, so it is the amplitude's
+    # uncertainty; the covariance must carry it at the right size
+    dt, n, reps = 0.01, 20_000, 300
+    noise, line = White(N=0.01), Sine(amplitude=0.02, frequency=0.5)
+    m = np.array([16, 32, 50, 74, 100, 150])
+    rng = np.random.default_rng(8)
+    t = np.arange(n) * dt
+    est = np.array(
+        [
+            allanite.avar(
+                noise.N / math.sqrt(dt) * rng.standard_normal(n)
+                + line.amplitude * np.sin(2 * np.pi * line.frequency * t + rng.uniform(0, 6.3)),
+                fs=1 / dt,
+                m=m,
+            ).var
+            for _ in range(reps)
+        ]
+    )
+    mc = est.var(axis=0, ddof=1)
+    with_cross = np.diag(avar_covariance(NoiseModel((noise, line), UNITS), m, dt, n))
+    noise_only = np.diag(avar_covariance(NoiseModel((noise,), UNITS), m, dt, n))
+    tol = 4 * math.sqrt(2 / (reps - 1)) + 0.05
+    assert np.all(np.abs(mc / with_cross - 1) < tol), mc / with_cross
+    assert mc[3] / noise_only[3] > 1 + tol  # near the peak the cross term dominates
+    # and it is one shape: the estimates at the peak's neighbours move together
+    assert np.corrcoef(est[:, 3], est[:, 4])[0, 1] > 0.8
 
 
 def test_six_axis_newcomer_record_keeps_the_random_walks(tmp_path, capsys):
@@ -283,3 +322,40 @@ def test_grid_slice():
             if entry["dominant"] and entry["value"] is not None:
                 # a 5-sigma miss has probability 6e-7 per term for an honest interval
                 assert abs(entry["z"]) < 5, (case, name, entry)
+
+
+def test_a_term_significant_against_the_chosen_model_is_added():
+    # record 90 of the full validation grid (Q+N+B+K+R, 1e6 samples at 100 Hz, angle): the
+    # ramp lowers the chi-square by 10.3 under the covariance of Q+N+B+K (above the penalty
+    # 9) but raised log det C, and the score alone kept Q+N+B+K (p = 0.045); the test of
+    # a left-out term against the chosen model's covariance adds it
+    vf = _validate_fit_module()
+    (case,) = [c for c in vf.grid(quick=False, long=False) if c.index == 90]
+    row = vf.run_case(case)
+    assert row["fitted_terms"] == ["Q", "N", "B", "K", "R"], row
+    assert not row["missing_dominant"], row
+    x = vf.design(case).simulate(
+        case.n, fs=case.fs, output=case.input, seed=case.seed, flicker_method=vf.FLICKER_METHOD
+    )
+    res = allanite.avar(
+        np.asarray(x).ravel(),
+        fs=case.fs,
+        input=case.input,
+        taus=case.taus,
+        units=case.unit,
+    )
+    f = fit(res)
+    (entry,) = [s for s in f.selection if s["term"] == "ramp"]
+    assert entry["kept"]
+    assert entry["added"]["delta_chi2"] >= 9.0
+    assert entry["score_gain"] < 0  # the score alone would have left it out
+
+
+def test_no_term_added_to_white_noise():
+    # the added-term test is a likelihood-ratio test at the penalty: on white noise alone
+    # (3 records) nothing is added (the chance per left-out term is about 0.1 %)
+    for seed in range(3):
+        rng = np.random.default_rng(40 + seed)
+        x = 0.01 * math.sqrt(100.0) * rng.standard_normal(200_000)
+        f = fit(allanite.avar(x, fs=100.0, units="deg/s"))
+        assert not any("added" in s for s in f.selection), f.selection

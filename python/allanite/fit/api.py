@@ -341,7 +341,9 @@ def fit(
         model discrepancy returned, and ``FitResult.rejected`` says so. A chosen ramp must
         also lower the chi-square by ``penalty`` against the rate random walk under the
         no-ramp covariance, else K is kept (the ramp, without variance of its own, wins the
-        likelihood where the two cannot be told apart). Every evaluated
+        likelihood where the two cannot be told apart); symmetrically, a left-out term that
+        lowers the chi-square by ``penalty`` under the chosen model's covariance is added
+        (a noise term's ``log det C`` made the score ask more of it). Every evaluated
         subset is in ``FitResult.meta["subsets"]``, the per-term gains in
         ``FitResult.selection``.
         Or a list of names (``"white"``/``"N"``, ``"quantization"``/``"Q"``, ``"flicker"``/

@@ -128,9 +128,11 @@ class FitResult:
         -2 log-likelihood drops when the term is added to the chosen terms without it
         (positive for a kept term), and whether it was kept; when a ramp was chosen, its
         entry also holds ``ramp_test`` (``alternative``, ``delta_chi2``, ``kept``: the ramp's
-        significance against the rate random walk). ``meta["subsets"]`` lists every
-        subset evaluated by the search (:mod:`allanite.fit.select`) with its score, chi2,
-        p-value and whether it is rejected.
+        significance against the rate random walk); a term added by the mirror test (its
+        chi-square drop under the chosen model's covariance reached the penalty although
+        the score alone left it out) holds ``added`` (``delta_chi2``). ``meta["subsets"]``
+        lists every subset evaluated by the search (:mod:`allanite.fit.select`) with its
+        score, chi2, p-value and whether it is rejected.
     discrepancy : float
         Relative model discrepancy :math:`\delta` per tau (Paule-Mandel, see
         :func:`allanite.fit.gls.solve`): 0 when the terms fit the curve; otherwise the
