@@ -196,3 +196,22 @@ def test_diagnose_sim_model_given_samples_is_refused(loop, capsys):
     err = capsys.readouterr().err
     assert "NumPy .npy array" in err
     assert "codec" not in err
+
+
+def test_report_reads_a_simulator_config_as_diagnose_does(tmp_path, capsys):
+    """``report --sim-model kalibr.yaml`` reads the config (in SI) in the record's unit."""
+    pytest.importorskip("matplotlib")
+    n_si, k_si = 1e-3, 2e-5  # rad/s/sqrt(Hz), rad/s^2/sqrt(Hz)
+    src = tmp_path / "kalibr.yaml"
+    src.write_text(f"gyroscope_noise_density: {n_si}\ngyroscope_random_walk: {k_si}\n"
+                   "update_rate: 100.0\n")  # fmt: skip
+    model = NoiseModel((White(N=n_si), RateRandomWalk(K=k_si)), {"rate": "rad/s", "time": "s"})
+    rec = tmp_path / "real.npy"
+    np.save(rec, np.degrees(model.simulate(N, fs=FS, seed=5)))
+    out = tmp_path / "r.html"
+    argv = ["report", str(rec), "--fs", "100", "--units", "deg/s", "--no-fit", "--n-mc", "20"]
+    assert main([*argv, "--sim-model", str(src), "-o", str(out)]) == 0, capsys.readouterr().err
+    html = out.read_text()
+    assert "Sim-to-real diagnosis" in html
+    assert "kalibr.yaml" in html
+    assert "no gap" in html

@@ -87,11 +87,12 @@ def test_sim_record_and_full_output(files, tmp_path, capsys):
 @pytest.mark.parametrize(
     ("extra", "message"),
     [
-        (["--units", "rad/s", "--sim-model", "{model}"], "unit mismatch"),
+        (["--units", "m/s^2", "--sim-model", "{model}"], "no accel noise model"),
+        (["--sim-model", "{model}"], "units are never guessed"),
         (["--sim-record", "{short}"], "shorter than the real"),
         (["--sim-record", "{sim}", "--sim-fs", "200"], "sample-rate mismatch"),
         (["--sim-record", "{nan}"], "NaN"),
-        (["--sim-model", "{model}", "--holdout", "2"], "holdout"),
+        (["--units", "deg/s", "--sim-model", "{model}", "--holdout", "2"], "holdout"),
     ],
 )
 def test_bad_input_is_one_line_and_exit_2(files, capsys, extra, message):
@@ -106,3 +107,19 @@ def test_bad_input_is_one_line_and_exit_2(files, capsys, extra, message):
 def test_sim_source_is_required(files):
     with pytest.raises(SystemExit):
         main(["diagnose", str(files["real"]), "--fs", "100"])
+
+
+def test_a_model_in_another_unit_of_the_same_quantity_is_converted(files, tmp_path, capsys):
+    """A deg/s record against a rad/s model JSON: the model is put in deg/s, as configs are."""
+    from allanite.model import NoiseModel
+
+    model = NoiseModel.load(files["model"])
+    in_rad = tmp_path / "model_rad.json"
+    model.in_units("rad/s").save(in_rad)
+    common = ["diagnose", str(files["real"]), "--fs", "100", "--units", "deg/s", "--n-mc", "20"]
+    assert main([*common, "--sim-model", str(files["model"]), "--json"]) == 0
+    same = json.loads(capsys.readouterr().out)
+    assert main([*common, "--sim-model", str(in_rad), "--json"]) == 0
+    converted = json.loads(capsys.readouterr().out)
+    assert converted["gap"]["p_value"] == pytest.approx(same["gap"]["p_value"], rel=1e-9)
+    assert converted["meta"]["units"] == "deg/s"

@@ -40,7 +40,8 @@ def test_unknown_diagnose_effects_are_refused_with_the_known_ones(
     np.save(rec, x)
     path = tmp_path / "model.json"
     model.save(path)
-    argv = ["diagnose", str(rec), "--fs", "100", "--sim-model", str(path), "--json"]
+    argv = ["diagnose", str(rec), "--fs", "100", "--units", "deg/s", "--sim-model", str(path)]
+    argv.append("--json")
     assert main([*argv, "--effects", "white,bogus"]) == 2
     line = _one_line_error(capsys, "diagnose")
     assert "unknown effect(s) 'bogus'; known effects: white, quantization, flicker" in line

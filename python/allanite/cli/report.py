@@ -17,6 +17,7 @@ from allanite.cli.record_options import (
     read_sensors,
     warn_implausible,
 )
+from allanite.cli.sim_config import add_sim_config_arguments, load_sim_model
 from allanite.report import Datasheet, DeviceAnalysis, build_report
 
 __all__ = ["register", "run"]
@@ -58,7 +59,14 @@ def register(subparsers: Any) -> None:
         "--reference", metavar="FILE", help="reference device record (same options)"
     )
     parser.add_argument("--datasheet", metavar="LIMITS.json", help="datasheet limits to check")
-    parser.add_argument("--sim-model", metavar="MODEL.json", help="noise model to diagnose against")
+    parser.add_argument(
+        "--sim-model",
+        metavar="CONFIG",
+        help="simulated sensor to diagnose against: a model JSON or a simulator/estimator IMU "
+        "config (Gazebo SDF, PX4, AirSim, Kalibr, OpenVINS, ORB-SLAM3, VINS, MATLAB, "
+        "gnss-ins-sim), as for allanite diagnose",
+    )
+    add_sim_config_arguments(parser, corrected=False)
     parser.add_argument(
         "--n-mc",
         type=int,
@@ -85,13 +93,19 @@ def fit_channels(device: DeviceAnalysis) -> tuple[Any, ...]:
     )
 
 
-def diagnosis_parts(
-    device: DeviceAnalysis, model_path: str, n_mc: int = 200
-) -> tuple[str, dict[str, Any]]:
-    """HTML and figures of the sim-to-real diagnosis of ``device`` against a model file."""
+def diagnosis_parts(device: DeviceAnalysis, args: argparse.Namespace) -> tuple[str, dict[str, Any]]:
+    """HTML and figures of the sim-to-real diagnosis of ``device`` against ``--sim-model``.
+
+    The config is read as ``allanite diagnose`` reads it (any format, in the record's unit).
+    """
     from allanite.report.diagnosis import diagnosis_section
 
-    return diagnosis_section(device.record, model_path, n_mc=n_mc)
+    record = device.record
+    fs = record.longest_segment().require_fs()
+    loaded = load_sim_model(args, fs, rate_unit(record))
+    return diagnosis_section(
+        record, loaded.model, model_name=Path(args.sim_model).name, n_mc=args.n_mc
+    )
 
 
 def _sensor_name(record: Any) -> str:
@@ -132,7 +146,7 @@ def run(args: argparse.Namespace) -> int:
     diag_html = None
     diag_figures = None
     if args.sim_model:
-        diag_html, diag_figures = diagnosis_parts(devices[0], args.sim_model, args.n_mc)
+        diag_html, diag_figures = diagnosis_parts(devices[0], args)
     report = build_report(
         devices,
         reference=reference,

@@ -24,12 +24,16 @@ from allanite.formats import (
     write_config,
 )
 from allanite.model import NoiseModel, read_text_file
+from allanite.units import RECORD_UNIT, sensor_kind
 
 __all__ = ["LoadedSim", "add_sim_config_arguments", "load_sim_model", "write_corrected"]
 
 
-def add_sim_config_arguments(group: Any) -> None:
-    """Add ``--sim-format``, ``--sim-sensor``, ``--sim-rate`` and ``--write-corrected``."""
+def add_sim_config_arguments(group: Any, *, corrected: bool = True) -> None:
+    """Add ``--sim-format``, ``--sim-sensor``, ``--sim-rate`` and ``--write-corrected``.
+
+    ``corrected=False`` leaves out ``--write-corrected`` (commands that write no config).
+    """
     group.add_argument(
         "--sim-format",
         choices=tuple(FORMATS),
@@ -47,6 +51,8 @@ def add_sim_config_arguments(group: Any) -> None:
         help="simulator IMU rate in Hz for per-sample configs without one (default: the "
         "record's --fs)",
     )
+    if not corrected:
+        return
     group.add_argument(
         "--write-corrected",
         metavar="OUT",
@@ -88,16 +94,19 @@ def load_sim_model(args: argparse.Namespace, fs: float, units: str | None) -> Lo
     sensor = args.sim_sensor or _sensor_of(units)
     model = config.model(sensor)
     if fmt == "allanite":
-        # the model JSON keeps its own unit: a mismatch with the record is reported, not fixed
         model = NoiseModel.from_json(path.read_text(encoding="utf-8"))
-        return LoadedSim(model, config, fmt, float(config.rate or fs), sensor)
+    model_unit = model.units["rate"]
     if units is None:
+        if model_unit == RECORD_UNIT:
+            return LoadedSim(model, config, fmt, float(config.rate or fs), sensor)
+        where = f"{fmt} config is in SI units" if fmt != "allanite" else "model is in"
         raise ValueError(
-            f"the {fmt} config is in SI units ({model.units['rate']}); give the unit of the "
-            "real record with --units (e.g. --units deg/s)"
+            f"the {where} ({model_unit}); give the unit of the real record with "
+            "--units (e.g. --units deg/s): units are never guessed"
         )
-    if units is not None and model.units["rate"] != units:
-        model = model.in_units(units)
+    convertible = model_unit != RECORD_UNIT and sensor_kind(model_unit) == sensor_kind(units)
+    if model_unit != units and convertible:
+        model = model.in_units(units)  # a mismatch of quantities is reported by diagnose
     for note in config.notes:
         print(f"note: {note}", file=sys.stderr)
     return LoadedSim(model, config, fmt, float(config.rate or fs), sensor)

@@ -139,15 +139,23 @@ def diagnosis_html(diagnosis: Any, *, channel: str, model_name: str) -> str:
 
 
 def diagnosis_section(
-    record: Record, model_path: str, channel: int = 0, **options: Any
+    record: Record,
+    model: Any,
+    channel: int = 0,
+    *,
+    model_name: str | None = None,
+    **options: Any,
 ) -> tuple[str, dict[str, Any]]:
-    """Run the diagnosis of ``record`` against the model file and render it with its figure."""
+    """Run the diagnosis of ``record`` against a model (or model file) and render it.
+
+    ``model_name`` names the model in the section (default: the file name of a path).
+    """
     from pathlib import Path
 
-    diagnosis = run_diagnosis(record, model_path, channel, **options)
-    html = diagnosis_html(
-        diagnosis, channel=record.channels[channel], model_name=Path(model_path).name
-    )
+    if model_name is None:
+        model_name = Path(model).name if isinstance(model, (str, Path)) else "the model"
+    diagnosis = run_diagnosis(record, model, channel, **options)
+    html = diagnosis_html(diagnosis, channel=record.channels[channel], model_name=model_name)
     figures: dict[str, Any] = {}
     try:
         from allanite.plot.diagnosis import diagnosis_figure
