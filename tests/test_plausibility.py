@@ -234,3 +234,21 @@ def test_stuck_search_memory_does_not_grow_with_the_record() -> None:
         tracemalloc.stop()
     assert found == [(1_000_000, 1_000_100)]
     assert peak < 20e6, peak  # one copy of the change indices alone would be 32 MB
+
+
+def test_units_that_contradict_channel_names_are_warned(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Three units for six channels: gz lands in m/s^2 and ax in g; the names say otherwise."""
+    rng = np.random.default_rng(4)
+    x = rng.standard_normal((20_000, 6)) * 0.01
+    path = tmp_path / "imu.csv"
+    np.savetxt(path, x, delimiter=",", header="gx,gy,gz,ax,ay,az", comments="")
+    argv = ["fit", str(path), "--fs", "100", "--channels", "gx,gy,gz,ax,ay,az"]
+    code, _, err = _cli([*argv, "--units", "deg/s,m/s^2,g"], capsys)
+    assert code == 0
+    assert "channel gz is named like a gyro but its unit m/s^2 is for an accelerometer" in err
+    assert "channel gx" not in err
+    code, _, err = _cli([*argv, "--units", "deg/s,m/s^2"], capsys)
+    assert code == 0
+    assert "named like" not in err

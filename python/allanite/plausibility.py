@@ -24,6 +24,7 @@ The slopes come from :mod:`allanite.report.slopes` (half-decade windows, points 
 
 from __future__ import annotations
 
+import re
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -36,6 +37,7 @@ from allanite.report.slopes import MIN_EDF, local_slopes, slope_table
 __all__ = [
     "Finding",
     "check_allan",
+    "check_channel_units",
     "check_samples",
     "refuse_constant",
     "stuck_segments",
@@ -67,7 +69,8 @@ class Finding:
     Attributes
     ----------
     code : str
-        ``"angle_as_rate"``, ``"rate_as_angle"``, ``"counts_without_scale"`` or ``"stuck"``.
+        ``"angle_as_rate"``, ``"rate_as_angle"``, ``"counts_without_scale"``, ``"stuck"`` or
+        ``"unit_vs_name"``.
     channel : str
         The channel it concerns.
     message : str
@@ -316,4 +319,39 @@ def check_allan(result: Any, channels: Sequence[str] = ()) -> list[Finding]:
                     "if the samples are rates, give --input rate",
                 )
             )
+    return out
+
+
+#: channel names that say which sensor a column is (gx, gyro_y, wz, omega_x / ax, acc_y, ...)
+_NAMED_SENSOR = (
+    (re.compile(r"^(g|gyr|gyro|w|omega|angular_velocity)[_.\-]?[xyz0-9]?$", re.I), "gyro"),
+    (re.compile(r"^(a|acc|accel|linear_acceleration)[_.\-]?[xyz0-9]?$", re.I), "accelerometer"),
+)
+
+
+def check_channel_units(channels: Sequence[str], unit: str) -> list[Finding]:
+    """Channels whose name says one sensor while their unit measures the other.
+
+    A six-axis file read with ``--units deg/s,m/s^2,g`` puts ``gz`` in m/s^2: the grouping rule
+    allows it, the names say it is a mistake (``gz`` is a gyro, ``ax`` an accelerometer).
+    """
+    from allanite.units import sensor_kind
+
+    try:
+        kind = sensor_kind(unit)
+    except ValueError:
+        return []
+    out = []
+    for name in channels:
+        for pattern, named in _NAMED_SENSOR:
+            if pattern.match(name.strip()) and kind in ("gyro", "accelerometer") and kind != named:
+                out.append(
+                    Finding(
+                        "unit_vs_name",
+                        name,
+                        f"channel {name} is named like a{'n' if named[0] == 'a' else ''} "
+                        f"{named} but its unit {unit} is for a{'n' if kind[0] == 'a' else ''} "
+                        f"{kind}; check the order of --units",
+                    )
+                )
     return out

@@ -21,7 +21,7 @@ from allanite.io.options import ReadOptions
 from allanite.io.readers import FORMATS, read_record
 from allanite.io.record import INPUT_KINDS, Record
 from allanite.io.timebase import GAP_POLICIES
-from allanite.plausibility import check_allan, check_samples, refuse_constant
+from allanite.plausibility import check_allan, check_channel_units, check_samples, refuse_constant
 from allanite.variance import KINDS, AllanResult, avar
 
 __all__ = [
@@ -242,6 +242,13 @@ def read_sensors(path: str | None, args: argparse.Namespace) -> list[Record]:
         except ValueError as exc:
             names = ", ".join(part.channels)
             raise ValueError(f"channel(s) {names}: {exc}") from None
+        findings = check_channel_units(part.channels, unit)
+        command = getattr(args, "command", None) or "allanite"
+        for finding in findings:
+            print(f"allanite {command}: warning: {finding.message}", file=sys.stderr)
+        if findings:
+            messages = tuple(f.message for f in findings)
+            part = dataclasses.replace(part, warnings=part.warnings + messages)
         out.append(part)
     return out
 
