@@ -210,3 +210,12 @@ def test_simulate_takes_fs_by_keyword(call):
     assert run(500, fs=100.0, seed=1).shape == (500,)
     with pytest.raises(TypeError):
         run(500, 100.0, seed=1)
+
+
+def test_an_allan_result_prints_in_one_line():
+    res = allanite.avar(np.random.default_rng(2).standard_normal(5000), fs=10.0, units="deg/s")
+    text = repr(res)
+    assert "\n" not in text
+    assert text.startswith("AllanResult(kind='overlapping', ")
+    assert "fs=10 Hz" in text and "units='deg/s'" in text
+    assert len(text) < 200

@@ -22,7 +22,7 @@ from allanite.variance.taus import KERNEL_KIND
 __all__ = ["AllanResult", "assemble_result"]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class AllanResult:
     """Allan-family variance of a record over a grid of averaging times.
 
@@ -66,6 +66,20 @@ class AllanResult:
     units: str | None = None
     meta: dict[str, Any] = field(default_factory=dict, compare=False)
     _repr_html_ = allan_html  # Jupyter: a compact table and the plot (allanite.notebook)
+
+    def __repr__(self) -> str:
+        """One line: kind, grid, channels, record and unit (the arrays are attributes)."""
+        channels = 1 if self.var.ndim == 1 else self.var.shape[1]
+        taus = (
+            f"{self.tau.size} taus {self.tau[0]:.3g}-{self.tau[-1]:.3g} s"
+            if self.tau.size
+            else "no taus"
+        )
+        return (
+            f"AllanResult(kind={self.kind!r}, {taus}, channels={channels}, "
+            f"n_samples={self.n_samples}, fs={self.fs:g} Hz, input={self.input!r}, "
+            f"units={self.units!r})"
+        )
 
     @property
     def dev(self) -> NDArray[np.float64]:
