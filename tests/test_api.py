@@ -217,5 +217,6 @@ def test_an_allan_result_prints_in_one_line():
     text = repr(res)
     assert "\n" not in text
     assert text.startswith("AllanResult(kind='overlapping', ")
-    assert "fs=10 Hz" in text and "units='deg/s'" in text
+    assert "fs=10 Hz" in text
+    assert "units='deg/s'" in text
     assert len(text) < 200
