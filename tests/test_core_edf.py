@@ -291,6 +291,9 @@ def test_lag1_acf_kernel_equals_numpy_definition(series: str, dtype: type) -> No
     for threads in (1, 3, 4):  # grouping of the factors never changes a bit
         again = np.asarray(_core.lag1_acf(base, ms, series, 4, threads))
         assert np.array_equal(again.reshape(got.shape), got)
+    for levels in (1, 2, 3):  # identify_alpha's lazy levels: a level's sums never change
+        fewer = np.asarray(_core.lag1_acf(base, ms, series, levels, 2))
+        assert np.array_equal(fewer.reshape(len(ms), 3, levels), got[:, :, :levels])
 
 
 def test_lag1_acf_kernel_bad_arguments() -> None:

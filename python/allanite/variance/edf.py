@@ -442,6 +442,14 @@ def _acf_decision(r1_of_level: Callable[[int], float], dmax: int, n: int, *, pha
         d += 1
 
 
+def _acf_decision_of(levels: list[float], dmax: int, n: int, phase: bool) -> int | None:
+    """:func:`_acf_decision` on the levels computed so far; None when it needs a deeper one."""
+    try:
+        return _acf_decision(levels.__getitem__, dmax, n, phase=phase)
+    except IndexError:
+        return None
+
+
 def acf_noise_id(z: NDArray[np.float64], dmax: int, *, phase: bool) -> int:
     r"""Dominant power-law exponent by the lag-1 autocorrelation (Riley & Greenhall 2004).
 
@@ -704,13 +712,16 @@ def identify_alpha(
     is clipped to the exponents the
     estimator can measure (``alpha + 2d > 1``).
 
-    Cost and memory: the lag-1 statistics of all difference levels come from the compiled
+    Cost and memory: the lag-1 statistics come from the compiled
     :func:`allanite._core.lag1_acf`: one streaming pass over the record per worker thread,
     every factor of the thread's group reading its rows ``x[::m]`` from tiles in cache (no copy
-    of the record or of the decimated series), the B1 ratio from the fewer than 30 averages,
-    and R(n) from the compiled one-pass :func:`allanite._core.mvar_avar_ratio`, evaluated
-    only at the factors where B1 points to phase noise. Extra memory is O(T C) besides the
-    input; nothing here calls :mod:`allanite.variance.oracle` (the test oracle).
+    of the record or of the decimated series). The levels are lazy: a first pass computes
+    level 0 only; a second pass, over the factors whose stopping rule asks to difference, all
+    ``dmax + 1`` levels (a level's sums are the same in either pass). Then the B1 ratio from
+    the fewer than 30 averages, and R(n) from the compiled one-pass
+    :func:`allanite._core.mvar_avar_ratio`, evaluated only at the factors where B1 points to
+    phase noise. Extra memory is O(T C) besides the input; nothing here calls
+    :mod:`allanite.variance.oracle` (the test oracle).
 
     Parameters
     ----------
@@ -753,16 +764,24 @@ def identify_alpha(
     n_series = -(-rows // factors) if is_phase else (rows - 1) // factors
     out = np.empty((factors.size, channels), dtype=np.int64)
 
-    acf = np.flatnonzero(n_series >= ACF_MIN_POINTS)
-    if acf.size:
-        r1 = np.asarray(_core.lag1_acf(x2, factors[acf], data, dmax + 1, threads))
-        r1 = r1.reshape(acf.size, channels, dmax + 1)
-        for row, i in enumerate(acf.tolist()):
+    # Lazy levels: level 0 of every factor first; the deeper levels only at the factors whose
+    # stopping rule asks for them (the compiled sums of a level do not depend on how many
+    # levels a pass computes, so the decisions are those of one pass over all levels).
+    undecided = np.flatnonzero(n_series >= ACF_MIN_POINTS)
+    n_levels = 1
+    while undecided.size:
+        r1 = np.asarray(_core.lag1_acf(x2, factors[undecided], data, n_levels, threads))
+        r1 = r1.reshape(undecided.size, channels, n_levels)
+        deeper = []
+        for row, i in enumerate(undecided.tolist()):
             for c in range(channels):
-                levels = r1[row, c].tolist()
-                out[i, c] = _acf_decision(
-                    levels.__getitem__, dmax, int(n_series[i]), phase=is_phase
-                )
+                alpha = _acf_decision_of(r1[row, c].tolist(), dmax, int(n_series[i]), is_phase)
+                if alpha is None:
+                    deeper.append(i)
+                    break
+                out[i, c] = alpha
+        undecided = np.asarray(deeper, dtype=np.int64)
+        n_levels = dmax + 1
 
     pending: list[tuple[int, int]] = []  # (tau index, channel) where B1 points to phase noise
     for i in np.flatnonzero(n_series < ACF_MIN_POINTS).tolist():
