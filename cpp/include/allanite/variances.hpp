@@ -413,8 +413,8 @@ inline PrefixCursor prefix_cursor(const PhaseRef& phase, const PrefixPlan& plan,
 /// third difference of the phase, w_{j+1} = w_j + d3(j), kept as a TwoSum pair. The lanes are
 /// independent dependency chains run side by side; no prefix sums are stored. The lanes'
 /// block sums go to per-lane compensated totals, added to totals in lane order.
-inline void add_modified_single(const PhaseRef& phase, const PrefixPlan& plan, std::int64_t m,
-                                std::int64_t count, NeumaierSum* totals) {
+ALLANITE_TARGET_CLONES ALLANITE_SLP_ONLY static void add_modified_single(const PhaseRef& phase, const PrefixPlan& plan,
+                                                      std::int64_t m, std::int64_t count, NeumaierSum* totals) {
   constexpr int kLanes = 4;
   const Eigen::Index nc = phase.cols();
   const std::int64_t rs = phase.outerStride();
@@ -459,26 +459,26 @@ inline void add_modified_single(const PhaseRef& phase, const PrefixPlan& plan, s
         n[k] = std::max<std::int64_t>(0, std::min(chunk, len[k] - start));
         const double* b = x + (first[k] + start) * rs;
         const Taps<3> t{{b, b + m * rs, b + 2 * m * rs, b + 3 * m * rs}, rs};
-        double* out = d3.data() + k * chunk;
+        double* out = d3.data() + k;  // interleaved: term j of lane k at j * kLanes + k
         if (rs == 1) {
-          for (std::int64_t j = 0; j < n[k]; ++j) out[j] = tap_diff(t, j);
+          for (std::int64_t j = 0; j < n[k]; ++j) out[j * kLanes] = tap_diff(t, j);
         } else {
-          for (std::int64_t j = 0; j < n[k]; ++j) out[j] = tap_diff(t, j * rs);
+          for (std::int64_t j = 0; j < n[k]; ++j) out[j * kLanes] = tap_diff(t, j * rs);
         }
       }
-      double a[kLanes][4] = {};
+      double a[4][kLanes] = {};  // a[r][k]: lane k's partial sum r (the lanes one vector)
       const std::int64_t common = *std::min_element(n, n + kLanes) / 4 * 4;
       std::int64_t j = 0;
       for (; j < common; j += 4) {  // the lanes' chains side by side, four terms each
         for (int r = 0; r < 4; ++r) {
+          const double* v = d3.data() + (j + r) * kLanes;
           double w[kLanes];
           for (int k = 0; k < kLanes; ++k) w[k] = hi[k] + lo[k];
-          for (int k = 0; k < kLanes; ++k) a[k][r] += w[k] * w[k];
+          for (int k = 0; k < kLanes; ++k) a[r][k] += w[k] * w[k];
           for (int k = 0; k < kLanes; ++k) {
-            const double v = d3[static_cast<std::size_t>(k * chunk + j + r)];
-            const double sum = hi[k] + v;
+            const double sum = hi[k] + v[k];
             const double bb = sum - hi[k];
-            lo[k] += (hi[k] - (sum - bb)) + (v - bb);  // TwoSum error
+            lo[k] += (hi[k] - (sum - bb)) + (v[k] - bb);  // TwoSum error
             hi[k] = sum;
           }
         }
@@ -486,14 +486,14 @@ inline void add_modified_single(const PhaseRef& phase, const PrefixPlan& plan, s
       for (int k = 0; k < kLanes; ++k)
         for (std::int64_t i = j; i < n[k]; ++i) {
           const double w = hi[k] + lo[k];
-          a[k][i & 3] += w * w;
+          a[i & 3][k] += w * w;
           double sum, e;
-          two_sum(hi[k], d3[static_cast<std::size_t>(k * chunk + i)], sum, e);
+          two_sum(hi[k], d3[static_cast<std::size_t>(i * kLanes + k)], sum, e);
           hi[k] = sum;
           lo[k] += e;
         }
       for (int k = 0; k < kLanes; ++k)
-        if (n[k] > 0) lane_total[k].add((a[k][0] + a[k][1]) + (a[k][2] + a[k][3]));
+        if (n[k] > 0) lane_total[k].add((a[0][k] + a[1][k]) + (a[2][k] + a[3][k]));
     }
     for (int k = 0; k < kLanes; ++k) totals[c].add(lane_total[k].value());
   }
