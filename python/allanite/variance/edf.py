@@ -567,6 +567,30 @@ def b1_noise_id(
     return _rn_phase_class(rn() if callable(rn) else rn, m)
 
 
+def _uncapped(
+    pending: list[tuple[int, int]],
+    out: NDArray[np.int64],
+    factors: NDArray[np.int64],
+    n_series: NDArray[np.int64],
+) -> list[tuple[int, int]]:
+    """The (tau, channel) of ``pending`` whose R(n) answer survives :func:`cap_few_point_alpha`.
+
+    The others get the "no ratio" answer (flicker PM, 1), which the cap then replaces by the
+    exponent (at most 1) of the longest factor identified by the lag-1 method.
+    """
+    reliable = n_series >= ACF_MIN_POINTS
+    if not pending or not reliable.any():
+        return pending
+    ref = int(np.flatnonzero(reliable)[np.argmax(factors[reliable])])
+    kept = []
+    for i, c in pending:
+        if factors[i] > factors[ref] and out[ref, c] <= 1:
+            out[i, c] = _rn_phase_class(None, int(factors[i]))
+        else:
+            kept.append((i, c))
+    return kept
+
+
 def _mvar_avar_ratios(
     phase: NDArray[np.float64], factors: list[int], threads: int
 ) -> dict[int, NDArray[np.float64]]:
@@ -720,8 +744,9 @@ def identify_alpha(
     ``dmax + 1`` levels (a level's sums are the same in either pass). Then the B1 ratio from
     the fewer than 30 averages, and R(n) from the compiled one-pass
     :func:`allanite._core.mvar_avar_ratio`, evaluated only at the factors where B1 points to
-    phase noise. Extra memory is O(T C) besides the input; nothing here calls
-    :mod:`allanite.variance.oracle` (the test oracle).
+    phase noise and the cap of :func:`cap_few_point_alpha` leaves the answer open (the longest
+    lag-1 factor's ``alpha`` above 1). Extra memory is O(T C) besides the input; nothing here
+    calls :mod:`allanite.variance.oracle` (the test oracle).
 
     Parameters
     ----------
@@ -794,6 +819,9 @@ def identify_alpha(
                 pending.append((i, c))
             else:
                 out[i, c] = alpha
+    # R(n) only chooses between white (2) and flicker (1) PM; where the cap of
+    # cap_few_point_alpha is at most 1 the choice cannot change the result: no ratio needed
+    pending = _uncapped(pending, out, factors, n_series)
     if pending:
         source = detrended if detrended is not None else x2.astype(np.float64, copy=False)
         ratios = _mvar_avar_ratios(
