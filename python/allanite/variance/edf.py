@@ -381,21 +381,27 @@ def equivalent_dof(
     factors = np.asarray(m, dtype=np.int64)
     if alphas.shape[0] != factors.size:
         raise ValueError(f"alpha has {alphas.shape[0]} rows for {factors.size} averaging factors")
-    out = np.empty(alphas.shape, dtype=np.float64)
+    width = int(np.prod(alphas.shape[1:]))
+    clipped = np.clip(alphas, lo, hi).reshape(factors.size, width).tolist()
     cache: dict[tuple[int, int], float] = {}
-    for index in np.ndindex(*alphas.shape):
-        a = int(np.clip(alphas[index], lo, hi))
-        mi = int(factors[index[0]])
-        key = (a, mi)
-        if key not in cache:
-            if kind == "total":
-                cache[key] = totvar_edf(a, mi, n_phase)
-            else:
-                cache[key] = greenhall_edf(
-                    a, shape.d, mi, n_phase, overlapping=shape.overlapping, modified=shape.modified
-                )
-        out[index] = cache[key]
-    return out
+    rows = []
+    for mi, row in zip(factors.reshape(-1).tolist(), clipped, strict=True):
+        for a in row:
+            key = (a, mi)
+            if key not in cache:
+                if kind == "total":
+                    cache[key] = totvar_edf(a, mi, n_phase)
+                else:
+                    cache[key] = greenhall_edf(
+                        a,
+                        shape.d,
+                        mi,
+                        n_phase,
+                        overlapping=shape.overlapping,
+                        modified=shape.modified,
+                    )
+        rows.append([cache[(a, mi)] for a in row])
+    return np.array(rows, dtype=np.float64).reshape(alphas.shape)
 
 
 # --------------------------------------------------------------------------------------------
