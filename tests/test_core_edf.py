@@ -291,6 +291,9 @@ def test_lag1_acf_kernel_equals_numpy_definition(series: str, dtype: type) -> No
     for threads in (1, 3, 4):  # grouping of the factors never changes a bit
         again = np.asarray(_core.lag1_acf(base, ms, series, 4, threads))
         assert np.array_equal(again.reshape(got.shape), got)
+    for levels in (1, 2, 3):  # identify_alpha's lazy levels: a level's sums never change
+        fewer = np.asarray(_core.lag1_acf(base, ms, series, levels, 2))
+        assert np.array_equal(fewer.reshape(len(ms), 3, levels), got[:, :, :levels])
 
 
 def test_lag1_acf_kernel_bad_arguments() -> None:
@@ -501,3 +504,36 @@ def test_out_of_core_smooths_like_in_memory(tmp_path):
 def test_unknown_alpha_string_is_refused():
     with pytest.raises(TypeError, match="stable32"):
         allanite.avar(np.random.default_rng(0).standard_normal(1000), fs=1.0, alpha="stable")
+
+
+def test_rn_skipped_only_where_the_cap_decides(monkeypatch: pytest.MonkeyPatch) -> None:
+    """identify_alpha skips R(n) where cap_few_point_alpha's cap (<= 1) decides: the result
+    equals the one with every ratio computed, and white FM needs no ratio at all."""
+    rng = np.random.default_rng(31)
+    n = 40_000
+    records = {
+        "white FM": _core.phase(rng.standard_normal((n, 2)), "rate"),
+        "white PM": rng.standard_normal((n, 2)),
+        "mixed": np.column_stack([rng.standard_normal(n), np.cumsum(rng.standard_normal(n))]),
+    }
+    factors = np.unique(np.geomspace(1, n // 4, 40).astype(np.int64))
+    calls: list[list[int]] = []
+    real_ratios = edf._mvar_avar_ratios
+
+    def counted(phase: np.ndarray, ms: list[int], threads: int) -> dict:
+        calls.append(ms)
+        return real_ratios(phase, ms, threads)
+
+    monkeypatch.setattr(edf, "_mvar_avar_ratios", counted)
+    for name, x in records.items():
+        for kind in ("overlapping", "hadamard", "total"):
+            for data in ("frequency", "phase"):
+                calls.clear()
+                lazy = edf.identify_alpha(x, factors, kind, data=data)
+                lazy_calls = len(calls)
+                with monkeypatch.context() as m:
+                    m.setattr(edf, "_uncapped", lambda pending, *_: pending)
+                    full = edf.identify_alpha(x, factors, kind, data=data)
+                assert np.array_equal(lazy, full), (name, kind, data)
+                if name == "white FM" and data == "frequency":
+                    assert lazy_calls == 0, (kind, calls)

@@ -232,3 +232,23 @@ def test_long_record_paths_match_reference_and_each_other(kind: str) -> None:
         ]
     )
     assert np.array_equal(alone, got)
+
+
+@pytest.mark.parametrize(
+    "n", [3, 1023, 1024, 1025, 3 * 1024 - 1, 4 * 1024 - 1, 4 * 1024, 5 * 1024 + 7]
+)
+def test_modified_prefix_plan_segment_edges(n: int) -> None:
+    """The prefix sums' plan sums four segments of whole 1024-row blocks side by side and
+    joins them: record lengths at block and segment edges (an empty or short last segment,
+    a mark at row M) match the oracle on a 1e10 bias, every factor, one or two threads."""
+    rng = np.random.default_rng(n)
+    x = np.column_stack([1e10 + rng.standard_normal(n), np.cumsum(rng.standard_normal(n))])
+    phase = _core.phase(x, "rate")
+    top = int(_core.max_m("modified", phase.shape[0]))
+    factors = np.unique(np.array([1, 2, top // 2, top]).clip(1, top))
+    got = np.asarray(_core.variance(phase, factors, "modified", 2))
+    want = np.column_stack(
+        [np.asarray(oracle.variance(x[:, c], factors, "modified", input="rate")) for c in range(2)]
+    )
+    np.testing.assert_allclose(got, want, rtol=RTOL, atol=0)
+    assert np.array_equal(np.asarray(_core.variance(phase, factors, "modified", 1)), got)

@@ -73,7 +73,12 @@ RowMatrix build_phase(const StridedMap<T>& x, InputKind kind) {
   const Eigen::Index nc = x.cols();
   if (n < 3) throw std::invalid_argument("record too short: need at least 3 samples, got " + std::to_string(n));
   if (nc < 1) throw std::invalid_argument("record has no channels");
-  detail::check_finite(x);
+  // no separate pass for finiteness: a NaN or inf makes a column's compensated mean NaN
+  // (Neumaier's correction gets inf - inf), and only then the record is searched for it
+  const auto column_mean = [&x](Eigen::Index c, double& mean1, double& corr) {
+    detail::column_mean(x, c, mean1, corr);
+    if (!std::isfinite(mean1) || !std::isfinite(corr)) detail::check_finite(x);
+  };
 
   if (kind == InputKind::Angle) {
     RowMatrix phase(n, nc);
@@ -83,7 +88,7 @@ RowMatrix build_phase(const StridedMap<T>& x, InputKind kind) {
     const double sxx = nn * (nn * nn - 1.0) / 12.0;
     for (Eigen::Index c = 0; c < nc; ++c) {
       double mean1 = 0.0, corr = 0.0;
-      detail::column_mean(x, c, mean1, corr);
+      column_mean(c, mean1, corr);
       NeumaierSum sxy;
       for (Eigen::Index k = 0; k < n; ++k) {
         const double u = (static_cast<double>(x(k, c)) - mean1) - corr;
@@ -108,7 +113,7 @@ RowMatrix build_phase(const StridedMap<T>& x, InputKind kind) {
   phase.row(0).setZero();
   for (Eigen::Index c = 0; c < nc; ++c) {
     double mean1 = 0.0, corr = 0.0;
-    detail::column_mean(x, c, mean1, corr);
+    column_mean(c, mean1, corr);
     NeumaierSum acc;
     for (Eigen::Index k = 0; k < n; ++k) {
       acc.add((static_cast<double>(x(k, c)) - mean1) - corr);

@@ -303,13 +303,63 @@ inline void add_diff_squares(const TapsT& t, std::int64_t count, Eigen::Index nc
 /// sum + comp) and handed to the kernel split per channel as S = H + L: H is sum rounded to a
 /// multiple of a power of two q with |H| <= 2^48 q, so every third difference of H is exact,
 /// and L = (sum - H) + comp carries the rest to O(eps |L|); no cancellation of the large S.
-/// Nothing of size M is stored: the plan keeps the state every kSumBlock rows (one serial
-/// pass), and cursors regenerate S, bit for bit the same wherever they start.
+/// Nothing of size M is stored: the plan keeps the state every kSumBlock rows (one pass, four
+/// segments of whole blocks summed side by side from zero, then joined to the running total
+/// with TwoSum), and a cursor regenerates S from the mark below its start row, so every S a
+/// factor reads depends only on the factor, never on the threads.
 struct PrefixPlan {
   Eigen::Index nc = 0;
   std::vector<double> sum, comp;  // state at rows 0, kSumBlock, 2 kSumBlock, ... (x nc)
   std::vector<double> big;        // per channel: (v + big) - big rounds v to a multiple of q
 };
+
+/// TwoSum states of kPlanSegments segments of one channel's rows side by side (one vector):
+/// segment s covers rows [s seg, (s + 1) seg) and starts from zero. Its local state at each
+/// kSumBlock rows goes to mark s seg / kSumBlock + b (entries `stride` apart, marks with
+/// row <= M), its end state to end_sum/end_comp, its largest |local sum| to top.
+constexpr int kPlanSegments = 4;
+ALLANITE_TARGET_CLONES ALLANITE_SLP_ONLY static void plan_segments(const double* x, std::int64_t rs, std::int64_t M,
+                                                                   std::int64_t seg, double* sum_at, double* comp_at,
+                                                                   std::int64_t stride, double* end_sum,
+                                                                   double* end_comp, double* top_out) noexcept {
+  double sum[kPlanSegments] = {}, comp[kPlanSegments] = {}, top[kPlanSegments] = {};
+  const std::int64_t seg_blocks = seg / kSumBlock;
+  // rows that every segment has (the last ones may be shorter): the four chains at once
+  const std::int64_t common = std::clamp<std::int64_t>(M - (kPlanSegments - 1) * seg, 0, seg);
+  for (std::int64_t r0 = 0; r0 < seg; r0 += kSumBlock) {
+    for (int s = 0; s < kPlanSegments; ++s)
+      if (s * seg + r0 <= M) {
+        sum_at[(s * seg_blocks + r0 / kSumBlock) * stride] = sum[s];
+        comp_at[(s * seg_blocks + r0 / kSumBlock) * stride] = comp[s];
+      }
+    const std::int64_t r1 = std::min(seg, r0 + kSumBlock);
+    const std::int64_t both = std::min(r1, std::max(r0, common));
+    for (std::int64_t r = r0; r < both; ++r) {
+      double v[kPlanSegments];
+      for (int s = 0; s < kPlanSegments; ++s) v[s] = x[(s * seg + r) * rs];
+      for (int s = 0; s < kPlanSegments; ++s) {
+        const double t = sum[s] + v[s];
+        const double bb = t - sum[s];
+        comp[s] += (sum[s] - (t - bb)) + (v[s] - bb);  // TwoSum error
+        sum[s] = t;
+        top[s] = std::max(top[s], std::fabs(t));
+      }
+    }
+    for (int s = 0; s < kPlanSegments; ++s)
+      for (std::int64_t r = both; r < r1 && s * seg + r < M; ++r) {
+        double t, e;
+        two_sum(sum[s], x[(s * seg + r) * rs], t, e);
+        sum[s] = t;
+        comp[s] += e;
+        top[s] = std::max(top[s], std::fabs(t));
+      }
+  }
+  for (int s = 0; s < kPlanSegments; ++s) {
+    end_sum[s] = sum[s];
+    end_comp[s] = comp[s];
+    top_out[s] = top[s];
+  }
+}
 
 inline PrefixPlan prefix_plan(const PhaseRef& phase) {
   const std::int64_t M = phase.rows();
@@ -317,30 +367,39 @@ inline PrefixPlan prefix_plan(const PhaseRef& phase) {
   const auto unc = static_cast<std::size_t>(nc);
   PrefixPlan p;
   p.nc = nc;
-  const std::size_t marks = static_cast<std::size_t>(M / kSumBlock + 1);
-  p.sum.assign(marks * unc, 0.0);
-  p.comp.assign(marks * unc, 0.0);
+  const std::int64_t marks = M / kSumBlock + 1;
+  // segments of whole blocks, summed side by side, then joined to the running total
+  const std::int64_t seg_blocks = (marks + kPlanSegments - 1) / kPlanSegments;
+  const std::int64_t seg = seg_blocks * kSumBlock;
+  p.sum.assign(static_cast<std::size_t>(marks) * unc, 0.0);
+  p.comp.assign(p.sum.size(), 0.0);
   p.big.assign(unc, 0.0);
   for (Eigen::Index c = 0; c < nc; ++c) {
     const auto uc = static_cast<std::size_t>(c);
-    double sum = 0.0, comp = 0.0, top = 0.0;
-    for (std::int64_t k = 0; k < M; ++k) {
-      if (k % kSumBlock == 0) {
-        p.sum[static_cast<std::size_t>(k / kSumBlock) * unc + uc] = sum;
-        p.comp[static_cast<std::size_t>(k / kSumBlock) * unc + uc] = comp;
-      }
+    double end_sum[kPlanSegments], end_comp[kPlanSegments], top[kPlanSegments];
+    plan_segments(phase.data() + c, phase.outerStride(), M, seg, p.sum.data() + uc, p.comp.data() + uc, nc,
+                  end_sum, end_comp, top);
+    // the state at a mark of segment s: its local state after the total of segments < s
+    double off_sum = 0.0, off_comp = 0.0, bound = 0.0;
+    const auto join = [&](double& sum, double& comp) {
       double t, e;
-      two_sum(sum, phase(k, c), t, e);  // branch free: the only chain is sum += x
+      two_sum(off_sum, sum, t, e);
+      comp = (off_comp + comp) + e;
       sum = t;
-      comp += e;
-      top = std::max(top, std::fabs(sum));
-    }
-    if (M % kSumBlock == 0) {
-      p.sum[static_cast<std::size_t>(M / kSumBlock) * unc + uc] = sum;
-      p.comp[static_cast<std::size_t>(M / kSumBlock) * unc + uc] = comp;
+    };
+    for (int s = 0; s < kPlanSegments; ++s) {
+      bound = std::max(bound, std::fabs(off_sum) + top[s]);  // bounds |S| in segment s
+      const std::int64_t k1 = std::min<std::int64_t>((s + 1) * seg_blocks, marks);
+      for (std::int64_t k = s * seg_blocks; k < k1; ++k) {
+        const auto i = static_cast<std::size_t>(k) * unc + uc;
+        join(p.sum[i], p.comp[i]);
+      }
+      join(end_sum[s], end_comp[s]);
+      off_sum = end_sum[s];
+      off_comp = end_comp[s];
     }
     int e2 = 0;
-    std::frexp(top, &e2);                 // top < 2^e2 = 2^48 q
+    std::frexp(bound, &e2);               // every |S| < 2^e2 = 2^48 q (up to rounding)
     p.big[uc] = std::ldexp(1.5, e2 + 4);  // 1.5 * 2^52 q: exact rounding for |v| < 2^51 q
   }
   return p;
@@ -413,8 +472,8 @@ inline PrefixCursor prefix_cursor(const PhaseRef& phase, const PrefixPlan& plan,
 /// third difference of the phase, w_{j+1} = w_j + d3(j), kept as a TwoSum pair. The lanes are
 /// independent dependency chains run side by side; no prefix sums are stored. The lanes'
 /// block sums go to per-lane compensated totals, added to totals in lane order.
-inline void add_modified_single(const PhaseRef& phase, const PrefixPlan& plan, std::int64_t m,
-                                std::int64_t count, NeumaierSum* totals) {
+ALLANITE_TARGET_CLONES ALLANITE_SLP_ONLY static void add_modified_single(const PhaseRef& phase, const PrefixPlan& plan,
+                                                      std::int64_t m, std::int64_t count, NeumaierSum* totals) {
   constexpr int kLanes = 4;
   const Eigen::Index nc = phase.cols();
   const std::int64_t rs = phase.outerStride();
@@ -459,26 +518,26 @@ inline void add_modified_single(const PhaseRef& phase, const PrefixPlan& plan, s
         n[k] = std::max<std::int64_t>(0, std::min(chunk, len[k] - start));
         const double* b = x + (first[k] + start) * rs;
         const Taps<3> t{{b, b + m * rs, b + 2 * m * rs, b + 3 * m * rs}, rs};
-        double* out = d3.data() + k * chunk;
+        double* out = d3.data() + k;  // interleaved: term j of lane k at j * kLanes + k
         if (rs == 1) {
-          for (std::int64_t j = 0; j < n[k]; ++j) out[j] = tap_diff(t, j);
+          for (std::int64_t j = 0; j < n[k]; ++j) out[j * kLanes] = tap_diff(t, j);
         } else {
-          for (std::int64_t j = 0; j < n[k]; ++j) out[j] = tap_diff(t, j * rs);
+          for (std::int64_t j = 0; j < n[k]; ++j) out[j * kLanes] = tap_diff(t, j * rs);
         }
       }
-      double a[kLanes][4] = {};
+      double a[4][kLanes] = {};  // a[r][k]: lane k's partial sum r (the lanes one vector)
       const std::int64_t common = *std::min_element(n, n + kLanes) / 4 * 4;
       std::int64_t j = 0;
       for (; j < common; j += 4) {  // the lanes' chains side by side, four terms each
         for (int r = 0; r < 4; ++r) {
+          const double* v = d3.data() + (j + r) * kLanes;
           double w[kLanes];
           for (int k = 0; k < kLanes; ++k) w[k] = hi[k] + lo[k];
-          for (int k = 0; k < kLanes; ++k) a[k][r] += w[k] * w[k];
+          for (int k = 0; k < kLanes; ++k) a[r][k] += w[k] * w[k];
           for (int k = 0; k < kLanes; ++k) {
-            const double v = d3[static_cast<std::size_t>(k * chunk + j + r)];
-            const double sum = hi[k] + v;
+            const double sum = hi[k] + v[k];
             const double bb = sum - hi[k];
-            lo[k] += (hi[k] - (sum - bb)) + (v - bb);  // TwoSum error
+            lo[k] += (hi[k] - (sum - bb)) + (v[k] - bb);  // TwoSum error
             hi[k] = sum;
           }
         }
@@ -486,14 +545,14 @@ inline void add_modified_single(const PhaseRef& phase, const PrefixPlan& plan, s
       for (int k = 0; k < kLanes; ++k)
         for (std::int64_t i = j; i < n[k]; ++i) {
           const double w = hi[k] + lo[k];
-          a[k][i & 3] += w * w;
+          a[i & 3][k] += w * w;
           double sum, e;
-          two_sum(hi[k], d3[static_cast<std::size_t>(k * chunk + i)], sum, e);
+          two_sum(hi[k], d3[static_cast<std::size_t>(i * kLanes + k)], sum, e);
           hi[k] = sum;
           lo[k] += e;
         }
       for (int k = 0; k < kLanes; ++k)
-        if (n[k] > 0) lane_total[k].add((a[k][0] + a[k][1]) + (a[k][2] + a[k][3]));
+        if (n[k] > 0) lane_total[k].add((a[0][k] + a[1][k]) + (a[2][k] + a[3][k]));
     }
     for (int k = 0; k < kLanes; ++k) totals[c].add(lane_total[k].value());
   }

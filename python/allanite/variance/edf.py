@@ -381,21 +381,27 @@ def equivalent_dof(
     factors = np.asarray(m, dtype=np.int64)
     if alphas.shape[0] != factors.size:
         raise ValueError(f"alpha has {alphas.shape[0]} rows for {factors.size} averaging factors")
-    out = np.empty(alphas.shape, dtype=np.float64)
+    width = int(np.prod(alphas.shape[1:]))
+    clipped = np.clip(alphas, lo, hi).reshape(factors.size, width).tolist()
     cache: dict[tuple[int, int], float] = {}
-    for index in np.ndindex(*alphas.shape):
-        a = int(np.clip(alphas[index], lo, hi))
-        mi = int(factors[index[0]])
-        key = (a, mi)
-        if key not in cache:
-            if kind == "total":
-                cache[key] = totvar_edf(a, mi, n_phase)
-            else:
-                cache[key] = greenhall_edf(
-                    a, shape.d, mi, n_phase, overlapping=shape.overlapping, modified=shape.modified
-                )
-        out[index] = cache[key]
-    return out
+    rows = []
+    for mi, row in zip(factors.reshape(-1).tolist(), clipped, strict=True):
+        for a in row:
+            key = (a, mi)
+            if key not in cache:
+                if kind == "total":
+                    cache[key] = totvar_edf(a, mi, n_phase)
+                else:
+                    cache[key] = greenhall_edf(
+                        a,
+                        shape.d,
+                        mi,
+                        n_phase,
+                        overlapping=shape.overlapping,
+                        modified=shape.modified,
+                    )
+        rows.append([cache[(a, mi)] for a in row])
+    return np.array(rows, dtype=np.float64).reshape(alphas.shape)
 
 
 # --------------------------------------------------------------------------------------------
@@ -440,6 +446,14 @@ def _acf_decision(r1_of_level: Callable[[int], float], dmax: int, n: int, *, pha
             p = -round(2.0 * delta) - 2 * d
             return int(p + 2 if phase else p)
         d += 1
+
+
+def _acf_decision_of(levels: list[float], dmax: int, n: int, phase: bool) -> int | None:
+    """:func:`_acf_decision` on the levels computed so far; None when it needs a deeper one."""
+    try:
+        return _acf_decision(levels.__getitem__, dmax, n, phase=phase)
+    except IndexError:
+        return None
 
 
 def acf_noise_id(z: NDArray[np.float64], dmax: int, *, phase: bool) -> int:
@@ -557,6 +571,30 @@ def b1_noise_id(
     if alpha is not None:
         return alpha
     return _rn_phase_class(rn() if callable(rn) else rn, m)
+
+
+def _uncapped(
+    pending: list[tuple[int, int]],
+    out: NDArray[np.int64],
+    factors: NDArray[np.int64],
+    n_series: NDArray[np.int64],
+) -> list[tuple[int, int]]:
+    """The (tau, channel) of ``pending`` whose R(n) answer survives :func:`cap_few_point_alpha`.
+
+    The others get the "no ratio" answer (flicker PM, 1), which the cap then replaces by the
+    exponent (at most 1) of the longest factor identified by the lag-1 method.
+    """
+    reliable = n_series >= ACF_MIN_POINTS
+    if not pending or not reliable.any():
+        return pending
+    ref = int(np.flatnonzero(reliable)[np.argmax(factors[reliable])])
+    kept = []
+    for i, c in pending:
+        if factors[i] > factors[ref] and out[ref, c] <= 1:
+            out[i, c] = _rn_phase_class(None, int(factors[i]))
+        else:
+            kept.append((i, c))
+    return kept
 
 
 def _mvar_avar_ratios(
@@ -704,13 +742,17 @@ def identify_alpha(
     is clipped to the exponents the
     estimator can measure (``alpha + 2d > 1``).
 
-    Cost and memory: the lag-1 statistics of all difference levels come from the compiled
+    Cost and memory: the lag-1 statistics come from the compiled
     :func:`allanite._core.lag1_acf`: one streaming pass over the record per worker thread,
     every factor of the thread's group reading its rows ``x[::m]`` from tiles in cache (no copy
-    of the record or of the decimated series), the B1 ratio from the fewer than 30 averages,
-    and R(n) from the compiled one-pass :func:`allanite._core.mvar_avar_ratio`, evaluated
-    only at the factors where B1 points to phase noise. Extra memory is O(T C) besides the
-    input; nothing here calls :mod:`allanite.variance.oracle` (the test oracle).
+    of the record or of the decimated series). The levels are lazy: a first pass computes
+    level 0 only; a second pass, over the factors whose stopping rule asks to difference, all
+    ``dmax + 1`` levels (a level's sums are the same in either pass). Then the B1 ratio from
+    the fewer than 30 averages, and R(n) from the compiled one-pass
+    :func:`allanite._core.mvar_avar_ratio`, evaluated only at the factors where B1 points to
+    phase noise and the cap of :func:`cap_few_point_alpha` leaves the answer open (the longest
+    lag-1 factor's ``alpha`` above 1). Extra memory is O(T C) besides the input; nothing here
+    calls :mod:`allanite.variance.oracle` (the test oracle).
 
     Parameters
     ----------
@@ -753,16 +795,24 @@ def identify_alpha(
     n_series = -(-rows // factors) if is_phase else (rows - 1) // factors
     out = np.empty((factors.size, channels), dtype=np.int64)
 
-    acf = np.flatnonzero(n_series >= ACF_MIN_POINTS)
-    if acf.size:
-        r1 = np.asarray(_core.lag1_acf(x2, factors[acf], data, dmax + 1, threads))
-        r1 = r1.reshape(acf.size, channels, dmax + 1)
-        for row, i in enumerate(acf.tolist()):
+    # Lazy levels: level 0 of every factor first; the deeper levels only at the factors whose
+    # stopping rule asks for them (the compiled sums of a level do not depend on how many
+    # levels a pass computes, so the decisions are those of one pass over all levels).
+    undecided = np.flatnonzero(n_series >= ACF_MIN_POINTS)
+    n_levels = 1
+    while undecided.size:
+        r1 = np.asarray(_core.lag1_acf(x2, factors[undecided], data, n_levels, threads))
+        r1 = r1.reshape(undecided.size, channels, n_levels)
+        deeper = []
+        for row, i in enumerate(undecided.tolist()):
             for c in range(channels):
-                levels = r1[row, c].tolist()
-                out[i, c] = _acf_decision(
-                    levels.__getitem__, dmax, int(n_series[i]), phase=is_phase
-                )
+                alpha = _acf_decision_of(r1[row, c].tolist(), dmax, int(n_series[i]), is_phase)
+                if alpha is None:
+                    deeper.append(i)
+                    break
+                out[i, c] = alpha
+        undecided = np.asarray(deeper, dtype=np.int64)
+        n_levels = dmax + 1
 
     pending: list[tuple[int, int]] = []  # (tau index, channel) where B1 points to phase noise
     for i in np.flatnonzero(n_series < ACF_MIN_POINTS).tolist():
@@ -775,6 +825,9 @@ def identify_alpha(
                 pending.append((i, c))
             else:
                 out[i, c] = alpha
+    # R(n) only chooses between white (2) and flicker (1) PM; where the cap of
+    # cap_few_point_alpha is at most 1 the choice cannot change the result: no ratio needed
+    pending = _uncapped(pending, out, factors, n_series)
     if pending:
         source = detrended if detrended is not None else x2.astype(np.float64, copy=False)
         ratios = _mvar_avar_ratios(
