@@ -215,3 +215,23 @@ def test_report_reads_a_simulator_config_as_diagnose_does(tmp_path, capsys):
     assert "Sim-to-real diagnosis" in html
     assert "kalibr.yaml" in html
     assert "no gap" in html
+
+
+def test_convert_warns_when_the_written_file_departs_or_lacks_a_sensor(tmp_path, capsys):
+    """Read back as the simulator reads it: a poor projection and a missing sensor are warned."""
+    flicker = NoiseModel.from_dict(
+        {"units": {"rate": "rad/s", "time": "s"}, "terms": [{"type": "flicker", "B": 1e-4}]}
+    )
+    src = tmp_path / "flicker.json"
+    flicker.save(src)
+    assert main(["model", "convert", str(src), str(tmp_path / "k.yaml"), "--rate", "100"]) == 0
+    err = capsys.readouterr().err
+    assert "warning: the written gyro model departs from the source by up to" in err
+    assert "has no accel noise entries" in err
+    white = NoiseModel((White(N=1e-3),), {"rate": "rad/s", "time": "s"})
+    white.save(src)
+    assert main(["model", "convert", str(src), str(tmp_path / "k2.yaml"), "--rate", "100"]) == 0
+    err = capsys.readouterr().err
+    assert "departs" not in err  # white noise is held exactly
+    assert main(["model", "convert", str(tmp_path / "k2.yaml"), str(tmp_path / "back.json")]) == 0
+    assert "warning" not in capsys.readouterr().err  # a model JSON holds one sensor by design

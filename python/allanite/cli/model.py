@@ -6,7 +6,11 @@ import argparse
 import sys
 from typing import Any
 
+import numpy as np
+
 from allanite.formats import FORMATS, read_config, write_config
+from allanite.formats.base import ImuConfig
+from allanite.formats.projection import default_tau_range
 
 __all__ = ["register", "run"]
 
@@ -74,16 +78,66 @@ def run(args: argparse.Namespace) -> int:
     if args.rate is not None and not args.rate > 0:
         raise ValueError(f"--rate must be a positive frequency in Hz, got {args.rate}")
     config = read_config(args.input, format=args.from_format, rate=args.rate)
+    rate = args.rate or config.rate
     for note in config.notes:
         print(f"note: {note}", file=sys.stderr)
     written = write_config(
         config,
         args.output,
         format=args.to_format,
-        rate=args.rate or config.rate,
+        rate=rate,
         template=args.template,
         tau_range=tuple(args.tau_range) if args.tau_range else None,
     )
     for line in written.report():
         print(line, file=sys.stderr)
+    for line in check_written(config, args.output, args.to_format, rate, args.tau_range):
+        print(f"allanite model convert: warning: {line}", file=sys.stderr)
     return 0
+
+
+#: a written model whose Allan deviation departs from the source's by more than this (over the
+#: projection's tau range) is warned about on stderr
+POOR_ADEV_ERROR = 0.25
+
+
+def check_written(
+    source: ImuConfig,
+    path: str,
+    format: str | None,
+    rate: float | None,
+    tau_range: list[float] | None,
+) -> list[str]:
+    """What a user must know about the written file, read back as the simulator reads it.
+
+    A sensor of the source missing from the output, and a sensor whose read-back Allan
+    deviation departs from the source's by more than :data:`POOR_ADEV_ERROR` anywhere over
+    the tau range (default: 10 samples to one hour; at 100 Hz without a rate).
+    """
+    back = read_config(path, format=format, rate=rate)
+    dt = 1.0 / (rate or back.rate or 100.0)
+    lo, hi = tau_range if tau_range else default_tau_range(dt)
+    taus = np.geomspace(lo, hi, 60)
+    out = []
+    for sensor in ("gyro", "accel"):
+        model = getattr(source, sensor)
+        if model is None:
+            if back.source_format == "allanite":
+                continue  # a model JSON holds one sensor by design
+            out.append(
+                f"{path} has no {sensor} noise entries: the source holds no {sensor} model "
+                "(add them by hand if the simulator or estimator needs them)"
+            )
+            continue
+        written = getattr(back, sensor)
+        if written is None:
+            out.append(f"{path} lost the {sensor} model (the format cannot hold it)")
+            continue
+        worst = float(np.max(np.abs(written.adev(taus, dt) / model.adev(taus, dt) - 1.0)))
+        if worst > POOR_ADEV_ERROR:
+            out.append(
+                f"the written {sensor} model departs from the source by up to {100 * worst:.0f} % "
+                f"in Allan deviation over {lo:.3g}-{hi:.3g} s: the format cannot hold the "
+                "source's terms (see the 'projected' lines); check it before use"
+            )
+    return out
