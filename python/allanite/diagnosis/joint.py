@@ -211,6 +211,27 @@ def explain(
     explained = set(best.evidence.get("explained", []))
     gaps = [tm.gap(), tm.gap(extras[0])]
     cache: dict[str, NDArray[np.float64]] = {}
+    worse = float(stats.chi2.isf(alpha, 1))
+
+    def on_top(
+        on: list[Attribution], on_c: list[Candidate], tm_bg: TauModel, left: dict[str, bool]
+    ) -> list[Attribution]:
+        """The candidates of another slot, ranked on top of the effects ``on``.
+
+        An effect that explains time/frequency evidence but makes the tau view significantly
+        worse is not an explanation of this record.
+        """
+        kept = rank(
+            [c for c in candidates if not _same_slot(c, on_c)],
+            tm_bg,
+            alpha=alpha,
+            evidence_p=evidence_p,
+            significant=left,
+            time_view=with_level_background(time_view, on, on_c, tm, duration, cache),
+            duration=duration,
+        )
+        return [a for a in kept if a.evidence["tau"]["delta_T"] > -worse]
+
     while len(chosen) < MAX_EFFECTS:
         total = np.sum(extras, axis=0)
         k_total = sum(len(c.free) for c in chosen_c)
@@ -218,20 +239,7 @@ def explain(
         if tm.p_value(total, n_params=k_total) > alpha and not any(left.values()):
             break
         tm_bg = with_background(tm, total)
-        pool = [c for c in candidates if not _same_slot(c, chosen_c)]
-        kept = rank(
-            pool,
-            tm_bg,
-            alpha=alpha,
-            evidence_p=evidence_p,
-            significant=left,
-            time_view=with_level_background(time_view, chosen, chosen_c, tm, duration, cache),
-            duration=duration,
-        )
-        # an effect that explains time/frequency evidence but makes the tau view significantly
-        # worse is not an explanation of this record
-        worse = float(stats.chi2.isf(alpha, 1))
-        kept = [a for a in kept if a.evidence["tau"]["delta_T"] > -worse]
+        kept = on_top(chosen, chosen_c, tm_bg, left)
         if not kept:
             break
         nxt = kept[0]
@@ -252,19 +260,8 @@ def explain(
                 *(set(a.evidence.get("explained", [])) for j, a in enumerate(chosen) if j != i)
             )
             left = {e: bool(s) and e not in told for e, s in significant.items()}
-            pool = [c for c in candidates if not _same_slot(c, others_c)]
             others_a = [a for j, a in enumerate(chosen) if j != i]
-            kept = rank(
-                pool,
-                tm_bg,
-                alpha=alpha,
-                evidence_p=evidence_p,
-                significant=left,
-                time_view=with_level_background(time_view, others_a, others_c, tm, duration, cache),
-                duration=duration,
-            )
-            worse = float(stats.chi2.isf(alpha, 1))
-            kept = [a for a in kept if a.evidence["tau"]["delta_T"] > -worse]
+            kept = on_top(others_a, others_c, tm_bg, left)
             if not kept or kept[0].effect == chosen[i].effect:
                 continue
             chosen[i], chosen_c[i] = kept[0], by_effect[kept[0].effect]
