@@ -10,7 +10,7 @@ import numpy as np
 
 from allanite.formats import FORMATS, read_config, write_config
 from allanite.formats.base import ImuConfig
-from allanite.formats.projection import default_tau_range
+from allanite.formats.projection import adev_error, default_tau_range
 
 __all__ = ["register", "run"]
 
@@ -133,7 +133,7 @@ def check_written(
         if written is None:
             out.append(f"{path} lost the {sensor} model (the format cannot hold it)")
             continue
-        worst = float(np.max(np.abs(written.adev(taus, dt) / model.adev(taus, dt) - 1.0)))
+        worst = adev_error(written, model.avar(taus, dt), taus, dt)
         if worst > POOR_ADEV_ERROR:
             out.append(
                 f"the written {sensor} model departs from the source by up to {100 * worst:.0f} % "

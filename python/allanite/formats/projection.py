@@ -24,7 +24,14 @@ from allanite.formats.base import ImuConfig, merge_same, sensor_model
 from allanite.model import NoiseModel
 from allanite.terms import GaussMarkov, RateRandomWalk, Term, White
 
-__all__ = ["SLOW_TYPES", "Projection", "default_tau_range", "project", "project_config"]
+__all__ = [
+    "SLOW_TYPES",
+    "Projection",
+    "adev_error",
+    "default_tau_range",
+    "project",
+    "project_config",
+]
 
 #: term types a slow slot (Gauss-Markov or random walk) can stand in for
 SLOW_TYPES = frozenset({"flicker", "markov", "rrw", "ramp"})
@@ -105,7 +112,8 @@ def _fit_slot(
     return build(result.x if result.fun <= cost(best) else best)
 
 
-def _worst(model: NoiseModel, target: np.ndarray, taus: np.ndarray, dt: float) -> float:
+def adev_error(model: NoiseModel, target: np.ndarray, taus: np.ndarray, dt: float) -> float:
+    """Largest relative Allan-deviation error of ``model`` against the AVAR ``target``."""
     return float(np.max(np.abs(np.sqrt(model.avar(taus, dt) / target) - 1.0)))
 
 
@@ -173,7 +181,7 @@ def project(
         target = sensor_model([*fixed, *replaced, *slow], sensor).avar(taus, dt)
         others = [t for t in kept if t.type != slot]
         new = _fit_slot(slot, fixed, None, target, taus, dt)
-        worst = _worst(sensor_model([*others, *new], sensor), target, taus, dt)
+        worst = adev_error(sensor_model([*others, *new], sensor), target, taus, dt)
         whites = [t for t in fixed if t.type == "white"]
         if whites:
             # the white noise free as well: taken only when it halves the largest error
@@ -181,7 +189,7 @@ def project(
             joint = _fit_slot(slot, rest, whites[0], target, taus, dt)
             others_joint = [t for t in others if t.type != "white"]
             trial = sensor_model([*others_joint, *joint], sensor)
-            worst_joint = _worst(trial, target, taus, dt)
+            worst_joint = adev_error(trial, target, taus, dt)
             if worst_joint < 0.5 * worst:
                 replaced, others, new, worst = (
                     [*replaced, whites[0]],
