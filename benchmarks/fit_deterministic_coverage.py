@@ -61,7 +61,7 @@ def ramp_design(terms: tuple[str, ...], design_seed: int, records: int) -> dict[
     import validate_fit as vf
 
     n, fs = 300_000, 1000.0
-    case = vf.Case(0, terms, n, fs, "octave", "rate", "deg/s", design_seed)
+    case = vf.Case(0, terms, n, fs, "octave", "rate", "deg/s", design_seed, design="legacy")
     model = vf.design(case)
     truth = model.coefficients()["R"]
     covered, z = 0, []

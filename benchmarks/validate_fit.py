@@ -38,17 +38,18 @@ import json
 import math
 import sys
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, Literal, cast
 
 import numpy as np
 
 import allanite
-from allanite.fit import fit
+from allanite.fit import fit, fit_factors
 from allanite.model import NoiseModel
 from allanite.terms import Flicker, Quantization, RateRamp, RateRandomWalk, White
 from allanite.terms.flicker import PLATEAU
+from allanite.variance.taus import averaging_factors
 
 RESULTS = Path(__file__).resolve().parent / "results"
 
@@ -109,6 +110,9 @@ class Case:
     input: str
     unit: str
     seed: int
+    #: "span": each term dominates 0.5-3 decades of the fitted taus (:func:`design_span`);
+    #: "legacy": the first grid's design, whose last term often enters only at the last taus
+    design: str = "span"
 
 
 def _avar_unit(symbol: str, tau: float) -> float:
@@ -122,12 +126,144 @@ def _avar_unit(symbol: str, tau: float) -> float:
     }[symbol]
 
 
+BUILD: dict[str, Any] = {
+    "Q": Quantization,
+    "N": White,
+    "B": Flicker,
+    "K": RateRandomWalk,
+    "R": RateRamp,
+}
+#: the coefficients are designed in deg/s-like numbers (first term 1e-2) and scaled by this
+#: factor into the record's unit; m/s^2 is the accelerometer-like case
+UNIT_FACTOR = {"deg/s": 1.0, "rad/s": math.pi / 180.0, "deg/h": 3600.0, "m/s^2": 0.1}
+#: the span design's bounds (decades of the fitted taus over which a term carries more than
+#: half of the true Allan variance), the issue's "each term dominates over 0.5 to 3 decades"
+SPAN_MIN, SPAN_MAX = 0.5, 3.0
+#: decades per crossing where no term carries more than half of the variance (first guess)
+GAP = 0.3
+
+
+def fitted_factors(case: Case) -> np.ndarray:
+    """The averaging factors the default fit will use on this case's curve."""
+    m = averaging_factors(
+        case.taus, fs=case.fs, n_samples=case.n, n_phase=case.n + 1, kind="overlapping"
+    )
+    return fit_factors(m, case.n)
+
+
+def _fine(factors: np.ndarray) -> np.ndarray:
+    """A dense set of integer factors spanning the fitted ones (for the spans in decades)."""
+    lo, hi = float(factors[0]), float(factors[-1])
+    return np.unique(np.round(np.geomspace(lo, hi, 400)).astype(np.int64))
+
+
+def dominated_decades(model: NoiseModel, factors: np.ndarray, fs: float) -> list[float]:
+    """Per term, the decades between the first and last of ``factors`` where it dominates.
+
+    A term dominates where it carries more than half of the model's exact Allan variance;
+    -1 where it never does.
+    """
+    dt = 1.0 / fs
+    tau = factors * dt
+    comp = [np.asarray(t.avar(tau, dt), dtype=np.float64) for t in model.terms]
+    total = sum(comp)
+    out = []
+    for c in comp:
+        where = tau[c > 0.5 * total]
+        out.append(float(np.log10(where.max() / where.min())) if where.size else -1.0)
+    return out
+
+
+def _chain(symbols: tuple[str, ...], log_cross: np.ndarray, unit: str) -> NoiseModel:
+    """Terms whose asymptotes cross at ``10**log_cross`` (first coefficient 1e-2)."""
+    coef = {symbols[0]: 1e-2}
+    for j in range(1, len(symbols)):
+        prev, cur = symbols[j - 1], symbols[j]
+        tau = 10.0 ** log_cross[j - 1]
+        coef[cur] = math.sqrt(coef[prev] ** 2 * _avar_unit(prev, tau) / _avar_unit(cur, tau))
+    factor = UNIT_FACTOR[unit]
+    terms = tuple(BUILD[s](coef[s] * factor) for s in symbols)
+    return NoiseModel(terms, {"rate": unit, "time": "s"})
+
+
+def _targets(rng: np.random.Generator, k: int, total: float) -> np.ndarray:
+    """Spans (decades) summing to ``total``, each in [SPAN_MIN, SPAN_MAX] where possible.
+
+    When the range is longer than ``k * SPAN_MAX`` (a few long records with one or two
+    terms) the first and last terms take the excess: they dominate to the range's ends.
+    """
+    if k == 1:
+        return np.array([total])
+    if total <= k * SPAN_MAX:
+        for _ in range(1000):
+            t = SPAN_MIN + rng.dirichlet(np.ones(k)) * (total - k * SPAN_MIN)
+            if t.max() <= SPAN_MAX:
+                return t
+        raise RuntimeError(f"no spans found for {k} terms over {total:.2f} decades")
+    t = np.empty(k)
+    t[1:-1] = rng.uniform(SPAN_MIN, SPAN_MAX, size=k - 2)
+    rest = total - t[1:-1].sum()
+    share = rng.uniform(0.3, 0.7)
+    t[0], t[-1] = share * rest, (1.0 - share) * rest
+    return t
+
+
+def design_span(case: Case) -> NoiseModel:
+    """Coefficients such that each term dominates 0.5-3 decades of the fitted taus.
+
+    The fitted taus are the ones the default fit uses on this case's grid
+    (:func:`fitted_factors`). Target spans summing to the fitted range are drawn from the seed
+    (:func:`_targets`); the asymptotes' crossings are then moved until each term's span of
+    dominance in the exact sampled Allan variance of the sum (more than half of it, on a
+    dense set of taus between the first and last fitted one) matches its target: a middle
+    term loses width to both neighbours near its crossings (flicker the most: at the centre
+    of a 0.5-decade asymptote span it carries 47 %). A draw whose spans do not all land in
+    [0.5, 3] decades is redrawn (the outer terms of a range longer than 3 decades per term
+    excepted, see :func:`_targets`).
+    """
+    rng = np.random.default_rng([case.seed, 11])
+    fine = _fine(fitted_factors(case))
+    lo, hi = math.log10(fine[0] / case.fs), math.log10(fine[-1] / case.fs)
+    total = hi - lo
+    k = len(case.terms)
+    if k == 1:
+        return _chain(case.terms, np.empty(0), case.unit)
+    # near each crossing no term carries more than half (three terms share it), about 0.3
+    # decade per crossing on the first grids: the targets leave that room
+    room = max(total - GAP * (k - 1), k * SPAN_MIN)
+    for _ in range(50):
+        target = _targets(rng, k, room)
+        spans = target * total / target.sum()
+        for _ in range(60):
+            model = _chain(case.terms, lo + np.cumsum(spans)[:-1], case.unit)
+            got = np.array(dominated_decades(model, fine, case.fs))
+            inner_ok = bool(np.all(got[1:-1] >= SPAN_MIN) and np.all(got[1:-1] <= SPAN_MAX))
+            outer_ok = bool(got[0] >= SPAN_MIN and got[-1] >= SPAN_MIN) and (
+                total > k * SPAN_MAX or bool(got[0] <= SPAN_MAX and got[-1] <= SPAN_MAX)
+            )
+            if inner_ok and outer_ok and np.max(np.abs(got - target)) < 0.1:
+                return model
+            spans = np.maximum(spans + 0.5 * (target - np.maximum(got, 0.0)), 0.05)
+            spans *= total / spans.sum()
+        if inner_ok and outer_ok:
+            return model
+    raise RuntimeError(f"no design found for case {case.index} ({'+'.join(case.terms)})")
+
+
 def design(case: Case) -> NoiseModel:
-    """Coefficients such that each term dominates over a span of 0.5-3 decades.
+    """The case's true model: :func:`design_span`, or :func:`design_legacy` for the old grid."""
+    return design_legacy(case) if case.design == "legacy" else design_span(case)
+
+
+def design_legacy(case: Case) -> NoiseModel:
+    """The first grid's coefficients: spans of 0.5-3 decades between asymptote crossings.
 
     The first term's coefficient is 1e-2 (rate unit); its span starts at the shortest tau
     (or later, for a term rising with tau), and each following term takes over at the end
-    of the previous span (equal asymptotes there). Spans are drawn from the seed.
+    of the previous span (equal asymptotes there). Spans are drawn from the seed. The chain
+    is placed in ``[dt, N dt / 8]``, not in the taus the fit uses, and the last crossing is
+    not bounded by the range: the last term often dominates only the last one to three
+    fitted taus (0-0.33 decade), or not at all (kept as the grid of such edge cases).
     """
     rng = np.random.default_rng([case.seed, 7])
     dt = 1.0 / case.fs
@@ -153,20 +289,29 @@ def design(case: Case) -> NoiseModel:
         level = coef[prev] ** 2 * _avar_unit(prev, tau)
         coef[cur] = math.sqrt(level / _avar_unit(cur, tau))
         log_tau += spans[j] if j < k - 1 else 0.0
-    factor = 1.0 if case.unit == "deg/s" else math.pi / 180.0
-    build: dict[str, Any] = {
-        "Q": Quantization,
-        "N": White,
-        "B": Flicker,
-        "K": RateRandomWalk,
-        "R": RateRamp,
-    }
-    terms = tuple(build[s](coef[s] * factor) for s in case.terms)
+    factor = UNIT_FACTOR[case.unit]
+    terms = tuple(BUILD[s](coef[s] * factor) for s in case.terms)
     return NoiseModel(terms, {"rate": case.unit, "time": "s"})
 
 
-def grid(quick: bool, long: bool = True) -> list[Case]:
-    """The designed grid (deterministic); ``long`` appends the 1e8-sample records (full grid)."""
+def grid(quick: bool, long: bool = True, legacy: bool = False) -> list[Case]:
+    """The designed grid (deterministic); ``long`` appends the 1e8-sample records (full grid).
+
+    ``legacy`` gives the first grid's records with its design (:func:`design_legacy`, units
+    deg/s and rad/s); otherwise the same subsets, lengths, rates, grids, inputs and seeds
+    with :func:`design_span` and the unit drawn from deg/s, rad/s, deg/h and m/s^2 (an
+    accelerometer-like record).
+    """
+    cases = _grid(quick, long)
+    if legacy:
+        return [replace(c, design="legacy") for c in cases]
+    units = np.random.default_rng(14).choice(
+        ["deg/s", "rad/s", "deg/h", "m/s^2"], p=[0.4, 0.2, 0.2, 0.2], size=len(cases)
+    )
+    return [replace(c, unit=str(u)) for c, u in zip(cases, units, strict=True)]
+
+
+def _grid(quick: bool, long: bool) -> list[Case]:
     rng = np.random.default_rng(12)
     cases: list[Case] = []
     lengths: tuple[int, ...]
@@ -255,12 +400,18 @@ def run_case(case: Case) -> dict[str, Any]:
         else -1.0
         for s, c in comp.items()
     }
+    # the same span on a dense set of taus between the first and last fitted one (what the
+    # design controls; the fitted taus quantise it to octaves)
+    dense = dict(
+        zip(case.terms, dominated_decades(model, _fine(f.tau * case.fs), case.fs), strict=True)
+    )
     terms: dict[str, Any] = {}
     for s in case.terms:
         entry: dict[str, Any] = {
             "truth": truth[s],
             "dominant": dominant[s],
             "dominant_decades": span[s],
+            "dense_decades": dense[s],
         }
         if s in f.coefficients:
             c = f.coefficients[s]
@@ -305,6 +456,7 @@ def run_case(case: Case) -> dict[str, Any]:
         ],
         "terms": terms,
         "n_points": int(f.tau.size),
+        "designed_taus": bool(np.array_equal(np.round(f.tau * case.fs), fitted_factors(case))),
         "simulate_s": t1 - t0,
         "fit_s": t2 - t1,
     }
@@ -459,6 +611,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--indices", help="only these grid indices (comma-separated, e.g. the worst cases)"
     )
+    parser.add_argument(
+        "--legacy",
+        action="store_true",
+        help="the first grid's design: last terms entering at the last 0-3 fitted taus",
+    )
     parser.add_argument("--output", help="results stem (default results/validate_fit_<mode>)")
     parser.add_argument(
         "--summarise", metavar="JSON", help="only rewrite the summary of a stored run's rows"
@@ -478,7 +635,7 @@ def main(argv: list[str] | None = None) -> int:
             markdown(summary, "python benchmarks/validate_fit.py"), encoding="utf-8"
         )
         return 0
-    cases = grid(args.quick, long=not args.no_long)
+    cases = grid(args.quick, long=not args.no_long, legacy=args.legacy)
     # a fixed shuffle, so that a partial run (--limit, or interrupted) samples the whole grid
     order = np.random.default_rng(2026).permutation(len(cases))
     cases = [cases[i] for i in order]
@@ -487,7 +644,7 @@ def main(argv: list[str] | None = None) -> int:
         cases = [c for c in cases if c.index in wanted]
     if args.limit:
         cases = cases[: args.limit]
-    mode = "quick" if args.quick else "full"
+    mode = ("quick" if args.quick else "full") + ("_legacy" if args.legacy else "")
     stem = Path(args.output) if args.output else RESULTS / f"validate_fit_{mode}"
     rows = []
     start = time.perf_counter()

@@ -325,12 +325,12 @@ def test_grid_slice():
 
 
 def test_a_term_significant_against_the_chosen_model_is_added():
-    # record 90 of the full validation grid (Q+N+B+K+R, 1e6 samples at 100 Hz, angle): the
-    # ramp lowers the chi-square by 10.3 under the covariance of Q+N+B+K (above the penalty
-    # 9) but raised log det C, and the score alone kept Q+N+B+K (p = 0.045); the test of
-    # a left-out term against the chosen model's covariance adds it
+    # record 90 of the first (legacy) validation grid (Q+N+B+K+R, 1e6 samples at 100 Hz,
+    # angle): the ramp lowers the chi-square by 10.3 under the covariance of Q+N+B+K (above
+    # the penalty 9) but raised log det C, and the score alone kept Q+N+B+K (p = 0.045); the
+    # test of a left-out term against the chosen model's covariance adds it
     vf = _validate_fit_module()
-    (case,) = [c for c in vf.grid(quick=False, long=False) if c.index == 90]
+    (case,) = [c for c in vf.grid(quick=False, long=False, legacy=True) if c.index == 90]
     row = vf.run_case(case)
     assert row["fitted_terms"] == ["Q", "N", "B", "K", "R"], row
     assert not row["missing_dominant"], row

@@ -6,7 +6,7 @@ and the original program's fit (``method="seed"``).
 
 from __future__ import annotations
 
-from allanite.fit.api import fit
+from allanite.fit.api import fit, fit_factors
 from allanite.fit.classic import ClassicReadout, classic_readout
 from allanite.fit.covariance import avar_covariance
 from allanite.fit.result import Coefficient, Comparison, ComparisonRow, FitResult
@@ -20,4 +20,5 @@ __all__ = [
     "avar_covariance",
     "classic_readout",
     "fit",
+    "fit_factors",
 ]

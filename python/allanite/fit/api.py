@@ -23,7 +23,7 @@ from allanite.terms import Flicker, Quantization, RateRamp, RateRandomWalk, Term
 from allanite.units import RECORD_UNIT, SYMBOL_POWERS, coefficient_unit, rate_unit
 from allanite.variance import AllanResult, avar
 
-__all__ = ["fit"]
+__all__ = ["fit", "fit_factors"]
 
 Method = Literal["gls", "seed"]
 
@@ -94,6 +94,35 @@ def _thin(m: NDArray[np.int64], keep: NDArray[np.bool_], min_ratio: float) -> ND
             out[i] = True
             last = float(m[i])
     return out
+
+
+def fit_factors(
+    m: ArrayLike, n_samples: int, *, max_fraction: float = 0.125, min_ratio: float = 2.0
+) -> NDArray[np.int64]:
+    """The averaging factors the GLS fit uses of a curve computed at factors ``m``.
+
+    The factors with ``m <= max_fraction * n_samples`` (enough independent differences),
+    thinned from the smallest up to ratios of at least ``min_ratio`` (:func:`_thin`), as
+    :func:`fit` does with its defaults when every variance is finite and positive. Use it to
+    place a design's terms inside the taus a fit will actually see.
+
+    Parameters
+    ----------
+    m : array_like of int
+        Averaging factors of the curve (e.g. ``AllanResult.m``).
+    n_samples : int
+        Record length (``AllanResult.n_samples``).
+    max_fraction, min_ratio : float
+        As in :func:`fit`.
+
+    Returns
+    -------
+    numpy.ndarray
+        The fitted factors, sorted.
+    """
+    factors = np.asarray(m, dtype=np.int64)
+    enough = factors <= max_fraction * n_samples
+    return np.sort(factors[_thin(factors, enough, min_ratio)])
 
 
 def _check_count(n_points: int, n_params: int, what: str) -> None:
