@@ -55,13 +55,19 @@ def ramp(seeds: int) -> dict[str, float]:
     }
 
 
-def ramp_design(terms: tuple[str, ...], design_seed: int, records: int) -> dict[str, Any]:
-    """Coverage of R on a validation-grid design, one simulation seed per record."""
+def ramp_design(
+    terms: tuple[str, ...], design_seed: int, records: int, design: str = "legacy"
+) -> dict[str, Any]:
+    """Coverage of R on a validation-grid design, one simulation seed per record.
+
+    ``design`` is the grid's design: "legacy" (the first grid's) or "span" (each term
+    dominating 0.5-3 decades of the fitted taus, :func:`validate_fit.design_span`).
+    """
     sys.path.insert(0, str(Path(__file__).resolve().parent))
     import validate_fit as vf
 
     n, fs = 300_000, 1000.0
-    case = vf.Case(0, terms, n, fs, "octave", "rate", "deg/s", design_seed, design="legacy")
+    case = vf.Case(0, terms, n, fs, "octave", "rate", "deg/s", design_seed, design=design)
     model = vf.design(case)
     truth = model.coefficients()["R"]
     covered, z = 0, []
@@ -73,7 +79,9 @@ def ramp_design(terms: tuple[str, ...], design_seed: int, records: int) -> dict[
         z.append((f["R"].value - truth) / f["R"].stderr)
     return {
         "terms": list(terms),
+        "design": design,
         "design_seed": design_seed,
+        "decades": dict(zip(terms, vf.dominated_decades(model, f.tau * fs, fs), strict=True)),
         "records": records,
         "covered": covered,
         "z_mean": float(np.mean(z)),
@@ -117,6 +125,12 @@ def main() -> int:
         "--designs", type=int, default=0, help="records per validation-grid ramp design"
     )
     parser.add_argument(
+        "--span-designs",
+        type=int,
+        default=0,
+        help="only the ramp designs of the span grid (N + R, N + K + R), this many records each",
+    )
+    parser.add_argument(
         "--sine-seeds", type=int, default=0, help="only the sine part, on this many seeds"
     )
     args = parser.parse_args()
@@ -125,11 +139,18 @@ def main() -> int:
         if args.sine_seeds and RESULTS.exists()
         else {}
     )
-    if args.sine_seeds:  # only the sine, on more seeds; the other parts are kept
+    if args.span_designs:  # only the span grid's ramp designs; the other parts are kept
+        out = json.loads(RESULTS.read_text(encoding="utf-8")) if RESULTS.exists() else {}
+        out["ramp_span_designs"] = [
+            ramp_design(terms, seed, args.span_designs, design="span")
+            for terms in (("N", "R"), ("N", "K", "R"))
+            for seed in (8, 5)
+        ]
+    elif args.sine_seeds:  # only the sine, on more seeds; the other parts are kept
         out["sine"] = sine(args.sine_seeds)
     else:
         out = {"ramp": ramp(args.seeds), "sine": sine(args.seeds)}
-    if args.designs and not args.sine_seeds:
+    if args.designs and not args.sine_seeds and not args.span_designs:
         out["ramp_designs"] = [
             ramp_design(("N", "R"), 8, args.designs),
             ramp_design(("N", "K", "R"), 5, args.designs),

@@ -324,6 +324,31 @@ def test_grid_slice():
                 assert abs(entry["z"]) < 5, (case, name, entry)
 
 
+def test_grid_design_honours_the_spans():
+    # issue 12: "magnitudes such that each term dominates over 0.5 to 3 decades", inside the
+    # taus the fit uses; the design only (no simulation), every record of the full grid
+    vf = _validate_fit_module()
+    checked = 0
+    for case in vf.grid(quick=False):
+        if len(case.terms) == 1:
+            continue  # a single term dominates the whole range
+        factors = vf.fitted_factors(case)
+        spans = vf.dominated_decades(vf.design(case), vf._fine(factors), case.fs)
+        assert min(spans) >= vf.SPAN_MIN, (case, spans)
+        assert max(spans[1:-1], default=0.0) <= vf.SPAN_MAX, (case, spans)
+        if math.log10(factors[-1] / factors[0]) <= len(case.terms) * vf.SPAN_MAX:
+            assert max(spans) <= vf.SPAN_MAX, (case, spans)
+        checked += 1
+    assert checked > 250
+    # the first grid's design is kept (--legacy) and its last term often does not dominate
+    # half a decade of the fitted taus
+    short = 0
+    for case in vf.grid(quick=True, legacy=True):
+        spans = vf.dominated_decades(vf.design(case), vf._fine(vf.fitted_factors(case)), case.fs)
+        short += min(spans) < vf.SPAN_MIN
+    assert short > 0
+
+
 def test_a_term_significant_against_the_chosen_model_is_added():
     # record 90 of the first (legacy) validation grid (Q+N+B+K+R, 1e6 samples at 100 Hz,
     # angle): the ramp lowers the chi-square by 10.3 under the covariance of Q+N+B+K (above
