@@ -301,25 +301,26 @@ def design_legacy(case: Case) -> NoiseModel:
     return NoiseModel(terms, {"rate": case.unit, "time": "s"})
 
 
-def grid(quick: bool, long: bool = True, legacy: bool = False) -> list[Case]:
+def grid(quick: bool, long: bool = True, legacy: bool = False, seed: int = 12) -> list[Case]:
     """The designed grid (deterministic); ``long`` appends the 1e8-sample records (full grid).
 
     ``legacy`` gives the first grid's records with its design (:func:`design_legacy`, units
     deg/s and rad/s); otherwise the same subsets, lengths, rates, grids, inputs and seeds
     with :func:`design_span` and the unit drawn from deg/s, rad/s, deg/h and m/s^2 (an
-    accelerometer-like record).
+    accelerometer-like record). ``seed`` draws another grid of the same design (12: the
+    stored results).
     """
-    cases = _grid(quick, long)
+    cases = _grid(quick, long, seed)
     if legacy:
         return [replace(c, design="legacy") for c in cases]
-    units = np.random.default_rng(14).choice(
+    units = np.random.default_rng(seed + 2).choice(
         ["deg/s", "rad/s", "deg/h", "m/s^2"], p=[0.4, 0.2, 0.2, 0.2], size=len(cases)
     )
     return [replace(c, unit=str(u)) for c, u in zip(cases, units, strict=True)]
 
 
-def _grid(quick: bool, long: bool) -> list[Case]:
-    rng = np.random.default_rng(12)
+def _grid(quick: bool, long: bool, seed: int) -> list[Case]:
+    rng = np.random.default_rng(seed)
     cases: list[Case] = []
     lengths: tuple[int, ...]
     if quick:
@@ -362,7 +363,7 @@ def _grid(quick: bool, long: bool) -> list[Case]:
             )
         cases += extra
     if not quick and long:
-        rng_long = np.random.default_rng(13)  # the other records do not move
+        rng_long = np.random.default_rng(seed + 1)  # the other records do not move
         for subset, fs, taus, kind in LONG:
             cases.append(
                 Case(
@@ -656,6 +657,9 @@ def main(argv: list[str] | None = None) -> int:
         action="store_true",
         help="the first grid's design: last terms entering at the last 0-3 fitted taus",
     )
+    parser.add_argument(
+        "--grid-seed", type=int, default=12, help="draw another grid (12: the stored results)"
+    )
     parser.add_argument("--output", help="results stem (default results/validate_fit_<mode>)")
     parser.add_argument(
         "--summarise", metavar="JSON", help="only rewrite the summary of a stored run's rows"
@@ -675,7 +679,7 @@ def main(argv: list[str] | None = None) -> int:
             markdown(summary, "python benchmarks/validate_fit.py"), encoding="utf-8"
         )
         return 0
-    cases = grid(args.quick, long=not args.no_long, legacy=args.legacy)
+    cases = grid(args.quick, long=not args.no_long, legacy=args.legacy, seed=args.grid_seed)
     # a fixed shuffle, so that a partial run (--limit, or interrupted) samples the whole grid
     order = np.random.default_rng(2026).permutation(len(cases))
     cases = [cases[i] for i in order]
@@ -685,6 +689,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.limit:
         cases = cases[: args.limit]
     mode = ("quick" if args.quick else "full") + ("_legacy" if args.legacy else "")
+    mode += f"_seed{args.grid_seed}" if args.grid_seed != 12 else ""
     stem = Path(args.output) if args.output else RESULTS / f"validate_fit_{mode}"
     rows = []
     start = time.perf_counter()
