@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import allanite
-from allanite.fit import classic_readout
+from allanite.fit import classic_readout, fit_factors
 from allanite.model import NoiseModel
 from allanite.terms import GaussMarkov, RateRandomWalk, White
 from allanite.variance import AllanResult
@@ -78,6 +78,21 @@ def test_fit_a_record_directly():
     assert fitted.model.units["rate"] == "deg/h"
     lo, hi = fitted["N"].ci(0.999)
     assert lo <= 0.02 <= hi
+
+
+@pytest.mark.parametrize(("taus", "points"), [("log", 100), ("octave", 100), ("log", 400)])
+def test_fit_factors_are_the_taus_the_fit_uses(taus, points):
+    # the validation grid places its terms in these taus: they must be the fit's own
+    rng = np.random.default_rng(6)
+    x = rng.standard_normal(30_000) * 0.02 / math.sqrt(DT)
+    res = allanite.avar(x, fs=1 / DT, taus=taus, points=points, units="deg/s")
+    fitted = allanite.fit(res, ["N"])
+    factors = fit_factors(res.m, res.n_samples)
+    np.testing.assert_array_equal(np.round(fitted.tau / DT).astype(np.int64), factors)
+    assert factors[-1] <= 30_000 / 8
+    assert np.all(factors[1:] >= 2 * factors[:-1])
+    # a looser cut keeps more taus
+    assert fit_factors(res.m, res.n_samples, max_fraction=0.25)[-1] > factors[-1]
 
 
 def test_table_units_and_json():
