@@ -22,7 +22,6 @@ Usage: ``nice python benchmarks/fit_flicker_coverage.py [--records 400]``; resul
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 import time
 from pathlib import Path
@@ -209,15 +208,7 @@ def main(argv: list[str] | None = None) -> int:
             flush=True,
         )
         if len(rows) % 20 == 0 or len(rows) == len(todo):
-            summary = summarise(rows)
-            summary["elapsed_s"] = time.perf_counter() - start
-            summary["complete"] = len(rows) == len(todo)
-            stem.parent.mkdir(parents=True, exist_ok=True)
-            stem.with_suffix(".json").write_text(
-                json.dumps({"summary": summary, "rows": rows}, indent=1, default=str),
-                encoding="utf-8",
-            )
-            stem.with_suffix(".md").write_text(markdown(summary, command), encoding="utf-8")
+            vf.save(stem, rows, len(todo), start, summarise, markdown, command)
     print(markdown(summarise(rows), command))
     return 0
 

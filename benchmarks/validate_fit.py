@@ -45,6 +45,7 @@ import json
 import math
 import sys
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, Literal, cast
@@ -707,20 +708,32 @@ def main(argv: list[str] | None = None) -> int:
         )
         # keep partial results on disk so that an interrupted run still reports
         if len(rows) % 10 == 0 or len(rows) == len(cases):
-            summary = summarise(rows)
-            summary["elapsed_s"] = time.perf_counter() - start
-            summary["complete"] = len(rows) == len(cases)
             command = "python benchmarks/validate_fit.py" + " ".join(
                 [""] + (argv if argv is not None else sys.argv[1:])
             )
-            stem.parent.mkdir(parents=True, exist_ok=True)
-            stem.with_suffix(".json").write_text(
-                json.dumps({"summary": summary, "rows": rows}, indent=1, default=str),
-                encoding="utf-8",
-            )
-            stem.with_suffix(".md").write_text(markdown(summary, command), encoding="utf-8")
+            save(stem, rows, len(cases), start, summarise, markdown, command)
     print(markdown(summarise(rows), "validate_fit"))
     return 0
+
+
+def save(
+    stem: Path,
+    rows: list[dict[str, Any]],
+    total: int,
+    start: float,
+    summarise: Callable[[list[dict[str, Any]]], dict[str, Any]],
+    markdown: Callable[[dict[str, Any], str], str],
+    command: str,
+) -> None:
+    """Write ``stem.json`` (summary and rows) and ``stem.md`` of a run, partial or complete."""
+    summary = summarise(rows)
+    summary["elapsed_s"] = time.perf_counter() - start
+    summary["complete"] = len(rows) == total
+    stem.parent.mkdir(parents=True, exist_ok=True)
+    stem.with_suffix(".json").write_text(
+        json.dumps({"summary": summary, "rows": rows}, indent=1, default=str), encoding="utf-8"
+    )
+    stem.with_suffix(".md").write_text(markdown(summary, command), encoding="utf-8")
 
 
 if __name__ == "__main__":
