@@ -13,6 +13,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 import allanite
 from allanite.examples import example_model
@@ -347,6 +348,29 @@ def test_grid_design_honours_the_spans():
         spans = vf.dominated_decades(vf.design(case), vf._fine(vf.fitted_factors(case)), case.fs)
         short += min(spans) < vf.SPAN_MIN
     assert short > 0
+
+
+def test_rejected_fit_reports_the_terms_best_chi2():
+    # record 91 of the span grid drawn with seed 112 (Q+N+B+K+R, 1e6 samples at 100 Hz,
+    # angle): the five terms' best fit has chi2 33.0 on 12 dof, p = 0.00098, just rejected;
+    # the coefficients with the model discrepancy follow the whole curve and have chi2 73.9
+    # (p = 6e-11) under the terms' covariance, which was reported before and overstated the
+    # misfit by seven orders of magnitude
+    vf = _validate_fit_module()
+    (case,) = [c for c in vf.grid(quick=False, long=False, seed=112) if c.index == 91]
+    x = vf.design(case).simulate(
+        case.n, fs=case.fs, output=case.input, seed=case.seed, flicker_method=vf.FLICKER_METHOD
+    )
+    res = allanite.avar(
+        np.asarray(x).ravel(), fs=case.fs, input=case.input, taus=case.taus, units=case.unit
+    )
+    f = fit(res)
+    assert f.rejected
+    assert f.discrepancy > 0
+    best = fit(res, list(case.terms), misfit_level=0.0)
+    assert best.discrepancy == 0
+    assert f.chi2 == pytest.approx(best.chi2, rel=1e-6)
+    assert f.p_value == pytest.approx(best.p_value, rel=1e-5)
 
 
 def test_a_term_significant_against_the_chosen_model_is_added():

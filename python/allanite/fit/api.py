@@ -404,8 +404,8 @@ def fit(
         the Paule-Mandel rule (chi-square = dof), so the coefficients follow the whole curve
         instead of the most precise points and their intervals carry the model error.
         ``FitResult.discrepancy`` reports ``delta``, ``chi2``/``p_value`` stay those of the
-        terms alone and ``FitResult.misfit`` flags the taus the model misses. 0 switches the
-        discrepancy off.
+        terms' own best fit (the test that rejected them) and ``FitResult.misfit`` flags the
+        taus the model misses. 0 switches the discrepancy off.
     min_ratio : float
         The GLS fit uses, from the shortest tau up, only taus at least this factor above the
         previous one used (2: octave spacing; a 100-point log grid is fitted on its

@@ -61,7 +61,7 @@ class GLSSolution:
     discrepancy: float  # relative model discrepancy delta (0: the terms fit)
     discrepancy_cov: NDArray[np.float64]  # the covariance added by it, cov - model_cov
     fitted: NDArray[np.float64]
-    chi2: float  # generalized chi-square under model_cov
+    chi2: float  # generalized chi-square of the terms' own best fit (without discrepancy)
     chi2_fit: float  # generalized chi-square under cov (what the estimate minimises)
     iterations: int
     jacobian: NDArray[np.float64]
@@ -318,7 +318,9 @@ def solve(
     chosen by the Paule-Mandel rule, the generalized chi-square under
     :math:`C_\delta` equal to its degrees of freedom, iterated jointly with :math:`\theta`.
     The coefficients and their intervals then carry the model error ("dark uncertainty");
-    the reported chi-square stays the one of the terms alone, so the misfit remains visible.
+    the reported chi-square stays the one of the terms' own best fit (before the
+    discrepancy), the statistic the test rejected, so the misfit remains visible and is not
+    overstated by the coefficients that follow the whole curve.
 
     Parameters
     ----------
@@ -388,7 +390,10 @@ def solve(
             shape = new_shape
         updated = _covariance(basis, theta) if basis is not None else None
         model_cov = model_cov if updated is None else updated
-        chi2 = _chi2(model_cov, data.y - g @ theta)
+        # ``chi2`` stays the one of the terms' own best fit, the statistic the test rejected:
+        # the coefficients with the discrepancy follow the whole curve on purpose, and their
+        # chi-square under the terms' covariance (on a validation record 73.9 on 12 dof,
+        # p = 6e-11, against 33.0, p = 0.00098, for the best fit) would overstate the misfit
     gw = _Whitener(current)(g)
     col = np.linalg.norm(gw, axis=0)
     col[col == 0] = 1.0
