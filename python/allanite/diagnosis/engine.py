@@ -23,6 +23,7 @@ from allanite.diagnosis.inputs import (
 )
 from allanite.diagnosis.joint import Explanation, combined_terms, explain
 from allanite.diagnosis.level_shape import warmup_time_constant
+from allanite.diagnosis.noise_level import drift_shape
 from allanite.diagnosis.null import runs
 from allanite.diagnosis.result import Diagnosis, Holdout
 from allanite.diagnosis.verdict import verdict
@@ -297,6 +298,7 @@ def _attribute(
         effects=effects,
         bursts=_bursts(analysis.time),
         band=band_shape(run.x_fit, run.fs, analysis.frequency),
+        drift=drift_shape(run.x_fit, run.fs, analysis.time, run.source.model),
     )
     # the same calibrated test ranks single effects and selects the joint set
     test: dict[str, Any] = {
