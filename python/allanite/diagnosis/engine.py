@@ -26,6 +26,7 @@ from allanite.diagnosis.level_shape import warmup_time_constant
 from allanite.diagnosis.noise_level import drift_shape
 from allanite.diagnosis.null import runs
 from allanite.diagnosis.result import Diagnosis, Holdout
+from allanite.diagnosis.time_base import time_base_evidence, with_time_base
 from allanite.diagnosis.verdict import verdict
 from allanite.io.record import Record
 from allanite.terms import term_from_dict
@@ -218,6 +219,8 @@ def diagnose(
         units=common_units,
         after=after,
     )
+    # the time base (time stamps of a Record, held samples): reported next to the three views
+    head = with_time_base(head, time_base_evidence(real, samples, rate, significance / 10.0))
     explanation, held = _held_out(run, found, x_hold, hold_kind)
     return Diagnosis(
         statistic=analysis.tau.gap,
