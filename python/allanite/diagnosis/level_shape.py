@@ -57,11 +57,12 @@ def level_misfit(effect: str, view: TimeView, duration: float, per_param: float 
     """Excess misfit of the level shape of ``effect`` (step, warmup, ramp); 0 otherwise.
 
     ``per_param`` is the ranking's penalty per parameter (``chi2_1`` quantile ``1 - alpha``);
-    it is charged twice for every step beyond the detected change points. The noise-level
-    effects (``white_drift``, ``bursts``) pay the misfit of their shape on the windows'
-    short-term noise level instead (:func:`allanite.diagnosis.noise_level.noise_misfit`).
+    it is charged twice for every step beyond the detected change points. The effects that
+    explain a changed short-term noise level (``white_drift``, ``bursts``, ``spikes``) pay the
+    misfit of their shape on the windows' short-term noise level instead
+    (:func:`allanite.diagnosis.noise_level.noise_misfit`).
     """
-    if effect in ("white_drift", "bursts"):
+    if effect in ("white_drift", "bursts", "spikes"):
         from allanite.diagnosis.noise_level import noise_misfit
 
         return noise_misfit(effect, view, per_param)

@@ -20,7 +20,8 @@ bursts); the excess ``max(0, chi^2 - (W - p))`` plus the ranking's per-parameter
 every shape number the tau view does not see (drift: ``ratio``, ``t_start``, ``t_end``;
 bursts: one per raised window) enters the ranking of the two candidates (:func:`noise_misfit`,
 through :func:`allanite.diagnosis.level_shape.level_misfit`). Separate raised stretches fit
-only the bursts; a level that rises or falls once fits the drift with fewer numbers.
+only the bursts; a level that rises or falls once fits the drift with fewer numbers. Spikes,
+which also raise ``hf``, only raise it in the windows that hold them (:func:`noise_misfit`).
 
 The drift's ``ratio`` (final over initial white-noise level) is then measured on the record
 itself: the per-window white-noise variance is ``(D_w - D_o) / (2 fs)`` with ``D_w`` the
@@ -36,6 +37,7 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy import stats
 
 from allanite.diagnosis.time_view import TimePlan, TimeView
 from allanite.terms.white_drift import ramp_window_mean
@@ -123,8 +125,8 @@ def _drift_fit(view: TimeView) -> tuple[float, float, float, float] | None:
     return float(chi2[p, k]), float(BETA_GRID[k]), float(starts[p]), float(ends[p])
 
 
-def _burst_fit(view: TimeView) -> tuple[float, int, int] | None:
-    """``(chi2, quiet windows, raised windows)`` of the bursts' shape on the hf residuals.
+def _burst_fit(view: TimeView, raised: NDArray[np.bool_]) -> tuple[float, int, int] | None:
+    """``(chi2, quiet windows, raised windows)`` of a shape raised in the windows ``raised``.
 
     A burst may cover a window partly, so each raised window keeps its own level; the quiet
     windows must share one.
@@ -133,7 +135,6 @@ def _burst_fit(view: TimeView) -> tuple[float, int, int] | None:
     if hf is None:
         return None
     r, sd = hf
-    raised = view.z["hf"] > view.thresholds["hf"]
     quiet = ~raised
     if not raised.any() or not quiet.any():
         return None
@@ -144,20 +145,34 @@ def _burst_fit(view: TimeView) -> tuple[float, int, int] | None:
 
 
 def noise_misfit(effect: str, view: TimeView, per_param: float = 0.0) -> float:
-    """Excess misfit of the noise-level shape of ``effect`` (``white_drift``, ``bursts``); else 0.
+    """Excess misfit of the noise-level shape of ``effect`` (drift, bursts, spikes); else 0.
 
     The excess ``max(0, chi^2 - (W - p))`` plus ``per_param`` (the ranking's per-parameter
-    penalty) for every shape number the tau view does not see: three for the drift
-    (``ratio``, ``t_start``, ``t_end``), one per raised window for the bursts.
+    penalty, ``chi2_1`` quantile ``1 - alpha``) for every shape number the tau view does not
+    see: three for the drift (``ratio``, ``t_start``, ``t_end``), one per raised window for the
+    bursts. Spikes explain a changed short-term level only in the windows that hold them: when
+    ``hf`` is significant (``alpha / 8``, the evidence's Bonferroni level) they pay the misfit
+    of the other windows (their times and heights come from the time view, no penalty).
     """
     w = int(view.t_s.size)
+    if effect == "spikes":
+        alpha = float(stats.chi2.sf(per_param, 1)) if per_param > 0 else 0.05
+        if view.family_p.get("hf", 1.0) >= alpha / 8.0 or "hf" not in view.z:
+            return 0.0
+        held = np.zeros(w, dtype=bool)
+        for t in view.spike_times_s:
+            held[min(int(t // view.window_s), w - 1)] = True
+        spiky = _burst_fit(view, held) if held.any() else None
+        if spiky is None:
+            return 0.0
+        return max(0.0, spiky[0] - (spiky[1] - 1))
     if effect == "white_drift":
         fit = _drift_fit(view)
         if fit is None:
             return 0.0
         return max(0.0, fit[0] - (w - DRIFT_PARAMS)) + per_param * (DRIFT_PARAMS - 1)
     if effect == "bursts":
-        burst = _burst_fit(view)
+        burst = _burst_fit(view, view.z["hf"] > view.thresholds["hf"])
         if burst is None:
             return 0.0
         chi2, n_quiet, n_raised = burst
