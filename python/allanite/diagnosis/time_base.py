@@ -12,12 +12,14 @@ analysis. So the diagnosis reports what the time base itself says, next to the t
   never get this far: the readers refuse them with the row to repair.
 * **held samples** (any record): a sensor or logger that repeats the previous value when a
   sample is missing leaves runs of exactly equal consecutive samples. Their number ``n_0`` is
-  compared with what the record's own resolution explains: with ``q`` the smallest non-zero
-  step between consecutive samples and ``n_q`` the steps of size ``q``, a smooth density of
-  the steps (Gaussian, robust spread ``s``) predicts ``e_0 = (n_q / 2) exp(q^2 / (2 s^2))``
-  zero steps; ``n_0`` is significant when the Poisson tail ``P(X >= n_0 | e_0)`` lies below
-  the level. Continuous (float) samples have ``n_q`` of about 1, so a handful of exact
-  repeats already counts.
+  compared with what the record's own resolution explains. With ``q`` the smallest non-zero
+  step between consecutive samples and ``n_1``, ``n_2`` the steps of ``q`` and ``2q`` (per
+  sign), a Gaussian density of the steps (log-quadratic) predicts
+  ``e_0 = n_1 (n_1 / n_2)^{1/3}`` zero steps; ``log(n_0 / e_0)`` is tested one-sided with the
+  counts' Poisson variances (``1/n_0 + (16/9)/n_1 + (1/9)/n_2``). Continuous (float) samples
+  have ``n_1 < 5``: then ``e_0 = 1/2`` and the Poisson tail ``P(X >= n_0)`` is the p-value, so
+  a handful of exact repeats already counts. A resolution coarser than the noise
+  (``n_2 < n_1 / 4``) makes repeated values the rule; held samples are then not tested.
 
 Both are :class:`~allanite.diagnosis.verdict.Unexplained` items of view ``time``, evidence
 ``time base`` or ``held``; any of them keeps the diagnosis from reading "closed".
@@ -40,6 +42,8 @@ __all__ = ["held_samples_item", "time_base_evidence", "time_base_items", "with_t
 
 #: at most this many time segments are listed per item
 MAX_SEGMENTS = 50
+#: steps of one resolution unit (per sign) above which the samples count as quantized
+RESOLVED = 5
 
 
 def _segments_text(segs: list[list[float]], limit: int = 4) -> str:
@@ -144,11 +148,19 @@ def held_samples_item(samples: Any, fs: float, level: float) -> Unexplained | No
     if step.size == 0:
         return None
     q = float(step.min())
-    n_q = int(np.count_nonzero(step <= 1.5 * q))
-    spread = float(np.median(np.abs(d - np.median(d)))) * 1.4826 or float(np.std(d))
-    ratio = float(np.exp(min(q * q / (2.0 * spread * spread), 700.0))) if spread > 0 else np.inf
-    expected = max(0.5 * n_q * ratio, 0.5)
-    p = float(stats.poisson.sf(n0 - 1, expected))
+    k = np.rint(step / q)
+    n1 = float(np.count_nonzero(k == 1)) / 2.0  # steps of one resolution unit, per sign
+    n2 = float(np.count_nonzero(k == 2)) / 2.0
+    if n1 < RESOLVED:  # continuous samples: an exact repeat is a held sample
+        expected = 0.5
+        p = float(stats.poisson.sf(n0 - 1, expected))
+    elif n2 < n1 / 4.0:
+        return None  # the resolution is coarser than the noise: repeats are the rule
+    else:
+        # log-quadratic (Gaussian) density of the steps through k = 1, 2, extrapolated to 0
+        expected = n1 * (n1 / n2) ** (1.0 / 3.0)
+        sd = np.sqrt(1.0 / n0 + (16.0 / 9.0) / n1 + (1.0 / 9.0) / n2)
+        p = float(stats.norm.sf(np.log(n0 / expected) / sd))
     if p >= level:
         return None
     segs = _held_runs(held, fs, gap_s=0.01 * x.size / fs)
