@@ -144,6 +144,17 @@ def _burst_fit(view: TimeView, raised: NDArray[np.bool_]) -> tuple[float, int, i
     return chi2, int(quiet.sum()), int(raised.sum())
 
 
+def _flat_fit(view: TimeView) -> tuple[float, int, int] | None:
+    """``(chi2, W, 0)`` of one common level on the hf residuals (a stationary noise level)."""
+    hf = _hf(view)
+    if hf is None:
+        return None
+    r, sd = hf
+    wgt = 1.0 / sd**2
+    c = float((r * wgt).sum() / wgt.sum())
+    return float((((r - c) / sd) ** 2).sum()), int(r.size), 0
+
+
 def noise_misfit(effect: str, view: TimeView, per_param: float = 0.0) -> float:
     """Excess misfit of the noise-level shape of ``effect`` (drift, bursts, spikes); else 0.
 
@@ -152,7 +163,8 @@ def noise_misfit(effect: str, view: TimeView, per_param: float = 0.0) -> float:
     see: three for the drift (``ratio``, ``t_start``, ``t_end``), one per raised window for the
     bursts. Spikes explain a changed short-term level only in the windows that hold them: when
     ``hf`` is significant (``alpha / 8``, the evidence's Bonferroni level) they pay the misfit
-    of the other windows (their times and heights come from the time view, no penalty).
+    of the other windows (their times and heights come from the time view, no penalty; with
+    no spike located, of all windows around one level).
     """
     w = int(view.t_s.size)
     if effect == "spikes":
@@ -162,7 +174,8 @@ def noise_misfit(effect: str, view: TimeView, per_param: float = 0.0) -> float:
         held = np.zeros(w, dtype=bool)
         for t in view.spike_times_s:
             held[min(int(t // view.window_s), w - 1)] = True
-        spiky = _burst_fit(view, held) if held.any() else None
+        # no located spike (a dense, fitted spike process is stationary): one common level
+        spiky = _burst_fit(view, held) if held.any() else _flat_fit(view)
         if spiky is None:
             return 0.0
         return max(0.0, spiky[0] - (spiky[1] - 1))
