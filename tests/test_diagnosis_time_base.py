@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 
@@ -136,3 +138,20 @@ def test_held_samples_of_quantized_counts_are_found():
     assert item is not None
     # zero steps: the held ones plus those of the resolution (about 1/5 * 0.4 of the steps)
     assert item.size["count"] > item.size["expected"]
+
+
+def test_cli_reports_the_gaps_of_a_csv_time_column(tmp_path, capsys):
+    from allanite.cli import main
+
+    t, x, truth = _dropped(2**13, 12)
+    path = tmp_path / "gyro.csv"
+    np.savetxt(path, np.column_stack([t, x]), delimiter=",", header="t,gyro", comments="")
+    model = tmp_path / "model.json"
+    MODEL.save(model)
+    args = ["diagnose", str(path), "--time-column", "t", "--gaps", "fill", "--units", "deg/s",
+            "--sim-model", str(model), "--n-mc", "20", "--json"]  # fmt: skip
+    assert main(args) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["closed"] is False
+    items = [u for u in out["unexplained"] if u["evidence"] == "time base"]
+    assert items[0]["size"]["gaps"] == len(truth)
