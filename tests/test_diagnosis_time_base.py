@@ -155,3 +155,41 @@ def test_cli_reports_the_gaps_of_a_csv_time_column(tmp_path, capsys):
     assert out["closed"] is False
     items = [u for u in out["unexplained"] if u["evidence"] == "time base"]
     assert items[0]["size"]["gaps"] == len(truth)
+
+
+def test_spikes_of_the_mean_rate_in_angle_input_are_dropped_samples():
+    from types import SimpleNamespace
+
+    from allanite.diagnosis.time_base import doubled_increments_item
+
+    rng = np.random.default_rng(13)
+    heights = 10.0 + 0.5 * rng.standard_normal(30)
+    view = SimpleNamespace(spike_amplitudes=list(heights), spike_times_s=list(np.arange(30.0)))
+    item = doubled_increments_item("angle", 10.0, view)
+    assert item is not None
+    assert item.evidence == "time base"
+    assert item.size["doubled_increments"] == 30
+    assert "dropped angle samples" in item.text
+    assert doubled_increments_item("rate", 10.0, view) is None
+    # spikes of another size are spikes, not dropped samples
+    assert doubled_increments_item("angle", 3.0, view) is None
+
+
+def test_diagnose_finds_dropped_angle_samples_on_a_turntable():
+    rng = np.random.default_rng(14)
+    rate = _noise(2**13, 15) + 10.0  # a 10 deg/s turntable, noise sd 0.5 deg/s per sample
+    angle = np.concatenate([[0.0], np.cumsum(rate) / FS])
+    keep = rng.random(angle.size) > 0.02
+    keep[0] = True
+    d = diagnose(angle[keep], MODEL, fs=FS, input="angle", units="deg/s", n_mc=20, seed=1)
+    assert not d.closed
+    items = [u for u in d.unexplained if u.evidence == "time base"]
+    assert len(items) == 1
+    # each isolated drop gives one rate sample 10 deg/s (20 noise sd) too high: all are found
+    # as spikes; a run of two gives one twice as high (not a doubled increment). The spike
+    # finder merges neighbours closer than two samples, so two drops that close count once.
+    drop = ~keep
+    isolated = drop & ~np.roll(drop, 1) & ~np.roll(drop, -1)
+    close = int(np.count_nonzero(np.diff(np.flatnonzero(isolated)) <= 2))
+    found = items[0].size["doubled_increments"]
+    assert int(isolated.sum()) - close <= found <= int(isolated.sum())

@@ -220,7 +220,16 @@ def diagnose(
         after=after,
     )
     # the time base (time stamps of a Record, held samples): reported next to the three views
-    head = with_time_base(head, time_base_evidence(real, samples, rate, significance / 10.0))
+    base_items = time_base_evidence(
+        real,
+        samples,
+        rate,
+        significance / 10.0,
+        input_kind=input_kind,
+        mean_rate=float(x.mean()),
+        view=analysis.time,
+    )
+    head = with_time_base(head, base_items)
     explanation, held = _held_out(run, found, x_hold, hold_kind)
     return Diagnosis(
         statistic=analysis.tau.gap,

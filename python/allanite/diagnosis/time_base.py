@@ -21,7 +21,12 @@ analysis. So the diagnosis reports what the time base itself says, next to the t
   a handful of exact repeats already counts. A resolution coarser than the noise
   (``n_2 < n_1 / 4``) makes repeated values the rule; held samples are then not tested.
 
-Both are :class:`~allanite.diagnosis.verdict.Unexplained` items of view ``time``, evidence
+* **doubled increments** (angle or increment input without time stamps): a dropped sample
+  makes one rate sample span two periods, one mean rate too high. On a turntable (a mean rate
+  well above the noise) the time view finds these as spikes; when most located spikes lie
+  within 25 % of the mean rate they are reported as dropped samples.
+
+All are :class:`~allanite.diagnosis.verdict.Unexplained` items of view ``time``, evidence
 ``time base`` or ``held``; any of them keeps the diagnosis from reading "closed".
 """
 
@@ -34,11 +39,18 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import stats
 
+from allanite.diagnosis.time_view import MAX_SPIKES
 from allanite.diagnosis.verdict import Unexplained, Verdict
 from allanite.io.record import Record
 from allanite.io.timebase import JITTER_WARN
 
-__all__ = ["held_samples_item", "time_base_evidence", "time_base_items", "with_time_base"]
+__all__ = [
+    "doubled_increments_item",
+    "held_samples_item",
+    "time_base_evidence",
+    "time_base_items",
+    "with_time_base",
+]
 
 #: at most this many time segments are listed per item
 MAX_SEGMENTS = 50
@@ -180,11 +192,63 @@ def held_samples_item(samples: Any, fs: float, level: float) -> Unexplained | No
     )
 
 
-def time_base_evidence(record: Any, samples: Any, fs: float, level: float) -> list[Unexplained]:
-    """Time-stamp items of ``record`` (a Record) and the held-samples item of ``samples``."""
+def doubled_increments_item(input_kind: str, mean_rate: float, view: Any) -> Unexplained | None:
+    """Spikes of the size of the mean rate in angle or increment input: dropped samples.
+
+    A dropped angle sample makes one rate sample span two periods: it reads ``mean rate +
+    noise`` too high. When most spikes the time view located (``view.spike_amplitudes``, above
+    the running median) lie within 25 % of the record's mean rate, they are reported as
+    dropped samples; None otherwise (rate input, no spikes, a mean rate of zero).
+    """
+    heights = np.asarray(getattr(view, "spike_amplitudes", []), dtype=np.float64)
+    if input_kind == "rate" or heights.size == 0 or mean_rate == 0.0:
+        return None
+    near = np.abs(heights - mean_rate) < 0.25 * abs(mean_rate)
+    if near.mean() < 0.5:
+        return None
+    times = np.asarray(view.spike_times_s, dtype=np.float64)[near]
+    segs = [[float(t), float(t)] for t in times[:MAX_SEGMENTS]]
+    more = " (at least)" if heights.size >= MAX_SPIKES else ""
+    text = (
+        f"time view: {int(near.sum())}{more} samples one mean rate too high "
+        f"({float(np.median(heights[near])):.3g} vs a mean rate of {mean_rate:.3g}) at "
+        f"{', '.join(f'{t:.4g}' for t in times[:4])} s"
+        f"{f' (+{times.size - 4} more)' if times.size > 4 else ''}: dropped {input_kind} samples "
+        "(each a doubled increment)"
+    )
+    return Unexplained(
+        "time",
+        "time base",
+        {"time_segments_s": segs},
+        {"doubled_increments": float(near.sum()), "mean_rate": mean_rate},
+        0.0,
+        text,
+    )
+
+
+def time_base_evidence(
+    record: Any,
+    samples: Any,
+    fs: float,
+    level: float,
+    *,
+    input_kind: str = "rate",
+    mean_rate: float = 0.0,
+    view: Any = None,
+) -> list[Unexplained]:
+    """Every time-base item: time stamps, held samples, doubled increments.
+
+    Time stamps of ``record`` (a Record), held samples of ``samples`` (as given), doubled
+    increments among the spikes of the time ``view`` (angle or increment input).
+    """
     items = time_base_items(record)
-    held = held_samples_item(samples, fs, level)
-    return items if held is None else [*items, held]
+    for item in (
+        held_samples_item(samples, fs, level),
+        doubled_increments_item(input_kind, mean_rate, view),
+    ):
+        if item is not None:
+            items.append(item)
+    return items
 
 
 def with_time_base(head: Verdict, items: list[Unexplained]) -> Verdict:
