@@ -80,7 +80,9 @@ class Unexplained:
         ``"tau"``, ``"frequency"`` or ``"time"``.
     evidence : str
         The statistic: ``tau`` (the Mahalanobis statistic), ``band`` (broadband PSD), ``line``,
-        ``level``, ``jump``, ``hf``, ``dyn``, ``spike``, ``kurt_hf``, ``kurt_lf``.
+        ``level``, ``jump``, ``hf``, ``dyn``, ``spike``, ``kurt_hf``, ``kurt_lf``; or the time
+        base (:mod:`allanite.diagnosis.time_base`): ``time base`` (gaps, jitter, doubled
+        increments), ``held``.
     where : dict
         ``tau_bands_s``, ``frequency_bands_hz``, ``frequency_lines_hz`` or ``time_segments_s``.
     size : dict
