@@ -802,6 +802,238 @@ def table(summary: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
+# --- out-of-vocabulary suite (``--oov``): several seeds per kind -------------------------------
+#
+# Each kind is a change of the real record the base model lacks. Kinds with a candidate of
+# their own (``OOV_EXPECTED``) count as handled when that candidate is in the explanation or
+# the headline says "not fully explained"; the others must read "not fully explained". A
+# "closed" headline without the expected candidate is a false "closed".
+
+
+def noise_drift(x: np.ndarray, fs: float, rng: np.random.Generator) -> np.ndarray:
+    """The white noise's level drifts linearly from x1 to x2 of the model's over the record
+    (temperature): the extra white noise grows as ``sqrt((1 + t/T)^2 - 1) N``."""
+    u = np.arange(x.size) / x.size
+    sd = np.sqrt((1.0 + u) ** 2 - 1.0) * 0.05 * np.sqrt(fs)
+    return x + sd * rng.standard_normal(x.size)
+
+
+def noise_step(x: np.ndarray, fs: float, rng: np.random.Generator) -> np.ndarray:
+    """The white noise's level steps once, to x1.8 of the model's, at a random time in the
+    first half."""
+    k = int(rng.uniform(0.1, 0.4) * x.size)
+    out = x.copy()
+    out[k:] += np.sqrt(1.8**2 - 1.0) * 0.05 * np.sqrt(fs) * rng.standard_normal(x.size - k)
+    return out
+
+
+def noise_settle(x: np.ndarray, fs: float, rng: np.random.Generator) -> np.ndarray:
+    """The white noise's level settles after switch-on: x2 at the start, back to x1 with a
+    time constant of a tenth of the record (a smooth, non-linear change)."""
+    t = np.arange(x.size) / x.size
+    sd = np.sqrt((1.0 + np.exp(-t / 0.1)) ** 2 - 1.0) * 0.05 * np.sqrt(fs)
+    return x + sd * rng.standard_normal(x.size)
+
+
+def wandering_line(x: np.ndarray, fs: float, rng: np.random.Generator) -> np.ndarray:
+    """A vibration line whose frequency wanders non-linearly: 0.1 fs +- 0.02 fs, one and a half
+    periods of a sinusoid over the record."""
+    n = x.size
+    u = np.arange(n) / n
+    freq = fs * (0.1 + 0.02 * np.sin(2.0 * np.pi * 1.5 * u + rng.uniform(0, 2 * np.pi)))
+    phase = 2.0 * np.pi * np.cumsum(freq) / fs
+    return x + 0.3 * np.sin(phase + rng.uniform(0, 2 * np.pi))
+
+
+def _drop_mask(n: int, rng: np.random.Generator, max_run: int) -> np.ndarray:
+    """Keep-mask with about 10 % of the samples dropped in runs of 1..max_run."""
+    keep = np.ones(n, dtype=bool)
+    mean_run = (1 + max_run) / 2.0
+    k = 0
+    while k < n:
+        k += int(rng.geometric(1.0 / (9.0 * mean_run)))
+        run = int(rng.integers(1, max_run + 1))
+        keep[k : k + run] = False
+        k += run
+    keep[0] = True
+    return keep
+
+
+#: rate of the turntable in the angle-input cases (deg/s): a dropped angle sample doubles one
+#: increment, i.e. one rate sample is table rate + noise too high
+TABLE_RATE = 10.0
+
+#: kind -> (transform of the rate record or None, the candidate that describes it or None)
+OOV_KINDS: dict[str, tuple[Any, str | None]] = {
+    "bursts": (bursts, "bursts"),
+    "noise_drift": (noise_drift, "white_drift"),
+    "noise_step": (noise_step, "white_drift"),
+    "noise_settle": (noise_settle, "white_drift"),
+    "drifting_line": (drifting_line, "drifting_line"),
+    "wandering_line": (wandering_line, None),
+    "resonance": (resonance, "resonance"),
+    "clipping": (clipping, None),
+    "held": (held_samples, None),
+    "dropped_timestamps": (None, None),  # a Record with its time column (gaps filled)
+    "dropped_angle_table": (None, None),  # angle input on a turntable, no time stamps
+    "dropped_angle": (None, None),  # angle input at rest, no time stamps
+}
+#: kinds whose record has no spectral line (a reported line there is spurious)
+NO_LINE_KINDS = ("bursts", "noise_drift", "noise_step", "noise_settle", "clipping", "held",
+                 "dropped_timestamps", "dropped_angle_table", "dropped_angle")  # fmt: skip
+
+
+def oov_real(
+    kind: str, base: NoiseModel, fs: float, n: int, seed: int
+) -> tuple[Any, dict[str, Any]]:
+    """The real record of an OOV case and the keyword arguments of :func:`diagnose`."""
+    rng = np.random.default_rng(seed + 11)
+    x = np.asarray(base.simulate(n, fs=fs, seed=seed), dtype=float).ravel()
+    transform = OOV_KINDS[kind][0]
+    if transform is not None:
+        return transform(x, fs, rng), {"fs": fs, "units": "deg/s"}
+    if kind == "dropped_timestamps":
+        from allanite.io import make_record
+
+        keep = _drop_mask(n, rng, 20)
+        t = np.arange(n) / fs
+        rec = make_record(np.column_stack([t[keep], x[keep]]), ["t", "gyro"], source="oov",
+                          time_column="t", gaps="fill", units="deg/s")  # fmt: skip
+        return rec, {}
+    table = TABLE_RATE if kind == "dropped_angle_table" else 0.0
+    angle = np.concatenate([[0.0], np.cumsum(x + table) / fs])
+    keep = _drop_mask(angle.size, rng, 1)
+    return angle[keep][: n + 1], {"fs": fs, "units": "deg/s", "input": "angle"}
+
+
+def evaluate_oov(
+    kind: str, seed: int, n_mc: int, fs: float = 100.0, n: int = 2**16
+) -> dict[str, Any]:
+    """Diagnose one OOV case (or a null case, ``kind == "null"``) and score the headline."""
+    base = base_model(fs)
+    if kind == "null":
+        real: Any = np.asarray(base.simulate(n, fs=fs, seed=seed), dtype=float).ravel()
+        kwargs: dict[str, Any] = {"fs": fs, "units": "deg/s"}
+    else:
+        real, kwargs = oov_real(kind, base, fs, n, seed)
+    t0 = time.perf_counter()
+    d = diagnose(real, base, holdout=0.5, n_mc=n_mc, seed=seed + 1, **kwargs)
+    named = sorted({x.effect for x in d.explanation.effects} if d.explanation else set())
+    expected = OOV_KINDS[kind][1] if kind != "null" else None
+    lines = list(d.where.get("frequency_lines_hz", [])) if d.significant else []
+    return {
+        "kind": kind,
+        "seed": seed,
+        "seconds": time.perf_counter() - t0,
+        "significant": d.significant,
+        "p_value": d.p_value,
+        "closed": d.closed,
+        "named": named,
+        "expected": expected,
+        "expected_named": expected in named if expected else None,
+        "handled": (not d.closed) or (expected is not None and expected in named),
+        "false_closed": d.closed and not (expected is not None and expected in named),
+        "lines_hz": lines,
+        "view_lines_hz": [ln.frequency_hz for ln in d.frequency.lines],
+        "evidence": sorted({u.evidence for u in d.unexplained}),
+        "headline": d.headline,
+    }
+
+
+def summarize_oov(rows: list[dict[str, Any]]) -> dict[str, Any]:
+    cases = [r for r in rows if r["kind"] != "null"]
+    nulls = [r for r in rows if r["kind"] == "null"]
+    with_candidate = [r for r in cases if r["expected"]]
+    no_line = [r for r in cases if r["kind"] in NO_LINE_KINDS]
+    per_kind: dict[str, dict[str, Any]] = {}
+    for r in cases:
+        k = per_kind.setdefault(r["kind"], {"cases": 0, "handled": 0, "closed": 0,
+                                            "expected_named": 0, "named": {}})  # fmt: skip
+        k["cases"] += 1
+        k["handled"] += int(r["handled"])
+        k["closed"] += int(r["closed"])
+        k["expected_named"] += int(bool(r["expected_named"]))
+        for e in r["named"]:
+            k["named"][e] = k["named"].get(e, 0) + 1
+    return {
+        "oov_cases": len(cases),
+        "handled_rate": float(np.mean([r["handled"] for r in cases])) if cases else None,
+        "false_closed": int(sum(r["false_closed"] for r in cases)),
+        "candidate_named_rate": float(np.mean([bool(r["expected_named"]) for r in with_candidate]))
+        if with_candidate
+        else None,
+        "candidate_cases": len(with_candidate),
+        "spurious_line_cases": int(sum(bool(r["lines_hz"]) for r in no_line)),
+        "spurious_view_line_cases": int(sum(bool(r["view_lines_hz"]) for r in no_line)),
+        "no_line_cases": len(no_line),
+        "null_cases": len(nulls),
+        "null_false_alarm_rate": float(np.mean([r["significant"] for r in nulls]))
+        if nulls
+        else None,
+        "null_not_closed_rate": float(np.mean([not r["closed"] for r in nulls])) if nulls else None,
+        "per_kind": per_kind,
+    }
+
+
+def oov_table(s: dict[str, Any]) -> str:
+    out = [
+        "| metric | value | goal |",
+        "|---|---|---|",
+        f"| handled (not fully explained, or the right candidate named) | "
+        f"{s['handled_rate']:.3f} of {s['oov_cases']} | >= 0.90 |",
+        f'| false "closed" | {s["false_closed"]} | 0 |',
+        f"| right candidate named (kinds with one) | {s['candidate_named_rate']:.3f} of "
+        f"{s['candidate_cases']} | |",
+        f"| spurious lines in `where` (records without a line) | {s['spurious_line_cases']} of "
+        f"{s['no_line_cases']} | 0 |",
+        f"| spurious lines in the frequency view (hints included) | "
+        f"{s['spurious_view_line_cases']} of {s['no_line_cases']} | |",
+        f"| null cases: false alarms (significant) | {s['null_false_alarm_rate']:.3f} of "
+        f"{s['null_cases']} | <= 0.05 |",
+        f"| null cases: not closed | {s['null_not_closed_rate']:.3f} of {s['null_cases']} | |",
+        "",
+        "| kind | cases | handled | closed | expected candidate named | effects named |",
+        "|---|---|---|---|---|---|",
+    ]
+    for kind, k in s["per_kind"].items():
+        named = ", ".join(f"{e} {c}" for e, c in sorted(k["named"].items(), key=lambda kv: -kv[1]))
+        exp = OOV_KINDS[kind][1]
+        out.append(f"| {kind} | {k['cases']} | {k['handled']} | {k['closed']} | "
+                   f"{k['expected_named'] if exp else 'n/a'} | {named} |")  # fmt: skip
+    return "\n".join(out)
+
+
+def run_oov(seeds: int, nulls: int, n_mc: int, seed0: int, tag: str) -> None:
+    """The ``--oov`` suite: every kind with ``seeds`` seeds, and ``nulls`` null cases."""
+    plan = [(k, seed0 + 101 * i) for k in OOV_KINDS for i in range(seeds)]
+    plan += [("null", seed0 + 7 + 97 * i) for i in range(nulls)]
+    rows = []
+    t0 = time.perf_counter()
+    for i, (kind, seed) in enumerate(plan):
+        row = evaluate_oov(kind, seed, n_mc)
+        rows.append(row)
+        print(f"[{i + 1}/{len(plan)}] {kind:<20} seed={seed} sig={row['significant']!s:<5} "
+              f"closed={row['closed']!s:<5} named={','.join(row['named'])} "
+              f"lines={row['lines_hz']} {row['seconds']:.0f}s", flush=True)  # fmt: skip
+    summary = summarize_oov(rows)
+    summary["seconds"] = time.perf_counter() - t0
+    summary["n_mc"] = n_mc
+    text = oov_table(summary)
+    print()
+    print(text)
+    RESULTS.mkdir(parents=True, exist_ok=True)
+    stem = RESULTS / ("validate_diagnosis_oov" + tag)
+    stem.with_suffix(".json").write_text(
+        json.dumps({"summary": summary, "cases": rows}, indent=1, default=float)
+    )
+    stem.with_suffix(".md").write_text(
+        "# Sim-to-real diagnosis validation: out-of-vocabulary cases\n\n"
+        f"`python benchmarks/validate_diagnosis.py {' '.join(sys.argv[1:])}`, n_mc = {n_mc}, "
+        f"fs 100 Hz, 2^16 samples, holdout 0.5, {len(plan)} cases, "
+        f"{summary['seconds']:.0f} s.\n\n{text}\n"
+    )
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="one configuration, fewer cases")
@@ -827,7 +1059,17 @@ def main() -> None:
         metavar="JSON",
         help="summarise the cases of earlier result files together (no new runs)",
     )
+    parser.add_argument(
+        "--oov",
+        action="store_true",
+        help="the out-of-vocabulary suite: every kind with --oov-seeds seeds, and --nulls nulls",
+    )
+    parser.add_argument("--oov-seeds", type=int, default=3, help="seeds per OOV kind")
     args = parser.parse_args()
+    if args.oov:
+        nulls = 20 if args.nulls is None else args.nulls
+        run_oov(args.oov_seeds, nulls, args.n_mc or 60, args.seed, args.tag)
+        return
     if args.combine:
         rows = [r for f in args.combine for r in json.loads(Path(f).read_text())["cases"]]
         summary = summarize(rows)

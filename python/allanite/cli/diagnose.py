@@ -141,7 +141,7 @@ def _summary(d: Any) -> str:
     units = d.meta.get("units")
     status = "CLOSED" if d.closed else "NOT FULLY EXPLAINED"
     if not d.significant:
-        status = "NO GAP"
+        status = "NO GAP" if d.closed else "NO GAP IN THE NOISE, NOT FULLY EXPLAINED"
     lines = [f"{status}: {d.headline}"]
     if d.unexplained:
         lines.append("unexplained:")
@@ -224,7 +224,7 @@ def run(args: argparse.Namespace) -> int:
     effects = [e.strip() for e in args.effects.split(",") if e.strip()] if args.effects else None
     show = args.progress == "on" or (args.progress == "auto" and real.size >= 2**20)
     result = diagnose(
-        real,
+        record if record.timing is not None else real,  # its time base is evidence too
         sim,
         fs=fs,
         input=part.input,

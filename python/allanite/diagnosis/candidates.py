@@ -22,6 +22,9 @@ resonance      --                                              a band-pass shape
                                                                whose peak stays put
 drifting_line  kurtosis of differences and of block means      a band-pass shaped excess
                (a sinusoid is platykurtic)                     whose peak moves linearly
+white_drift    hf, kurtosis of differences, spike statistic    hf, and a drift/step shape
+               (the model's white noise, its level drifting   of the windows' noise level
+               or stepping over the record)                    (replaces the white term)
 =============  ==============================================  ==========================
 
 The last two come from :func:`allanite.diagnosis.band_shape.band_shape` (frequency view and
@@ -66,6 +69,7 @@ EFFECTS: dict[str, str] = {
     "bursts": "white_bursts",
     "resonance": "resonance",
     "drifting_line": "drifting_line",
+    "white_drift": "white_drift",
 }
 
 #: evidence (non-tau statistics) each effect can explain
@@ -82,6 +86,8 @@ EXPLAINS: dict[str, frozenset[str]] = {
     # a sinusoid's amplitude follows the arcsine law: platykurtic samples, differences and
     # short block means
     "drifting_line": frozenset({"kurt_hf", "kurt_lf"}),
+    # a white-noise level that changes over the record: like bursts, a scale mixture
+    "white_drift": frozenset({"hf", "kurt_hf", "spike"}),
 }
 
 #: evidence an effect needs before it is proposed (any of)
@@ -92,6 +98,7 @@ SIGNATURE: dict[str, frozenset[str]] = {
     "spikes": frozenset({"spike"}),
     "telegraph": frozenset({"kurt_lf"}),
     "bursts": frozenset({"hf"}),
+    "white_drift": frozenset({"hf"}),
 }
 
 
@@ -170,6 +177,18 @@ def _model_terms(model: Any) -> list[Term]:
     return list(terms) if terms is not None else []
 
 
+def _drift_fixed(drift: Any, duration: float) -> dict[str, float] | None:
+    """Fixed parameters of ``white_drift`` from a :class:`DriftShape` (None: not proposed)."""
+    if drift is None:
+        return None
+    return {
+        "ratio": float(drift.ratio),
+        "t_start": float(drift.t_start),
+        "t_end": float(drift.t_end),
+        "duration": float(duration),
+    }
+
+
 def check_effects(effects: Any) -> list[str] | None:
     """Validate a list of effect names (None: all); unknown names are refused with the list.
 
@@ -212,6 +231,7 @@ def candidate_library(
     effects: list[str] | None = None,
     bursts: tuple[float, float] | None = None,
     band: Any = None,
+    drift: Any = None,
 ) -> tuple[list[Candidate], list[str]]:
     """Candidates to fit, and the effects that cannot be tried (no Term class, no model term).
 
@@ -243,6 +263,11 @@ def candidate_library(
         A band-pass shaped excess of the frequency view
         (:func:`allanite.diagnosis.band_shape.band_shape`): ``resonance`` or
         ``drifting_line`` is proposed with its shape fixed and its level free.
+    drift : DriftShape, optional
+        A drift or step of the white-noise level found on the time view's windows
+        (:func:`allanite.diagnosis.noise_level.drift_shape`): ``white_drift`` replaces the
+        model's white noise with its ``ratio``, ``t_start`` and ``t_end`` fixed and the rms
+        level ``N`` free.
     """
     wanted = effects if effects is not None else list(EFFECTS)
     terms = _model_terms(model)
@@ -253,7 +278,7 @@ def candidate_library(
         if effect not in wanted:
             continue
         cls = TERM_TYPES.get(term_type)
-        if cls is None or (effect == "lowpass" and not whites):
+        if cls is None or (effect in ("lowpass", "white_drift") and not whites):
             unavailable.append(effect)
             continue
         signature = SIGNATURE.get(effect)
@@ -292,6 +317,13 @@ def candidate_library(
         elif effect == "lowpass":
             replaces = whites[0]
             fixed["N"] = float(replaces.values()["N"])
+        elif effect == "white_drift":
+            fixed_drift = _drift_fixed(drift, duration)
+            if fixed_drift is None:
+                continue
+            replaces = whites[0]
+            fixed.update(fixed_drift)
+            start["N"] = float(replaces.values()["N"])
         names = tuple(p.name for p in cls.params)
         free = tuple(n for n in names if n not in fixed)
         out.append(

@@ -30,6 +30,7 @@ RATE_FREE: dict[str, Callable[[Any], float | None]] = {
     "markov": lambda t: float(t.tau_c),
     "telegraph": lambda t: float(t.tau_c),
     "white_bursts": lambda t: float(t.burst_s),
+    "white_drift": lambda t: None,
     "warmup": lambda t: float(t.tau_w),
     "sine": lambda t: 1.0 / float(t.frequency),
     "lowpass_white": lambda t: 1.0 / float(t.bandwidth),

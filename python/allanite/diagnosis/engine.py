@@ -23,8 +23,10 @@ from allanite.diagnosis.inputs import (
 )
 from allanite.diagnosis.joint import Explanation, combined_terms, explain
 from allanite.diagnosis.level_shape import warmup_time_constant
+from allanite.diagnosis.noise_level import drift_shape
 from allanite.diagnosis.null import runs
 from allanite.diagnosis.result import Diagnosis, Holdout
+from allanite.diagnosis.time_base import time_base_evidence, with_time_base
 from allanite.diagnosis.verdict import verdict
 from allanite.io.record import Record
 from allanite.terms import term_from_dict
@@ -217,6 +219,17 @@ def diagnose(
         units=common_units,
         after=after,
     )
+    # the time base (time stamps of a Record, held samples): reported next to the three views
+    base_items = time_base_evidence(
+        real,
+        samples,
+        rate,
+        significance / 10.0,
+        input_kind=input_kind,
+        mean_rate=float(x.mean()),
+        view=analysis.time,
+    )
+    head = with_time_base(head, base_items)
     explanation, held = _held_out(run, found, x_hold, hold_kind)
     return Diagnosis(
         statistic=analysis.tau.gap,
@@ -297,6 +310,7 @@ def _attribute(
         effects=effects,
         bursts=_bursts(analysis.time),
         band=band_shape(run.x_fit, run.fs, analysis.frequency),
+        drift=drift_shape(run.x_fit, run.fs, analysis.time, run.source.model),
     )
     # the same calibrated test ranks single effects and selects the joint set
     test: dict[str, Any] = {

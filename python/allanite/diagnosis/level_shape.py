@@ -57,8 +57,15 @@ def level_misfit(effect: str, view: TimeView, duration: float, per_param: float 
     """Excess misfit of the level shape of ``effect`` (step, warmup, ramp); 0 otherwise.
 
     ``per_param`` is the ranking's penalty per parameter (``chi2_1`` quantile ``1 - alpha``);
-    it is charged twice for every step beyond the detected change points.
+    it is charged twice for every step beyond the detected change points. The effects that
+    explain a changed short-term noise level (``white_drift``, ``bursts``, ``spikes``) pay the
+    misfit of their shape on the windows' short-term noise level instead
+    (:func:`allanite.diagnosis.noise_level.noise_misfit`).
     """
+    if effect in ("white_drift", "bursts", "spikes"):
+        from allanite.diagnosis.noise_level import noise_misfit
+
+        return noise_misfit(effect, view, per_param)
     if effect not in ("step", "warmup", "ramp"):
         return 0.0
     sd = np.where(view.level_sd > 0, view.level_sd, np.inf)

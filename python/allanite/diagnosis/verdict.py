@@ -54,6 +54,7 @@ TERM_NAMES = {
     "bursts": "white noise in bursts (a time-varying noise level)",
     "resonance": "a resonance (white noise through a second-order band-pass)",
     "drifting_line": "a vibration line whose frequency drifts",
+    "white_drift": "a white-noise level that changes over the record",
 }
 
 #: what each piece of time/frequency evidence means, in words
@@ -79,7 +80,9 @@ class Unexplained:
         ``"tau"``, ``"frequency"`` or ``"time"``.
     evidence : str
         The statistic: ``tau`` (the Mahalanobis statistic), ``band`` (broadband PSD), ``line``,
-        ``level``, ``jump``, ``hf``, ``dyn``, ``spike``, ``kurt_hf``, ``kurt_lf``.
+        ``level``, ``jump``, ``hf``, ``dyn``, ``spike``, ``kurt_hf``, ``kurt_lf``; or the time
+        base (:mod:`allanite.diagnosis.time_base`): ``time base`` (gaps, jitter, doubled
+        increments), ``held``.
     where : dict
         ``tau_bands_s``, ``frequency_bands_hz``, ``frequency_lines_hz`` or ``time_segments_s``.
     size : dict
@@ -180,9 +183,23 @@ def describe_effect(a: Attribution, units: str | None) -> str:
             f"the real sensor's {name} is {a.params.get('scale', float('nan')):.2f}x the "
             f"simulated one ({format_params(a, units, skip=('scale',))})"
         )
+    if a.effect == "white_drift":
+        return _describe_drift(a, units)
     name = TERM_NAMES.get(a.effect, a.effect)
     verb = "is missing" if a.effect != "lowpass" else "is missing in the simulation"
     return f"{name} {verb} ({format_params(a, units)})"
+
+
+def _describe_drift(a: Attribution, units: str | None) -> str:
+    """``white_drift`` in words: how the level changes, when, and the rms level."""
+    p = a.params
+    ratio, t0, t1 = p.get("ratio", 1.0), p.get("t_start", 0.0), p.get("t_end", 0.0)
+    how = f"steps at {t0:.4g} s" if t1 <= t0 else f"drifts from {t0:.4g} s to {t1:.4g} s"
+    return (
+        f"the real sensor's white-noise level changes over the record: it {how}, to "
+        f"x{ratio:.3g} of its initial level "
+        f"({format_params(a, units, skip=('ratio', 't_start', 't_end', 'duration'))} rms)"
+    )
 
 
 def effect_psd(cand: Candidate, values: dict[str, float], f: Any, dt: float) -> Any:

@@ -21,6 +21,7 @@ from allanite.terms.transients import (
     WarmUp,
 )
 from allanite.terms.white import White
+from allanite.terms.white_drift import WhiteDrift
 
 #: the stationary IEEE power-law terms in order of increasing tau slope
 POWER_LAW_TERMS: tuple[type[Term], ...] = (Quantization, White, Flicker, RateRandomWalk, RateRamp)
@@ -46,5 +47,6 @@ __all__ = [
     "WarmUp",
     "White",
     "WhiteBursts",
+    "WhiteDrift",
     "term_from_dict",
 ]

@@ -1,0 +1,256 @@
+r"""Shape of a noise level that changes over the record: a drift or step, or bursts.
+
+The time view's ``hf`` statistic is the log mean square of the first differences per window,
+real minus simulated, with the median over the windows removed (``r_w``, null spread
+``s_w``). A white-noise level that changes over the record moves it in time; two shapes
+describe such a change:
+
+* ``white_drift`` (:class:`allanite.terms.WhiteDrift`): the variance moves linearly from one
+  level to another between ``t_start`` and ``t_end`` (a step when they coincide):
+  ``r_w = c + log(1 + beta g_w)`` with ``g_w`` the window mean of
+  :func:`allanite.terms.white_drift.ramp_fraction`; ``t_start``, ``t_end`` on the window
+  boundaries and ``beta`` on a log grid, ``c`` by weighted least squares;
+* ``bursts`` (:class:`allanite.terms.WhiteBursts`): raised in the windows the time view flags
+  (``z_w`` above its threshold), each at its own level (a burst may cover a window partly),
+  the quiet windows at one common level ``c``.
+
+Each shape's misfit ``chi^2 = sum_w ((r_w - fit_w) / s_w)^2`` is compared with its
+expectation ``W - p`` (``p`` = fitted numbers: 4 for the drift, ``1 + raised windows`` for the
+bursts); the excess ``max(0, chi^2 - (W - p))`` plus the ranking's per-parameter penalty for
+every shape number the tau view does not see (drift: ``ratio``, ``t_start``, ``t_end``;
+bursts: one per raised window) enters the ranking of the two candidates (:func:`noise_misfit`,
+through :func:`allanite.diagnosis.level_shape.level_misfit`). Separate raised stretches fit
+only the bursts; a level that rises or falls once fits the drift with fewer numbers. Spikes,
+which also raise ``hf``, only raise it in the windows that hold them (:func:`noise_misfit`).
+
+The drift's ``ratio`` (final over initial white-noise level) is then measured on the record
+itself: the per-window white-noise variance is ``(D_w - D_o) / (2 fs)`` with ``D_w`` the
+window's mean square of first differences and ``D_o = 2 A_sim(dt) - 2 fs N_sim^2`` the part
+of the simulated sensor's that is not white noise (quantization, ...), and ``a + b g_w`` is
+fitted to it; ``ratio = sqrt((a + b) / a)``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy import stats
+
+from allanite.diagnosis.time_view import TimePlan, TimeView
+from allanite.terms.white_drift import ramp_window_mean
+
+__all__ = ["DriftShape", "drift_shape", "noise_misfit"]
+
+#: grid of the variance ratio (final / initial) of the drift shape
+BETA_GRID = np.concatenate([np.geomspace(1.0 / 64.0, 0.95, 40), np.geomspace(1.05, 64.0, 48)]) - 1
+#: the drift has this many fitted numbers on the windows (offset, beta, t_start, t_end)
+DRIFT_PARAMS = 4
+
+
+@dataclass(frozen=True)
+class DriftShape:
+    """Best drift/step shape of the windows' short-term noise level.
+
+    Attributes
+    ----------
+    ratio : float
+        Final over initial white-noise level (amplitude, not variance).
+    t_start, t_end : float
+        Start and end of the change in seconds (equal: a step).
+    chi2 : float
+        Misfit of the shape on the ``hf`` window residuals.
+    n_windows : int
+        Number of windows.
+    """
+
+    ratio: float
+    t_start: float
+    t_end: float
+    chi2: float
+    n_windows: int
+
+    @property
+    def excess(self) -> float:
+        """``max(0, chi2 - (W - 4))``."""
+        return max(0.0, self.chi2 - (self.n_windows - DRIFT_PARAMS))
+
+
+def _hf(view: TimeView) -> tuple[NDArray[np.float64], NDArray[np.float64]] | None:
+    r = view.residual.get("hf")
+    sd = view.spread.get("hf")
+    if r is None or sd is None or r.size < 4:
+        return None
+    ok = np.isfinite(sd) & (sd > 0)
+    if not ok.all():
+        return None
+    return np.asarray(r, dtype=np.float64), np.asarray(sd, dtype=np.float64)
+
+
+def _ramp_grid(
+    view: TimeView,
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """Window means of every ramp with ends on the window boundaries: ``(P, W)``, starts, ends."""
+    w = view.t_s.size
+    edges = np.arange(w + 1) * view.window_s
+    a, b = edges[:-1], edges[1:]
+    starts, ends, shapes = [], [], []
+    for i in range(w):
+        for j in range(i, w + 1):
+            if j == i and i == 0:
+                continue  # a step at t = 0 is no change
+            t0, t1 = float(edges[i]), float(edges[j])  # j == i: a step at a window boundary
+            starts.append(t0)
+            ends.append(t1)
+            shapes.append(ramp_window_mean(a, b, t0, t1))
+    return np.array(shapes), np.array(starts), np.array(ends)
+
+
+def _drift_fit(view: TimeView) -> tuple[float, float, float, float] | None:
+    """``(chi2, beta, t_start, t_end)`` of the best drift shape on the hf residuals."""
+    hf = _hf(view)
+    if hf is None:
+        return None
+    r, sd = hf
+    wgt = 1.0 / sd**2
+    g, starts, ends = _ramp_grid(view)
+    # pred[p, k, w] = log(1 + beta_k g_pw); the offset c is the weighted mean of r - pred
+    pred = np.log1p(BETA_GRID[None, :, None] * g[:, None, :])
+    resid = r[None, None, :] - pred
+    c = (resid * wgt).sum(axis=2) / wgt.sum()
+    chi2 = (((resid - c[:, :, None]) / sd) ** 2).sum(axis=2)
+    p, k = np.unravel_index(int(np.argmin(chi2)), chi2.shape)
+    return float(chi2[p, k]), float(BETA_GRID[k]), float(starts[p]), float(ends[p])
+
+
+def _burst_fit(view: TimeView, raised: NDArray[np.bool_]) -> tuple[float, int, int] | None:
+    """``(chi2, quiet windows, raised windows)`` of a shape raised in the windows ``raised``.
+
+    A burst may cover a window partly, so each raised window keeps its own level; the quiet
+    windows must share one.
+    """
+    hf = _hf(view)
+    if hf is None:
+        return None
+    r, sd = hf
+    quiet = ~raised
+    if not raised.any() or not quiet.any():
+        return None
+    wgt = 1.0 / sd[quiet] ** 2
+    c = float((r[quiet] * wgt).sum() / wgt.sum())
+    chi2 = float((((r[quiet] - c) / sd[quiet]) ** 2).sum())
+    return chi2, int(quiet.sum()), int(raised.sum())
+
+
+def _flat_fit(view: TimeView) -> tuple[float, int, int] | None:
+    """``(chi2, W, 0)`` of one common level on the hf residuals (a stationary noise level)."""
+    hf = _hf(view)
+    if hf is None:
+        return None
+    r, sd = hf
+    wgt = 1.0 / sd**2
+    c = float((r * wgt).sum() / wgt.sum())
+    return float((((r - c) / sd) ** 2).sum()), int(r.size), 0
+
+
+def noise_misfit(effect: str, view: TimeView, per_param: float = 0.0) -> float:
+    """Excess misfit of the noise-level shape of ``effect`` (drift, bursts, spikes); else 0.
+
+    The excess ``max(0, chi^2 - (W - p))`` plus ``per_param`` (the ranking's per-parameter
+    penalty, ``chi2_1`` quantile ``1 - alpha``) for every shape number the tau view does not
+    see: three for the drift (``ratio``, ``t_start``, ``t_end``), one per raised window for the
+    bursts. Spikes explain a changed short-term level only in the windows that hold them: when
+    ``hf`` is significant (``alpha / 8``, the evidence's Bonferroni level) they pay the misfit
+    of the other windows (their times and heights come from the time view, no penalty; with
+    no spike located, of all windows around one level).
+    """
+    w = int(view.t_s.size)
+    if effect == "spikes":
+        alpha = float(stats.chi2.sf(per_param, 1)) if per_param > 0 else 0.05
+        if view.family_p.get("hf", 1.0) >= alpha / 8.0 or "hf" not in view.z:
+            return 0.0
+        held = np.zeros(w, dtype=bool)
+        for t in view.spike_times_s:
+            held[min(int(t // view.window_s), w - 1)] = True
+        # no located spike (a dense, fitted spike process is stationary): one common level
+        spiky = _burst_fit(view, held) if held.any() else _flat_fit(view)
+        if spiky is None:
+            return 0.0
+        return max(0.0, spiky[0] - (spiky[1] - 1))
+    if effect == "white_drift":
+        fit = _drift_fit(view)
+        if fit is None:
+            return 0.0
+        return max(0.0, fit[0] - (w - DRIFT_PARAMS)) + per_param * (DRIFT_PARAMS - 1)
+    if effect == "bursts":
+        burst = _burst_fit(view, view.z["hf"] > view.thresholds["hf"])
+        if burst is None:
+            return 0.0
+        chi2, n_quiet, n_raised = burst
+        return max(0.0, chi2 - (n_quiet - 1)) + per_param * n_raised
+    return 0.0
+
+
+def _window_white_variance(
+    x: NDArray[np.float64], plan: TimePlan, fs: float, other: float
+) -> NDArray[np.float64]:
+    used = x[: plan.n_windows * plan.length].reshape(plan.n_windows, plan.length)
+    d = np.diff(used, axis=1)
+    return np.asarray((np.mean(d * d, axis=1) - other) / (2.0 * fs))
+
+
+def drift_shape(
+    x: NDArray[np.float64], fs: float, view: TimeView, model: Any = None
+) -> DriftShape | None:
+    """The drift/step shape of the record's white-noise level, or None.
+
+    None when the time view flags no window of changed short-term level (``hf``) or when the
+    white-noise variance measured on the record's windows is not positive at both ends of the
+    change.
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        The analysed rate record.
+    fs : float
+        Sampling frequency in Hz.
+    view : TimeView
+        Its time view.
+    model : NoiseModel, optional
+        The simulated sensor; its non-white share of the first differences is removed before
+        the ratio is measured (without it the differences are taken as all white noise).
+    """
+    z = view.z.get("hf")
+    if z is None or not (np.abs(z) > view.thresholds["hf"]).any():
+        return None
+    fit = _drift_fit(view)
+    if fit is None:
+        return None
+    chi2, beta, t_start, t_end = fit
+    if abs(beta) < 1e-12:
+        return None
+    w = int(view.t_s.size)
+    length = round(view.window_s * fs)
+    plan = TimePlan(n_windows=w, length=length, m=max(2, length // 16))
+    other = 0.0
+    if model is not None:
+        dt = 1.0 / fs
+        total = 2.0 * float(np.asarray(model.avar(np.array([dt]), dt))[0])
+        white = sum(2.0 * fs * float(t.N) ** 2 for t in model.terms if t.type == "white")
+        other = max(total - white, 0.0)
+    v = _window_white_variance(x, plan, fs, other)
+    edges = np.arange(w + 1) * view.window_s
+    g = ramp_window_mean(edges[:-1], edges[1:], t_start, t_end)
+    design = np.stack([np.ones(w), g], axis=1)
+    (a, b), *_ = np.linalg.lstsq(design, v, rcond=None)
+    if a <= 0 or a + b <= 0:
+        return None
+    return DriftShape(
+        ratio=float(np.sqrt((a + b) / a)),
+        t_start=t_start,
+        t_end=t_end,
+        chi2=chi2,
+        n_windows=w,
+    )

@@ -1,0 +1,263 @@
+r"""Evidence about the time base: gaps and uneven steps in the time stamps, held samples.
+
+Dropped samples leave no trace in a record of stationary noise (every statistic of the three
+views stays the same), and the library's readers repair or split a time column before any
+analysis. So the diagnosis reports what the time base itself says, next to the three views:
+
+* **time stamps** (a :class:`~allanite.io.Record` read with a time column): every gap
+  (an interval of at least 1.5 nominal periods, :data:`allanite.io.timebase.GAP_FACTOR`)
+  with its time and length, the samples missing in all, how the reader handled them (filled
+  by interpolation, or split and the longest segment analysed), and a time-stamp jitter above
+  :data:`allanite.io.timebase.JITTER_WARN` of the period. Repeated or backward time stamps
+  never get this far: the readers refuse them with the row to repair.
+* **held samples** (any record): a sensor or logger that repeats the previous value when a
+  sample is missing leaves runs of exactly equal consecutive samples. Their number ``n_0`` is
+  compared with what the record's own resolution explains. With ``q`` the smallest non-zero
+  step between consecutive samples and ``n_1``, ``n_2`` the steps of ``q`` and ``2q`` (per
+  sign), a Gaussian density of the steps (log-quadratic) predicts
+  ``e_0 = n_1 (n_1 / n_2)^{1/3}`` zero steps; ``log(n_0 / e_0)`` is tested one-sided with the
+  counts' Poisson variances (``1/n_0 + (16/9)/n_1 + (1/9)/n_2``). Continuous (float) samples
+  have ``n_1 < 5``: then ``e_0 = 1/2`` and the Poisson tail ``P(X >= n_0)`` is the p-value, so
+  a handful of exact repeats already counts. A resolution coarser than the noise
+  (``n_2 < n_1 / 4``) makes repeated values the rule; held samples are then not tested.
+
+* **doubled increments** (angle or increment input without time stamps): a dropped sample
+  makes one rate sample span two periods, one mean rate too high. On a turntable (a mean rate
+  well above the noise) the time view finds these as spikes; when most located spikes lie
+  within 25 % of the mean rate they are reported as dropped samples.
+
+All are :class:`~allanite.diagnosis.verdict.Unexplained` items of view ``time``, evidence
+``time base`` or ``held``; any of them keeps the diagnosis from reading "closed".
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy import stats
+
+from allanite.diagnosis.time_view import MAX_SPIKES
+from allanite.diagnosis.verdict import Unexplained, Verdict
+from allanite.io.record import Record
+from allanite.io.timebase import JITTER_WARN
+
+__all__ = [
+    "doubled_increments_item",
+    "held_samples_item",
+    "time_base_evidence",
+    "time_base_items",
+    "with_time_base",
+]
+
+#: at most this many time segments are listed per item
+MAX_SEGMENTS = 50
+#: steps of one resolution unit (per sign) above which the samples count as quantized
+RESOLVED = 5
+
+
+def _segments_text(segs: list[list[float]], limit: int = 4) -> str:
+    text = ", ".join(f"{a:.4g}-{b:.4g} s" for a, b in segs[:limit])
+    return text + (f" (+{len(segs) - limit} more)" if len(segs) > limit else "")
+
+
+def time_base_items(record: Any) -> list[Unexplained]:
+    """Gaps and jitter of a Record's time column as unexplained items (none without one)."""
+    timing = getattr(record, "timing", None) if isinstance(record, Record) else None
+    if timing is None:
+        return []
+    items: list[Unexplained] = []
+    dt = timing.dt_nominal
+    if timing.gaps:
+        segs: list[list[float]] = []
+        before = 0
+        for index, duration, missing in timing.gaps:
+            start = (index - 1 + before) * dt
+            segs.append([start, start + duration])
+            before += missing
+        total_missing = int(sum(g[2] for g in timing.gaps))
+        total_s = float(sum(g[1] for g in timing.gaps))
+        n_total = record.n_samples + (0 if timing.filled else total_missing)
+        how = (
+            f"filled by interpolation ({timing.filled} samples)"
+            if timing.filled
+            else f"split into {len(record.segments)} segments, the longest analysed"
+        )
+        text = (
+            f"time view: the time stamps have {len(timing.gaps)} gap(s), {total_missing} missing "
+            f"sample(s) ({100.0 * total_missing / max(n_total, 1):.2g} %) at "
+            f"{_segments_text(segs)}; {how}: the samples are not what the sensor measured "
+            "there"
+        )
+        items.append(
+            Unexplained(
+                "time",
+                "time base",
+                {"time_segments_s": segs[:MAX_SEGMENTS], "gaps": len(timing.gaps)},
+                {
+                    "gaps": float(len(timing.gaps)),
+                    "missing_samples": float(total_missing),
+                    "missing_fraction": total_missing / max(n_total, 1),
+                    "gap_seconds": total_s,
+                    "filled_samples": float(timing.filled),
+                },
+                0.0,
+                text,
+            )
+        )
+    if timing.jitter_rms > JITTER_WARN * dt:
+        rel = timing.jitter_rms / dt
+        items.append(
+            Unexplained(
+                "time",
+                "time base",
+                {"time_segments_s": []},
+                {"jitter_rms_relative": rel, "jitter_max_s": timing.jitter_max},
+                0.0,
+                f"time view: the time stamps are uneven: jitter {100 * rel:.2g} % rms of the "
+                f"period (largest {timing.jitter_max:.3g} s); the analysis assumes even sampling",
+            )
+        )
+    return items
+
+
+def _held_runs(held: NDArray[np.bool_], fs: float, gap_s: float) -> list[list[float]]:
+    """Times of the held samples, merged when closer than ``gap_s``."""
+    idx = np.flatnonzero(held) + 1  # sample k repeats sample k - 1
+    out: list[list[float]] = []
+    for k in idx:
+        t = float(k) / fs
+        if out and t - out[-1][1] <= gap_s:
+            out[-1][1] = t + 1.0 / fs
+        else:
+            out.append([t, t + 1.0 / fs])
+    return out
+
+
+def held_samples_item(samples: Any, fs: float, level: float) -> Unexplained | None:
+    """Held (repeated) samples as an unexplained item, or None when the record explains them.
+
+    Parameters
+    ----------
+    samples : array_like
+        The record as given (rate, increments or angle), one channel.
+    fs : float
+        Sampling frequency in Hz.
+    level : float
+        Significance level of the test.
+    """
+    x = np.asarray(samples, dtype=np.float64).ravel()
+    if x.size < 3:
+        return None
+    d = np.diff(x)
+    held = d == 0.0
+    n0 = int(held.sum())
+    if n0 == 0:
+        return None
+    step = np.abs(d[~held])
+    if step.size == 0:
+        return None
+    q = float(step.min())
+    k = np.rint(step / q)
+    n1 = float(np.count_nonzero(k == 1)) / 2.0  # steps of one resolution unit, per sign
+    n2 = float(np.count_nonzero(k == 2)) / 2.0
+    if n1 < RESOLVED:  # continuous samples: an exact repeat is a held sample
+        expected = 0.5
+        p = float(stats.poisson.sf(n0 - 1, expected))
+    elif n2 < n1 / 4.0:
+        return None  # the resolution is coarser than the noise: repeats are the rule
+    else:
+        # log-quadratic (Gaussian) density of the steps through k = 1, 2, extrapolated to 0
+        expected = n1 * (n1 / n2) ** (1.0 / 3.0)
+        sd = np.sqrt(1.0 / n0 + (16.0 / 9.0) / n1 + (1.0 / 9.0) / n2)
+        p = float(stats.norm.sf(np.log(n0 / expected) / sd))
+    if p >= level:
+        return None
+    segs = _held_runs(held, fs, gap_s=0.01 * x.size / fs)
+    text = (
+        f"time view: {n0} held samples (a value repeated exactly, {100.0 * n0 / d.size:.2g} % of "
+        f"the samples; {expected:.3g} expected from the record's resolution) at "
+        f"{_segments_text(segs)}: a logger or sensor that repeats the last value when a sample "
+        f"is missing, p = {p:.2g}"
+    )
+    return Unexplained(
+        "time",
+        "held",
+        {"time_segments_s": segs[:MAX_SEGMENTS]},
+        {"count": float(n0), "fraction": n0 / d.size, "expected": expected},
+        p,
+        text,
+    )
+
+
+def doubled_increments_item(input_kind: str, mean_rate: float, view: Any) -> Unexplained | None:
+    """Spikes of the size of the mean rate in angle or increment input: dropped samples.
+
+    A dropped angle sample makes one rate sample span two periods: it reads ``mean rate +
+    noise`` too high. When most spikes the time view located (``view.spike_amplitudes``, above
+    the running median) lie within 25 % of the record's mean rate, they are reported as
+    dropped samples; None otherwise (rate input, no spikes, a mean rate of zero).
+    """
+    heights = np.asarray(getattr(view, "spike_amplitudes", []), dtype=np.float64)
+    if input_kind == "rate" or heights.size == 0 or mean_rate == 0.0:
+        return None
+    near = np.abs(heights - mean_rate) < 0.25 * abs(mean_rate)
+    if near.mean() < 0.5:
+        return None
+    times = np.asarray(view.spike_times_s, dtype=np.float64)[near]
+    segs = [[float(t), float(t)] for t in times[:MAX_SEGMENTS]]
+    more = " (at least)" if heights.size >= MAX_SPIKES else ""
+    text = (
+        f"time view: {int(near.sum())}{more} samples one mean rate too high "
+        f"({float(np.median(heights[near])):.3g} vs a mean rate of {mean_rate:.3g}) at "
+        f"{', '.join(f'{t:.4g}' for t in times[:4])} s"
+        f"{f' (+{times.size - 4} more)' if times.size > 4 else ''}: dropped {input_kind} samples "
+        "(each a doubled increment)"
+    )
+    return Unexplained(
+        "time",
+        "time base",
+        {"time_segments_s": segs},
+        {"doubled_increments": float(near.sum()), "mean_rate": mean_rate},
+        0.0,
+        text,
+    )
+
+
+def time_base_evidence(
+    record: Any,
+    samples: Any,
+    fs: float,
+    level: float,
+    *,
+    input_kind: str = "rate",
+    mean_rate: float = 0.0,
+    view: Any = None,
+) -> list[Unexplained]:
+    """Every time-base item: time stamps, held samples, doubled increments.
+
+    Time stamps of ``record`` (a Record), held samples of ``samples`` (as given), doubled
+    increments among the spikes of the time ``view`` (angle or increment input).
+    """
+    items = time_base_items(record)
+    for item in (
+        held_samples_item(samples, fs, level),
+        doubled_increments_item(input_kind, mean_rate, view),
+    ):
+        if item is not None:
+            items.append(item)
+    return items
+
+
+def with_time_base(head: Verdict, items: list[Unexplained]) -> Verdict:
+    """The verdict with the time-base items added: not closed when there is any."""
+    if not items:
+        return head
+    text = "; ".join(i.text for i in items)
+    if head.closed:
+        headline = f"{head.headline}; but not everything is explained: {text}"
+    else:
+        headline = f"{head.headline}; {text}"
+    return replace(head, closed=False, unexplained=[*head.unexplained, *items], headline=headline)

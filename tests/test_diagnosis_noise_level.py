@@ -1,0 +1,116 @@
+"""A white-noise level that changes over the record: the Term and the ``white_drift`` candidate."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from allanite.diagnosis import diagnose
+from allanite.diagnosis.noise_level import noise_misfit
+from allanite.model import NoiseModel
+from allanite.terms import RateRandomWalk, White, WhiteDrift, term_from_dict
+from allanite.terms.white_drift import ramp_fraction, ramp_window_mean
+
+FS = 100.0
+N_SAMPLES = 2**14
+DURATION = N_SAMPLES / FS
+UNITS = {"rate": "deg/s", "time": "s"}
+MODEL = NoiseModel((White(N=0.05), RateRandomWalk(K=1e-4)), UNITS)
+
+
+def test_ramp_window_mean_is_the_mean_of_the_ramp():
+    t = np.linspace(0.0, 100.0, 400_001)
+    for t0, t1 in ((20.0, 60.0), (35.0, 35.0), (0.0, 100.0)):
+        g = ramp_fraction(t, t0, t1)
+        for a, b in ((0.0, 100.0), (10.0, 30.0), (30.0, 40.0), (50.0, 90.0)):
+            inside = (t >= a) & (t <= b)
+            # trapezoid mean on a grid of 2.5e-4 s: the step is resolved to one grid cell
+            np.testing.assert_allclose(
+                ramp_window_mean(a, b, t0, t1), g[inside].mean(), atol=2.5e-4 / (b - a) + 1e-6
+            )
+
+
+@pytest.mark.parametrize(("t0", "t1"), [(0.0, DURATION), (0.3 * DURATION, 0.3 * DURATION)])
+def test_white_drift_profile_has_mean_one_and_the_right_ratio(t0, t1):
+    term = WhiteDrift(N=0.05, ratio=2.0, t_start=t0, t_end=t1, duration=DURATION)
+    t = (np.arange(N_SAMPLES) + 0.5) / FS
+    v = term.variance_scale(t)
+    assert abs(v.mean() - 1.0) < 1e-3  # sampled mean of the exact record mean 1
+    ends = term.variance_scale([0.0, DURATION])
+    np.testing.assert_allclose(ends[1] / ends[0], 4.0)  # variance ratio = ratio^2
+    np.testing.assert_allclose(term.avar([0.01, 1.0], 0.01), 0.05**2 / np.array([0.01, 1.0]))
+    assert term_from_dict(term.to_dict()) == term
+
+
+def test_white_drift_simulation_follows_its_profile():
+    term = WhiteDrift(N=0.05, ratio=2.0, t_start=0.0, t_end=DURATION, duration=DURATION)
+    x = np.asarray(NoiseModel((term,), UNITS).simulate(N_SAMPLES, fs=FS, seed=3)).ravel()
+    blocks = x.reshape(16, -1)
+    length = blocks.shape[1]
+    t = (np.arange(N_SAMPLES) / FS).reshape(16, -1)
+    expected = (term.N**2 * FS) * term.variance_scale(t).mean(axis=1)
+    z = (blocks.var(axis=1) / expected - 1.0) / np.sqrt(2.0 / length)  # chi-square, sd 2/L
+    assert np.abs(z).max() < 4.0
+
+
+def test_white_drift_refuses_bad_parameters():
+    with pytest.raises(ValueError, match="ratio"):
+        WhiteDrift(N=0.05, ratio=0.0, t_start=0.0, t_end=1.0, duration=10.0)
+    with pytest.raises(ValueError, match="t_end"):
+        WhiteDrift(N=0.05, ratio=2.0, t_start=5.0, t_end=1.0, duration=10.0)
+
+
+def _record(term: WhiteDrift, seed: int) -> np.ndarray:
+    real = NoiseModel((term, RateRandomWalk(K=1e-4)), UNITS)
+    return np.asarray(real.simulate(N_SAMPLES, fs=FS, seed=seed)).ravel()
+
+
+@pytest.fixture(scope="module")
+def drift_diagnosis():
+    term = WhiteDrift(N=0.05, ratio=2.0, t_start=0.0, t_end=DURATION, duration=DURATION)
+    return diagnose(_record(term, 11), MODEL, fs=FS, units="deg/s", n_mc=30, seed=1)
+
+
+def test_linear_noise_drift_is_named_with_its_ratio(drift_diagnosis):
+    d = drift_diagnosis
+    assert d.best is not None
+    assert d.best.effect == "white_drift"
+    assert "white-noise level changes over the record" in d.headline
+    assert d.headline.startswith("the real sensor's white-noise level changes")
+    p = d.best.params
+    # the ratio comes from the 32 window variances (L = 512 samples each): the first
+    # differences' mean square has relative sd sqrt(3/L); the two ends of the line are each
+    # about a quarter of the windows -> sd(ratio)/ratio ~ 0.5 sqrt(3/L) sqrt(4/W); 4 sd
+    tol = 4 * 0.5 * np.sqrt(3.0 / 512) * np.sqrt(4.0 / 32) * 2.0
+    assert abs(p["ratio"] - 2.0) < tol
+    assert p["t_start"] <= 0.1 * DURATION
+    assert p["t_end"] >= 0.9 * DURATION
+    # N: the rms level of the record, within the tau view's Fisher uncertainty (4 sd)
+    assert abs(p["N"] - 0.05) < 4 * d.best.params_sigma["N"] + 1e-12
+    assert d.explanation is not None
+    terms = [t["type"] for t in d.explanation.terms]
+    assert "white_drift" in terms
+    assert "white" not in terms
+
+
+def test_drift_beats_bursts_on_a_drift(drift_diagnosis):
+    d = drift_diagnosis
+    per_param = 3.841458820694124
+    drift = noise_misfit("white_drift", d.time, per_param)
+    assert drift < noise_misfit("bursts", d.time, per_param)
+    assert noise_misfit("ramp", d.time, per_param) == 0.0
+
+
+def test_noise_step_is_named_at_its_time():
+    t_step = 0.4 * DURATION
+    term = WhiteDrift(N=0.05, ratio=1.8, t_start=t_step, t_end=t_step, duration=DURATION)
+    d = diagnose(_record(term, 5), MODEL, fs=FS, units="deg/s", n_mc=30, seed=2)
+    assert d.best is not None
+    assert d.best.effect == "white_drift"
+    window = d.time.window_s
+    p = d.best.params
+    # the change's ends lie on window boundaries: the reported interval holds the step and
+    # spans at most the two windows around it
+    assert p["t_start"] <= t_step <= p["t_end"]
+    assert p["t_end"] - p["t_start"] <= 2 * window + 1e-9
+    assert p["ratio"] > 1.5
