@@ -150,3 +150,159 @@ def test_negative_channel_indices_are_refused(
     assert main(["analyze", "--example", "--channels", "-1"]) == 2
     assert "negative indices are not accepted" in _one_line_error(capsys, "analyze")
     assert record.select([2]).channels == (record.channels[2],)
+
+
+def test_format_table_prints_the_units_the_cli_prints(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Regression: format_table printed N in deg/sqrt(s) while allanite fit printed deg/sqrt(h)."""
+    import allanite
+    from allanite.report.coefficients import coefficient_table
+
+    x = np.random.default_rng(21).standard_normal(40_000) * 0.01 * np.sqrt(FS)  # N 0.6 deg/√h
+    fitted = allanite.fit(allanite.avar(x, fs=FS, units="deg/s"))
+    text = fitted.format_table()
+    rows = {r.symbol: r for r in coefficient_table(fitted, "deg/s")}
+    assert rows["N"].unit == "deg/sqrt(h)"
+    line = next(ln for ln in text.splitlines() if ln.startswith("N "))
+    assert line.endswith("  deg/sqrt(h)")
+    assert f"{rows['N'].value:>12.4g}" in line  # the CLI's value, the CLI's unit
+    assert 0.55 < rows["N"].value < 0.65
+    assert "deg/sqrt(s)" not in text
+    # the model's own units stay available
+    assert fitted.format_table(units=None).splitlines()[1].endswith("  deg/sqrt(s)")
+    path = tmp_path / "x.npy"
+    np.save(path, x)
+    assert main(["fit", str(path), "--fs", "100", "--units", "deg/s"]) == 0
+    printed = capsys.readouterr().out
+    assert f"N = {rows['N'].value:.4g} deg/sqrt(h)" in printed
+
+
+@pytest.mark.parametrize(
+    ("rate", "per_second", "unit"), [("deg/h", "deg/s", "deg"), ("g", "m/s^2", "m/s")]
+)
+def test_simulated_increments_are_written_in_an_angle_unit(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], rate: str, per_second: str, unit: str
+) -> None:
+    """Regression: simulate --output increment labelled its CSV column deg/s*s."""
+    model = NoiseModel([White(3.0)], units={"rate": rate, "time": "s"})
+    path = tmp_path / "m.json"
+    model.save(path)
+    for output in ("increment", "angle"):
+        out = tmp_path / f"{output}.csv"
+        argv = ["simulate", str(path), "--fs", "100", "-n", "500", "--seed", "4"]
+        assert main([*argv, "--output", output, "-o", str(out)]) == 0
+        assert f"of {output} [{unit}] at 100 Hz" in capsys.readouterr().out
+        header = out.read_text().splitlines()[0]
+        assert header == f"{output}_0[{unit}]"
+        # the values are in that unit: the model converted to per second, then integrated
+        expect = model.in_units(per_second).simulate(500, fs=FS, output=output, seed=4)
+        np.testing.assert_allclose(np.loadtxt(out, skiprows=1), expect.ravel(), rtol=1e-12)
+
+
+def test_a_config_without_the_sensor_names_the_other_one(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Regression: "holds no gyro noise model" did not mention --sim-sensor accel."""
+    from allanite.formats import ImuConfig, read_config, write_config
+
+    accel = NoiseModel([White(0.002)], units={"rate": "m/s^2", "time": "s"})
+    config = tmp_path / "imu.sdf"
+    write_config(ImuConfig(accel=accel), config, format="gz-sdf", rate=FS)
+    with pytest.raises(ValueError, match=r"holds no gyro noise model; it holds an accel model: "):
+        read_config(config, format="gz-sdf").model("gyro")
+    with pytest.raises(ValueError, match=r"holds no gyro noise model$"):
+        ImuConfig().model("gyro")  # nothing else to suggest
+    real = tmp_path / "real.npy"
+    np.save(real, RNG.standard_normal(4000) * 0.01)
+    argv = ["diagnose", str(real), "--fs", "100", "--units", "rad/s", "--sim-model", str(config)]
+    assert main(argv) == 2
+    assert "choose it with --sim-sensor accel" in _one_line_error(capsys, "diagnose")
+
+
+def test_a_filter_bandwidth_above_nyquist_is_stated(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Regression: the diagnosis printed a low-pass bandwidth above fs/2 without a word."""
+    from allanite.terms.transients import LowPassWhite
+
+    units = {"rate": "deg/s", "time": "s"}
+    sim = tmp_path / "sim.json"
+    NoiseModel([White(0.01)], units=units).save(sim)
+    for bandwidth in (80.0, 20.0):
+        real = NoiseModel([LowPassWhite(N=0.01, bandwidth=bandwidth)], units=units)
+        x = real.simulate(2**16, fs=FS, seed=3)
+        d = diagnose(x.ravel(), NoiseModel.load(sim), fs=FS, units="deg/s", n_mc=40)
+        assert d.best is not None
+        assert d.best.effect == "lowpass"
+        above = d.best.params["bandwidth"] > FS / 2
+        assert above == (bandwidth > FS / 2)
+        note = "above the Nyquist frequency 50 Hz: it acts before sampling"
+        assert (note in d.headline) == above
+        path = tmp_path / "real.npy"
+        np.save(path, x)
+        argv = ["diagnose", str(path), "--fs", "100", "--units", "deg/s", "--n-mc", "40"]
+        assert main([*argv, "--sim-model", str(sim)]) == 0
+        attribution = capsys.readouterr().out.split("attribution (best first):")[1]
+        assert (note in attribution.splitlines()[1]) == above
+
+
+def _time_view_headline(x: np.ndarray) -> str:
+    model = NoiseModel([White(0.01)], units={"rate": "deg/s", "time": "s"})
+    return diagnose(x, model, fs=FS, units="deg/s", n_mc=40).headline
+
+
+def test_negligible_time_view_deviations_are_not_dramatized() -> None:
+    """Regression: a kurtosis of 0.05 on a long record read as "heavy-tailed" and "bursts"."""
+    rng = np.random.default_rng(5)
+    n, sd = 2**21, 0.01 * np.sqrt(FS)
+    df = 60  # Student t: excess kurtosis 6 / (df - 4) = 0.11, estimated 0.049 here
+    slight = rng.standard_t(df, n) / np.sqrt(df / (df - 2)) * sd
+    text = _time_view_headline(slight)
+    assert text.startswith("a small gap, significant but negligible in size")
+    assert "slightly heavier-tailed than simulated (excess kurtosis 0.0491, simulated" in text
+    assert "heavy-tailed sample-to-sample" not in text
+    # a 3 % modulation of the noise level: its size, no "bursts", no zero-size effect named
+    level = rng.standard_normal(n) * sd * (1 + 0.03 * np.sin(2 * np.pi * np.arange(n) / n * 7))
+    text = _time_view_headline(level)
+    assert "the short-tau noise level varies slightly over the record (rms +3" in text
+    assert "bursts" not in text
+    assert "is missing" not in text
+    # a large deviation keeps the strong wording, with its size
+    heavy = rng.standard_t(6, 2**17) / np.sqrt(6 / 4) * sd
+    text = _time_view_headline(heavy)
+    assert "heavy-tailed sample-to-sample changes (excess kurtosis) (real 1.39 vs simulated" in text
+    assert "negligible" not in text
+
+
+def test_positional_fs_names_the_fix() -> None:
+    """Regression: simulate(model, n, fs) with fs now keyword-only was a bare TypeError."""
+    import allanite
+    from allanite.simulation import simulate, simulate_chunks, write_record
+
+    model = NoiseModel([White(0.001)], units={"rate": "deg/s", "time": "s"})
+    x = RNG.standard_normal(1000)
+    with pytest.raises(TypeError, match=r"^fs is keyword-only: simulate\(model, n, fs=\.\.\.\);"):
+        simulate(model, 100, 100.0)
+    with pytest.raises(
+        TypeError, match=r"^fs is keyword-only: NoiseModel.simulate\(n, fs=\.\.\.\)"
+    ):
+        model.simulate(100, 100.0)
+    with pytest.raises(TypeError, match=r"^fs is keyword-only: avar\(x, fs=\.\.\.\); avar\(\) "):
+        allanite.avar(x, 100.0)
+    calls = [
+        lambda: allanite.oadev(x, 100.0),
+        lambda: allanite.mdev(x, 100.0),
+        lambda: allanite.fit(x, "auto", 100.0),
+        lambda: allanite.diagnose(x, model, 100.0),
+        lambda: allanite.avar_large(x, 100.0),
+        lambda: allanite.batch([x], 100.0),
+        lambda: list(simulate_chunks(model, 10, 100.0)),
+        lambda: write_record("never.npy", model, 10, 100.0),
+    ]
+    for call in calls:
+        with pytest.raises(TypeError, match=r"^fs is keyword-only: \w+\(.*fs=\.\.\.\)"):
+            call()
+    np.testing.assert_array_equal(
+        simulate(model, 10, fs=100.0, seed=1), model.simulate(10, fs=100.0, seed=1)
+    )

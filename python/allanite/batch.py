@@ -39,6 +39,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from allanite._deprecation import keyword_only_fs
 from allanite.confidence import DEFAULT_LEVEL
 from allanite.datasheet import Check, Datasheet, Limit, Measured, check_limits, verdict
 from allanite.errors import InputError
@@ -334,6 +335,7 @@ def _name(item: Any, index: int) -> tuple[str, Any]:
     return f"record{index}", item
 
 
+@keyword_only_fs
 def batch(
     records: Iterable[Any],
     *,

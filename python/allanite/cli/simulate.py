@@ -33,7 +33,8 @@ def register(subparsers: Any) -> None:
         "--output",
         choices=("rate", "angle", "increment"),
         default="rate",
-        help="rate (model units, default), angle increments or accumulated angle",
+        help="rate (model units, default), angle increments or accumulated angle (in the "
+        "model's angle unit: deg for deg/s and deg/h, m/s for an accelerometer)",
     )
     parser.add_argument("--seed", type=int, default=None, help="random seed (non-negative)")
     parser.add_argument(
@@ -94,6 +95,7 @@ def run(args: argparse.Namespace) -> int:
         output_size,
         write_record,
     )
+    from allanite.units import integrated_unit
 
     format_of(args.out)  # fail on a bad suffix before any work
     model = NoiseModel.load(args.model)
@@ -101,8 +103,11 @@ def run(args: argparse.Namespace) -> int:
     if args.n_channels < 1:
         raise ValueError(f"--n-channels must be at least 1, got {args.n_channels}")
     check_free_space(args.out, output_size(args.out, n, args.n_channels))
-    unit = model.units["rate"]
-    what = unit if args.output == "rate" else f"{unit}*s"
+    what = model.units["rate"]
+    if args.output != "rate":  # angles in an angle unit (deg), not deg/s*s or deg/h*s
+        per_second, what = integrated_unit(what)
+        if per_second != model.units["rate"]:
+            model = model.in_units(per_second)
     big = n * args.n_channels >= 10_000_000
     with progress_bars(None if big and not args.quiet else False) as update:
         write_record(

@@ -73,8 +73,15 @@ class ImuConfig:
             raise ValueError(f"sensor must be 'gyro' or 'accel', got {sensor!r}")
         found: NoiseModel | None = getattr(self, sensor)
         if found is None:
+            other = "accel" if sensor == "gyro" else "gyro"
+            hint = (
+                f"; it holds {'an' if other == 'accel' else 'a'} {other} model: choose it with "
+                f"--sim-sensor {other} (library: config.model({other!r}))"
+                if getattr(self, other) is not None
+                else ""
+            )
             raise ValueError(
-                f"the {self.source_format or 'given'} config holds no {sensor} noise model"
+                f"the {self.source_format or 'given'} config holds no {sensor} noise model{hint}"
             )
         return found
 
