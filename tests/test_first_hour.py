@@ -306,3 +306,112 @@ def test_positional_fs_names_the_fix() -> None:
     np.testing.assert_array_equal(
         simulate(model, 10, fs=100.0, seed=1), model.simulate(10, fs=100.0, seed=1)
     )
+
+
+def test_a_six_axis_robot_log_is_two_sensors_without_units(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Regression: a ROS bag's gyro and accelerometer (units set by sensor_msgs/Imu) were
+    fitted in "record units" unless --units repeated what the message defines."""
+    pytest.importorskip("rosbags")
+    from test_io_robot_logs import write_bag
+
+    n, rate = 20_000, 200.0
+    data = np.random.default_rng(8).standard_normal((n, 6)) * 0.01
+    data[:, 5] += 9.81
+    write_bag(tmp_path / "imu.bag", "ros1", data, np.arange(n) / rate, topics=("/imu0",))
+    bag = str(tmp_path / "imu.bag")
+    assert main(["fit", bag]) == 0
+    out = capsys.readouterr().out
+    assert "channel gyro_x (gyro, rad/s):" in out
+    assert "channel accel_z (accelerometer, m/s^2):" in out
+    assert "record's own units" not in out
+    # white noise of 0.01 per sample at 200 Hz: N = 0.01 / sqrt(200) rad/sqrt(s)
+    expect = 0.01 / np.sqrt(rate) * 60.0  # in rad/sqrt(h)
+    line = next(ln for ln in out.splitlines() if "N = " in ln and "rad/sqrt(h)" in ln)
+    value = float(line.split("N = ")[1].split()[0])
+    assert abs(value / expect - 1) < 0.03  # 3 % = 7 standard errors of N at 20000 samples
+    # --units still wins, and analyze (one sensor) says how to pick one
+    assert main(["fit", bag, "--channels", "gyro_x", "--units", "deg/s"]) == 0
+    assert "channel gyro_x (gyro, deg/s):" in capsys.readouterr().out
+    assert main(["analyze", bag, "--summary"]) == 0
+    err = capsys.readouterr().err
+    assert "holds channels in rad/s and m/s^2" in err
+    assert "--channels gyro_x,gyro_y,gyro_z (rad/s); --channels accel_x,accel_y,accel_z" in err
+
+
+def test_write_corrected_folds_in_the_joint_explanation() -> None:
+    """Regression: the headline named three effects, the corrected config held only the first."""
+    from types import SimpleNamespace
+
+    from allanite.formats import kalibr, px4_plugin
+    from allanite.formats.corrected import corrected_model
+    from allanite.terms import RateRandomWalk
+
+    units = {"rate": "rad/s", "time": "s"}
+    model = NoiseModel([White(2e-4), RateRandomWalk(3e-5)], units=units)
+
+    def effect(name: str, term: dict[str, object], params: dict[str, float]) -> SimpleNamespace:
+        return SimpleNamespace(
+            effect=name, term=term, params=params, gap_before=100.0, gap_after=1.0, shrinkage=0.9
+        )
+
+    white = effect("rescale:white", {"type": "white", "N": 1e-4}, {"scale": 0.5})
+    rrw = effect("rescale:rrw", {"type": "rrw", "K": 5e-6}, {"scale": 0.17})
+    lowpass = effect("lowpass", {"type": "lowpass_white", "N": 1e-4, "bandwidth": 20.0}, {})
+    joint = SimpleNamespace(effects=[white, rrw], gap_before=100.0, gap_after=0.5)
+    diagnosis = SimpleNamespace(significant=True, attribution=[white, rrw], explanation=joint)
+    out, what = corrected_model(model, diagnosis, kalibr.HOLDS)
+    assert [(t.type, t.values()) for t in out.terms] == [
+        ("white", {"N": 1e-4}),
+        ("rrw", {"K": 5e-6}),
+    ]
+    assert what.startswith("folded in the joint explanation: rescale:white (scale=0.5); ")
+    assert what.endswith("gap 100 -> 0.5 (shrinkage 100 %)")
+    # the longest prefix the format holds; what follows an unheld effect is left out
+    joint = SimpleNamespace(effects=[white, lowpass, rrw], gap_before=100.0, gap_after=0.5)
+    diagnosis = SimpleNamespace(significant=True, attribution=[white], explanation=joint)
+    out, what = corrected_model(model, diagnosis, px4_plugin.HOLDS)
+    assert [(t.type, t.values()) for t in out.terms] == [
+        ("white", {"N": 1e-4}),
+        ("rrw", {"K": 3e-5}),
+    ]
+    assert "left out lowpass, rescale:rrw of the joint explanation" in what
+    # a first effect the format cannot hold: the best single effect it holds, as before
+    joint = SimpleNamespace(effects=[lowpass, rrw], gap_before=100.0, gap_after=0.5)
+    diagnosis = SimpleNamespace(significant=True, attribution=[lowpass, rrw], explanation=joint)
+    out, what = corrected_model(model, diagnosis, px4_plugin.HOLDS)
+    assert what.startswith("folded in rescale:rrw (scale=0.17); gap 100 -> 1 (shrinkage 90 %)")
+    assert "skipped lowpass" in what
+
+
+@pytest.mark.parametrize(("fmt", "name"), [("kalibr", "imu.yaml"), ("px4-plugin", "p.sdf")])
+def test_a_config_written_into_a_template_states_its_projections(
+    tmp_path: Path, fmt: str, name: str
+) -> None:
+    """Regression: with a template (--write-corrected) the projected terms were not in the file."""
+    import xml.etree.ElementTree as ET
+
+    from allanite.formats import ImuConfig, read_config, write_config
+    from allanite.terms import Flicker
+
+    gyro = NoiseModel([White(1e-4), Flicker(3e-5)], units={"rate": "rad/s", "time": "s"})
+    first = tmp_path / name
+    start = ImuConfig(
+        gyro=NoiseModel([White(2e-4)], units=gyro.units),
+        accel=NoiseModel([White(2e-3)], units={"rate": "m/s^2", "time": "s"}),
+    )
+    write_config(start, first, format=fmt, rate=FS)
+    paths = [first]
+    for k in range(2):  # twice: the notes of the earlier write are replaced, not stacked
+        paths.append(tmp_path / f"{k}{name}")
+        config = read_config(paths[-2], format=fmt, rate=FS).with_model("gyro", gyro)
+        written = write_config(config, paths[-1], format=fmt, rate=FS, template=paths[-2])
+        assert written.projections
+    text = paths[-1].read_text()
+    assert text.count("projected: gyro: flicker (B=3e-05) -> ") == 1
+    assert "largest ADEV error" in text
+    if fmt == "px4-plugin":
+        ET.fromstring(text.split("\n", 1)[1] if text.startswith("<?xml") else text)
+    (white,) = read_config(paths[-1], format=fmt, rate=FS).model("gyro").terms_of_type("white")
+    assert pytest.approx(1e-4) == white.N
