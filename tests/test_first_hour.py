@@ -415,3 +415,45 @@ def test_a_config_written_into_a_template_states_its_projections(
         ET.fromstring(text.split("\n", 1)[1] if text.startswith("<?xml") else text)
     (white,) = read_config(paths[-1], format=fmt, rate=FS).model("gyro").terms_of_type("white")
     assert pytest.approx(1e-4) == white.N
+
+
+def test_batch_prints_the_units_fit_prints(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Regression: batch printed N in deg/h*sqrt(s), "PASS" without limits, the path twice."""
+    x = np.random.default_rng(3).standard_normal(60_000) * 0.18 * np.sqrt(FS)  # deg/h
+    path = tmp_path / "dut.npy"
+    np.save(path, x)
+    assert main(["fit", str(path), "--fs", "100", "--units", "deg/h"]) == 0
+    fitted = capsys.readouterr().out
+    n_fit = fitted.split("N = ")[1].split(" deg/sqrt(h)")[0]
+    assert main(["batch", str(path), "--fs", "100", "--units", "deg/h"]) == 0
+    out = capsys.readouterr().out
+    header, row = (line.split() for line in out.splitlines()[:2])
+    assert row[header.index("N")] == n_fit  # as fit prints it: 0.003 deg/sqrt(h)
+    assert row[-1] == "OK"
+    assert "units: Q in deg, N in deg/sqrt(h), B in deg/h, K in deg/h/sqrt(h)" in out
+    assert main(["batch", str(path)]) == 1
+    out = capsys.readouterr().out
+    assert (
+        f"error: {path}: the sampling frequency is unknown; give it with fs= (CLI: --fs HZ)" in out
+    )
+    assert f"{path}: {path}" not in out
+
+
+def test_a_time_column_left_out_is_named(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Regression: a CSV "t,gz" without --time-column failed without naming t, and with --fs
+    analysed t as a gyro channel, warning only "angle given as rate?"."""
+    path = tmp_path / "nav.csv"
+    t = np.arange(3000) / FS
+    np.savetxt(path, np.column_stack([t, RNG.standard_normal(3000)]), delimiter=",",
+               header="t,gz", comments="")  # fmt: skip
+    assert main(["analyze", str(path)]) == 2
+    assert "column 't' looks like the time: --time-column t" in _one_line_error(capsys, "analyze")
+    assert main(["analyze", str(path), "--fs", "100", "--summary"]) == 0
+    assert "warning: channel t is named like time stamps and always increases: if it is the " \
+        "time, give --time-column t" in capsys.readouterr().out  # fmt: skip
+    assert main(["analyze", str(path), "--time-column", "t", "--summary"]) == 0
+    assert "named like time stamps" not in capsys.readouterr().out

@@ -168,10 +168,9 @@ def _load(task: _Task) -> tuple[NDArray[Any], float, str, str | None, tuple[str,
             options.setdefault("fs", task.fs)
         source = read_record(source, **options)
     if isinstance(source, Record):
-        if source.fs is None:
-            raise ValueError(f"{task.name}: sampling frequency unknown; pass fs=")
+        fs = source.require_fs()  # names the record and how to give fs
         names = tuple(source.channels) or tuple(str(i) for i in range(source.samples.shape[-1]))
-        return source.samples, float(source.fs), source.input, source.units, names
+        return source.samples, fs, source.input, source.units, names
     if task.fs is None:
         raise ValueError(f"{task.name}: arrays need fs= (sampling frequency in Hz)")
     arr = np.asarray(source)

@@ -21,7 +21,7 @@ from numpy.typing import NDArray
 from allanite.errors import InputError, choose_one
 from allanite.extras import require
 from allanite.io.options import Column, ReadOptions
-from allanite.io.record import Record
+from allanite.io.record import Record, time_like
 from allanite.io.text import read_text_table
 from allanite.io.timebase import resolve_time
 
@@ -274,6 +274,7 @@ def make_record(
             channels=channels,
             source=source,
             scale=scale,
+            warnings=_time_channels(channels, samples) if fs is not None else (),
         )
     if not np.isfinite(time_scale) or time_scale <= 0:
         raise ValueError(f"time_scale must be a positive number of seconds, got {time_scale!r}")
@@ -293,6 +294,19 @@ def make_record(
         timing=base.timing,
         scale=scale,
     )
+
+
+def _time_channels(channels: tuple[str, ...], samples: NDArray[Any]) -> tuple[str, ...]:
+    """Warnings for channels that are named like time stamps and increase: a missed time column."""
+    out = []
+    for c, name in enumerate(channels):
+        if time_like(name) and bool(np.all(np.diff(samples[:, c]) > 0)):
+            out.append(
+                f"channel {name} is named like time stamps and always increases: if it is the "
+                f"time, give --time-column {name} (time_column={name!r}); it is analysed as a "
+                "sensor channel"
+            )
+    return tuple(out)
 
 
 # --- per-format loaders: return (table, names, where) ----------------------------------------
