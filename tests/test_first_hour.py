@@ -457,3 +457,22 @@ def test_a_time_column_left_out_is_named(
         "time, give --time-column t" in capsys.readouterr().out  # fmt: skip
     assert main(["analyze", str(path), "--time-column", "t", "--summary"]) == 0
     assert "named like time stamps" not in capsys.readouterr().out
+
+
+def test_a_random_walk_projected_onto_gazebo_stays_a_random_walk(tmp_path: Path) -> None:
+    """Regression: Kalibr -> gz SDF wrote dynamic_bias_correlation_time 2e17 s, where Gazebo's
+    phi = exp(-dt/tau) is 1.0 in double precision: the written bias never moved."""
+    import math
+
+    from allanite.formats import read_config, write_config
+
+    src = tmp_path / "imu.yaml"
+    src.write_text("gyroscope_noise_density: 1.87e-4\ngyroscope_random_walk: 2.66e-5\n"
+                   "update_rate: 200.0\n")  # fmt: skip
+    written = write_config(read_config(src), tmp_path / "out.sdf", format="gz-sdf")
+    (gm,) = read_config(tmp_path / "out.sdf").model("gyro").terms_of_type("markov")
+    assert gm.tau_c <= 1000.0 * 3600.0  # the default tau range ends at 3600 s
+    phi = math.exp(-(1 / 200.0) / gm.tau_c)
+    driving = gm.sigma * math.sqrt(1.0 - phi * phi)  # Gazebo's per-step bias increment
+    assert driving == pytest.approx(2.66e-5 * math.sqrt(1 / 200.0), rel=1e-4)
+    assert "largest ADEV error 0.0 %" in written.projections[0]
