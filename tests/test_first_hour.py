@@ -476,3 +476,29 @@ def test_a_random_walk_projected_onto_gazebo_stays_a_random_walk(tmp_path: Path)
     driving = gm.sigma * math.sqrt(1.0 - phi * phi)  # Gazebo's per-step bias increment
     assert driving == pytest.approx(2.66e-5 * math.sqrt(1 / 200.0), rel=1e-4)
     assert "largest ADEV error 0.0 %" in written.projections[0]
+
+
+def test_units_a_header_states_are_read(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Regression: a CSV allanite simulate wrote (``angle_0[deg]``) read back without a unit."""
+    model = NoiseModel([White(0.005)], units={"rate": "deg/s", "time": "s"})
+    model.save(tmp_path / "m.json")
+    out = tmp_path / "a.csv"
+    argv = ["simulate", str(tmp_path / "m.json"), "--fs", "100", "-n", "20000", "--seed", "2"]
+    assert main([*argv, "--output", "angle", "-o", str(out), "--quiet"]) == 0
+    assert main(["fit", str(out), "--fs", "100", "--input", "angle"]) == 0
+    printed = capsys.readouterr().out
+    assert "channel angle_0[deg] (gyro, deg/s):" in printed
+    n = float(printed.split("N = ")[1].split(" deg/sqrt(h)")[0])
+    assert abs(n / 0.3 - 1) < 0.03  # 0.005 deg/sqrt(s) = 0.3 deg/sqrt(h); 3 % ~ 4 s.e.
+    # a unit that does not suit the input kind is not used, and the warning says why
+    assert main(["analyze", str(out), "--fs", "100", "--summary"]) == 0
+    assert "the header states deg, not a unit of rate samples: not used; give --input angle" \
+        in capsys.readouterr().out  # fmt: skip
+    # --units wins over the header; a header without units in brackets changes nothing
+    assert main(["fit", str(out), "--fs", "100", "--input", "angle", "--units", "rad"]) == 0
+    assert "(gyro, rad/s)" in capsys.readouterr().out
+    plain = tmp_path / "p.csv"
+    plain.write_text("gx[1],gy\n" + "\n".join(f"{v},{v}" for v in RNG.standard_normal(50)))
+    from allanite.io import read_record
+
+    assert read_record(plain, fs=FS).units is None
