@@ -502,3 +502,17 @@ def test_units_a_header_states_are_read(tmp_path: Path, capsys: pytest.CaptureFi
     from allanite.io import read_record
 
     assert read_record(plain, fs=FS).units is None
+
+
+def test_fit_says_which_model_it_wrote(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Regression: fit -o on three channels saved the first one's model without a word."""
+    path = tmp_path / "three.npy"
+    np.save(path, RNG.standard_normal((20_000, 3)) * 0.05)
+    out = tmp_path / "m.json"
+    assert main(["fit", str(path), "--fs", "100", "--units", "deg/s", "-o", str(out)]) == 0
+    last = capsys.readouterr().out.splitlines()[-1]
+    assert last == (
+        f"wrote {out}: the noise model of channel col0 (gyro, deg/s); 2 other channel(s) not "
+        "saved: fit one with --channels NAME -o FILE"
+    )
+    assert NoiseModel.load(out).units["rate"] == "deg/s"
