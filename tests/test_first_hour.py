@@ -516,3 +516,22 @@ def test_fit_says_which_model_it_wrote(tmp_path: Path, capsys: pytest.CaptureFix
         "saved: fit one with --channels NAME -o FILE"
     )
     assert NoiseModel.load(out).units["rate"] == "deg/s"
+
+
+def test_simulate_given_a_config_names_the_conversion(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Regression: allanite simulate imu.yaml said "the noise model is not valid JSON"."""
+    src = tmp_path / "imu.yaml"
+    src.write_text("gyroscope_noise_density: 1.87e-4\ngyroscope_random_walk: 2.66e-5\n"
+                   "update_rate: 200.0\n")  # fmt: skip
+    out = tmp_path / "s.npy"
+    assert main(["simulate", str(src), "--fs", "200", "-n", "100", "-o", str(out)]) == 2
+    line = _one_line_error(capsys, "simulate")
+    assert f"{src} is a Kalibr imu.yaml config, not a noise-model JSON; convert it first: " \
+        f"allanite model convert {src} model.json" in line  # fmt: skip
+    assert not out.exists()
+    assert main(["model", "convert", str(src), str(tmp_path / "m.json")]) == 0
+    assert main(["simulate", str(tmp_path / "m.json"), "--fs", "200", "-n", "100", "-o",
+                 str(out), "--quiet"]) == 0  # fmt: skip
+    assert np.load(out).shape == (100,)

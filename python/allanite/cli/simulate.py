@@ -76,6 +76,24 @@ def _count(text: str) -> int:
     return int(value)
 
 
+def _refuse_config(path: str) -> None:
+    """A simulator/estimator config given as the model: name it and the conversion."""
+    from allanite.errors import InputError
+    from allanite.formats import CONFIG_TEXT, FORMATS, detect_format
+    from allanite.model import read_text_file
+
+    try:
+        fmt = detect_format(Path(path), read_text_file(Path(path), CONFIG_TEXT))
+    except (InputError, ValueError, OSError):
+        return  # NoiseModel.load says what is wrong with it
+    if fmt != "allanite":
+        raise ValueError(
+            f"{path} is a {FORMATS[fmt].TITLE} config, not a noise-model JSON; convert it "
+            f"first: allanite model convert {path} model.json [--rate HZ] (its gyro model), "
+            "then simulate model.json"
+        )
+
+
 def _duration(seconds: float) -> str:
     for unit, size in (("d", 86400.0), ("h", 3600.0), ("min", 60.0)):
         if seconds >= size:
@@ -98,6 +116,7 @@ def run(args: argparse.Namespace) -> int:
     from allanite.units import integrated_unit
 
     format_of(args.out)  # fail on a bad suffix before any work
+    _refuse_config(args.model)
     model = NoiseModel.load(args.model)
     n = record_length(args.fs, args.samples, args.duration)
     if args.n_channels < 1:
