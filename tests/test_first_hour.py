@@ -535,3 +535,22 @@ def test_simulate_given_a_config_names_the_conversion(
     assert main(["simulate", str(tmp_path / "m.json"), "--fs", "200", "-n", "100", "-o",
                  str(out), "--quiet"]) == 0  # fmt: skip
     assert np.load(out).shape == (100,)
+
+
+def test_slope_regions_do_not_repeat_a_class() -> None:
+    """Regression: "15.9 – 39 s slope -0.17 (0)" then "43.6 – 61 s slope -0.24 (0)"."""
+    import allanite
+    from allanite.report.slopes import slope_table
+    from allanite.terms import Flicker, RateRandomWalk
+
+    model = NoiseModel(
+        [White(0.3 / 60), Flicker(5.0 / 3600), RateRandomWalk(3 / 60 / 3600)],
+        units={"rate": "deg/s", "time": "s"},
+    )
+    x = model.simulate(240_000, fs=200.0, n_channels=3, seed=1)[:, 0]
+    res = allanite.avar(x, fs=200.0, units="deg/s")
+    rows = slope_table(res.tau, res.dev, res.edf)
+    assert [r.canonical for r in rows] == [-0.5, 0.0]
+    assert rows[1].tau_min == pytest.approx(15.9, rel=0.01)
+    assert rows[1].tau_max == pytest.approx(61.0, rel=0.01)
+    assert rows[0].tau_max < rows[1].tau_min
