@@ -554,3 +554,18 @@ def test_slope_regions_do_not_repeat_a_class() -> None:
     assert rows[1].tau_min == pytest.approx(15.9, rel=0.01)
     assert rows[1].tau_max == pytest.approx(61.0, rel=0.01)
     assert rows[0].tau_max < rows[1].tau_min
+
+
+def test_report_intervals_carry_the_values_digits(tmp_path: Path) -> None:
+    """Regression: the report showed N = 0.2995 with the interval "0.299 … 0.3"."""
+    import allanite
+    from allanite.report.coefficients import coefficient_table
+
+    x = np.random.default_rng(21).standard_normal(40_000) * 0.01 * np.sqrt(FS)
+    path = tmp_path / "x.npy"
+    np.save(path, x)
+    out = tmp_path / "r.html"
+    assert main(["report", str(path), "--fs", "100", "--units", "deg/s", "-o", str(out)]) == 0
+    fitted = allanite.fit(allanite.avar(x, fs=FS, units="deg/s"))
+    row = {r.symbol: r for r in coefficient_table(fitted, "deg/s", 0.95)}["N"]
+    assert f"{row.low:.4g} … {row.high:.4g}" in out.read_text(encoding="utf-8")
