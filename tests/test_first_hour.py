@@ -569,3 +569,24 @@ def test_report_intervals_carry_the_values_digits(tmp_path: Path) -> None:
     fitted = allanite.fit(allanite.avar(x, fs=FS, units="deg/s"))
     row = {r.symbol: r for r in coefficient_table(fitted, "deg/s", 0.95)}["N"]
     assert f"{row.low:.4g} … {row.high:.4g}" in out.read_text(encoding="utf-8")
+
+
+def test_model_convert_takes_one_sensor(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Regression: a config's accelerometer could not be converted to a model JSON at all."""
+    from allanite.formats import ImuConfig, write_config
+
+    accel = NoiseModel([White(0.002)], units={"rate": "m/s^2", "time": "s"})
+    gyro = NoiseModel([White(2e-4)], units={"rate": "rad/s", "time": "s"})
+    src = tmp_path / "imu.yaml"
+    write_config(ImuConfig(gyro=gyro, accel=accel), src, format="kalibr", rate=FS)
+    assert main(["model", "convert", str(src), str(tmp_path / "g.json")]) == 0
+    assert "write it with --sensor accel" in capsys.readouterr().err
+    assert NoiseModel.load(tmp_path / "g.json").units["rate"] == "rad/s"
+    out = tmp_path / "a.json"
+    assert main(["model", "convert", str(src), str(out), "--sensor", "accel"]) == 0
+    assert "dropped" not in capsys.readouterr().err
+    (white,) = NoiseModel.load(out).terms
+    assert NoiseModel.load(out).units["rate"] == "m/s^2"
+    assert white.values()["N"] == pytest.approx(0.002)
+    assert main(["model", "convert", str(out), str(tmp_path / "x.yaml"), "--sensor", "gyro"]) == 2
+    assert "it holds an accel model: choose it with --sensor accel" in capsys.readouterr().err
