@@ -150,3 +150,443 @@ def test_negative_channel_indices_are_refused(
     assert main(["analyze", "--example", "--channels", "-1"]) == 2
     assert "negative indices are not accepted" in _one_line_error(capsys, "analyze")
     assert record.select([2]).channels == (record.channels[2],)
+
+
+def test_format_table_prints_the_units_the_cli_prints(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Regression: format_table printed N in deg/sqrt(s) while allanite fit printed deg/sqrt(h)."""
+    import allanite
+    from allanite.report.coefficients import coefficient_table
+
+    x = np.random.default_rng(21).standard_normal(40_000) * 0.01 * np.sqrt(FS)  # N 0.6 deg/√h
+    fitted = allanite.fit(allanite.avar(x, fs=FS, units="deg/s"))
+    text = fitted.format_table()
+    rows = {r.symbol: r for r in coefficient_table(fitted, "deg/s")}
+    assert rows["N"].unit == "deg/sqrt(h)"
+    line = next(ln for ln in text.splitlines() if ln.startswith("N "))
+    assert line.endswith("  deg/sqrt(h)")
+    assert f"{rows['N'].value:>12.4g}" in line  # the CLI's value, the CLI's unit
+    assert 0.55 < rows["N"].value < 0.65
+    assert "deg/sqrt(s)" not in text
+    # the model's own units stay available
+    assert fitted.format_table(units=None).splitlines()[1].endswith("  deg/sqrt(s)")
+    path = tmp_path / "x.npy"
+    np.save(path, x)
+    assert main(["fit", str(path), "--fs", "100", "--units", "deg/s"]) == 0
+    printed = capsys.readouterr().out
+    assert f"N = {rows['N'].value:.4g} deg/sqrt(h)" in printed
+
+
+@pytest.mark.parametrize(
+    ("rate", "per_second", "unit"), [("deg/h", "deg/s", "deg"), ("g", "m/s^2", "m/s")]
+)
+def test_simulated_increments_are_written_in_an_angle_unit(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], rate: str, per_second: str, unit: str
+) -> None:
+    """Regression: simulate --output increment labelled its CSV column deg/s*s."""
+    model = NoiseModel([White(3.0)], units={"rate": rate, "time": "s"})
+    path = tmp_path / "m.json"
+    model.save(path)
+    for output in ("increment", "angle"):
+        out = tmp_path / f"{output}.csv"
+        argv = ["simulate", str(path), "--fs", "100", "-n", "500", "--seed", "4"]
+        assert main([*argv, "--output", output, "-o", str(out)]) == 0
+        assert f"of {output} [{unit}] at 100 Hz" in capsys.readouterr().out
+        header = out.read_text().splitlines()[0]
+        assert header == f"{output}_0[{unit}]"
+        # the values are in that unit: the model converted to per second, then integrated
+        expect = model.in_units(per_second).simulate(500, fs=FS, output=output, seed=4)
+        np.testing.assert_allclose(np.loadtxt(out, skiprows=1), expect.ravel(), rtol=1e-12)
+
+
+def test_a_config_without_the_sensor_names_the_other_one(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Regression: "holds no gyro noise model" did not mention --sim-sensor accel."""
+    from allanite.formats import ImuConfig, read_config, write_config
+
+    accel = NoiseModel([White(0.002)], units={"rate": "m/s^2", "time": "s"})
+    config = tmp_path / "imu.sdf"
+    write_config(ImuConfig(accel=accel), config, format="gz-sdf", rate=FS)
+    with pytest.raises(ValueError, match=r"holds no gyro noise model; it holds an accel model: "):
+        read_config(config, format="gz-sdf").model("gyro")
+    with pytest.raises(ValueError, match=r"holds no gyro noise model$"):
+        ImuConfig().model("gyro")  # nothing else to suggest
+    real = tmp_path / "real.npy"
+    np.save(real, RNG.standard_normal(4000) * 0.01)
+    argv = ["diagnose", str(real), "--fs", "100", "--units", "rad/s", "--sim-model", str(config)]
+    assert main(argv) == 2
+    assert "choose it with --sim-sensor accel" in _one_line_error(capsys, "diagnose")
+
+
+def test_a_filter_bandwidth_above_nyquist_is_stated(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Regression: the diagnosis printed a low-pass bandwidth above fs/2 without a word."""
+    from allanite.terms.transients import LowPassWhite
+
+    units = {"rate": "deg/s", "time": "s"}
+    sim = tmp_path / "sim.json"
+    NoiseModel([White(0.01)], units=units).save(sim)
+    for bandwidth in (80.0, 20.0):
+        real = NoiseModel([LowPassWhite(N=0.01, bandwidth=bandwidth)], units=units)
+        x = real.simulate(2**16, fs=FS, seed=3)
+        d = diagnose(x.ravel(), NoiseModel.load(sim), fs=FS, units="deg/s", n_mc=40)
+        assert d.best is not None
+        assert d.best.effect == "lowpass"
+        above = d.best.params["bandwidth"] > FS / 2
+        assert above == (bandwidth > FS / 2)
+        note = "above the Nyquist frequency 50 Hz: it acts before sampling"
+        assert (note in d.headline) == above
+        path = tmp_path / "real.npy"
+        np.save(path, x)
+        argv = ["diagnose", str(path), "--fs", "100", "--units", "deg/s", "--n-mc", "40"]
+        assert main([*argv, "--sim-model", str(sim)]) == 0
+        attribution = capsys.readouterr().out.split("attribution (best first):")[1]
+        assert (note in attribution.splitlines()[1]) == above
+
+
+def _time_view_headline(x: np.ndarray) -> str:
+    model = NoiseModel([White(0.01)], units={"rate": "deg/s", "time": "s"})
+    return diagnose(x, model, fs=FS, units="deg/s", n_mc=40).headline
+
+
+def test_negligible_time_view_deviations_are_not_dramatized() -> None:
+    """Regression: a kurtosis of 0.05 on a long record read as "heavy-tailed" and "bursts"."""
+    rng = np.random.default_rng(5)
+    n, sd = 2**21, 0.01 * np.sqrt(FS)
+    df = 60  # Student t: excess kurtosis 6 / (df - 4) = 0.11, estimated 0.049 here
+    slight = rng.standard_t(df, n) / np.sqrt(df / (df - 2)) * sd
+    text = _time_view_headline(slight)
+    assert text.startswith("a small gap, significant but negligible in size")
+    assert "slightly heavier-tailed than simulated (excess kurtosis 0.0491, simulated" in text
+    assert "heavy-tailed sample-to-sample" not in text
+    # a 3 % modulation of the noise level: its size, no "bursts", no zero-size effect named
+    level = rng.standard_normal(n) * sd * (1 + 0.03 * np.sin(2 * np.pi * np.arange(n) / n * 7))
+    text = _time_view_headline(level)
+    assert "the short-tau noise level varies slightly over the record (rms +3" in text
+    assert "bursts" not in text
+    assert "is missing" not in text
+    # a large deviation keeps the strong wording, with its size
+    heavy = rng.standard_t(6, 2**17) / np.sqrt(6 / 4) * sd
+    text = _time_view_headline(heavy)
+    assert "heavy-tailed sample-to-sample changes (excess kurtosis) (real 1.39 vs simulated" in text
+    assert "negligible" not in text
+
+
+def test_positional_fs_names_the_fix() -> None:
+    """Regression: simulate(model, n, fs) with fs now keyword-only was a bare TypeError."""
+    import allanite
+    from allanite.simulation import simulate, simulate_chunks, write_record
+
+    model = NoiseModel([White(0.001)], units={"rate": "deg/s", "time": "s"})
+    x = RNG.standard_normal(1000)
+    with pytest.raises(TypeError, match=r"^fs is keyword-only: simulate\(model, n, fs=\.\.\.\);"):
+        simulate(model, 100, 100.0)
+    with pytest.raises(
+        TypeError, match=r"^fs is keyword-only: NoiseModel.simulate\(n, fs=\.\.\.\)"
+    ):
+        model.simulate(100, 100.0)
+    with pytest.raises(TypeError, match=r"^fs is keyword-only: avar\(x, fs=\.\.\.\); avar\(\) "):
+        allanite.avar(x, 100.0)
+    calls = [
+        lambda: allanite.oadev(x, 100.0),
+        lambda: allanite.mdev(x, 100.0),
+        lambda: allanite.fit(x, "auto", 100.0),
+        lambda: allanite.diagnose(x, model, 100.0),
+        lambda: allanite.avar_large(x, 100.0),
+        lambda: allanite.batch([x], 100.0),
+        lambda: list(simulate_chunks(model, 10, 100.0)),
+        lambda: write_record("never.npy", model, 10, 100.0),
+    ]
+    for call in calls:
+        with pytest.raises(TypeError, match=r"^fs is keyword-only: \w+\(.*fs=\.\.\.\)"):
+            call()
+    np.testing.assert_array_equal(
+        simulate(model, 10, fs=100.0, seed=1), model.simulate(10, fs=100.0, seed=1)
+    )
+
+
+def test_a_six_axis_robot_log_is_two_sensors_without_units(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Regression: a ROS bag's gyro and accelerometer (units set by sensor_msgs/Imu) were
+    fitted in "record units" unless --units repeated what the message defines."""
+    pytest.importorskip("rosbags")
+    from test_io_robot_logs import write_bag
+
+    n, rate = 20_000, 200.0
+    data = np.random.default_rng(8).standard_normal((n, 6)) * 0.01
+    data[:, 5] += 9.81
+    write_bag(tmp_path / "imu.bag", "ros1", data, np.arange(n) / rate, topics=("/imu0",))
+    bag = str(tmp_path / "imu.bag")
+    assert main(["fit", bag]) == 0
+    out = capsys.readouterr().out
+    assert "channel gyro_x (gyro, rad/s):" in out
+    assert "channel accel_z (accelerometer, m/s^2):" in out
+    assert "record's own units" not in out
+    # white noise of 0.01 per sample at 200 Hz: N = 0.01 / sqrt(200) rad/sqrt(s)
+    expect = 0.01 / np.sqrt(rate) * 60.0  # in rad/sqrt(h)
+    line = next(ln for ln in out.splitlines() if "N = " in ln and "rad/sqrt(h)" in ln)
+    value = float(line.split("N = ")[1].split()[0])
+    assert abs(value / expect - 1) < 0.03  # 3 % = 7 standard errors of N at 20000 samples
+    # --units still wins, and analyze (one sensor) says how to pick one
+    assert main(["fit", bag, "--channels", "gyro_x", "--units", "deg/s"]) == 0
+    assert "channel gyro_x (gyro, deg/s):" in capsys.readouterr().out
+    assert main(["analyze", bag, "--summary"]) == 0
+    err = capsys.readouterr().err
+    assert "holds channels in rad/s and m/s^2" in err
+    assert "--channels gyro_x,gyro_y,gyro_z (rad/s); --channels accel_x,accel_y,accel_z" in err
+
+
+def test_write_corrected_folds_in_the_joint_explanation() -> None:
+    """Regression: the headline named three effects, the corrected config held only the first."""
+    from types import SimpleNamespace
+
+    from allanite.formats import kalibr, px4_plugin
+    from allanite.formats.corrected import corrected_model
+    from allanite.terms import RateRandomWalk
+
+    units = {"rate": "rad/s", "time": "s"}
+    model = NoiseModel([White(2e-4), RateRandomWalk(3e-5)], units=units)
+
+    def effect(name: str, term: dict[str, object], params: dict[str, float]) -> SimpleNamespace:
+        return SimpleNamespace(
+            effect=name, term=term, params=params, gap_before=100.0, gap_after=1.0, shrinkage=0.9
+        )
+
+    white = effect("rescale:white", {"type": "white", "N": 1e-4}, {"scale": 0.5})
+    rrw = effect("rescale:rrw", {"type": "rrw", "K": 5e-6}, {"scale": 0.17})
+    lowpass = effect("lowpass", {"type": "lowpass_white", "N": 1e-4, "bandwidth": 20.0}, {})
+    joint = SimpleNamespace(effects=[white, rrw], gap_before=100.0, gap_after=0.5)
+    diagnosis = SimpleNamespace(significant=True, attribution=[white, rrw], explanation=joint)
+    out, what = corrected_model(model, diagnosis, kalibr.HOLDS)
+    assert [(t.type, t.values()) for t in out.terms] == [
+        ("white", {"N": 1e-4}),
+        ("rrw", {"K": 5e-6}),
+    ]
+    assert what.startswith("folded in the joint explanation: rescale:white (scale=0.5); ")
+    assert what.endswith("gap 100 -> 0.5 (shrinkage 100 %)")
+    # the longest prefix the format holds; what follows an unheld effect is left out
+    joint = SimpleNamespace(effects=[white, lowpass, rrw], gap_before=100.0, gap_after=0.5)
+    diagnosis = SimpleNamespace(significant=True, attribution=[white], explanation=joint)
+    out, what = corrected_model(model, diagnosis, px4_plugin.HOLDS)
+    assert [(t.type, t.values()) for t in out.terms] == [
+        ("white", {"N": 1e-4}),
+        ("rrw", {"K": 3e-5}),
+    ]
+    assert "left out lowpass, rescale:rrw of the joint explanation" in what
+    # a first effect the format cannot hold: the best single effect it holds, as before
+    joint = SimpleNamespace(effects=[lowpass, rrw], gap_before=100.0, gap_after=0.5)
+    diagnosis = SimpleNamespace(significant=True, attribution=[lowpass, rrw], explanation=joint)
+    out, what = corrected_model(model, diagnosis, px4_plugin.HOLDS)
+    assert what.startswith("folded in rescale:rrw (scale=0.17); gap 100 -> 1 (shrinkage 90 %)")
+    assert "skipped lowpass" in what
+
+
+@pytest.mark.parametrize(("fmt", "name"), [("kalibr", "imu.yaml"), ("px4-plugin", "p.sdf")])
+def test_a_config_written_into_a_template_states_its_projections(
+    tmp_path: Path, fmt: str, name: str
+) -> None:
+    """Regression: with a template (--write-corrected) the projected terms were not in the file."""
+    import xml.etree.ElementTree as ET
+
+    from allanite.formats import ImuConfig, read_config, write_config
+    from allanite.terms import Flicker
+
+    gyro = NoiseModel([White(1e-4), Flicker(3e-5)], units={"rate": "rad/s", "time": "s"})
+    first = tmp_path / name
+    start = ImuConfig(
+        gyro=NoiseModel([White(2e-4)], units=gyro.units),
+        accel=NoiseModel([White(2e-3)], units={"rate": "m/s^2", "time": "s"}),
+    )
+    write_config(start, first, format=fmt, rate=FS)
+    paths = [first]
+    for k in range(2):  # twice: the notes of the earlier write are replaced, not stacked
+        paths.append(tmp_path / f"{k}{name}")
+        config = read_config(paths[-2], format=fmt, rate=FS).with_model("gyro", gyro)
+        written = write_config(config, paths[-1], format=fmt, rate=FS, template=paths[-2])
+        assert written.projections
+    text = paths[-1].read_text()
+    assert text.count("projected: gyro: flicker (B=3e-05) -> ") == 1
+    assert "largest ADEV error" in text
+    if fmt == "px4-plugin":
+        ET.fromstring(text.split("\n", 1)[1] if text.startswith("<?xml") else text)
+    (white,) = read_config(paths[-1], format=fmt, rate=FS).model("gyro").terms_of_type("white")
+    assert pytest.approx(1e-4) == white.N
+
+
+def test_batch_prints_the_units_fit_prints(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Regression: batch printed N in deg/h*sqrt(s), "PASS" without limits, the path twice."""
+    x = np.random.default_rng(3).standard_normal(60_000) * 0.18 * np.sqrt(FS)  # deg/h
+    path = tmp_path / "dut.npy"
+    np.save(path, x)
+    assert main(["fit", str(path), "--fs", "100", "--units", "deg/h"]) == 0
+    fitted = capsys.readouterr().out
+    n_fit = fitted.split("N = ")[1].split(" deg/sqrt(h)")[0]
+    assert main(["batch", str(path), "--fs", "100", "--units", "deg/h"]) == 0
+    out = capsys.readouterr().out
+    header, row = (line.split() for line in out.splitlines()[:2])
+    assert row[header.index("N")] == n_fit  # as fit prints it: 0.003 deg/sqrt(h)
+    assert row[-1] == "OK"
+    assert "units: Q in deg, N in deg/sqrt(h), B in deg/h, K in deg/h/sqrt(h)" in out
+    assert main(["batch", str(path)]) == 1
+    out = capsys.readouterr().out
+    assert (
+        f"error: {path}: the sampling frequency is unknown; give it with fs= (CLI: --fs HZ)" in out
+    )
+    assert f"{path}: {path}" not in out
+
+
+def test_a_time_column_left_out_is_named(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Regression: a CSV "t,gz" without --time-column failed without naming t, and with --fs
+    analysed t as a gyro channel, warning only "angle given as rate?"."""
+    path = tmp_path / "nav.csv"
+    t = np.arange(3000) / FS
+    np.savetxt(path, np.column_stack([t, RNG.standard_normal(3000)]), delimiter=",",
+               header="t,gz", comments="")  # fmt: skip
+    assert main(["analyze", str(path)]) == 2
+    assert "column 't' looks like the time: --time-column t" in _one_line_error(capsys, "analyze")
+    assert main(["analyze", str(path), "--fs", "100", "--summary"]) == 0
+    assert "warning: channel t is named like time stamps and always increases: if it is the " \
+        "time, give --time-column t" in capsys.readouterr().out  # fmt: skip
+    assert main(["analyze", str(path), "--time-column", "t", "--summary"]) == 0
+    assert "named like time stamps" not in capsys.readouterr().out
+
+
+def test_a_random_walk_projected_onto_gazebo_stays_a_random_walk(tmp_path: Path) -> None:
+    """Regression: Kalibr -> gz SDF wrote dynamic_bias_correlation_time 2e17 s, where Gazebo's
+    phi = exp(-dt/tau) is 1.0 in double precision: the written bias never moved."""
+    import math
+
+    from allanite.formats import read_config, write_config
+
+    src = tmp_path / "imu.yaml"
+    src.write_text("gyroscope_noise_density: 1.87e-4\ngyroscope_random_walk: 2.66e-5\n"
+                   "update_rate: 200.0\n")  # fmt: skip
+    written = write_config(read_config(src), tmp_path / "out.sdf", format="gz-sdf")
+    (gm,) = read_config(tmp_path / "out.sdf").model("gyro").terms_of_type("markov")
+    assert gm.tau_c <= 1000.0 * 3600.0  # the default tau range ends at 3600 s
+    phi = math.exp(-(1 / 200.0) / gm.tau_c)
+    driving = gm.sigma * math.sqrt(1.0 - phi * phi)  # Gazebo's per-step bias increment
+    assert driving == pytest.approx(2.66e-5 * math.sqrt(1 / 200.0), rel=1e-4)
+    assert "largest ADEV error 0.0 %" in written.projections[0]
+
+
+def test_units_a_header_states_are_read(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Regression: a CSV allanite simulate wrote (``angle_0[deg]``) read back without a unit."""
+    model = NoiseModel([White(0.005)], units={"rate": "deg/s", "time": "s"})
+    model.save(tmp_path / "m.json")
+    out = tmp_path / "a.csv"
+    argv = ["simulate", str(tmp_path / "m.json"), "--fs", "100", "-n", "20000", "--seed", "2"]
+    assert main([*argv, "--output", "angle", "-o", str(out), "--quiet"]) == 0
+    assert main(["fit", str(out), "--fs", "100", "--input", "angle"]) == 0
+    printed = capsys.readouterr().out
+    assert "channel angle_0[deg] (gyro, deg/s):" in printed
+    n = float(printed.split("N = ")[1].split(" deg/sqrt(h)")[0])
+    assert abs(n / 0.3 - 1) < 0.03  # 0.005 deg/sqrt(s) = 0.3 deg/sqrt(h); 3 % ~ 4 s.e.
+    # a unit that does not suit the input kind is not used, and the warning says why
+    assert main(["analyze", str(out), "--fs", "100", "--summary"]) == 0
+    assert "the header states deg, not a unit of rate samples: not used; give --input angle" \
+        in capsys.readouterr().out  # fmt: skip
+    # --units wins over the header; a header without units in brackets changes nothing
+    assert main(["fit", str(out), "--fs", "100", "--input", "angle", "--units", "rad"]) == 0
+    assert "(gyro, rad/s)" in capsys.readouterr().out
+    plain = tmp_path / "p.csv"
+    plain.write_text("gx[1],gy\n" + "\n".join(f"{v},{v}" for v in RNG.standard_normal(50)))
+    from allanite.io import read_record
+
+    assert read_record(plain, fs=FS).units is None
+
+
+def test_fit_says_which_model_it_wrote(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Regression: fit -o on three channels saved the first one's model without a word."""
+    path = tmp_path / "three.npy"
+    np.save(path, RNG.standard_normal((20_000, 3)) * 0.05)
+    out = tmp_path / "m.json"
+    assert main(["fit", str(path), "--fs", "100", "--units", "deg/s", "-o", str(out)]) == 0
+    last = capsys.readouterr().out.splitlines()[-1]
+    assert last == (
+        f"wrote {out}: the noise model of channel col0 (gyro, deg/s); 2 other channel(s) not "
+        "saved: fit one with --channels NAME -o FILE"
+    )
+    assert NoiseModel.load(out).units["rate"] == "deg/s"
+
+
+def test_simulate_given_a_config_names_the_conversion(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Regression: allanite simulate imu.yaml said "the noise model is not valid JSON"."""
+    src = tmp_path / "imu.yaml"
+    src.write_text("gyroscope_noise_density: 1.87e-4\ngyroscope_random_walk: 2.66e-5\n"
+                   "update_rate: 200.0\n")  # fmt: skip
+    out = tmp_path / "s.npy"
+    assert main(["simulate", str(src), "--fs", "200", "-n", "100", "-o", str(out)]) == 2
+    line = _one_line_error(capsys, "simulate")
+    assert f"{src} is a Kalibr imu.yaml config, not a noise-model JSON; convert it first: " \
+        f"allanite model convert {src} model.json" in line  # fmt: skip
+    assert not out.exists()
+    assert main(["model", "convert", str(src), str(tmp_path / "m.json")]) == 0
+    assert main(["simulate", str(tmp_path / "m.json"), "--fs", "200", "-n", "100", "-o",
+                 str(out), "--quiet"]) == 0  # fmt: skip
+    assert np.load(out).shape == (100,)
+
+
+def test_slope_regions_do_not_repeat_a_class() -> None:
+    """Regression: "15.9 – 39 s slope -0.17 (0)" then "43.6 – 61 s slope -0.24 (0)"."""
+    import allanite
+    from allanite.report.slopes import slope_table
+    from allanite.terms import Flicker, RateRandomWalk
+
+    model = NoiseModel(
+        [White(0.3 / 60), Flicker(5.0 / 3600), RateRandomWalk(3 / 60 / 3600)],
+        units={"rate": "deg/s", "time": "s"},
+    )
+    x = model.simulate(240_000, fs=200.0, n_channels=3, seed=1)[:, 0]
+    res = allanite.avar(x, fs=200.0, units="deg/s")
+    rows = slope_table(res.tau, res.dev, res.edf)
+    assert [r.canonical for r in rows] == [-0.5, 0.0]
+    assert rows[1].tau_min == pytest.approx(15.9, rel=0.01)
+    assert rows[1].tau_max == pytest.approx(61.0, rel=0.01)
+    assert rows[0].tau_max < rows[1].tau_min
+
+
+def test_report_intervals_carry_the_values_digits(tmp_path: Path) -> None:
+    """Regression: the report showed N = 0.2995 with the interval "0.299 … 0.3"."""
+    import allanite
+    from allanite.report.coefficients import coefficient_table
+
+    x = np.random.default_rng(21).standard_normal(40_000) * 0.01 * np.sqrt(FS)
+    path = tmp_path / "x.npy"
+    np.save(path, x)
+    out = tmp_path / "r.html"
+    assert main(["report", str(path), "--fs", "100", "--units", "deg/s", "-o", str(out)]) == 0
+    fitted = allanite.fit(allanite.avar(x, fs=FS, units="deg/s"))
+    row = {r.symbol: r for r in coefficient_table(fitted, "deg/s", 0.95)}["N"]
+    assert f"{row.low:.4g} … {row.high:.4g}" in out.read_text(encoding="utf-8")
+
+
+def test_model_convert_takes_one_sensor(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Regression: a config's accelerometer could not be converted to a model JSON at all."""
+    from allanite.formats import ImuConfig, write_config
+
+    accel = NoiseModel([White(0.002)], units={"rate": "m/s^2", "time": "s"})
+    gyro = NoiseModel([White(2e-4)], units={"rate": "rad/s", "time": "s"})
+    src = tmp_path / "imu.yaml"
+    write_config(ImuConfig(gyro=gyro, accel=accel), src, format="kalibr", rate=FS)
+    assert main(["model", "convert", str(src), str(tmp_path / "g.json")]) == 0
+    assert "write it with --sensor accel" in capsys.readouterr().err
+    assert NoiseModel.load(tmp_path / "g.json").units["rate"] == "rad/s"
+    out = tmp_path / "a.json"
+    assert main(["model", "convert", str(src), str(out), "--sensor", "accel"]) == 0
+    assert "dropped" not in capsys.readouterr().err
+    (white,) = NoiseModel.load(out).terms
+    assert NoiseModel.load(out).units["rate"] == "m/s^2"
+    assert white.values()["N"] == pytest.approx(0.002)
+    assert main(["model", "convert", str(out), str(tmp_path / "x.yaml"), "--sensor", "gyro"]) == 2
+    assert "it holds an accel model: choose it with --sensor accel" in capsys.readouterr().err

@@ -50,8 +50,10 @@ def test_fit_result_table_with_goodness_of_fit() -> None:
     fitted = allanite.fit(allanite.avar(x, fs=FS, units="deg/s"))
     html = fitted._repr_html_()
     assert "FitResult (gls): white" in html
-    row = fitted.table(None, 0.95)[0]
+    row = fitted.table("customary", 0.95)[0]  # as allanite fit prints it
+    assert row["unit"] == "deg/sqrt(h)"
     assert f"<td>N</td><td>{row['value']:.4g}</td>" in html
+    assert "<td>deg/sqrt(h)</td>" in html
     assert f"{row['low']:.4g} – {row['high']:.4g}" in html
     assert f"chi² = {fitted.chi2:.4g} for {fitted.dof} dof" in html
     assert "model not rejected" in html

@@ -151,7 +151,7 @@ def test_cli_writes_the_same_samples_as_the_api(tmp_path, model_file, suffix):
         got = np.load(out)
     elif suffix == ".csv":
         got = np.loadtxt(out, delimiter=",", skiprows=1)
-        assert out.read_text().splitlines()[0] == "angle_0[deg/s*s],angle_1[deg/s*s]"
+        assert out.read_text().splitlines()[0] == "angle_0[deg],angle_1[deg]"
     else:
         got = np.fromfile(out, dtype="<f8").reshape(-1, 2)
     assert np.array_equal(got, expected)

@@ -1,13 +1,21 @@
-"""Renamed keywords: the old name keeps working for a while, with a DeprecationWarning."""
+"""API changes: renamed keywords and arguments that became keyword-only.
+
+A renamed keyword keeps working for a while, with a DeprecationWarning; an argument that
+became keyword-only says so when given by position.
+"""
 
 from __future__ import annotations
 
+import functools
+import inspect
 import warnings
-from typing import TypeVar
+from collections.abc import Callable
+from typing import ParamSpec, TypeVar
 
-__all__ = ["renamed"]
+__all__ = ["keyword_only_fs", "renamed"]
 
 T = TypeVar("T")
+P = ParamSpec("P")
 
 
 def renamed(
@@ -52,3 +60,32 @@ def renamed(
         stacklevel=3,
     )
     return old_value
+
+
+def keyword_only_fs(func: Callable[P, T]) -> Callable[P, T]:
+    """Decorate a public function whose ``fs`` became keyword-only.
+
+    A call that gives more positional arguments than the function takes (the old
+    ``simulate(model, n, 100.0)``) raises a :class:`TypeError` naming the fix,
+    ``fs is keyword-only: simulate(model, n, fs=...)``, instead of Python's bare count of
+    positional arguments. Correct calls pass straight through.
+    """
+    params = list(inspect.signature(func).parameters.values())
+    positional = [p.name for p in params if p.kind in (p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD)]
+    method = bool(positional) and positional[0] == "self"
+    shown = positional[1:] if method else positional
+    owner = func.__qualname__.rsplit(".", 1)[0]
+    name = f"{owner}.{func.__name__}" if method else func.__name__
+    call = f"{name}(" + "".join(f"{p}, " for p in shown) + "fs=...)"
+
+    @functools.wraps(func)
+    def wrapper(*args: P.args, **kwargs: P.kwargs) -> T:
+        if len(args) > len(positional):
+            given = len(args) - method
+            raise TypeError(
+                f"fs is keyword-only: {call}; {name}() takes {len(shown)} positional "
+                f"argument(s) but {given} were given (the other options are keyword-only too)"
+            )
+        return func(*args, **kwargs)
+
+    return wrapper

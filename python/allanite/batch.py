@@ -39,6 +39,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from allanite._deprecation import keyword_only_fs
 from allanite.confidence import DEFAULT_LEVEL
 from allanite.datasheet import Check, Datasheet, Limit, Measured, check_limits, verdict
 from allanite.errors import InputError
@@ -167,10 +168,9 @@ def _load(task: _Task) -> tuple[NDArray[Any], float, str, str | None, tuple[str,
             options.setdefault("fs", task.fs)
         source = read_record(source, **options)
     if isinstance(source, Record):
-        if source.fs is None:
-            raise ValueError(f"{task.name}: sampling frequency unknown; pass fs=")
+        fs = source.require_fs()  # names the record and how to give fs
         names = tuple(source.channels) or tuple(str(i) for i in range(source.samples.shape[-1]))
-        return source.samples, float(source.fs), source.input, source.units, names
+        return source.samples, fs, source.input, source.units, names
     if task.fs is None:
         raise ValueError(f"{task.name}: arrays need fs= (sampling frequency in Hz)")
     arr = np.asarray(source)
@@ -334,6 +334,7 @@ def _name(item: Any, index: int) -> tuple[str, Any]:
     return f"record{index}", item
 
 
+@keyword_only_fs
 def batch(
     records: Iterable[Any],
     *,

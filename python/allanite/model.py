@@ -31,7 +31,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from allanite._deprecation import renamed
+from allanite._deprecation import keyword_only_fs, renamed
 from allanite.terms import TERM_TYPES, Term, term_from_dict
 from allanite.units import Unit, coefficient_unit, convert, rate_unit, sensor_kind
 
@@ -357,6 +357,7 @@ class NoiseModel:
             raise type(exc)(f"{p}: {exc}") from None
 
     # --- simulation -------------------------------------------------------------------------
+    @keyword_only_fs
     def simulate(
         self,
         n: int | None = None,

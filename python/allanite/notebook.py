@@ -129,7 +129,7 @@ def fit_html(fit: Any) -> str:
     level = DEFAULT_LEVEL
     rows = [
         [r["name"], r["value"], r["stderr"], f"{_num(r['low'])} – {_num(r['high'])}", r["unit"]]
-        for r in fit.table(None, level)
+        for r in fit.table("customary", level)
     ]
     table = _table(["coefficient", "value", "stderr", f"{100 * level:g} % interval", "unit"], rows)
     if fit.method == "gls":

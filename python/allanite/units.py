@@ -66,6 +66,7 @@ __all__ = [
     "customary_unit",
     "display_unit",
     "integral_unit",
+    "integrated_unit",
     "parse_unit",
     "quantity",
     "rate_unit",
@@ -443,6 +444,31 @@ def integral_unit(text: str | Unit) -> str:
     if match is not None and match.group(1) in LENGTH_UNITS:
         return f"{match.group(1)}/s^2"  # m/s -> m/s^2
     return f"({text})/s"
+
+
+def integrated_unit(rate: str) -> tuple[str, str]:
+    """Unit of angle (or velocity) samples integrated from a rate: :func:`integral_unit` inverted.
+
+    Returns ``(seconds_rate, sample_unit)``: the rate unit per second to integrate in, and
+    the unit of its integral over seconds. ``deg/s`` gives ``("deg/s", "deg")``, ``deg/h``
+    and ``dph`` give ``("deg/s", "deg")`` too (a rate per hour integrated over seconds is
+    no named angle: convert it first), ``m/s^2`` and ``g`` give ``("m/s^2", "m/s")``, the
+    record unit gives ``("unit", "unit*s")``.
+
+    Raises
+    ------
+    ValueError
+        If ``rate`` is not a rate unit (see :func:`rate_unit`).
+    """
+    kind = sensor_kind(rate)
+    split = _split_rate(rate)
+    if kind == "gyro":
+        angle = split[0] if split is not None and split[0] in ANGLE_UNITS else "rad"
+        return f"{angle}/s", angle
+    if kind == "accelerometer":
+        length = split[0] if split is not None and split[0] in LENGTH_UNITS else "m"
+        return f"{length}/s^2", f"{length}/s"
+    return rate, f"{rate}*s"
 
 
 def record_rate_unit(units: str | None, input: str = "rate", *, strict: bool = False) -> str | None:

@@ -16,6 +16,7 @@ from allanite.cli.record_options import (
     dump_json,
     read_from_args,
     record_command,
+    stated_units,
     warn_implausible,
 )
 from allanite.fit.classic import ClassicReadout, classic_readout
@@ -299,6 +300,18 @@ def save_plot(path: str, record: Record, result: AllanResult, level: float) -> N
 def run(args: argparse.Namespace) -> int:
     """Run ``allanite analyze``."""
     record = read_from_args(args.file, args)
+    stated = stated_units(record)
+    if stated is not None:
+        groups = {
+            u: [c for c, v in zip(record.channels, stated, strict=True) if v == u] for u in stated
+        }
+        picks = "; ".join(f"--channels {','.join(cs)} ({u})" for u, cs in groups.items())
+        print(
+            f"allanite analyze: note: {record.source} holds channels in {' and '.join(groups)} "
+            f"(shown in record units); analyse one sensor with {picks}, or use allanite fit or "
+            "report, which take each sensor in its unit",
+            file=sys.stderr,
+        )
     result = avar_from_args(record, args)
     if not np.all(np.isfinite(result.var)):
         raise ValueError(f"{record.source}: the variance is not finite; check the samples")

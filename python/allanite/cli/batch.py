@@ -137,21 +137,56 @@ def _cell(v: Any) -> str:
     return str(v).upper() if v in ("pass", "marginal", "fail", "missing", "error") else str(v)
 
 
-def _text_table(result: Any) -> str:
-    """Aligned text: one column per coefficient as ``value [low, high]``, checks, status."""
+def _display_unit(rate: str | None, name: str) -> tuple[str, float]:
+    """``(unit, factor)`` of coefficient ``name`` of a model in ``rate``, as ``allanite fit``.
+
+    The customary unit (:func:`allanite.units.customary_unit`: N in deg/sqrt(h), ...) and the
+    factor from the model's unit to it.
+    """
+    from allanite.units import RECORD_UNIT, SYMBOL_POWERS, coefficient_unit, convert, customary_unit
+
+    own = coefficient_unit(rate or RECORD_UNIT, *SYMBOL_POWERS[name]).text
+    if rate is None:
+        return own, 1.0
+    shown = customary_unit(rate, name, own)
+    return shown, convert(1.0, own, shown)
+
+
+def _customary(values: dict[str, Any], shown: list[str]) -> dict[str, Any]:
+    """A row's coefficient values, low and high in the customary units of its rate unit."""
+    from allanite.units import SYMBOL_POWERS
+
+    out = dict(values)
+    for name in (c for c in shown if c in SYMBOL_POWERS):
+        _, factor = _display_unit(values.get("units"), name)
+        for key in (name, f"{name}_low", f"{name}_high"):
+            if isinstance(out.get(key), float):
+                out[key] = out[key] * factor
+    return out
+
+
+def _text_table(result: Any, limits: bool = True) -> str:
+    """Aligned text: one column per coefficient as ``value [low, high]``, checks, status.
+
+    Coefficients are shown in the customary units ``allanite fit`` prints (the CSV and JSON
+    outputs keep the model's units, named in their ``units`` column). Without datasheet
+    ``limits`` a fitted record's status is ``OK``, not ``PASS`` (nothing was checked).
+    """
     columns = list(result.columns)
     shown = [c for c in columns if c not in ("n_samples", "fs", "units", "pass", "error")]
     shown = [c for c in shown if not c.endswith(("_low", "_high"))]
     header = [c if c != "p_value" else "p" for c in shown]
     cells = []
     for row in result.rows:
-        values = dict(zip(columns, row, strict=True))
+        values = _customary(dict(zip(columns, row, strict=True)), shown)
         line = []
         for c in shown:
             if c == "rejected":  # flag a rejected model plainly, leave the others blank
                 line.append("REJECTED" if values[c] else "-")
                 continue
             text = _cell(values[c])
+            if c == "status" and not limits and values[c] == "pass":
+                text = "OK"
             if f"{c}_low" in values and values[c] is not None:
                 text += f" [{_cell(values[c + '_low'])}, {_cell(values[c + '_high'])}]"
             line.append(text)
@@ -160,7 +195,9 @@ def _text_table(result: Any) -> str:
     lines = ["  ".join(h.ljust(w) for h, w in zip(header, widths, strict=True))]
     lines += ["  ".join(v.ljust(w) for v, w in zip(r, widths, strict=True)) for r in cells]
     errors = [
-        f"{values['record']}: {values['error']}"
+        values["error"]
+        if str(values["error"]).startswith(f"{values['record']}: ")
+        else f"{values['record']}: {values['error']}"
         for values in (dict(zip(columns, row, strict=True)) for row in result.rows)
         if values["error"]
     ]
@@ -172,18 +209,19 @@ def _text_table(result: Any) -> str:
 
 
 def _unit_legend(result: Any, shown: list[str]) -> list[str]:
-    """One line per rate unit of the table saying what unit each coefficient column is in."""
-    from allanite.units import RECORD_UNIT, SYMBOL_POWERS, coefficient_unit
+    """One line per display unit set of the table: what unit each coefficient column is in."""
+    from allanite.units import SYMBOL_POWERS
 
     names = [c for c in shown if c in SYMBOL_POWERS]
     if not names or "units" not in result.columns:
         return []
     lines = []
-    for rate in dict.fromkeys(result.column("units")):
-        units = ", ".join(
-            f"{n} in {coefficient_unit(rate or RECORD_UNIT, *SYMBOL_POWERS[n]).text}" for n in names
-        )
-        if rate is None:
+    legends = dict.fromkeys(
+        (rate is None, ", ".join(f"{n} in {_display_unit(rate, n)[0]}" for n in names))
+        for rate in result.column("units")
+    )
+    for unitless, units in legends:  # deg/s and deg/h records share one legend line
+        if unitless:
             lines.append(
                 f"units: the records have no unit (give --units): coefficients in record units, "
                 f"{units}"
@@ -231,5 +269,5 @@ def run(args: argparse.Namespace) -> int:
                 tmp.write_text(result.to_json(indent=1) + "\n")
             else:
                 result.to_csv(tmp)
-    print(result.to_json(indent=1) if args.json else _text_table(result))
+    print(result.to_json(indent=1) if args.json else _text_table(result, bool(args.datasheet)))
     return 0 if result.passed else 1

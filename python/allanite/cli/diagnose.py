@@ -168,7 +168,7 @@ def _summary(d: Any) -> str:
     if d.attribution:
         lines.append("attribution (best first):")
         for a in d.attribution:
-            params = format_params(a, units)
+            params = format_params(a, units, fs=d.meta.get("fs"))
             lines.append(
                 f"  {a.effect:<22} {params}  gap {a.gap_before:.4g} -> {a.gap_after:.4g} "
                 f"(shrinkage {100 * a.shrinkage:.0f} %, "

@@ -212,7 +212,21 @@ def run(args: argparse.Namespace) -> int:
             for check in item["checks"]:
                 value = "not measured" if check["value"] is None else f"{check['value']:.4g}"
                 print(f"  datasheet {check['quantity']}: {value} -> {check['status'].upper()}")
+        if args.output:
+            print(_written(args.output, channels))
     return 1 if failed else 0
+
+
+def _written(path: str, channels: list[dict[str, Any]]) -> str:
+    """What ``-o`` wrote: the model of the first channel, and how to get another's."""
+    first = channels[0]
+    text = f"wrote {path}: the noise model of channel {first['channel']} ({_what(first)})"
+    if len(channels) > 1:
+        text += (
+            f"; {len(channels) - 1} other channel(s) not saved: fit one with --channels NAME "
+            "-o FILE"
+        )
+    return text
 
 
 def _what(item: dict[str, Any]) -> str:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
 from typing import Any
 
@@ -70,7 +71,15 @@ def register(subparsers: Any) -> None:
         metavar=("LO", "HI"),
         help="averaging times in s a projection matches (default 10 samples to 1 h)",
     )
+    conv.add_argument(
+        "--sensor",
+        choices=("gyro", "accel"),
+        help="convert only this sensor's model (a model JSON holds one: the gyro's by default)",
+    )
     conv.set_defaults(func=run)
+
+
+_OTHER = {"gyro": "accel:", "accel": "gyro:"}
 
 
 def run(args: argparse.Namespace) -> int:
@@ -78,6 +87,14 @@ def run(args: argparse.Namespace) -> int:
     if args.rate is not None and not args.rate > 0:
         raise ValueError(f"--rate must be a positive frequency in Hz, got {args.rate}")
     config = read_config(args.input, format=args.from_format, rate=args.rate)
+    if args.sensor is not None:
+        kept = config.model(args.sensor, option="--sensor")  # a clear error when it has none
+        config = dataclasses.replace(
+            config,
+            gyro=kept if args.sensor == "gyro" else None,
+            accel=kept if args.sensor == "accel" else None,
+            notes=tuple(n for n in config.notes if not n.startswith(_OTHER[args.sensor])),
+        )
     rate = args.rate or config.rate
     for note in config.notes:
         print(f"note: {note}", file=sys.stderr)

@@ -222,7 +222,11 @@ def read_sensors(path: str | None, args: argparse.Namespace) -> list[Record]:
     """
     units = unit_list(getattr(args, "units", None))
     if len(units) <= 1:
-        return [read_from_args(path, args)]
+        record = read_from_args(path, args)
+        stated = stated_units(record) if not units else None
+        if stated is None:
+            return [record]
+        return _split_by_unit(record, stated, args)
     record = _read(path, args, units=None)
     n = record.n_channels
     if n % len(units):
@@ -230,7 +234,30 @@ def read_sensors(path: str | None, args: argparse.Namespace) -> list[Record]:
             f"--units gives {len(units)} units for {n} channels ({', '.join(record.channels)}); "
             "give one unit, one per channel or one per equal group of consecutive channels"
         )
-    per_channel = [units[c // (n // len(units))] for c in range(n)]
+    return _split_by_unit(record, [units[c // (n // len(units))] for c in range(n)], args)
+
+
+def stated_units(record: Record) -> list[str] | None:
+    """Per-channel units the file format itself states when they differ, else None.
+
+    A ROS ``sensor_msgs/Imu`` message or a PX4 ``sensor_combined`` topic defines its units
+    (rad/s for the gyro axes, m/s^2 for the accelerometer's): a six-axis log is then two
+    sensors without ``--units`` (not a guess: the message definition says so).
+    """
+    meta = record.meta if isinstance(record.meta, dict) else {}
+    per = meta.get("channel_units")
+    if record.units is not None or not isinstance(per, dict):
+        return None
+    found = [per.get(c) for c in record.channels]
+    if any(u is None for u in found) or len(set(found)) < 2:
+        return None
+    return [str(u) for u in found]
+
+
+def _split_by_unit(
+    record: Record, per_channel: list[str], args: argparse.Namespace
+) -> list[Record]:
+    """One record per unit of ``per_channel`` (a unit per channel), in order of appearance."""
     groups: dict[str, list[int | str]] = {}
     for c, unit in enumerate(per_channel):
         groups.setdefault(unit, []).append(c)

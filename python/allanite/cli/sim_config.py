@@ -107,8 +107,10 @@ def load_sim_model(args: argparse.Namespace, fs: float, units: str | None) -> Lo
     convertible = model_unit != RECORD_UNIT and sensor_kind(model_unit) == sensor_kind(units)
     if model_unit != units and convertible:
         model = model.in_units(units)  # a mismatch of quantities is reported by diagnose
+    other = "accel" if sensor == "gyro" else "gyro"
     for note in config.notes:
-        print(f"note: {note}", file=sys.stderr)
+        if not note.startswith(f"{other}:"):  # notes on the other sensor are beside the point
+            print(f"note: {note}", file=sys.stderr)
     return LoadedSim(model, config, fmt, float(config.rate or fs), sensor)
 
 

@@ -33,7 +33,8 @@ def register(subparsers: Any) -> None:
         "--output",
         choices=("rate", "angle", "increment"),
         default="rate",
-        help="rate (model units, default), angle increments or accumulated angle",
+        help="rate (model units, default), angle increments or accumulated angle (in the "
+        "model's angle unit: deg for deg/s and deg/h, m/s for an accelerometer)",
     )
     parser.add_argument("--seed", type=int, default=None, help="random seed (non-negative)")
     parser.add_argument(
@@ -75,6 +76,24 @@ def _count(text: str) -> int:
     return int(value)
 
 
+def _refuse_config(path: str) -> None:
+    """A simulator/estimator config given as the model: name it and the conversion."""
+    from allanite.errors import InputError
+    from allanite.formats import CONFIG_TEXT, FORMATS, detect_format
+    from allanite.model import read_text_file
+
+    try:
+        fmt = detect_format(Path(path), read_text_file(Path(path), CONFIG_TEXT))
+    except (InputError, ValueError, OSError):
+        return  # NoiseModel.load says what is wrong with it
+    if fmt != "allanite":
+        raise ValueError(
+            f"{path} is a {FORMATS[fmt].TITLE} config, not a noise-model JSON; convert it "
+            f"first: allanite model convert {path} model.json [--rate HZ] (its gyro model), "
+            "then simulate model.json"
+        )
+
+
 def _duration(seconds: float) -> str:
     for unit, size in (("d", 86400.0), ("h", 3600.0), ("min", 60.0)):
         if seconds >= size:
@@ -94,15 +113,20 @@ def run(args: argparse.Namespace) -> int:
         output_size,
         write_record,
     )
+    from allanite.units import integrated_unit
 
     format_of(args.out)  # fail on a bad suffix before any work
+    _refuse_config(args.model)
     model = NoiseModel.load(args.model)
     n = record_length(args.fs, args.samples, args.duration)
     if args.n_channels < 1:
         raise ValueError(f"--n-channels must be at least 1, got {args.n_channels}")
     check_free_space(args.out, output_size(args.out, n, args.n_channels))
-    unit = model.units["rate"]
-    what = unit if args.output == "rate" else f"{unit}*s"
+    what = model.units["rate"]
+    if args.output != "rate":  # angles in an angle unit (deg), not deg/s*s or deg/h*s
+        per_second, what = integrated_unit(what)
+        if per_second != model.units["rate"]:
+            model = model.in_units(per_second)
     big = n * args.n_channels >= 10_000_000
     with progress_bars(None if big and not args.quiet else False) as update:
         write_record(

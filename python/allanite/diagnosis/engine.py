@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from allanite._deprecation import renamed
+from allanite._deprecation import keyword_only_fs, renamed
 from allanite.diagnosis.analysis import Analysis, Progress, analyze
 from allanite.diagnosis.attribution import Attribution, rank
 from allanite.diagnosis.band_shape import band_shape
@@ -83,6 +83,7 @@ def _evidence(analysis: Analysis) -> dict[str, float]:
     return out
 
 
+@keyword_only_fs
 def diagnose(
     real: ArrayLike | Record,
     sim: Any,

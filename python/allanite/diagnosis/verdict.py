@@ -70,6 +70,19 @@ EVIDENCE_TEXT = {
 }
 
 
+#: an excess-kurtosis difference below this is reported as negligible in size: it changes the
+#: variance of a short-tau Allan variance estimate by the factor ``1 + kappa / 2`` (Gaussian
+#: reference), i.e. by less than 10 %, so the Gaussian intervals stay within 5 %
+KURTOSIS_NEGLIGIBLE = 0.2
+#: a noise level within this relative rms of the typical level is reported as negligible in
+#: size (the Allan variance in those windows within about +-10 %)
+LEVEL_NEGLIGIBLE = 0.05
+#: an explanation whose effects shrink the tau gap by less than this is not named in the
+#: headline of a gap it leaves open (they explain nothing)
+SHRINKAGE_NEGLIGIBLE = 0.01
+_NEGLIGIBLE = ": significant on this long record, but negligible in size"
+
+
 @dataclass(frozen=True)
 class Unexplained:
     """One part of the gap that the best effect leaves unexplained.
@@ -149,8 +162,14 @@ def param_unit(rate: str | None, rate_power: float, time_power: float) -> str:
     return text if time_power == 0 else f"{text}*s^{time_power:g}"
 
 
-def format_params(a: Attribution, units: str | None, *, skip: tuple[str, ...] = ()) -> str:
-    """``N = 0.014 deg/sqrt(s)``-style text of an attribution's parameters."""
+def format_params(
+    a: Attribution, units: str | None, *, skip: tuple[str, ...] = (), fs: float | None = None
+) -> str:
+    """``N = 0.014 deg/sqrt(s)``-style text of an attribution's parameters.
+
+    With the sampling frequency ``fs``, a frequency above the Nyquist frequency (a sensor
+    filter's bandwidth can be: it acts before sampling) says so.
+    """
     specs = {}
     cls = _term_class(a)
     if cls is not None:
@@ -164,7 +183,13 @@ def format_params(a: Attribution, units: str | None, *, skip: tuple[str, ...] = 
             continue
         spec = specs.get(name)
         unit = param_unit(units, spec.rate, spec.time) if spec is not None else ""
-        parts.append(f"{name} = {value:.4g}" + (f" {unit}" if unit else ""))
+        text = f"{name} = {value:.4g}" + (f" {unit}" if unit else "")
+        if fs is not None and unit == "Hz" and value > fs / 2:
+            text += (
+                f" [above the Nyquist frequency {fs / 2:.4g} Hz: it acts before sampling and is "
+                "seen only through the sampled noise]"
+            )
+        parts.append(text)
     return ", ".join(parts)
 
 
@@ -174,20 +199,20 @@ def _term_class(a: Attribution) -> Any:
     return TERM_TYPES.get(str(a.term.get("type", "")))
 
 
-def describe_effect(a: Attribution, units: str | None) -> str:
-    """The effect in words, with its parameters and units."""
+def describe_effect(a: Attribution, units: str | None, fs: float | None = None) -> str:
+    """The effect in words, with its parameters and units (``fs``: see :func:`format_params`)."""
     if a.effect.startswith("rescale:"):
         kind = a.effect.split(":", 1)[1]
         name = TERM_NAMES.get(kind, f"{kind} term")
         return (
             f"the real sensor's {name} is {a.params.get('scale', float('nan')):.2f}x the "
-            f"simulated one ({format_params(a, units, skip=('scale',))})"
+            f"simulated one ({format_params(a, units, skip=('scale',), fs=fs)})"
         )
     if a.effect == "white_drift":
         return _describe_drift(a, units)
     name = TERM_NAMES.get(a.effect, a.effect)
     verb = "is missing" if a.effect != "lowpass" else "is missing in the simulation"
-    return f"{name} {verb} ({format_params(a, units)})"
+    return f"{name} {verb} ({format_params(a, units, fs=fs)})"
 
 
 def _describe_drift(a: Attribution, units: str | None) -> str:
@@ -253,17 +278,25 @@ def _time_item(name: str, tv: TimeView, p: float) -> Unexplained:
     segs = where["time_segments_s"]
     text = f"time view: {what}"
     if "noise_level_ratio_max" in size:
-        text += f" (rms x{size['noise_level_ratio_max']:.2g} of the typical level"
-        text += f" at {_segments_text(segs)})" if segs else ")"
+        hi, lo = size["noise_level_ratio_max"] - 1.0, size["noise_level_ratio_min"] - 1.0
+        spread = f"rms {100 * hi:+.2g} % / {100 * lo:+.2g} % of the typical level"
+        if max(abs(hi), abs(lo)) < LEVEL_NEGLIGIBLE:
+            text = f"time view: the {'short' if name == 'hf' else 'mid'}-tau noise level varies "
+            text += f"slightly over the record ({spread}{_NEGLIGIBLE})"
+        else:
+            text += f" ({spread}" + (f" at {_segments_text(segs)})" if segs else ")")
     elif segs and name != "spike":
         text += f" at {_segments_text(segs)}"
     elif name == "spike":
         text += f" ({int(size['count'])} found)"
     elif name.startswith("kurt"):
-        text += (
-            f" (real {size['excess_kurtosis_real']:.3g} vs simulated "
-            f"{size['excess_kurtosis_sim']:.3g})"
-        )
+        real, sim = size["excess_kurtosis_real"], size["excess_kurtosis_sim"]
+        if abs(real - sim) < KURTOSIS_NEGLIGIBLE:
+            shape = "heavier" if real > sim else "lighter"
+            text = f"time view: the sample-to-sample changes are slightly {shape}-tailed than "
+            text += f"simulated (excess kurtosis {real:.3g}, simulated {sim:.3g}{_NEGLIGIBLE})"
+        else:
+            text += f" (real {real:.3g} vs simulated {sim:.3g})"
     return Unexplained("time", name, where, size, float(p), text + f", p = {p:.2g}")
 
 
@@ -393,8 +426,15 @@ def verdict(
         else:
             items.append(_time_item(e, time, evidence_p[e]))
     closed = explanation is not None and not items
+    if (
+        explanation is not None
+        and not closed
+        and all(a.shrinkage < SHRINKAGE_NEGLIGIBLE for a in explanation.effects)
+    ):
+        explanation = None  # effects that shrink nothing are not named as "missing"
     if explanation is not None:
-        effect = "; and ".join(describe_effect(a, units) for a in explanation.effects)
+        fs = 1.0 / tau_model.dt
+        effect = "; and ".join(describe_effect(a, units, fs) for a in explanation.effects)
         it = "them" if len(explanation.effects) > 1 else "it"
         if closed:
             headline = f"{effect}; after adding {it}, the records agree in all three views"
@@ -405,6 +445,9 @@ def verdict(
             headline = f"{effect}; {closed_tau}not everything is explained: " + "; ".join(
                 i.text for i in items
             )
+    elif items and all(_NEGLIGIBLE in i.text for i in items):
+        headline = "a small gap, significant but negligible in size, that no candidate effect "
+        headline += "explains: " + "; ".join(i.text for i in items)
     else:
         headline = "there is a significant gap that no candidate effect explains: " + "; ".join(
             i.text for i in items

@@ -10,6 +10,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy import stats
 
+from allanite._deprecation import keyword_only_fs
 from allanite.fit.classic import ClassicReadout, classic_readout
 from allanite.fit.covariance import avar_covariance
 from allanite.fit.gls import GLSData, GLSSolution, score_interval, solve
@@ -332,6 +333,7 @@ def _fit_seed(result: AllanResult, units: str) -> FitResult:
     )
 
 
+@keyword_only_fs
 def fit(
     result_or_record: AllanResult | Record | ArrayLike,
     terms: str | Sequence[Any] = "auto",

@@ -15,7 +15,7 @@ from scipy import stats
 from allanite.fit.classic import ClassicReadout
 from allanite.model import NoiseModel
 from allanite.notebook import fit_html
-from allanite.units import convert, display_unit, parse_unit
+from allanite.units import convert, customary_unit, display_unit, parse_unit
 
 __all__ = ["Coefficient", "Comparison", "ComparisonRow", "FitResult"]
 
@@ -259,6 +259,8 @@ class FitResult:
     def _unit_for(self, name: str, units: str | Mapping[str, str] | None) -> str:
         if units is None:
             return self.coefficients[name].unit
+        if units == "customary":  # as datasheets quote it, the CLI's and the report's choice
+            return customary_unit(self.model.units["rate"], name, self.coefficients[name].unit)
         if isinstance(units, str):  # the coefficient's dimension shown with that rate unit
             return display_unit(units, parse_unit(self.coefficients[name].unit))
         if name in units:
@@ -274,8 +276,10 @@ class FitResult:
         Parameters
         ----------
         units : str or mapping, optional
-            A rate unit (``"deg/h"``: N in deg/sqrt(h), K in deg/h/sqrt(h), ...), or a unit
-            per coefficient (``{"N": "deg/sqrt(h)", "B": "deg/h"}``); default: model units.
+            A rate unit (``"deg/h"``: N in deg/sqrt(h), K in deg/h/sqrt(h), ...), a unit per
+            coefficient (``{"N": "deg/sqrt(h)", "B": "deg/h"}``), or ``"customary"``: the
+            units datasheets quote (:func:`allanite.units.customary_unit`, as ``allanite fit``
+            prints them); default: model units.
         level : float
             Confidence level of ``low``/``high``.
         """
@@ -297,9 +301,13 @@ class FitResult:
         return rows
 
     def format_table(
-        self, units: str | Mapping[str, str] | None = None, level: float = 0.95
+        self, units: str | Mapping[str, str] | None = "customary", level: float = 0.95
     ) -> str:
-        """Plain-text version of :meth:`table`, with the goodness of fit."""
+        """Plain-text version of :meth:`table`, with the goodness of fit.
+
+        By default in the customary units, as ``allanite fit`` prints them (a gyro's N in
+        deg/sqrt(h), B in deg/h); ``units=None`` keeps the model's units.
+        """
         pct = f"{100 * level:g}%"
         lines = [
             f"{'coef':<10}{'value':>12}{'stderr':>12}{pct + ' low':>12}{pct + ' high':>12}  unit"

@@ -59,3 +59,17 @@ def update_keys(text: str, values: dict[str, str], *, indent: str = "") -> str:
         else:
             missing.append(f"{indent}{key}: {value}")
     return "\n".join(lines + missing) + "\n"
+
+
+_NOTE = re.compile(r"^\s*# (projected|dropped|not representable[^:]*, dropped): ")
+
+
+def with_notes(text: str, dropped: list[str], projections: list[str]) -> str:
+    """``text`` with ``# dropped: ...`` / ``# projected: ...`` lines for what it cannot hold.
+
+    For configs written into a user's template: the notes of an earlier allanite write are
+    replaced, so a corrected config says what this write projected or left out, once.
+    """
+    lines = [line for line in text.splitlines() if not _NOTE.match(line)]
+    lines += [f"# dropped: {d}" for d in dropped] + [f"# projected: {p}" for p in projections]
+    return "\n".join(lines) + "\n"

@@ -44,7 +44,10 @@ def write(
         raise ValueError("the config holds no noise model to write")
     dropped = []
     if config.gyro is not None and config.accel is not None:
-        dropped.append("accel: the model JSON holds one sensor; the accelerometer model")
+        dropped.append(
+            "accel: the model JSON holds one sensor; the accelerometer model (write it with "
+            "--sensor accel, library: config.with_model or ImuConfig(accel=...))"
+        )
     if template is not None:
         old = NoiseModel.from_json(template)
         if old.units["rate"] != model.units["rate"]:

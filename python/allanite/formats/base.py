@@ -67,14 +67,24 @@ class ImuConfig:
     source_format: str = ""
     notes: tuple[str, ...] = ()
 
-    def model(self, sensor: str = "gyro") -> NoiseModel:
-        """The model of one sensor, with a clear error when the config has none."""
+    def model(self, sensor: str = "gyro", *, option: str = "--sim-sensor") -> NoiseModel:
+        """The model of one sensor, with a clear error when the config has none.
+
+        ``option`` is the command-line option the error names to choose the other sensor.
+        """
         if sensor not in SENSORS:
             raise ValueError(f"sensor must be 'gyro' or 'accel', got {sensor!r}")
         found: NoiseModel | None = getattr(self, sensor)
         if found is None:
+            other = "accel" if sensor == "gyro" else "gyro"
+            hint = (
+                f"; it holds {'an' if other == 'accel' else 'a'} {other} model: choose it with "
+                f"{option} {other} (library: config.model({other!r}))"
+                if getattr(self, other) is not None
+                else ""
+            )
             raise ValueError(
-                f"the {self.source_format or 'given'} config holds no {sensor} noise model"
+                f"the {self.source_format or 'given'} config holds no {sensor} noise model{hint}"
             )
         return found
 

@@ -23,7 +23,7 @@ from __future__ import annotations
 
 from allanite.formats._densities import HOLDS as HOLDS  # the format protocol: what it holds
 from allanite.formats._densities import density_entries, from_densities
-from allanite.formats._text import load_yaml, number_text, update_keys
+from allanite.formats._text import load_yaml, number_text, update_keys, with_notes
 from allanite.formats.base import ImuConfig, Written, number
 
 NAME = "kalibr"
@@ -77,7 +77,7 @@ def write(
         text = update_keys(template, {k: number_text(v) for k, v in values.items()})
         if rate:
             text = update_keys(text, {"update_rate": number_text(rate)})
-        return Written(text, dropped, projections)
+        return Written(with_notes(text, dropped, projections), dropped, projections)
     lines = ["# IMU noise model exported by allanite (continuous-time densities, SI units)"]
     for key in sorted(values):
         lines.append(f"{key}: {number_text(values[key])}  # {UNITS[key]}")

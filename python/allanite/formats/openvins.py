@@ -11,7 +11,7 @@ from typing import Any
 
 from allanite.formats import kalibr
 from allanite.formats._densities import HOLDS, from_densities
-from allanite.formats._text import load_yaml, number_text, update_keys
+from allanite.formats._text import load_yaml, number_text, update_keys, with_notes
 from allanite.formats.base import ImuConfig, Written, number
 
 NAME = "openvins"
@@ -50,7 +50,8 @@ def write(
     if rate:
         text_values["update_rate"] = number_text(rate)
     if template is not None:
-        return Written(update_keys(template, text_values, indent="  "), dropped, projections)
+        text = update_keys(template, text_values, indent="  ")
+        return Written(with_notes(text, dropped, projections), dropped, projections)
     lines = ["%YAML:1.0 # need to specify the file type at the top!", "", "imu0:"]
     lines += [f"  {k}: {v}  # {kalibr.UNITS[k]}" for k, v in sorted(text_values.items())]
     lines += ["  rostopic: /imu0", "  time_offset: 0.0"]

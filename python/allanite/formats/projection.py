@@ -56,6 +56,10 @@ def _describe(term: Term) -> str:
     return f"{term.type} ({values})"
 
 
+#: a projected Gauss-Markov correlation time is at most this many times the longest tau
+TAU_C_CAP = 1000.0
+
+
 def _taus(tau_range: tuple[float, float], dt: float) -> np.ndarray:
     lo, hi = tau_range
     if not (lo > 0 and hi > lo):
@@ -78,12 +82,15 @@ def _fit_slot(
         base = base + t.avar(taus, dt)
     log_target = np.log(target)
     n_slot = 2 if slot == "markov" else 1
+    # beyond TAU_C_CAP x the longest tau a Gauss-Markov bias is a random walk over the range
+    # (ADEV within ~0.1 %); an unbounded fit drifted to tau_c ~ 1e17 s, where a simulator's
+    # phi = exp(-dt/tau_c) rounds to 1 in double precision and the bias never moves
+    longest = TAU_C_CAP * float(taus[-1])
 
     def build(theta: np.ndarray) -> list[Term]:
         if slot == "markov":
-            out: list[Term] = [
-                GaussMarkov(sigma=float(np.exp(theta[0])), tau_c=float(np.exp(theta[1])))
-            ]
+            tau_c = min(float(np.exp(theta[1])), longest)
+            out: list[Term] = [GaussMarkov(sigma=float(np.exp(theta[0])), tau_c=tau_c)]
         else:
             out = [RateRandomWalk(K=float(np.exp(theta[0])))]
         if white is not None:

@@ -135,9 +135,26 @@ def write(
                     f"the template has no <{key}> element; add it to the plugin block or write "
                     "without a template"
                 )
-        return Written(text, dropped, projections)
+        return Written(_with_notes(text, notes), dropped, projections)
     lines = [*notes, '<plugin name="imu_plugin" filename="libgazebo_imu_plugin.so">']
     lines += ["  <linkName>imu_link</linkName>", "  <imuTopic>/imu</imuTopic>"]
     lines += [f"  <{k}>{number_text(v)}</{k}>" for k, v in values.items()]
     lines.append("</plugin>")
     return Written("\n".join(lines) + "\n", dropped, projections)
+
+
+_NOTE = re.compile(r"[ \t]*<!-- (dropped|projected): .*? -->\n?")
+_PLUGIN = re.compile(r"^([ \t]*)<plugin\b[^>]*imu_plugin", re.M)
+
+
+def _with_notes(text: str, notes: list[str]) -> str:
+    """A template with this write's notes before its plugin element (earlier notes replaced)."""
+    text = _NOTE.sub("", text)
+    if not notes:
+        return text
+    found = _PLUGIN.search(text)
+    if found is None:
+        return text.rstrip("\n") + "\n" + "\n".join(notes) + "\n"
+    indent = found.group(1)
+    block = "".join(f"{indent}{n}\n" for n in notes)
+    return text[: found.start()] + block + text[found.start() :]

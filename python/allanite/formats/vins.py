@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from allanite.formats._densities import HOLDS as HOLDS  # the format protocol: what it holds
 from allanite.formats._densities import density_entries, from_densities
-from allanite.formats._text import load_yaml, number_text, update_keys
+from allanite.formats._text import load_yaml, number_text, update_keys, with_notes
 from allanite.formats.base import ImuConfig, Written
 
 NAME = "vins"
@@ -41,7 +41,8 @@ def write(
     densities, dropped, projections = density_entries(config, KEYS, rate, tau_range)
     values = {key: number_text(value) for key, value in densities.items()}
     if template is not None:
-        return Written(update_keys(template, values), dropped, projections)
+        text = with_notes(update_keys(template, values), dropped, projections)
+        return Written(text, dropped, projections)
     lines = ["%YAML:1.0", "# IMU noise (continuous densities, SI units) written by allanite"]
     lines += [f"{k}: {v}" for k, v in values.items()]
     lines.extend(f"# dropped: {d}" for d in dropped)

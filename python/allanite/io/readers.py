@@ -10,6 +10,7 @@ a policy, see :mod:`allanite.io.timebase`), a scale factor from counts to units,
 from __future__ import annotations
 
 import os
+import re
 import zipfile
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -21,7 +22,7 @@ from numpy.typing import NDArray
 from allanite.errors import InputError, choose_one
 from allanite.extras import require
 from allanite.io.options import Column, ReadOptions
-from allanite.io.record import Record
+from allanite.io.record import Record, time_like
 from allanite.io.text import read_text_table
 from allanite.io.timebase import resolve_time
 
@@ -266,7 +267,7 @@ def make_record(
         raise InputError(f"only {arr.shape[0]} sample(s); need at least 3", path=source)
     channels = tuple(col_names[i] for i in idx)
     if t_index is None:
-        return Record(
+        record = Record(
             samples=samples,
             fs=fs,
             input=input,
@@ -274,14 +275,16 @@ def make_record(
             channels=channels,
             source=source,
             scale=scale,
+            warnings=_time_channels(channels, samples) if fs is not None else (),
         )
+        return _header_units(record) if units is None and scale is None else record
     if not np.isfinite(time_scale) or time_scale <= 0:
         raise ValueError(f"time_scale must be a positive number of seconds, got {time_scale!r}")
     t = np.asarray(arr[:, t_index], dtype=np.float64) * time_scale
     base = resolve_time(
         t, np.asarray(samples, dtype=np.float64), source=source, policy=gaps, fs=fs, where=locate
     )
-    return Record(
+    record = Record(
         samples=base.samples,
         fs=base.fs,
         input=input,
@@ -293,6 +296,61 @@ def make_record(
         timing=base.timing,
         scale=scale,
     )
+    return _header_units(record) if units is None and scale is None else record
+
+
+_HEADER_UNIT = re.compile(r"^(.*\S)\s*\[([^\[\]]+)\]$")
+
+
+def _header_units(record: Record) -> Record:
+    """The units a header states for every channel, when no unit was given.
+
+    ``gz[deg/s]``, as ``allanite simulate`` writes them: the record's unit when they agree,
+    else one per channel (``meta["channel_units"]``, as for robot logs). A header that does
+    not state a readable unit for every channel leaves the record as it is.
+    """
+    import dataclasses
+
+    from allanite.units import parse_unit
+
+    found = []
+    for name in record.channels:
+        match = _HEADER_UNIT.match(name)
+        if match is None:
+            return record
+        try:
+            parse_unit(match.group(2))
+        except ValueError:
+            return record
+        found.append(match.group(2).strip())
+    stated = ", ".join(dict.fromkeys(found))
+    try:
+        for unit in set(found):
+            dataclasses.replace(record, units=unit).rate_unit()
+    except ValueError:
+        other = "--input angle or increment" if record.input == "rate" else "--input rate"
+        note = (
+            f"the header states {stated}, not a unit of {record.input} samples: not used; "
+            f"give {other} if that is what the samples are, or --units"
+        )
+        return dataclasses.replace(record, warnings=(*record.warnings, note))
+    meta = {**record.meta, "channel_units": dict(zip(record.channels, found, strict=True))}
+    units = found[0] if len(set(found)) == 1 else None
+    note = f"units from the header: {stated}"
+    return dataclasses.replace(record, units=units, meta=meta, warnings=(*record.warnings, note))
+
+
+def _time_channels(channels: tuple[str, ...], samples: NDArray[Any]) -> tuple[str, ...]:
+    """Warnings for channels that are named like time stamps and increase: a missed time column."""
+    out = []
+    for c, name in enumerate(channels):
+        if time_like(name) and bool(np.all(np.diff(samples[:, c]) > 0)):
+            out.append(
+                f"channel {name} is named like time stamps and always increases: if it is the "
+                f"time, give --time-column {name} (time_column={name!r}); it is analysed as a "
+                "sensor channel"
+            )
+    return tuple(out)
 
 
 # --- per-format loaders: return (table, names, where) ----------------------------------------

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import re
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -11,7 +12,19 @@ from numpy.typing import NDArray
 
 from allanite.units import record_rate_unit
 
-__all__ = ["INPUT_KINDS", "Record", "Segment", "Timing"]
+__all__ = ["INPUT_KINDS", "Record", "Segment", "Timing", "time_like"]
+
+_TIME_NAME = re.compile(
+    r"^(t|time|times|timestamp|timestamps|stamp|sec|secs|seconds)"
+    r"([ _\-]?(s|sec|\[s\]|\(s\)|\[sec\]))?$",
+    re.I,
+)
+
+
+def time_like(name: str) -> bool:
+    """Whether a column name reads as a time stamp column (``t``, ``time``, ``time_s``, ...)."""
+    return bool(_TIME_NAME.match(name.strip()))
+
 
 #: what the samples are: angular rate, angle increments per sample, or angle
 INPUT_KINDS: tuple[str, ...] = ("rate", "increment", "angle")
@@ -163,9 +176,15 @@ class Record:
     def require_fs(self) -> float:
         """Return the sampling frequency, or raise a ValueError telling how to give it."""
         if self.fs is None:
+            named = next((c for c in self.channels if time_like(c)), None)
+            hint = (
+                f"; column {named!r} looks like the time: --time-column {named}"
+                if named is not None
+                else ""
+            )
             raise ValueError(
                 f"{self.source}: the sampling frequency is unknown; give it with fs= (CLI: "
-                "--fs HZ) or name a time column (--time-column)"
+                f"--fs HZ) or name a time column (--time-column){hint}"
             )
         return self.fs
 

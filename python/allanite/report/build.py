@@ -209,7 +209,7 @@ def _adev_table(device: DeviceAnalysis, level: float) -> str:
     for k in _pick_rows(res.tau.size):
         row = [h.fmt(res.tau[k])]
         for c in range(dev.shape[1]):
-            row += [h.fmt(dev[k, c]), f"{h.fmt(lo[k, c], 3)} … {h.fmt(hi[k, c], 3)}"]
+            row += [h.fmt(dev[k, c]), f"{h.fmt(lo[k, c])} … {h.fmt(hi[k, c])}"]
         rows.append(row)
     return h.table(header, rows, text_columns=0)
 
@@ -286,7 +286,7 @@ def _coefficient_section(
                 k.quantity or k.term,
                 k.symbol,
                 h.fmt(k.value),
-                "–" if k.low != k.low else f"{h.fmt(k.low, 3)} … {h.fmt(k.high, 3)}",
+                "–" if k.low != k.low else f"{h.fmt(k.low)} … {h.fmt(k.high)}",
                 k.unit,
                 k.slope or "–",
             ]
@@ -357,7 +357,7 @@ def _datasheet_section(
             c.limit.label,
             c.limit.bounds_text(),
             h.fmt(c.value),
-            "–" if c.low is None else f"{h.fmt(c.low, 3)} … {h.fmt(c.high, 3)}",
+            "–" if c.low is None else f"{h.fmt(c.low)} … {h.fmt(c.high)}",
             h.badge(c.status),
         ]
         for c in checks

@@ -147,4 +147,43 @@ def slope_table(
                 )
             )
             start = k
-    return [r for r in rows if r.n_points >= MIN_POINTS]
+    return [r for r in _merge_equal(rows, tau, dev, canon, sensor) if r.n_points >= MIN_POINTS]
+
+
+def _merge_equal(
+    rows: list[SlopeRow],
+    tau: NDArray[np.float64],
+    dev: NDArray[np.float64],
+    canon: NDArray[np.float64],
+    sensor: str,
+) -> list[SlopeRow]:
+    """Merge neighbouring rows that their own slopes put in the same class.
+
+    Runs are cut where the local slope changes class, but a row is named after its own
+    least-squares slope, so two neighbours can both read as, say, a flat 0 (``15.9 – 39 s``
+    and ``43.6 – 61 s``): one row, refitted over both, when the merged slope keeps the class.
+    """
+    names = ACCEL_SLOPE_TERMS if sensor == "accelerometer" else SLOPE_TERMS
+    out: list[SlopeRow] = []
+    for row in rows:
+        prev = out[-1] if out else None
+        if prev is None or prev.canonical != row.canonical:
+            out.append(row)
+            continue
+        sel = (tau >= prev.tau_min) & (tau <= row.tau_max)
+        fit = float(np.polyfit(np.log10(tau[sel]), np.log10(dev[sel]), 1)[0])
+        if float(canon[np.argmin(np.abs(canon - fit))]) != row.canonical:
+            out.append(row)
+            continue
+        label, term, symbol = names[row.canonical]
+        out[-1] = SlopeRow(
+            tau_min=prev.tau_min,
+            tau_max=row.tau_max,
+            slope=fit,
+            canonical=row.canonical,
+            label=label,
+            term=term,
+            symbol=symbol,
+            n_points=int(sel.sum()),
+        )
+    return out

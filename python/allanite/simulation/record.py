@@ -22,7 +22,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from allanite import _core
-from allanite._deprecation import renamed
+from allanite._deprecation import keyword_only_fs, renamed
 from allanite.simulation.flicker import FLICKER_METHODS
 from allanite.simulation.streams import SumStream, check_fs, seed_sequence
 from allanite.terms.base import Term
@@ -159,6 +159,7 @@ def _open(
     return SumStream(streams, fs, int(n_channels))
 
 
+@keyword_only_fs
 def simulate_chunks(
     model: Any,
     n: int | None = None,
@@ -203,6 +204,7 @@ def simulate_chunks(
         yield values
 
 
+@keyword_only_fs
 def simulate(
     model: Any,
     n: int | None = None,

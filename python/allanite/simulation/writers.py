@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from allanite._deprecation import renamed
+from allanite._deprecation import keyword_only_fs, renamed
 from allanite.io.atomic import atomic_output
 from allanite.simulation.record import record_length, simulate_chunks
 
@@ -146,6 +146,7 @@ def write_chunks(
     return Path(path)
 
 
+@keyword_only_fs
 def write_record(
     path: str | os.PathLike[str],
     model: Any,

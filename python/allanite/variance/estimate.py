@@ -15,6 +15,7 @@ from typing import Any
 from numpy.typing import ArrayLike
 
 from allanite import _core
+from allanite._deprecation import keyword_only_fs
 from allanite.io.record import Record
 from allanite.units import record_rate_unit
 from allanite.variance.checks import (
@@ -37,6 +38,7 @@ from allanite.variance.taus import KERNEL_KIND, TauSpec, averaging_factors
 __all__ = ["adev", "avar", "hdev", "mdev", "oadev", "ohdev", "tdev", "totdev"]
 
 
+@keyword_only_fs
 def avar(
     x: ArrayLike | Record | ChunkedRecord | str | os.PathLike[str],
     *,
@@ -193,6 +195,7 @@ def _named(kind: Kind, arguments: dict[str, Any]) -> AllanResult:
     return avar(options.pop("x"), kind=kind, **options)
 
 
+@keyword_only_fs
 def adev(
     x: ArrayLike | Record | ChunkedRecord | str | os.PathLike[str],
     *,
@@ -227,6 +230,7 @@ def adev(
     return _named("standard", locals())
 
 
+@keyword_only_fs
 def oadev(
     x: ArrayLike | Record | ChunkedRecord | str | os.PathLike[str],
     *,
@@ -261,6 +265,7 @@ def oadev(
     return _named("overlapping", locals())
 
 
+@keyword_only_fs
 def mdev(
     x: ArrayLike | Record | ChunkedRecord | str | os.PathLike[str],
     *,
@@ -295,6 +300,7 @@ def mdev(
     return _named("modified", locals())
 
 
+@keyword_only_fs
 def hdev(
     x: ArrayLike | Record | ChunkedRecord | str | os.PathLike[str],
     *,
@@ -329,6 +335,7 @@ def hdev(
     return _named("standard_hadamard", locals())
 
 
+@keyword_only_fs
 def ohdev(
     x: ArrayLike | Record | ChunkedRecord | str | os.PathLike[str],
     *,
@@ -363,6 +370,7 @@ def ohdev(
     return _named("hadamard", locals())
 
 
+@keyword_only_fs
 def tdev(
     x: ArrayLike | Record | ChunkedRecord | str | os.PathLike[str],
     *,
@@ -397,6 +405,7 @@ def tdev(
     return _named("time", locals())
 
 
+@keyword_only_fs
 def totdev(
     x: ArrayLike | Record | ChunkedRecord | str | os.PathLike[str],
     *,

@@ -36,6 +36,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from allanite import _core
+from allanite._deprecation import keyword_only_fs
 from allanite.io.record import Record
 from allanite.units import record_rate_unit
 from allanite.variance.checks import INPUTS, KINDS, check_threads, given_alpha, resolve_source
@@ -329,6 +330,7 @@ def _capped(
     return None if alphas is None else cap_few_point_alpha(alphas, factors, points)
 
 
+@keyword_only_fs
 def avar_large(
     source: ArrayLike | Record | ChunkedRecord | str | os.PathLike[str],
     *,
