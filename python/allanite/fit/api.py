@@ -16,7 +16,7 @@ from allanite.fit.covariance import avar_covariance
 from allanite.fit.gls import GLSData, GLSSolution, score_interval, solve
 from allanite.fit.result import Coefficient, FitResult
 from allanite.fit.seed import SCALE, coefficient_bounds, seed_fit
-from allanite.fit.select import n_params, select_terms
+from allanite.fit.select import Ambiguity, n_params, select_terms
 from allanite.fit.spec import TermSpec, resolve_terms
 from allanite.io.record import Record
 from allanite.model import NoiseModel
@@ -241,21 +241,26 @@ def _fit_gls(
         result.tau[enough], np.sqrt(np.asarray(result.var, dtype=np.float64)[enough])
     )
     subsets: list[dict[str, Any]] = []
+    ambiguity: Ambiguity | None = None
     if auto:
         usable = [s for s in specs if _n_params([s]) < int(keep.sum())]
         slope = _slope_start(classic, data, units)
         starts = [None] if slope is None else [None, slope]
-        sol, selection, subsets = select_terms(usable, data, edf, penalty, misfit_level, starts)
+        sol, ambiguity, selection, subsets = select_terms(
+            usable, data, edf, penalty, misfit_level, starts
+        )
     else:
         sol, selection = solve(specs, data, edf, misfit_level=misfit_level), ()
     model = sol.model(units)
+    coefficients = _coefficients(sol, model)
+    alternatives, exchangeable = _ambiguous(ambiguity, coefficients, data, units)
     dof = int(keep.sum()) - _n_params(sol.specs)
     p_value = float(stats.chi2.sf(sol.chi2, dof)) if dof > 0 else math.nan
     # standardised under the terms alone, so that a misfit shows where it is
     residuals = (data.y - sol.fitted) / np.sqrt(np.diag(sol.model_cov))
     return FitResult(
         model=model,
-        coefficients=_coefficients(sol, model),
+        coefficients=coefficients,
         chi2=sol.chi2,
         dof=dof,
         p_value=p_value,
@@ -277,7 +282,69 @@ def _fit_gls(
         },
         discrepancy=sol.discrepancy,
         misfit_level=misfit_level,
+        alternatives=alternatives,
+        exchangeable=exchangeable,
     )
+
+
+#: the label of each automatic candidate's amplitude
+_SYMBOL = {"quantization": "Q", "white": "N", "flicker": "B", "rrw": "K", "ramp": "R"}
+
+#: share of the fitted Allan variance above which a swapped-in term is said to explain a tau
+_SHARE = 0.2
+
+
+def _hull(own: Coefficient, union: Coefficient) -> Coefficient:
+    """``own`` with the interval widened to the hull of its own and the union fit's."""
+
+    def interval(level: float) -> tuple[float, float]:
+        (a, b), (c, d) = own.ci(level), union.ci(level)
+        return min(a, c), max(b, d)
+
+    return Coefficient(own.name, own.value, max(own.stderr, union.stderr), own.unit, interval)
+
+
+def _ambiguous(
+    ambiguity: Ambiguity | None,
+    coefficients: dict[str, Coefficient],
+    data: GLSData,
+    units: str,
+) -> tuple[tuple[dict[str, Any], ...], dict[str, Coefficient]]:
+    """Widen the exchangeable terms' intervals in place; describe the alternatives.
+
+    The chosen terms involved in a swap (:func:`allanite.fit.select._exchangeable`) get the
+    hull of their own interval and the one of the union fit (chosen plus swapped-in terms:
+    its lower bounds reach what the data allow, often 0), so the estimate stays inside; the
+    swapped-in terms are returned with their union-fit value and interval. Each alternative
+    gains ``symbol_in``/``symbol_out`` and ``from_tau``, the shortest fitted tau at which
+    the swapped-in term carries more than a fifth of the alternative's fitted variance.
+    """
+    if ambiguity is None:
+        return (), {}
+    union_coefs = _coefficients(ambiguity.union, ambiguity.union.model(units))
+    for name in ambiguity.exchangeable:
+        label = _SYMBOL.get(name)
+        if label in coefficients and label in union_coefs:
+            coefficients[label] = _hull(coefficients[label], union_coefs[label])
+    exchangeable: dict[str, Coefficient] = {}
+    described = []
+    for alt in ambiguity.alternatives:
+        symbol = _SYMBOL.get(alt["swap_in"], alt["swap_in"])
+        if symbol in union_coefs:
+            exchangeable[symbol] = union_coefs[symbol]
+        sol = ambiguity.alternative_fits[alt["swap_in"]]
+        j = [s.cls.type for s in sol.specs].index(alt["swap_in"])
+        share = max(float(sol.theta[j]), 0.0) * sol.design[:, j] / np.maximum(sol.fitted, 1e-300)
+        over = np.flatnonzero(share > _SHARE)
+        described.append(
+            {
+                **alt,
+                "symbol_in": symbol,
+                "symbol_out": _SYMBOL.get(alt["swap_out"], alt["swap_out"]),
+                "from_tau": float(data.tau[over[0]]) if over.size else float(data.tau[-1]),
+            }
+        )
+    return tuple(described), exchangeable
 
 
 def _fit_seed(result: AllanResult, units: str) -> FitResult:

@@ -141,6 +141,17 @@ class FitResult:
     misfit_level : float
         The significance level of the misfit test (``p_value``) and, Bonferroni-corrected
         over the taus, of the per-tau flags :attr:`misfit`.
+    alternatives : tuple of dict
+        For ``terms="auto"``: the subsets that swap one chosen term for another candidate
+        at a score within the selection's penalty (the record cannot tell them apart;
+        :func:`allanite.fit.select._exchangeable`), each with ``terms``, ``swap_out``,
+        ``swap_in`` (term types), ``symbol_out``, ``symbol_in``, ``score_delta``,
+        ``p_value`` and ``from_tau`` (the shortest tau where the swapped-in term carries
+        more than a fifth of the alternative's variance). When there are any, the chosen
+        exchangeable terms' intervals are the hull of their own and those of the fit with
+        all the exchangeable terms (see :meth:`ambiguity_note`).
+    exchangeable : dict of str to Coefficient
+        The swapped-in terms' coefficients from that union fit (not part of :attr:`model`).
     """
 
     model: NoiseModel
@@ -159,6 +170,8 @@ class FitResult:
     meta: dict[str, Any] = field(default_factory=dict, compare=False)
     discrepancy: float = 0.0
     misfit_level: float = 0.001
+    alternatives: tuple[dict[str, Any], ...] = ()
+    exchangeable: dict[str, Coefficient] = field(default_factory=dict, compare=False)
     _repr_html_ = fit_html  # Jupyter: a compact table and the plot (allanite.notebook)
 
     @property
@@ -193,9 +206,35 @@ class FitResult:
             f"brackets: {100 * level:g} % intervals; chi2 = {self.chi2:.3g} for {self.dof} dof "
             f"(correlated GLS), p = {self.p_value:.3g}"
         )
+        note = self.ambiguity_note(level)
+        note = "\n" + note if note else ""
         if not self.rejected:
-            return text + ": model not rejected"
-        return text + "\n" + self.rejection_warning()
+            return text + ": model not rejected" + note
+        return text + "\n" + self.rejection_warning() + note
+
+    def ambiguity_note(self, level: float = 0.95) -> str:
+        """One line per alternative the record cannot tell from the chosen terms (else empty).
+
+        E.g. ``AMBIGUOUS: flicker B = 0.0047 [0, 0.0093] deg/h fits the excess at tau >
+        164 s as well as K: the record cannot tell them apart ...``.
+        """
+        lines = []
+        for alt in self.alternatives:
+            symbol, out = alt["symbol_in"], alt["symbol_out"]
+            coef = self.exchangeable.get(symbol)
+            if coef is None:
+                continue
+            unit = customary_unit(self.model.units["rate"], symbol, coef.unit)
+            factor = _factor(coef, unit)
+            lo, hi = coef.ci(level)
+            lines.append(
+                f"AMBIGUOUS: {alt['swap_in']} {symbol} = {coef.value * factor:.4g} "
+                f"[{lo * factor:.4g}, {hi * factor:.4g}] {unit} fits the excess at tau > "
+                f"{alt['from_tau']:.3g} s as well as {out} (score {alt['score_delta']:+.3g}, "
+                f"within the penalty): the record cannot tell them apart; the intervals of "
+                f"{out} and {symbol} are those of the fit with both"
+            )
+        return "\n".join(lines)
 
     def rejection_warning(self) -> str:
         """The plain warning of a rejected fit (empty when the fit is not rejected)."""
@@ -342,7 +381,28 @@ class FitResult:
             "discrepancy": self.discrepancy,
             "good_range": self.good_range,
             "classic": {"label": self.classic.label, **self.classic.values},
+            "alternatives": self.alternatives_dict(level),
         }
+
+    def alternatives_dict(self, level: float = 0.95) -> list[dict[str, Any]]:
+        """JSON-ready :attr:`alternatives`, each with the swapped-in term's value and interval.
+
+        ``value``, ``low`` and ``high`` are in the model's units (``unit``) and come from the
+        fit with all the exchangeable terms; ``note`` is the line of :meth:`ambiguity_note`.
+        """
+        out = []
+        notes = self.ambiguity_note(level).splitlines()
+        for alt, note in zip(
+            [a for a in self.alternatives if a["symbol_in"] in self.exchangeable],
+            notes,
+            strict=True,
+        ):
+            coef = self.exchangeable[alt["symbol_in"]]
+            lo, hi = coef.ci(level)
+            out.append(
+                {**alt, "value": coef.value, "low": lo, "high": hi, "unit": coef.unit, "note": note}
+            )
+        return out
 
     def to_json(self, level: float = 0.95, **kwargs: Any) -> str:
         """JSON text of :meth:`to_dict`."""

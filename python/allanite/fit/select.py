@@ -60,7 +60,7 @@ from scipy import stats
 from allanite.fit.gls import GLSData, GLSSolution, _covariance, solve
 from allanite.fit.spec import TermSpec
 
-__all__ = ["Candidate", "n_params", "score", "select_terms"]
+__all__ = ["Ambiguity", "Candidate", "n_params", "score", "select_terms"]
 
 
 def n_params(specs: Sequence[TermSpec]) -> int:
@@ -286,6 +286,97 @@ def _add_significant(
         additions[best] = {"delta_chi2": tests[best]}
 
 
+@dataclass(frozen=True)
+class Ambiguity:
+    """Selections the record cannot tell from the chosen one (:func:`_exchangeable`).
+
+    Attributes
+    ----------
+    alternatives : tuple of dict
+        Per alternative subset: ``terms`` (its term types), ``swap_out`` (the chosen term
+        it lacks), ``swap_in`` (the candidate it has instead), ``score_delta`` (its score
+        minus the chosen one's, below the penalty) and ``p_value``.
+    union : GLSSolution
+        The fit of the chosen terms plus every swapped-in term: the model that contains
+        every reading, whose intervals of the exchangeable terms reach what the data allow.
+    alternative_fits : dict
+        The fitted solution of each alternative subset, by ``swap_in`` term type.
+    exchangeable : frozenset of str
+        The term types involved in a swap (chosen and candidate).
+    """
+
+    alternatives: tuple[dict[str, Any], ...]
+    union: GLSSolution
+    alternative_fits: dict[str, GLSSolution]
+    exchangeable: frozenset[str]
+
+
+def _exchangeable(
+    chosen: Candidate,
+    by_names: dict[frozenset[str], Candidate],
+    penalty: float,
+    misfit_level: float,
+) -> Ambiguity | None:
+    r"""Find the subsets that swap one chosen term for another candidate at nearly the same score.
+
+    An alternative is a subset, not rejected by the goodness-of-fit test, that differs from
+    the chosen one by one term exchanged for another candidate and whose score is within
+    the selection's own penalty of the chosen score (:math:`S_\text{alt} - S_\text{chosen}
+    < \text{penalty}`): the selection's price of one parameter is its smallest unit of
+    evidence, so such a pair is a choice the record does not make (on a 3 h navigation
+    record the excess of the last taus was rate random walk by 1.4 over flicker, the truth
+    being flicker plus a tenth of the random walk). The interval of the chosen term,
+    conditional on the selection, then claims what the record cannot show; the caller
+    widens it to the interval of the union fit (chosen plus the swapped-in terms).
+
+    Returns
+    -------
+    Ambiguity or None
+        None when no alternative is within the penalty or the union was not fitted.
+    """
+    if chosen.p_value < misfit_level:
+        return None  # a rejected model: the intervals already carry the model discrepancy
+    names = chosen.names
+    alternatives: list[dict[str, Any]] = []
+    fits: dict[str, GLSSolution] = {}
+    for key, cand in by_names.items():
+        out, into = names - key, key - names
+        if len(out) != 1 or len(into) != 1 or cand.p_value < misfit_level:
+            continue
+        delta = cand.score - chosen.score
+        if not delta < penalty:
+            continue
+        (o,), (i,) = tuple(out), tuple(into)
+        previous = [a for a in alternatives if a["swap_in"] == i]
+        if previous and previous[0]["score_delta"] <= delta:
+            continue  # one alternative per candidate: the closest swap
+        alternatives = [a for a in alternatives if a["swap_in"] != i]
+        alternatives.append(
+            {
+                "terms": sorted(key),
+                "swap_out": o,
+                "swap_in": i,
+                "score_delta": float(delta),
+                "p_value": cand.p_value,
+            }
+        )
+        fits[i] = cand.solution
+    if not alternatives:
+        return None
+    union = by_names.get(names | {a["swap_in"] for a in alternatives})
+    if union is None:  # too many parameters for the taus: the smallest unions instead
+        alternatives = [a for a in alternatives if names | {a["swap_in"]} in by_names]
+        if not alternatives:
+            return None
+        best = min(alternatives, key=lambda a: a["score_delta"])
+        alternatives = [best]
+        union = by_names[names | {best["swap_in"]}]
+        fits = {best["swap_in"]: fits[best["swap_in"]]}
+    involved = {a["swap_in"] for a in alternatives} | {a["swap_out"] for a in alternatives}
+    alternatives.sort(key=lambda a: a["score_delta"])
+    return Ambiguity(tuple(alternatives), union.solution, fits, frozenset(involved))
+
+
 def select_terms(
     specs: Sequence[TermSpec],
     data: GLSData,
@@ -293,7 +384,7 @@ def select_terms(
     penalty: float,
     misfit_level: float,
     starts: Sequence[NDArray[np.float64] | None] = (None,),
-) -> tuple[GLSSolution, tuple[dict[str, Any], ...], list[dict[str, Any]]]:
+) -> tuple[GLSSolution, Ambiguity | None, tuple[dict[str, Any], ...], list[dict[str, Any]]]:
     """Choose the terms by the exhaustive, lexicographic search described in the module.
 
     Parameters
@@ -315,6 +406,8 @@ def select_terms(
     -------
     solution : GLSSolution
         The chosen fit.
+    ambiguity : Ambiguity or None
+        The alternatives the record cannot tell from the chosen subset (:func:`_exchangeable`).
     selection : tuple of dict
         Per candidate term: ``score_gain`` (how much the score drops when the term is added
         to the best evaluated subset without it, given the other chosen terms; positive
@@ -357,4 +450,5 @@ def select_terms(
         }
         for key, c in sorted(found.items(), key=lambda kv: kv[1].score)
     ]
-    return chosen.solution, tuple(selection), subsets
+    ambiguity = _exchangeable(chosen, by_names, penalty, misfit_level)
+    return chosen.solution, ambiguity, tuple(selection), subsets
