@@ -666,7 +666,20 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--summarise", metavar="JSON", help="only rewrite the summary of a stored run's rows"
     )
+    parser.add_argument(
+        "--ambiguous",
+        type=int,
+        nargs="?",
+        const=120,
+        metavar="COUNT",
+        help="the designed ambiguous set instead (minor terms dominating nowhere; 120 records)",
+    )
     args = parser.parse_args(argv)
+    if args.ambiguous:
+        command = "python benchmarks/validate_fit.py" + " ".join(
+            [""] + (argv if argv is not None else sys.argv[1:])
+        )
+        return main_ambiguous(args.ambiguous, command)
     if args.summarise:
         path = Path(args.summarise)
         stored = json.loads(path.read_text(encoding="utf-8"))
@@ -735,6 +748,216 @@ def save(
         json.dumps({"summary": summary, "rows": rows}, indent=1, default=str), encoding="utf-8"
     )
     stem.with_suffix(".md").write_text(markdown(summary, command), encoding="utf-8")
+
+
+# --- the designed ambiguous set (--ambiguous) ---------------------------------------------------
+#: the families of the ambiguous set: the dominant term, then the minor terms and where their
+#: shares are designed ("end": at the last fitted tau, "start": at the first)
+AMBIGUOUS_FAMILIES: tuple[tuple[tuple[str, ...], str], ...] = (
+    (("N", "B", "K"), "end"),  # flicker and rate random walk sharing the last taus (issue)
+    (("N", "K"), "end"),  # a rate random walk entering at the last taus
+    (("N", "B"), "end"),  # flicker entering at the last taus
+    (("N", "K", "R"), "end"),  # random walk and ramp sharing the last taus
+    (("Q", "N"), "start"),  # quantization at the first taus
+)
+#: share of the Allan variance of the sum a minor term carries where it is designed
+AMBIGUOUS_SHARE = (0.2, 0.45)
+
+
+def ambiguous_cases(count: int = 120, seed: int = 13) -> list[Case]:
+    """The designed ambiguous records: minor terms that contribute but dominate nowhere.
+
+    Cycles through :data:`AMBIGUOUS_FAMILIES`, record lengths 1e5-2e6, rates 10 Hz-1 kHz,
+    both grids, rate and angle input and three units; the seed of each record is fixed.
+    """
+    rng = np.random.default_rng(seed)
+    cases = []
+    for i in range(count):
+        terms, _ = AMBIGUOUS_FAMILIES[i % len(AMBIGUOUS_FAMILIES)]
+        cases.append(
+            Case(
+                index=i,
+                terms=terms,
+                n=int(rng.choice([100_000, 300_000, 1_000_000, 2_000_000])),
+                fs=float(rng.choice([10.0, 100.0, 250.0, 1000.0])),
+                taus=str(rng.choice(["log", "octave"])),
+                input=str(rng.choice(["rate", "angle"])),
+                unit=str(rng.choice(["deg/s", "rad/s", "deg/h"])),
+                seed=10_000 + i,
+                design="ambiguous",
+            )
+        )
+    return cases
+
+
+def design_ambiguous(case: Case) -> NoiseModel:
+    """The model of an ambiguous record: each minor term carries a drawn share (20-45 %).
+
+    The shares are of the exact Allan variance of the sum at the last fitted tau (first, for
+    quantization); the dominant term (N) carries the rest, so no minor term dominates there,
+    and the design is redrawn (shares shrunk) until none carries half anywhere.
+    """
+    family = dict(AMBIGUOUS_FAMILIES)[case.terms]
+    rng = np.random.default_rng(case.seed)
+    dt = 1.0 / case.fs
+    tau = fitted_factors(case) * dt
+    where = tau[-1] if family == "end" else tau[0]
+    minors = [s for s in case.terms if s != "N"]
+    shares = rng.uniform(*AMBIGUOUS_SHARE, size=len(minors))
+    if shares.sum() > 0.8:
+        shares *= 0.8 / shares.sum()
+    factor = UNIT_FACTOR[case.unit]
+    n_coef = 1e-2 * factor
+    for _ in range(20):
+        unit = {s: float(BUILD[s](1.0).avar(np.array([where]), dt)[0]) for s in case.terms}
+        total = n_coef**2 * unit["N"] / (1.0 - shares.sum())
+        coef = {"N": n_coef}
+        for s, share in zip(minors, shares, strict=True):
+            coef[s] = math.sqrt(share * total / unit[s])
+        model = NoiseModel(
+            tuple(BUILD[s](coef[s]) for s in case.terms), {"rate": case.unit, "time": "s"}
+        )
+        comp = [np.asarray(t.avar(tau, dt), dtype=np.float64) for t in model.terms]
+        total_all = sum(comp)
+        if all(np.all(c <= 0.5 * total_all) for s, c in zip(case.terms, comp) if s != "N"):
+            return model
+        shares *= 0.9
+    return model
+
+
+def run_ambiguous_case(case: Case) -> dict[str, Any]:
+    """Simulate, fit with the defaults, score each true term's interval before and after.
+
+    Before: the interval conditional on the selection (``meta["selected_coefficients"]``),
+    a true term left out counting as an interval excluding the truth. After: the reported
+    interval (the hull with the union fit for exchangeable terms), and for a true term left
+    out but reported as exchangeable (``FitResult.exchangeable``), the union fit's interval.
+    """
+    model = design_ambiguous(case)
+    x = np.asarray(
+        model.simulate(
+            case.n, fs=case.fs, output=case.input, seed=case.seed, flicker_method=FLICKER_METHOD
+        ),
+        dtype=np.float64,
+    ).ravel()
+    kind = cast(Literal["rate", "angle"], case.input)
+    res = allanite.avar(x, fs=case.fs, input=kind, taus=case.taus, units=case.unit)
+    t0 = time.perf_counter()
+    f = fit(res)
+    fit_s = time.perf_counter() - t0
+    truth = model.coefficients()
+    dt = 1.0 / case.fs
+    comp = {s: np.asarray(t.avar(f.tau, dt), dtype=np.float64) for s, t in zip(case.terms, model.terms)}
+    total = sum(comp.values())
+    selected = f.meta["selected_coefficients"]
+
+    def covers(coef: Any, value: float) -> tuple[bool, float, float]:
+        lo, hi = coef.ci(LEVEL)
+        return bool(lo <= value <= hi), lo, hi
+
+    terms: dict[str, Any] = {}
+    for s in sorted(set(case.terms) | set(f.coefficients)):
+        value = truth.get(s, 0.0)
+        entry: dict[str, Any] = {
+            "truth": value,
+            "share_last": float(comp[s][-1] / total[-1]) if s in comp else 0.0,
+            "share_first": float(comp[s][0] / total[0]) if s in comp else 0.0,
+            "max_share": float(np.max(comp[s] / total)) if s in comp else 0.0,
+        }
+        if s in selected:
+            entry["before"], *entry["before_ci"] = covers(selected[s], value)
+        else:
+            entry["before"] = False
+        if s in f.coefficients:
+            entry["after"], *entry["after_ci"] = covers(f.coefficients[s], value)
+            entry["reported"] = "model"
+        elif s in f.exchangeable:
+            entry["after"], *entry["after_ci"] = covers(f.exchangeable[s], value)
+            entry["reported"] = "not identifiable"
+        else:
+            entry["after"] = False
+            entry["reported"] = "absent"
+        if value == 0.0 and s not in f.coefficients:
+            continue  # an absent false term: nothing claimed
+        terms[s] = entry
+    return {
+        "case": case.__dict__,
+        "fitted_terms": list(f.coefficients),
+        "alternatives": [a["symbol_in"] for a in f.alternatives],
+        "p_value": f.p_value,
+        "rejected": bool(f.rejected),
+        "terms": terms,
+        "fit_s": fit_s,
+    }
+
+
+def summarise_ambiguous(rows: list[dict[str, Any]]) -> dict[str, Any]:
+    """Per term: intervals excluding the truth before and after, and the ambiguous fits."""
+    per: dict[str, dict[str, int]] = {}
+    for row in rows:
+        for s, e in row["terms"].items():
+            key = s if e["truth"] > 0 else f"{s} (false)"
+            d = per.setdefault(key, {"n": 0, "excluded_before": 0, "excluded_after": 0})
+            d["n"] += 1
+            d["excluded_before"] += not e["before"]
+            d["excluded_after"] += not e["after"]
+    worst = [
+        {"index": r["case"]["index"], "terms": r["case"]["terms"], "fitted": r["fitted_terms"],
+         "excluded": [s for s, e in r["terms"].items() if not e["after"]]}
+        for r in rows
+        if any(not e["after"] for e in r["terms"].values())
+    ]
+    return {
+        "records": len(rows),
+        "rejected": sum(r["rejected"] for r in rows),
+        "with_alternatives": sum(bool(r["alternatives"]) for r in rows),
+        "per_term": per,
+        "excluded_after": worst[:20],
+    }
+
+
+def markdown_ambiguous(summary: dict[str, Any], command: str) -> str:
+    """Markdown of :func:`summarise_ambiguous`."""
+    lines = [
+        "# Default fit on the designed ambiguous set",
+        "",
+        f"`{command}`: {summary['records']} records; rejected {summary['rejected']}; "
+        f"fits reporting alternatives {summary['with_alternatives']}.",
+        "",
+        "| term | records | 95 % interval excludes truth: before | after |",
+        "|---|---|---|---|",
+    ]
+    for s, d in sorted(summary["per_term"].items()):
+        n = max(d["n"], 1)
+        lines.append(
+            f"| {s} | {d['n']} | {d['excluded_before']} ({100 * d['excluded_before'] / n:.1f} %) "
+            f"| {d['excluded_after']} ({100 * d['excluded_after'] / n:.1f} %) |"
+        )
+    lines += ["", "Records with an interval excluding the truth after (first 20):", ""]
+    lines += [f"- {w}" for w in summary["excluded_after"]]
+    return "\n".join(lines) + "\n"
+
+
+def main_ambiguous(count: int, command: str) -> int:
+    """Run the ambiguous set and write ``results/validate_fit_ambiguous.{json,md}``."""
+    cases = ambiguous_cases(count)
+    rows = []
+    start = time.perf_counter()
+    stem = RESULTS / "validate_fit_ambiguous"
+    for case in cases:
+        row = run_ambiguous_case(case)
+        rows.append(row)
+        bad = [s for s, e in row["terms"].items() if not e["after"]]
+        print(
+            f"[{len(rows)}/{len(cases)}] {'+'.join(case.terms):<8} n={case.n:<8} fs={case.fs:<6g} "
+            f"{case.taus:<6} -> {','.join(row['fitted_terms']):<8} alt={row['alternatives']} "
+            f"p={row['p_value']:.3g} {'EXCLUDED ' + str(bad) if bad else ''}",
+            flush=True,
+        )
+        if len(rows) % 10 == 0 or len(rows) == len(cases):
+            save(stem, rows, len(cases), start, summarise_ambiguous, markdown_ambiguous, command)
+    print(markdown_ambiguous(summarise_ambiguous(rows), command))
+    return 0
 
 
 if __name__ == "__main__":

@@ -253,6 +253,7 @@ def _fit_gls(
         sol, selection = solve(specs, data, edf, misfit_level=misfit_level), ()
     model = sol.model(units)
     coefficients = _coefficients(sol, model)
+    selected = dict(coefficients)  # conditional on the selection, before any widening
     alternatives, exchangeable = _ambiguous(ambiguity, coefficients, data, units)
     dof = int(keep.sum()) - _n_params(sol.specs)
     p_value = float(stats.chi2.sf(sol.chi2, dof)) if dof > 0 else math.nan
@@ -279,6 +280,8 @@ def _fit_gls(
             "n_samples": result.n_samples,
             "fs": result.fs,
             "subsets": subsets,
+            # the coefficients with the intervals conditional on the selection alone
+            "selected_coefficients": selected,
         },
         discrepancy=sol.discrepancy,
         misfit_level=misfit_level,
@@ -312,10 +315,10 @@ def _ambiguous(
 ) -> tuple[tuple[dict[str, Any], ...], dict[str, Coefficient]]:
     """Widen the exchangeable terms' intervals in place; describe the alternatives.
 
-    The chosen terms involved in a swap (:func:`allanite.fit.select._exchangeable`) get the
-    hull of their own interval and the one of the union fit (chosen plus swapped-in terms:
-    its lower bounds reach what the data allow, often 0), so the estimate stays inside; the
-    swapped-in terms are returned with their union-fit value and interval. Each alternative
+    The chosen terms (:func:`allanite.fit.select._exchangeable`) get the hull of their own
+    interval and the one of the union fit (chosen plus swapped-in or added terms: its lower
+    bounds reach what the data allow, often 0), so the estimate stays inside; the
+    alternative terms are returned with their union-fit value and interval. Each alternative
     gains ``symbol_in``/``symbol_out`` and ``from_tau``, the shortest fitted tau at which
     the swapped-in term carries more than a fifth of the alternative's fitted variance.
     """
@@ -340,7 +343,9 @@ def _ambiguous(
             {
                 **alt,
                 "symbol_in": symbol,
-                "symbol_out": _SYMBOL.get(alt["swap_out"], alt["swap_out"]),
+                "symbol_out": None
+                if alt["swap_out"] is None
+                else _SYMBOL.get(alt["swap_out"], alt["swap_out"]),
                 "from_tau": float(data.tau[over[0]]) if over.size else float(data.tau[-1]),
             }
         )

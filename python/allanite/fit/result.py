@@ -227,13 +227,22 @@ class FitResult:
             unit = customary_unit(self.model.units["rate"], symbol, coef.unit)
             factor = _factor(coef, unit)
             lo, hi = coef.ci(level)
-            lines.append(
+            head = (
                 f"AMBIGUOUS: {alt['swap_in']} {symbol} = {coef.value * factor:.4g} "
-                f"[{lo * factor:.4g}, {hi * factor:.4g}] {unit} fits the excess at tau > "
-                f"{alt['from_tau']:.3g} s as well as {out} (score {alt['score_delta']:+.3g}, "
-                f"within the penalty): the record cannot tell them apart; the intervals of "
-                f"{out} and {symbol} are those of the fit with both"
+                f"[{lo * factor:.4g}, {hi * factor:.4g}] {unit}"
             )
+            if out is None:
+                lines.append(
+                    f"{head} may contribute at tau > {alt['from_tau']:.3g} s (chi2 drop "
+                    f"{alt['delta_chi2']:.3g}, below the penalty): the record cannot show "
+                    "whether it is present; the intervals are those of the fit with it"
+                )
+            else:
+                lines.append(
+                    f"{head} fits the excess at tau > {alt['from_tau']:.3g} s as well as {out} "
+                    f"(score {alt['score_delta']:+.3g}, within the penalty): the record cannot "
+                    f"tell them apart; the intervals are those of the fit with both"
+                )
         return "\n".join(lines)
 
     def rejection_warning(self) -> str:

@@ -294,15 +294,16 @@ class Ambiguity:
     ----------
     alternatives : tuple of dict
         Per alternative subset: ``terms`` (its term types), ``swap_out`` (the chosen term
-        it lacks), ``swap_in`` (the candidate it has instead), ``score_delta`` (its score
-        minus the chosen one's, below the penalty) and ``p_value``.
+        it lacks; None for an addition), ``swap_in`` (the candidate it has instead or in
+        addition), ``score_delta`` (its score minus the chosen one's), ``p_value``, and for
+        an addition ``delta_chi2``.
     union : GLSSolution
         The fit of the chosen terms plus every swapped-in term: the model that contains
         every reading, whose intervals of the exchangeable terms reach what the data allow.
     alternative_fits : dict
         The fitted solution of each alternative subset, by ``swap_in`` term type.
     exchangeable : frozenset of str
-        The term types involved in a swap (chosen and candidate).
+        The term types of the union fit (chosen and alternative candidates).
     """
 
     alternatives: tuple[dict[str, Any], ...]
@@ -311,69 +312,77 @@ class Ambiguity:
     exchangeable: frozenset[str]
 
 
+#: chi-square drop (under the chosen model's covariance) from which a term left out is
+#: reported as an alternative: its squared amplitude one standard error above zero
+ADD_EVIDENCE = 1.0
+
+
 def _exchangeable(
     chosen: Candidate,
+    specs: Sequence[TermSpec],
     by_names: dict[frozenset[str], Candidate],
+    data: GLSData,
+    edf: NDArray[np.float64],
     penalty: float,
     misfit_level: float,
 ) -> Ambiguity | None:
-    r"""Find the subsets that swap one chosen term for another candidate at nearly the same score.
+    r"""Find the alternatives the record cannot tell from the chosen subset.
 
-    An alternative is a subset, not rejected by the goodness-of-fit test, that differs from
-    the chosen one by one term exchanged for another candidate and whose score is within
-    the selection's own penalty of the chosen score (:math:`S_\text{alt} - S_\text{chosen}
-    < \text{penalty}`): the selection's price of one parameter is its smallest unit of
-    evidence, so such a pair is a choice the record does not make (on a 3 h navigation
-    record the excess of the last taus was rate random walk by 1.4 over flicker, the truth
-    being flicker plus a tenth of the random walk). The interval of the chosen term,
-    conditional on the selection, then claims what the record cannot show; the caller
-    widens it to the interval of the union fit (chosen plus the swapped-in terms).
+    Two kinds, both among the subsets the goodness-of-fit test does not reject:
+
+    * a swap: the chosen terms with one exchanged for another candidate, at a score within
+      the selection's own penalty (:math:`S_\text{alt} - S_\text{chosen} < \text{penalty}`;
+      on a 3 h navigation record the excess of the last taus was rate random walk by 1.4 over
+      flicker, the truth being flicker plus a tenth of the random walk);
+    * an addition: a candidate left out whose chi-square drop against the chosen model
+      (:func:`_delta_chi2`, the mirror test's statistic) is at least :data:`ADD_EVIDENCE`
+      but below the penalty: the data show some of it, not enough to select it.
+
+    The intervals of the chosen terms, conditional on the selection, then claim what the
+    record cannot show; the caller widens them to the hull with the union fit (the chosen
+    plus every swapped-in or added term).
 
     Returns
     -------
     Ambiguity or None
-        None when no alternative is within the penalty or the union was not fitted.
+        None when there is no alternative or the union was not fitted.
     """
     if chosen.p_value < misfit_level:
         return None  # a rejected model: the intervals already carry the model discrepancy
     names = chosen.names
-    alternatives: list[dict[str, Any]] = []
+    best: dict[str, dict[str, Any]] = {}
     fits: dict[str, GLSSolution] = {}
     for key, cand in by_names.items():
         out, into = names - key, key - names
-        if len(out) != 1 or len(into) != 1 or cand.p_value < misfit_level:
+        if len(into) != 1 or len(out) > 1 or cand.p_value < misfit_level:
             continue
-        delta = cand.score - chosen.score
-        if not delta < penalty:
-            continue
-        (o,), (i,) = tuple(out), tuple(into)
-        previous = [a for a in alternatives if a["swap_in"] == i]
-        if previous and previous[0]["score_delta"] <= delta:
-            continue  # one alternative per candidate: the closest swap
-        alternatives = [a for a in alternatives if a["swap_in"] != i]
-        alternatives.append(
-            {
-                "terms": sorted(key),
-                "swap_out": o,
-                "swap_in": i,
-                "score_delta": float(delta),
-                "p_value": cand.p_value,
-            }
-        )
+        (i,) = tuple(into)
+        if out:
+            delta = cand.score - chosen.score
+            if not delta < penalty:
+                continue
+            entry = {"swap_out": next(iter(out)), "score_delta": float(delta)}
+        else:
+            drop = _delta_chi2(chosen, i, specs, data, edf)
+            if not ADD_EVIDENCE <= drop < penalty:
+                continue
+            entry = {"swap_out": None, "score_delta": float(cand.score - chosen.score)}
+            entry["delta_chi2"] = float(drop)
+        if i in best and best[i]["score_delta"] <= entry["score_delta"]:
+            continue  # one alternative per candidate: the closest
+        best[i] = {"terms": sorted(key), "swap_in": i, **entry, "p_value": cand.p_value}
         fits[i] = cand.solution
-    if not alternatives:
+    if not best:
         return None
-    union = by_names.get(names | {a["swap_in"] for a in alternatives})
-    if union is None:  # too many parameters for the taus: the smallest unions instead
-        alternatives = [a for a in alternatives if names | {a["swap_in"]} in by_names]
+    alternatives = sorted(best.values(), key=lambda a: a["score_delta"])
+    union = by_names.get(names | set(best))
+    if union is None:  # too many parameters for the taus: the closest alternative only
+        alternatives = [a for a in alternatives if names | {a["swap_in"]} in by_names][:1]
         if not alternatives:
             return None
-        best = min(alternatives, key=lambda a: a["score_delta"])
-        alternatives = [best]
-        union = by_names[names | {best["swap_in"]}]
-        fits = {best["swap_in"]: fits[best["swap_in"]]}
-    involved = {a["swap_in"] for a in alternatives} | {a["swap_out"] for a in alternatives}
-    alternatives.sort(key=lambda a: a["score_delta"])
+        union = by_names[names | {alternatives[0]["swap_in"]}]
+        fits = {alternatives[0]["swap_in"]: fits[alternatives[0]["swap_in"]]}
+    involved = names | {a["swap_in"] for a in alternatives}
     return Ambiguity(tuple(alternatives), union.solution, fits, frozenset(involved))
 
 
@@ -450,5 +459,5 @@ def select_terms(
         }
         for key, c in sorted(found.items(), key=lambda kv: kv[1].score)
     ]
-    ambiguity = _exchangeable(chosen, by_names, penalty, misfit_level)
+    ambiguity = _exchangeable(chosen, specs, by_names, data, edf, penalty, misfit_level)
     return chosen.solution, ambiguity, tuple(selection), subsets
