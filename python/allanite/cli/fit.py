@@ -99,7 +99,9 @@ def goodness(fit: Any, level: float) -> dict[str, Any]:
     """Interval level and goodness of fit of one channel's fit, for the text and JSON output.
 
     ``rejected`` is True when the generalized chi-square test rejects the fitted model
-    (p below the fit's ``misfit_level``); ``missed_taus`` are the taus it misses.
+    (p below the fit's ``misfit_level``); ``missed_taus`` are the taus it misses;
+    ``alternatives`` the term choices the record cannot tell apart
+    (:meth:`allanite.fit.FitResult.alternatives_dict`).
     """
     if getattr(fit, "method", None) != "gls":
         return {"level": level}
@@ -110,6 +112,7 @@ def goodness(fit: Any, level: float) -> dict[str, Any]:
         "p_value": fit.p_value,
         "rejected": fit.rejected,
         "missed_taus": fit.missed_taus.tolist(),
+        "alternatives": fit.alternatives_dict(level),
     }
 
 

@@ -319,12 +319,14 @@ def _ambiguous(
     interval and the one of the union fit (chosen plus swapped-in or added terms: its lower
     bounds reach what the data allow, often 0), so the estimate stays inside; the
     alternative terms are returned with their union-fit value and interval. Each alternative
-    gains ``symbol_in``/``symbol_out`` and ``from_tau``, the shortest fitted tau at which
-    the swapped-in term carries more than a fifth of the alternative's fitted variance.
+    gains ``symbol_in``/``symbol_out`` and ``taus``, the first and last fitted tau at which
+    the alternative term carries more than a fifth of the alternative's fitted variance
+    (where it carries most, when nowhere).
     """
     if ambiguity is None:
         return (), {}
-    union_coefs = _coefficients(ambiguity.union, ambiguity.union.model(units))
+    union = ambiguity.union
+    union_coefs = {} if union is None else _coefficients(union, union.model(units))
     for name in ambiguity.exchangeable:
         label = _SYMBOL.get(name)
         if label in coefficients and label in union_coefs:
@@ -335,10 +337,15 @@ def _ambiguous(
         symbol = _SYMBOL.get(alt["swap_in"], alt["swap_in"])
         if symbol in union_coefs:
             exchangeable[symbol] = union_coefs[symbol]
+        else:  # no union fit: the term's value and interval in the fit with it
+            own = ambiguity.with_term[alt["swap_in"]]
+            exchangeable[symbol] = _coefficients(own, own.model(units))[symbol]
         sol = ambiguity.alternative_fits[alt["swap_in"]]
         j = [s.cls.type for s in sol.specs].index(alt["swap_in"])
         share = max(float(sol.theta[j]), 0.0) * sol.design[:, j] / np.maximum(sol.fitted, 1e-300)
         over = np.flatnonzero(share > _SHARE)
+        if not over.size:
+            over = np.array([int(np.argmax(share))])
         described.append(
             {
                 **alt,
@@ -346,7 +353,7 @@ def _ambiguous(
                 "symbol_out": None
                 if alt["swap_out"] is None
                 else _SYMBOL.get(alt["swap_out"], alt["swap_out"]),
-                "from_tau": float(data.tau[over[0]]) if over.size else float(data.tau[-1]),
+                "taus": [float(data.tau[over[0]]), float(data.tau[over[-1]])],
             }
         )
     return tuple(described), exchangeable

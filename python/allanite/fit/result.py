@@ -146,8 +146,10 @@ class FitResult:
         at a score within the selection's penalty (the record cannot tell them apart;
         :func:`allanite.fit.select._exchangeable`), each with ``terms``, ``swap_out``,
         ``swap_in`` (term types), ``symbol_out``, ``symbol_in``, ``score_delta``,
-        ``p_value`` and ``from_tau`` (the shortest tau where the swapped-in term carries
-        more than a fifth of the alternative's variance). When there are any, the chosen
+        ``p_value``, ``delta_chi2`` for an addition (``swap_out`` None: a term left out
+        that the data show some of, not enough to select it) and ``taus`` (the first and
+        last tau where the alternative term carries more than a fifth of the alternative's
+        variance). When there are any, the chosen
         exchangeable terms' intervals are the hull of their own and those of the fit with
         all the exchangeable terms (see :meth:`ambiguity_note`).
     exchangeable : dict of str to Coefficient
@@ -215,8 +217,8 @@ class FitResult:
     def ambiguity_note(self, level: float = 0.95) -> str:
         """One line per alternative the record cannot tell from the chosen terms (else empty).
 
-        E.g. ``AMBIGUOUS: flicker B = 0.0047 [0, 0.0093] deg/h fits the excess at tau >
-        164 s as well as K: the record cannot tell them apart ...``.
+        E.g. ``AMBIGUOUS: flicker B = 0.0039 [0, 0.015] deg/h fits the excess at tau =
+        328-1.31e+03 s as well as K ...: the record cannot tell them apart ...``.
         """
         lines = []
         for alt in self.alternatives:
@@ -227,19 +229,21 @@ class FitResult:
             unit = customary_unit(self.model.units["rate"], symbol, coef.unit)
             factor = _factor(coef, unit)
             lo, hi = coef.ci(level)
+            t1, t2 = alt["taus"]
+            where = f"{t1:.3g}" if t1 == t2 else f"{t1:.3g}-{t2:.3g}"
             head = (
                 f"AMBIGUOUS: {alt['swap_in']} {symbol} = {coef.value * factor:.4g} "
                 f"[{lo * factor:.4g}, {hi * factor:.4g}] {unit}"
             )
             if out is None:
                 lines.append(
-                    f"{head} may contribute at tau > {alt['from_tau']:.3g} s (chi2 drop "
+                    f"{head} may contribute at tau = {where} s (chi2 drop "
                     f"{alt['delta_chi2']:.3g}, below the penalty): the record cannot show "
                     "whether it is present; the intervals are those of the fit with it"
                 )
             else:
                 lines.append(
-                    f"{head} fits the excess at tau > {alt['from_tau']:.3g} s as well as {out} "
+                    f"{head} fits the excess at tau = {where} s as well as {out} "
                     f"(score {alt['score_delta']:+.3g}, within the penalty): the record cannot "
                     f"tell them apart; the intervals are those of the fit with both"
                 )

@@ -297,24 +297,30 @@ class Ambiguity:
         it lacks; None for an addition), ``swap_in`` (the candidate it has instead or in
         addition), ``score_delta`` (its score minus the chosen one's), ``p_value``, and for
         an addition ``delta_chi2``.
-    union : GLSSolution
-        The fit of the chosen terms plus every swapped-in term: the model that contains
-        every reading, whose intervals of the exchangeable terms reach what the data allow.
+    union : GLSSolution or None
+        The fit of the chosen terms plus every alternative term: the model that contains
+        every reading, whose intervals of the exchangeable terms reach what the data allow
+        (None when it has too many parameters for the taus; then ``with_term`` serves).
     alternative_fits : dict
         The fitted solution of each alternative subset, by ``swap_in`` term type.
+    with_term : dict
+        The fit of the chosen terms plus the alternative term, by ``swap_in`` term type
+        (the alternative term's value and interval of an addition).
     exchangeable : frozenset of str
-        The term types of the union fit (chosen and alternative candidates).
+        The chosen term types swapped out by an alternative (their intervals are widened).
     """
 
     alternatives: tuple[dict[str, Any], ...]
-    union: GLSSolution
+    union: GLSSolution | None
     alternative_fits: dict[str, GLSSolution]
+    with_term: dict[str, GLSSolution]
     exchangeable: frozenset[str]
 
 
-#: chi-square drop (under the chosen model's covariance) from which a term left out is
-#: reported as an alternative: its squared amplitude one standard error above zero
-ADD_EVIDENCE = 1.0
+#: chi-square drop (under the chosen model's covariance) above which a term left out is
+#: reported as an alternative: any fitted amount of it (the designed ambiguous set's minor
+#: terms, 20-45 % of the variance at the last taus, were left out with drops below 1)
+ADD_EVIDENCE = 0.01
 
 
 def _exchangeable(
@@ -335,12 +341,14 @@ def _exchangeable(
       on a 3 h navigation record the excess of the last taus was rate random walk by 1.4 over
       flicker, the truth being flicker plus a tenth of the random walk);
     * an addition: a candidate left out whose chi-square drop against the chosen model
-      (:func:`_delta_chi2`, the mirror test's statistic) is at least :data:`ADD_EVIDENCE`
-      but below the penalty: the data show some of it, not enough to select it.
+      (:func:`_delta_chi2`, the mirror test's statistic) is above :data:`ADD_EVIDENCE`
+      but below the penalty: the data show some of it, not enough to select it; its
+      interval is that of the fit with it (lower bound typically 0).
 
-    The intervals of the chosen terms, conditional on the selection, then claim what the
-    record cannot show; the caller widens them to the hull with the union fit (the chosen
-    plus every swapped-in or added term).
+    The intervals of the chosen terms swapped out, conditional on the selection, claim what
+    the record cannot show; the caller widens them to the hull with the union fit (the
+    chosen plus every alternative term), where the alternative terms' intervals are read
+    too. An addition alone leaves the chosen intervals as they are.
 
     Returns
     -------
@@ -364,7 +372,7 @@ def _exchangeable(
             entry = {"swap_out": next(iter(out)), "score_delta": float(delta)}
         else:
             drop = _delta_chi2(chosen, i, specs, data, edf)
-            if not ADD_EVIDENCE <= drop < penalty:
+            if not ADD_EVIDENCE < drop < penalty:
                 continue
             entry = {"swap_out": None, "score_delta": float(cand.score - chosen.score)}
             entry["delta_chi2"] = float(drop)
@@ -376,14 +384,19 @@ def _exchangeable(
         return None
     alternatives = sorted(best.values(), key=lambda a: a["score_delta"])
     union = by_names.get(names | set(best))
-    if union is None:  # too many parameters for the taus: the closest alternative only
-        alternatives = [a for a in alternatives if names | {a["swap_in"]} in by_names][:1]
+    if union is None:  # too many parameters for the taus: each term's own superset instead
+        alternatives = [a for a in alternatives if names | {a["swap_in"]} in by_names]
         if not alternatives:
             return None
-        union = by_names[names | {alternatives[0]["swap_in"]}]
-        fits = {alternatives[0]["swap_in"]: fits[alternatives[0]["swap_in"]]}
-    involved = names | {a["swap_in"] for a in alternatives}
-    return Ambiguity(tuple(alternatives), union.solution, fits, frozenset(involved))
+    involved = {a["swap_out"] for a in alternatives if a["swap_out"] is not None}
+    added = {a["swap_in"]: by_names[names | {a["swap_in"]}].solution for a in alternatives}
+    return Ambiguity(
+        tuple(alternatives),
+        None if union is None else union.solution,
+        fits,
+        {k: v for k, v in added.items() if k in fits},
+        frozenset(involved),
+    )
 
 
 def select_terms(

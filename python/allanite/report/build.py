@@ -317,6 +317,9 @@ def _goodness(fit: Any) -> str:
         f"accounted for), p = {p:.2g}."
     )
     rejected = getattr(fit, "rejected", p < MISFIT_P)
+    note = getattr(fit, "ambiguity_note", None)
+    ambiguous = "" if note is None else note()
+    ambiguous = "".join(f'<p class="note">{h.escape(line)}</p>' for line in ambiguous.splitlines())
     if rejected:
         missed = getattr(fit, "missed_taus", None)
         where = (
@@ -328,8 +331,9 @@ def _goodness(fit: Any) -> str:
             f'<div class="rejected">Model REJECTED: {h.escape(text)} The fitted terms do not '
             "describe this Allan curve within its uncertainty, so its coefficients are not "
             f"trustworthy; look at the model plot before using them.{h.escape(where)}</div>"
+            + ambiguous
         )
-    return f'<p class="note">{h.escape(text)} Model not rejected.</p>'
+    return f'<p class="note">{h.escape(text)} Model not rejected.</p>' + ambiguous
 
 
 def _rate_adev(device: DeviceAnalysis, channel: int, level: float) -> tuple[Any, ...]:
