@@ -819,7 +819,9 @@ def design_ambiguous(case: Case) -> NoiseModel:
         )
         comp = [np.asarray(t.avar(tau, dt), dtype=np.float64) for t in model.terms]
         total_all = sum(comp)
-        if all(np.all(c <= 0.5 * total_all) for s, c in zip(case.terms, comp) if s != "N"):
+        if all(
+            np.all(c <= 0.5 * total_all) for s, c in zip(case.terms, comp, strict=True) if s != "N"
+        ):
             return model
         shares *= 0.9
     return model
@@ -847,7 +849,10 @@ def run_ambiguous_case(case: Case) -> dict[str, Any]:
     fit_s = time.perf_counter() - t0
     truth = model.coefficients()
     dt = 1.0 / case.fs
-    comp = {s: np.asarray(t.avar(f.tau, dt), dtype=np.float64) for s, t in zip(case.terms, model.terms)}
+    comp = {
+        s: np.asarray(t.avar(f.tau, dt), dtype=np.float64)
+        for s, t in zip(case.terms, model.terms, strict=True)
+    }
     total = sum(comp.values())
     selected = f.meta["selected_coefficients"]
 
@@ -902,8 +907,12 @@ def summarise_ambiguous(rows: list[dict[str, Any]]) -> dict[str, Any]:
             d["excluded_before"] += not e["before"]
             d["excluded_after"] += not e["after"]
     worst = [
-        {"index": r["case"]["index"], "terms": r["case"]["terms"], "fitted": r["fitted_terms"],
-         "excluded": [s for s, e in r["terms"].items() if not e["after"]]}
+        {
+            "index": r["case"]["index"],
+            "terms": r["case"]["terms"],
+            "fitted": r["fitted_terms"],
+            "excluded": [s for s, e in r["terms"].items() if not e["after"]],
+        }
         for r in rows
         if any(not e["after"] for e in r["terms"].values())
     ]
