@@ -853,7 +853,7 @@ def run_ambiguous_case(case: Case) -> dict[str, Any]:
         s: np.asarray(t.avar(f.tau, dt), dtype=np.float64)
         for s, t in zip(case.terms, model.terms, strict=True)
     }
-    total = sum(comp.values())
+    total = np.sum(np.array(list(comp.values())), axis=0)
     selected = f.meta["selected_coefficients"]
 
     def covers(coef: Any, value: float) -> tuple[bool, float, float]:
