@@ -833,7 +833,8 @@ def run_ambiguous_case(case: Case) -> dict[str, Any]:
     Before: the interval conditional on the selection (``meta["selected_coefficients"]``),
     a true term left out counting as an interval excluding the truth. After: the reported
     interval (the hull with the union fit for exchangeable terms), and for a true term left
-    out but reported as exchangeable (``FitResult.exchangeable``), the union fit's interval.
+    out but reported as exchangeable (``FitResult.exchangeable``), the union fit's interval;
+    one reported as not detected (``FitResult.undetected``), the interval of the fit with it.
     """
     model = design_ambiguous(case)
     x = np.asarray(
@@ -879,6 +880,9 @@ def run_ambiguous_case(case: Case) -> dict[str, Any]:
         elif s in f.exchangeable:
             entry["after"], *entry["after_ci"] = covers(f.exchangeable[s], value)
             entry["reported"] = "not identifiable"
+        elif s in f.undetected:
+            entry["after"], *entry["after_ci"] = covers(f.undetected[s], value)
+            entry["reported"] = "not detected"
         else:
             entry["after"] = False
             entry["reported"] = "absent"
@@ -902,8 +906,11 @@ def summarise_ambiguous(rows: list[dict[str, Any]]) -> dict[str, Any]:
     for row in rows:
         for s, e in row["terms"].items():
             key = s if e["truth"] > 0 else f"{s} (false)"
-            d = per.setdefault(key, {"n": 0, "excluded_before": 0, "excluded_after": 0})
+            d = per.setdefault(
+                key, {"n": 0, "excluded_before": 0, "excluded_after": 0, "not_detected": 0}
+            )
             d["n"] += 1
+            d["not_detected"] += e.get("reported") == "not detected"
             d["excluded_before"] += not e["before"]
             d["excluded_after"] += not e["after"]
     worst = [
@@ -933,14 +940,20 @@ def markdown_ambiguous(summary: dict[str, Any], command: str) -> str:
         f"`{command}`: {summary['records']} records; rejected {summary['rejected']}; "
         f"fits reporting alternatives {summary['with_alternatives']}.",
         "",
-        "| term | records | 95 % interval excludes truth: before | after |",
-        "|---|---|---|---|",
+        "Before: the intervals conditional on the selection (a true term left out counts as "
+        "excluded). After: the reported ones (hull with the union fit for swapped terms, the "
+        "union fit's for alternative terms, the fit with the term for terms not detected).",
+        "",
+        "| term | records | 95 % interval excludes truth: before | after | after, reported "
+        "as not detected |",
+        "|---|---|---|---|---|",
     ]
     for s, d in sorted(summary["per_term"].items()):
         n = max(d["n"], 1)
         lines.append(
             f"| {s} | {d['n']} | {d['excluded_before']} ({100 * d['excluded_before'] / n:.1f} %) "
-            f"| {d['excluded_after']} ({100 * d['excluded_after'] / n:.1f} %) |"
+            f"| {d['excluded_after']} ({100 * d['excluded_after'] / n:.1f} %) "
+            f"| {d['not_detected']} |"
         )
     lines += ["", "Records with an interval excluding the truth after (first 20):", ""]
     lines += [f"- {w}" for w in summary["excluded_after"]]

@@ -255,6 +255,7 @@ def _fit_gls(
     coefficients = _coefficients(sol, model)
     selected = dict(coefficients)  # conditional on the selection, before any widening
     alternatives, exchangeable = _ambiguous(ambiguity, coefficients, data, units)
+    undetected = _undetected(ambiguity, exchangeable, units)
     dof = int(keep.sum()) - _n_params(sol.specs)
     p_value = float(stats.chi2.sf(sol.chi2, dof)) if dof > 0 else math.nan
     # standardised under the terms alone, so that a misfit shows where it is
@@ -287,6 +288,7 @@ def _fit_gls(
         misfit_level=misfit_level,
         alternatives=alternatives,
         exchangeable=exchangeable,
+        undetected=undetected,
     )
 
 
@@ -323,7 +325,7 @@ def _ambiguous(
     the alternative term carries more than a fifth of the alternative's fitted variance
     (where it carries most, when nowhere).
     """
-    if ambiguity is None:
+    if ambiguity is None or not ambiguity.alternatives:
         return (), {}
     union = ambiguity.union
     union_coefs = {} if union is None else _coefficients(union, union.model(units))
@@ -357,6 +359,24 @@ def _ambiguous(
             }
         )
     return tuple(described), exchangeable
+
+
+def _undetected(
+    ambiguity: Ambiguity | None, exchangeable: dict[str, Coefficient], units: str
+) -> dict[str, Coefficient]:
+    """The candidates left out and not alternatives, each from the fit with it.
+
+    Their intervals (from 0, or near it) bound what the record allows of a term it does
+    not show: "not detected" is not "absent".
+    """
+    if ambiguity is None:
+        return {}
+    out: dict[str, Coefficient] = {}
+    for name, sol in ambiguity.with_term.items():
+        symbol = _SYMBOL.get(name, name)
+        if symbol not in exchangeable:
+            out[symbol] = _coefficients(sol, sol.model(units))[symbol]
+    return dict(sorted(out.items(), key=lambda kv: "QNBKR".find(kv[0])))
 
 
 def _fit_seed(result: AllanResult, units: str) -> FitResult:

@@ -154,6 +154,10 @@ class FitResult:
         all the exchangeable terms (see :meth:`ambiguity_note`).
     exchangeable : dict of str to Coefficient
         The swapped-in terms' coefficients from that union fit (not part of :attr:`model`).
+    undetected : dict of str to Coefficient
+        For ``terms="auto"``: every other candidate left out, from the fit with it (not part
+        of :attr:`model`): the upper end of its interval bounds what the record allows of a
+        term it does not show (:meth:`undetected_line`).
     """
 
     model: NoiseModel
@@ -174,6 +178,7 @@ class FitResult:
     misfit_level: float = 0.001
     alternatives: tuple[dict[str, Any], ...] = ()
     exchangeable: dict[str, Coefficient] = field(default_factory=dict, compare=False)
+    undetected: dict[str, Coefficient] = field(default_factory=dict, compare=False)
     _repr_html_ = fit_html  # Jupyter: a compact table and the plot (allanite.notebook)
 
     @property
@@ -208,7 +213,7 @@ class FitResult:
             f"brackets: {100 * level:g} % intervals; chi2 = {self.chi2:.3g} for {self.dof} dof "
             f"(correlated GLS), p = {self.p_value:.3g}"
         )
-        note = self.ambiguity_note(level)
+        note = "\n".join(x for x in (self.ambiguity_note(level), self.undetected_line(level)) if x)
         note = "\n" + note if note else ""
         if not self.rejected:
             return text + ": model not rejected" + note
@@ -248,6 +253,19 @@ class FitResult:
                     f"tell them apart; the intervals are those of the fit with both"
                 )
         return "\n".join(lines)
+
+    def undetected_line(self, level: float = 0.95) -> str:
+        """One line of upper limits of the candidates not detected (empty when none)."""
+        parts = []
+        for symbol, coef in self.undetected.items():
+            unit = customary_unit(self.model.units["rate"], symbol, coef.unit)
+            hi = coef.ci(level)[1] * _factor(coef, unit)
+            parts.append(f"{symbol} <= {hi:.3g} {unit}")
+        if not parts:
+            return ""
+        return f"not detected ({100 * level:g} % upper limits, fit with the term): " + ", ".join(
+            parts
+        )
 
     def rejection_warning(self) -> str:
         """The plain warning of a rejected fit (empty when the fit is not rejected)."""
@@ -395,6 +413,11 @@ class FitResult:
             "good_range": self.good_range,
             "classic": {"label": self.classic.label, **self.classic.values},
             "alternatives": self.alternatives_dict(level),
+            "undetected": [
+                {"name": k, "value": c.value, "low": lo, "high": hi, "unit": c.unit}
+                for k, c in self.undetected.items()
+                for lo, hi in [c.ci(level)]
+            ],
         }
 
     def alternatives_dict(self, level: float = 0.95) -> list[dict[str, Any]]:

@@ -304,8 +304,9 @@ class Ambiguity:
     alternative_fits : dict
         The fitted solution of each alternative subset, by ``swap_in`` term type.
     with_term : dict
-        The fit of the chosen terms plus the alternative term, by ``swap_in`` term type
-        (the alternative term's value and interval of an addition).
+        The fit of the chosen terms plus one candidate left out, by its term type, for every
+        such candidate whose fit is not rejected (an alternative term's interval when there
+        is no union fit; otherwise the upper limit of a term not detected).
     exchangeable : frozenset of str
         The chosen term types swapped out by an alternative (their intervals are widened).
     """
@@ -353,7 +354,9 @@ def _exchangeable(
     Returns
     -------
     Ambiguity or None
-        None when there is no alternative or the union was not fitted.
+        None when the chosen model is rejected; else the alternatives (possibly none) and,
+        for every candidate left out, the fit with it (``with_term``: the upper limits of
+        the terms not detected).
     """
     if chosen.p_value < misfit_level:
         return None  # a rejected model: the intervals already carry the model discrepancy
@@ -380,21 +383,23 @@ def _exchangeable(
             continue  # one alternative per candidate: the closest
         best[i] = {"terms": sorted(key), "swap_in": i, **entry, "p_value": cand.p_value}
         fits[i] = cand.solution
-    if not best:
-        return None
     alternatives = sorted(best.values(), key=lambda a: a["score_delta"])
     union = by_names.get(names | set(best))
     if union is None:  # too many parameters for the taus: each term's own superset instead
         alternatives = [a for a in alternatives if names | {a["swap_in"]} in by_names]
-        if not alternatives:
-            return None
     involved = {a["swap_out"] for a in alternatives if a["swap_out"] is not None}
-    added = {a["swap_in"]: by_names[names | {a["swap_in"]}].solution for a in alternatives}
+    # every candidate left out, with the fit that has it: the alternatives' fallback and
+    # the upper limits of the terms not detected
+    added = {
+        i: cand.solution
+        for i in {s.cls.type for s in specs} - names
+        if (cand := by_names.get(names | {i})) is not None and not cand.p_value < misfit_level
+    }
     return Ambiguity(
         tuple(alternatives),
         None if union is None else union.solution,
-        fits,
-        {k: v for k, v in added.items() if k in fits},
+        {a["swap_in"]: fits[a["swap_in"]] for a in alternatives},
+        added,
         frozenset(involved),
     )
 
