@@ -391,9 +391,9 @@ def _exchangeable(
     # every candidate left out, with the fit that has it: the alternatives' fallback and
     # the upper limits of the terms not detected
     added = {
-        i: cand.solution
+        i: sup.solution
         for i in {s.cls.type for s in specs} - names
-        if (cand := by_names.get(names | {i})) is not None and not cand.p_value < misfit_level
+        if (sup := by_names.get(names | {i})) is not None and not sup.p_value < misfit_level
     }
     return Ambiguity(
         tuple(alternatives),
