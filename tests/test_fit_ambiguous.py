@@ -23,12 +23,20 @@ from allanite.terms import Flicker, RateRandomWalk, White
 
 
 def _interval(f: FitResult, symbol: str) -> tuple[float, float] | None:
-    """The reported 95 % interval of ``symbol``: the model's, else the alternative's."""
-    if symbol in f.coefficients:
-        return f.coefficients[symbol].ci(0.95)
-    if symbol in f.exchangeable:
-        return f.exchangeable[symbol].ci(0.95)
+    """The reported 95 % interval of ``symbol``: the model's, the alternative's, the limit's."""
+    for where in (f.coefficients, f.exchangeable, f.undetected):
+        if symbol in where:
+            return where[symbol].ci(0.95)
     return None
+
+
+def _ulog_gyro() -> NoiseModel:
+    # gyro White(0.3/60), Flicker(5/3600), RateRandomWalk(3/60/3600) deg/s, recorded in rad/s
+    c = math.pi / 180.0
+    return NoiseModel(
+        [White(0.3 / 60 * c), Flicker(5 / 3600 * c), RateRandomWalk(3 / 60 / 3600 * c)],
+        units={"rate": "rad/s", "time": "s"},
+    )
 
 
 @pytest.fixture(scope="module")
@@ -83,12 +91,7 @@ def test_alternatives_in_json_cli_and_report(nav):
 
 
 def test_six_axis_ulog_gyro_250hz_5min():
-    # gyro White(0.3/60), Flicker(5/3600), RateRandomWalk(3/60/3600) deg/s, recorded in rad/s
-    c = math.pi / 180.0
-    model = NoiseModel(
-        [White(0.3 / 60 * c), Flicker(5 / 3600 * c), RateRandomWalk(3 / 60 / 3600 * c)],
-        units={"rate": "rad/s", "time": "s"},
-    )
+    model = _ulog_gyro()
     truth = model.coefficients()
     x = model.simulate(75_000, fs=250.0, seed=4).ravel()
     f = fit(x, fs=250.0, units="rad/s")
@@ -114,3 +117,18 @@ def test_a_clear_record_has_no_swap():
     for name, coef in f.coefficients.items():
         assert coef.ci(0.95) == f.meta["selected_coefficients"][name].ci(0.95)
     assert np.all(np.isfinite([c.value for c in f.coefficients.values()]))
+
+
+def test_a_term_left_out_without_evidence_gets_an_upper_limit():
+    # the same gyro, seed 6: the rate random walk (about a quarter of the variance at the
+    # last taus) is not in the model and the data show none of it: "not detected", with
+    # the upper limit of the fit with it, which holds the truth
+    model = _ulog_gyro()
+    truth = model.coefficients()
+    f = fit(model.simulate(75_000, fs=250.0, seed=6).ravel(), fs=250.0, units="rad/s")
+    assert "K" not in f.coefficients
+    assert "K" in f.undetected
+    lo, hi = f.undetected["K"].ci(0.95)
+    assert lo <= truth["K"] <= hi
+    assert "not detected (95 % upper limits" in f.format_table()
+    assert [u["name"] for u in json.loads(f.to_json())["undetected"]] == list(f.undetected)
