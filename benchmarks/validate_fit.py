@@ -35,6 +35,7 @@ Usage::
     nice python benchmarks/validate_fit.py --limit 100        # the first 100 of the full grid
     nice python benchmarks/validate_fit.py --legacy           # the first grid's design
     nice python benchmarks/validate_fit.py --grid-seed 112    # another draw of the grid
+    nice python benchmarks/validate_fit.py --ambiguous        # the designed ambiguous set
 
 Results: ``benchmarks/results/validate_fit_{quick,full}[_legacy].json`` and ``.md``.
 """
