@@ -37,6 +37,13 @@ likelihood-ratio tests under one fixed covariance:
    dominates, so the score alone asks more than the penalty of a term confined to the last
    taus). The superset must not be rejected; an added ramp must pass step 3.
 
+Finally the choices the record does not make are recorded (:func:`_exchangeable`): a
+non-rejected subset that swaps one chosen term for another candidate at a score within the
+penalty, or a left-out term whose chi-square drop against the chosen model is positive but
+below the penalty. :func:`allanite.fit.fit` widens the swapped-out terms' intervals to the
+hull with the union fit (chosen plus all alternative terms), reports the alternative terms
+from that fit and the other left-out terms as not detected, with upper limits.
+
 The reweighted fit of one subset is not convex (the covariance depends on the estimate), so
 each subset is fitted from several starting covariances and the best score is kept: the
 diagonal one from the estimates' EDF, the covariance of the model read off the curve by the
