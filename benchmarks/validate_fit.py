@@ -910,7 +910,7 @@ def run_case_cli(case: Case, form: CliForm, folder: Path) -> dict[str, Any]:
 def summarise_cli(rows: list[dict[str, Any]]) -> dict[str, Any]:
     """The API mode's measures on the CLI's results, and the CLI-vs-API comparison."""
     ran = [r for r in rows if "terms" in r]
-    summary = summarise(ran) if ran else {"records": 0}
+    summary: dict[str, Any] = summarise(ran) if ran else {"records": 0}
     cases = [r["case"] for r in rows]
     forms = [r["form"] for r in rows]
 

@@ -99,7 +99,7 @@ def test_cli_units_deg_h_rad_s_and_none(tmp_path: Path, capsys: pytest.CaptureFi
     # coefficients are in the record's own units instead of silently assuming deg/s
     fs, n_true = 100.0, 0.01  # deg/sqrt(s)
     rate = np.random.default_rng(12).normal(size=30_000) * n_true * np.sqrt(fs)
-    files = {}
+    files: dict[str, Path] = {}
     for unit, factor in (("deg/s", 1.0), ("deg/h", 3600.0), ("rad/s", np.pi / 180.0)):
         files[unit] = tmp_path / f"r{len(files)}.npy"
         np.save(files[unit], rate * factor)
