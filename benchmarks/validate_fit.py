@@ -786,6 +786,23 @@ def _api_units(f: Any) -> dict[str, str]:
     return {row["name"]: row["unit"] for row in f.table(None, LEVEL)}
 
 
+def _compare_models(got: NoiseModel, want: NoiseModel) -> list[str]:
+    """Differences between two models' coefficients in customary units (rate units may differ)."""
+    from allanite.report.coefficients import coefficient_table
+    from allanite.units import convert
+
+    a = {r.symbol: r for r in coefficient_table(got, None)}
+    b = {r.symbol: r for r in coefficient_table(want, None)}
+    if sorted(a) != sorted(b):
+        return [f"-o model terms {sorted(a)} vs API {sorted(b)}"]
+    out = []
+    for sym, row in a.items():
+        value = convert(row.value, row.unit, b[sym].unit)
+        if not abs(value - b[sym].value) <= CLI_REL * abs(b[sym].value):
+            out.append(f"-o model {sym} = {value:.9g} {b[sym].unit}, API {b[sym].value:.9g}")
+    return out
+
+
 def run_case_cli(case: Case, form: CliForm, folder: Path) -> dict[str, Any]:
     """One record through the API (:func:`run_case`) and the CLI; score the CLI, compare."""
     from allanite.units import convert
@@ -821,7 +838,6 @@ def run_case_cli(case: Case, form: CliForm, folder: Path) -> dict[str, Any]:
         return {**row, "mismatches": [f"channel {channel!r} not in {names}"], "ok": False}
     ch = found[0]
     saved = json.loads(model_path.read_text(encoding="utf-8"))
-    model_path.unlink()
     # the units: what the JSON says, and that the model's coefficients are in that unit
     if ch["units"] != rate:
         mismatches.append(f"units {ch['units']!r}, expected {rate!r}")
@@ -829,10 +845,13 @@ def run_case_cli(case: Case, form: CliForm, folder: Path) -> dict[str, Any]:
         mismatches.append(f"model units {ch['model'].get('units')!r}, expected rate {rate!r}")
     if saved != out["channels"][0]["model"]:
         mismatches.append("-o model differs from the --json model of the first channel")
+    # the -o model read back as a user does, against the API's model (customary units)
+    mismatches += _compare_models(NoiseModel.load(model_path), f.model)
     if form.layout == "single" or channel == out["channels"][0]["channel"]:
         pass
     else:
         mismatches.append(f"-o wrote channel {out['channels'][0]['channel']}, not {channel}")
+    model_path.unlink()
     # the coefficients, back in the API's units (the CLI prints customary units)
     units = _api_units(f)
     cli_terms: dict[str, dict[str, float]] = {}
