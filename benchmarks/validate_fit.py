@@ -926,7 +926,56 @@ def run_case_cli(case: Case, form: CliForm, folder: Path) -> dict[str, Any]:
     }
 
 
-def summarise_cli(rows: list[dict[str, Any]]) -> dict[str, Any]:
+def unit_checks(folder: Path) -> list[dict[str, Any]]:
+    """Issue 12's example record (30 min, 100 Hz, seed 102) in deg/s, deg/h and rad/s.
+
+    Simulated by ``allanite simulate`` (deg/s) and rescaled; ``allanite fit`` with the
+    matching ``--units``, and the rad/s file without ``--units`` (the user forgot it): N as
+    printed, its unit, the JSON's unit and the text's channel line.
+    """
+    from allanite.examples import example_model
+
+    example_model().save(folder / "m.json")
+    rec = folder / "s.npy"
+    model = str(folder / "m.json")
+    simulate = ["simulate", model, "--fs", "100", "--duration", "30min", "--seed", "102"]
+    done = run_cli([*simulate, "-o", str(rec)])
+    if done.returncode != 0:
+        return [{"error": done.stderr.strip()}]
+    x = np.load(rec)
+    out = []
+    for name, factor, units in (
+        ("deg/s", 1.0, "deg/s"),
+        ("deg/h", 3600.0, "deg/h"),
+        ("rad/s", math.pi / 180.0, "rad/s"),
+        ("rad/s", math.pi / 180.0, None),
+    ):
+        path = folder / f"s_{name.replace('/', '_')}.npy"
+        np.save(path, x * factor)
+        flags = [str(path), "--fs", "100"] + (["--units", units] if units else [])
+        js = run_cli(["fit", *flags, "--json"])
+        text = run_cli(["fit", *flags])
+        ch = json.loads(js.stdout)["channels"][0] if js.returncode == 0 else {}
+        n = {r["symbol"]: r for r in ch.get("coefficients", [])}.get("N", {})
+        out.append(
+            {
+                "file": name,
+                "flags": flags[1:],
+                "returncode": js.returncode,
+                "N": n.get("value"),
+                "N_unit": n.get("unit"),
+                "json_units": ch.get("units"),
+                "model_rate_unit": ch.get("model", {}).get("units", {}).get("rate"),
+                "text_channel_line": text.stdout.splitlines()[0] if text.stdout else None,
+                "stderr": (js.stderr + text.stderr).strip()[-500:],
+            }
+        )
+    return out
+
+
+def summarise_cli(
+    rows: list[dict[str, Any]], checks: list[dict[str, Any]] | None = None
+) -> dict[str, Any]:
     """The API mode's measures on the CLI's results, and the CLI-vs-API comparison."""
     ran = [r for r in rows if "terms" in r]
     summary: dict[str, Any] = summarise(ran) if ran else {"records": 0}
@@ -957,6 +1006,7 @@ def summarise_cli(rows: list[dict[str, Any]]) -> dict[str, Any]:
             "layout": count([f["layout"] for f in forms]),
             "time_column": count([f["time_column"] for f in forms]),
         },
+        "unit_checks": checks or [],
         "cli_seconds": {
             "median": float(np.median([r["cli_s"] for r in rows])) if rows else math.nan,
             "max": float(np.max([r["cli_s"] for r in rows])) if rows else math.nan,
@@ -993,7 +1043,20 @@ def markdown_cli(summary: dict[str, Any], command: str) -> str:
         "### mismatches",
     ]
     lines += [f"- {json.dumps(m, default=str)}" for m in c["mismatches"]] or ["none"]
-    return head + "\n".join(lines) + "\n"
+    lines += [
+        "",
+        "## units: issue 12's example record in deg/s, deg/h, rad/s, and without --units",
+        "",
+        "| file | flags | N | JSON units | model rate unit | text |",
+        "|---|---|---|---|---|---|",
+    ]
+    for k in c.get("unit_checks", []):
+        n = "-" if k.get("N") is None else f"{k['N']:.4g} {k['N_unit']}"
+        lines.append(
+            f"| {k.get('file')} | `{' '.join(k.get('flags', []))}` | {n} | {k.get('json_units')} "
+            f"| {k.get('model_rate_unit')} | {k.get('text_channel_line')} |"
+        )
+    return head.rstrip("\n") + "\n" + "\n".join(lines) + "\n"
 
 
 def main_cli(args: argparse.Namespace, argv: list[str]) -> int:
@@ -1008,6 +1071,13 @@ def main_cli(args: argparse.Namespace, argv: list[str]) -> int:
     rows: list[dict[str, Any]] = []
     start = time.perf_counter()
     with tempfile.TemporaryDirectory(prefix="validate_fit_cli_") as tmp:
+        checks = unit_checks(Path(tmp))
+        for k in checks:
+            print(f"units: {json.dumps(k)}", flush=True)
+
+        def summarise_run(rows: list[dict[str, Any]]) -> dict[str, Any]:
+            return summarise_cli(rows, checks)
+
         for case, form in pairs:
             row = run_case_cli(case, form, Path(tmp))
             rows.append(row)
@@ -1020,7 +1090,7 @@ def main_cli(args: argparse.Namespace, argv: list[str]) -> int:
                 flush=True,
             )
             if len(rows) % 5 == 0 or len(rows) == len(pairs):
-                save(stem, rows, len(pairs), start, summarise_cli, markdown_cli, command)
+                save(stem, rows, len(pairs), start, summarise_run, markdown_cli, command)
     return 0 if all(r["ok"] for r in rows) else 1
 
 
