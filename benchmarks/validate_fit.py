@@ -35,8 +35,20 @@ Usage::
     nice python benchmarks/validate_fit.py --limit 100        # the first 100 of the full grid
     nice python benchmarks/validate_fit.py --legacy           # the first grid's design
     nice python benchmarks/validate_fit.py --grid-seed 112    # another draw of the grid
+    nice python benchmarks/validate_fit.py --cli              # 66 records through the CLI
 
 Results: ``benchmarks/results/validate_fit_{quick,full}[_legacy].json`` and ``.md``.
+
+``--cli`` (:func:`main_cli`) takes 66 records of the full grid (:func:`cli_grid`: all four
+units, rate and angle input, log and octave grids, 1e5 to 1e7 samples), writes each as a user
+has it (npy, or CSV with a header stating the units and sometimes a time column; one channel,
+or six with the record in gx or, for m/s^2, ax and white noise in the others), runs
+``allanite fit FILE --units U [--input angle] --taus T --json -o model.json`` and scores the
+CLI's numbers with the same measures (:func:`summarise`), and compares them with
+``allanite.fit`` on the same record: same terms, coefficients and bounds to 1e-6 after
+converting the customary units back, p-value, rejection, the JSON's unit, and the ``-o``
+model read back. It also fits issue 12's example record in deg/s, deg/h and rad/s, and
+without ``--units`` (:func:`unit_checks`). Results: ``results/validate_fit_cli.{json,md}``.
 """
 
 from __future__ import annotations
