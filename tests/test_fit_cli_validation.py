@@ -158,3 +158,25 @@ def test_one_column_csv_with_a_units_header(
     np.savetxt(bad, angle, fmt="%.17g", header="a [rad],b [rad]", comments="")
     with pytest.raises(ValueError, match=r"the header names \d column\(s\) but the rows have 1"):
         allanite.io.read_record(bad, fs=fs)
+
+
+def test_cli_comparison_reports_a_wrong_unit(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # the CLI-vs-API comparison is not vacuous: the record labelled deg/h instead of deg/s
+    # (a 3600x error) is reported as a units and a coefficient mismatch
+    vf = _validate_fit_module()
+    case = vf.Case(0, ("N",), 20_000, 100.0, "octave", "rate", "deg/s", seed=5)
+    write = vf.write_cli_record
+
+    def mislabelled(*args: Any) -> Any:
+        path, flags, channel, rate = write(*args)
+        return path, [("deg/h" if f == "deg/s" else f) for f in flags], channel, rate
+
+    monkeypatch.setattr(vf, "write_cli_record", mislabelled)
+    row = vf.run_case_cli(case, vf.CliForm("npy", "single"), tmp_path)
+    assert not row["ok"]
+    text = " ".join(row["mismatches"])
+    assert "units 'deg/h', expected 'deg/s'" in text
+    assert "N value" in text
+    assert "-o model N" in text
