@@ -36,8 +36,20 @@ Usage::
     nice python benchmarks/validate_fit.py --legacy           # the first grid's design
     nice python benchmarks/validate_fit.py --grid-seed 112    # another draw of the grid
     nice python benchmarks/validate_fit.py --ambiguous        # the designed ambiguous set
+    nice python benchmarks/validate_fit.py --cli              # 66 records through the CLI
 
 Results: ``benchmarks/results/validate_fit_{quick,full}[_legacy].json`` and ``.md``.
+
+``--cli`` (:func:`main_cli`) takes 66 records of the full grid (:func:`cli_grid`: all four
+units, rate and angle input, log and octave grids, 1e5 to 1e7 samples), writes each as a user
+has it (npy, or CSV with a header stating the units and sometimes a time column; one channel,
+or six with the record in gx or, for m/s^2, ax and white noise in the others), runs
+``allanite fit FILE --units U [--input angle] --taus T --json -o model.json`` and scores the
+CLI's numbers with the same measures (:func:`summarise`), and compares them with
+``allanite.fit`` on the same record: same terms, coefficients and bounds to 1e-6 after
+converting the customary units back, p-value, rejection, the JSON's unit, and the ``-o``
+model read back. It also fits issue 12's example record in deg/s, deg/h and rad/s, and
+without ``--units`` (:func:`unit_checks`). Results: ``results/validate_fit_cli.{json,md}``.
 """
 
 from __future__ import annotations
@@ -45,6 +57,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import subprocess
 import sys
 import time
 from collections.abc import Callable
@@ -383,8 +396,12 @@ def _grid(quick: bool, long: bool, seed: int) -> list[Case]:
     return cases
 
 
-def run_case(case: Case) -> dict[str, Any]:
-    """Simulate, fit with the defaults, score."""
+def run_case(case: Case, keep: dict[str, Any] | None = None) -> dict[str, Any]:
+    """Simulate, fit with the defaults, score.
+
+    ``keep``, when given, receives the samples (``x``), the Allan result (``avar``) and the
+    fit (``fit``), for :func:`run_case_cli`.
+    """
     model = design(case)
     dt = 1.0 / case.fs
     t0 = time.perf_counter()
@@ -399,6 +416,8 @@ def run_case(case: Case) -> dict[str, Any]:
     res = allanite.avar(x, fs=case.fs, input=kind, taus=case.taus, units=case.unit)
     f = fit(res)
     t2 = time.perf_counter()
+    if keep is not None:
+        keep.update(x=x, avar=res, fit=f)
     truth = model.coefficients()
     symbols = dict(zip(case.terms, model.terms, strict=True))
     comp = {s: np.asarray(term.avar(f.tau, dt), dtype=np.float64) for s, term in symbols.items()}
@@ -644,6 +663,450 @@ def markdown(summary: dict[str, Any], command: str) -> str:
     return "\n".join(lines)
 
 
+# --- the CLI mode (--cli): the same records through ``allanite fit FILE ... --json -o`` ---
+
+#: the CLI records: sample sizes of the full grid (without the 1e8 records) drawn for the CLI
+CLI_RECORDS = 66
+#: of which this many of 1e7 samples (npy: a CSV of 1e7 rows is not how such records come)
+CLI_LONG = 3
+#: CSV and six-axis files up to this many samples (text parsing and six fits per record)
+CLI_CSV_MAX = 300_000
+#: the same record fitted by the CLI and the API: coefficients equal to this relative
+#: tolerance (both are float64 end to end: npy exactly, CSV written with 17 digits, the time
+#: column's inferred rate to ~1e-15; unit conversion to customary units and back)
+CLI_REL = 1e-6
+#: the other channels of a six-axis file: white noise (deg/s and m/s^2 per sqrt(s))
+SIX_GYRO, SIX_ACCEL = ("gx", "gy", "gz"), ("ax", "ay", "az")
+#: the angle/increment unit a user's file has for a rate unit, and the factor from the
+#: simulator's integral (rate unit x s) to it: a deg/h gyro's angle is written in deg
+ANGLE_UNIT = {
+    "deg/s": ("deg", 1.0),
+    "rad/s": ("rad", 1.0),
+    "deg/h": ("deg", 1.0 / 3600.0),
+    "m/s^2": ("m/s", 1.0),
+}
+
+
+@dataclass(frozen=True)
+class CliForm:
+    """How a CLI record is written: file format, layout, and a time column (CSV)."""
+
+    fmt: str  # "npy" or "csv"
+    layout: str  # "single" or "six"
+    time_column: bool = False
+
+
+def cli_grid(seed: int = 12) -> list[tuple[Case, CliForm]]:
+    """A deterministic subset of the full grid (no 1e8 records) with the file forms.
+
+    :data:`CLI_LONG` records of 1e7 samples (npy, one channel) and the rest up to 3e6
+    samples; records up to :data:`CLI_CSV_MAX` samples alternate npy/CSV and one or six
+    channels (CSV with a time column every second time); longer ones are npy, one channel.
+    """
+    cases = grid(False, long=False, seed=seed)
+    order = np.random.default_rng(2027).permutation(len(cases))
+    long = [cases[i] for i in order if cases[i].n >= 10_000_000][:CLI_LONG]
+    rest = [cases[i] for i in order if cases[i].n < 10_000_000][: CLI_RECORDS - len(long)]
+    out: list[tuple[Case, CliForm]] = []
+    small = 0
+    for case in sorted(rest + long, key=lambda c: c.index):
+        if case.n > CLI_CSV_MAX:
+            out.append((case, CliForm("npy", "single")))
+            continue
+        fmt = ("npy", "csv")[small % 2]
+        layout = ("single", "six")[(small // 2) % 2]
+        out.append((case, CliForm(fmt, layout, time_column=fmt == "csv" and (small // 4) % 2 == 0)))
+        small += 1
+    return out
+
+
+def write_cli_record(
+    case: Case, form: CliForm, x: np.ndarray, folder: Path
+) -> tuple[Path, list[str], str, str]:
+    """Write the record as a user would have it; return path, CLI flags, channel, rate unit.
+
+    The channel is the record's name in a six-axis file (one-channel files: the only one).
+
+    Rate records are written in the case's unit, angle records in the matching angle unit
+    (:data:`ANGLE_UNIT`). A six-axis file has the record in ``gx`` (a gyro unit) or ``ax``
+    (m/s^2) and white noise in the other five channels; ``--units`` gives one unit per sensor.
+    """
+    from allanite.units import integral_unit
+
+    angle = case.input == "angle"
+    unit, factor = ANGLE_UNIT[case.unit] if angle else (case.unit, 1.0)
+    samples = x * factor
+    rate = integral_unit(unit) if angle else unit
+    flags = ["--taus", case.taus] + (["--input", "angle"] if angle else [])
+    gyro = case.unit != "m/s^2"
+    path = folder / f"rec{case.index}.{form.fmt}"
+    if form.layout == "six":
+        rng = np.random.default_rng([case.seed, 6])
+        data = rng.normal(size=(case.n, 6)) * np.sqrt(case.fs) * 1e-2
+        if angle:
+            data = np.cumsum(data, axis=0) / case.fs
+        data[:, 0 if gyro else 3] = samples
+        other_unit = ("m/s" if angle else "m/s^2") if gyro else ("deg" if angle else "deg/s")
+        gyro_unit, accel_unit = (unit, other_unit) if gyro else (other_unit, unit)
+        # CSV: the header states each column's unit; npy has no names (col0..col5, by index)
+        names = [f"{n} [{gyro_unit}]" for n in SIX_GYRO] + [
+            f"{n} [{accel_unit}]" for n in SIX_ACCEL
+        ]
+        keys = names if form.fmt == "csv" else [str(i) for i in range(6)]
+        shown = names if form.fmt == "csv" else [f"col{i}" for i in range(6)]
+        channel = shown[0 if gyro else 3]
+        if gyro:
+            flags += ["--units", f"{unit},{other_unit}"]
+        else:  # the accelerometer first, so that -o writes its model
+            flags += ["--channels", ",".join(keys[3:] + keys[:3])]
+            flags += ["--units", f"{unit},{other_unit}"]
+    else:
+        data = samples[:, None]
+        names = [f"{'gyro' if gyro else 'accel'} [{unit}]"]
+        channel = names[0] if form.fmt == "csv" else "col0"
+        flags += ["--units", unit]
+    if form.fmt == "npy":
+        np.save(path, data if data.shape[1] > 1 else data[:, 0])
+        flags += ["--fs", repr(case.fs)]
+    else:
+        columns = [data]
+        if form.time_column:
+            columns.insert(0, (np.arange(case.n) / case.fs)[:, None])
+            names = ["t [s]", *names]
+            flags += ["--time-column", "t [s]"]
+        else:
+            flags += ["--fs", repr(case.fs)]
+        np.savetxt(
+            path,
+            np.hstack(columns),
+            delimiter=",",
+            fmt="%.17g",
+            header=",".join(names),
+            comments="",
+        )
+    return path, flags, channel, rate
+
+
+def run_cli(argv: list[str]) -> subprocess.CompletedProcess[str]:
+    """``allanite ARGV`` as a user runs it (the console script of this interpreter)."""
+    script = Path(sys.executable).with_name("allanite")
+    command = [str(script)] if script.exists() else [sys.executable, "-m", "allanite"]
+    return subprocess.run(command + argv, capture_output=True, text=True, check=False)
+
+
+def _api_units(f: Any) -> dict[str, str]:
+    """The unit of each coefficient of an API fit (its own table)."""
+    return {row["name"]: row["unit"] for row in f.table(None, LEVEL)}
+
+
+def _compare_models(got: NoiseModel, want: NoiseModel) -> list[str]:
+    """Differences between two models' coefficients in customary units (rate units may differ)."""
+    from allanite.report.coefficients import coefficient_table
+    from allanite.units import convert
+
+    a = {r.symbol: r for r in coefficient_table(got, None)}
+    b = {r.symbol: r for r in coefficient_table(want, None)}
+    if sorted(a) != sorted(b):
+        return [f"-o model terms {sorted(a)} vs API {sorted(b)}"]
+    out = []
+    for sym, row in a.items():
+        value = convert(row.value, row.unit, b[sym].unit)
+        if not abs(value - b[sym].value) <= CLI_REL * abs(b[sym].value):
+            out.append(f"-o model {sym} = {value:.9g} {b[sym].unit}, API {b[sym].value:.9g}")
+    return out
+
+
+def run_case_cli(case: Case, form: CliForm, folder: Path) -> dict[str, Any]:
+    """One record through the API (:func:`run_case`) and the CLI; score the CLI, compare."""
+    from allanite.units import convert
+
+    keep: dict[str, Any] = {}
+    api = run_case(case, keep)
+    f = keep["fit"]
+    path, flags, channel, rate = write_cli_record(case, form, keep["x"], folder)
+    model_path = folder / f"model{case.index}.json"
+    t0 = time.perf_counter()
+    proc = run_cli(["fit", str(path), *flags, "--json", "-o", str(model_path)])
+    cli_s = time.perf_counter() - t0
+    row: dict[str, Any] = {
+        "case": case.__dict__,
+        "form": form.__dict__,
+        "flags": flags,
+        "returncode": proc.returncode,
+        "stderr": proc.stderr.strip()[-2000:],
+        "cli_s": cli_s,
+        "api": {k: api[k] for k in ("fitted_terms", "p_value", "rejected")},
+    }
+    path.unlink()
+    mismatches: list[str] = []
+    if proc.returncode != 0:
+        model_path.unlink(missing_ok=True)
+        return {**row, "mismatches": [f"exit code {proc.returncode}"], "ok": False}
+    out = json.loads(proc.stdout)
+    # one channel: whatever the reader calls it (npy: col0); six: by its header name
+    one = form.layout == "single" and len(out["channels"]) == 1
+    found = out["channels"][:1] if one else [c for c in out["channels"] if c["channel"] == channel]
+    if not found:
+        names = [c["channel"] for c in out["channels"]]
+        return {**row, "mismatches": [f"channel {channel!r} not in {names}"], "ok": False}
+    ch = found[0]
+    saved = json.loads(model_path.read_text(encoding="utf-8"))
+    # the units: what the JSON says, and that the model's coefficients are in that unit
+    if ch["units"] != rate:
+        mismatches.append(f"units {ch['units']!r}, expected {rate!r}")
+    if ch["model"].get("units", {}).get("rate") != rate:
+        mismatches.append(f"model units {ch['model'].get('units')!r}, expected rate {rate!r}")
+    if saved != out["channels"][0]["model"]:
+        mismatches.append("-o model differs from the --json model of the first channel")
+    # the -o model read back as a user does, against the API's model (customary units)
+    mismatches += _compare_models(NoiseModel.load(model_path), f.model)
+    if form.layout == "single" or channel == out["channels"][0]["channel"]:
+        pass
+    else:
+        mismatches.append(f"-o wrote channel {out['channels'][0]['channel']}, not {channel}")
+    model_path.unlink()
+    # the coefficients, back in the API's units (the CLI prints customary units)
+    units = _api_units(f)
+    cli_terms: dict[str, dict[str, float]] = {}
+    for r in ch["coefficients"]:
+        sym = r["symbol"]
+        if sym not in units:
+            cli_terms[sym] = {"value": math.nan, "low": math.nan, "high": math.nan}
+            continue
+        cli_terms[sym] = {
+            k: convert(r[k], r["unit"], units[sym]) if r[k] is not None else math.nan
+            for k in ("value", "low", "high")
+        }
+    if sorted(cli_terms) != sorted(f.coefficients):
+        mismatches.append(f"terms {sorted(cli_terms)} vs API {sorted(f.coefficients)}")
+    worst_rel = 0.0
+    for sym, got in cli_terms.items():
+        if sym not in f.coefficients:
+            continue
+        c = f.coefficients[sym]
+        lo, hi = c.ci(LEVEL)
+        for name, ref in (("value", c.value), ("low", lo), ("high", hi)):
+            rel = abs(got[name] - ref) / max(abs(ref), 1e-300)
+            worst_rel = max(worst_rel, rel)
+            if not rel <= CLI_REL:
+                mismatches.append(f"{sym} {name}: CLI {got[name]:.9g} vs API {ref:.9g}")
+    if bool(ch.get("rejected")) != bool(f.rejected):
+        mismatches.append(f"rejected: CLI {ch.get('rejected')} vs API {f.rejected}")
+    p_cli = ch.get("p_value")
+    if p_cli is None or not math.isclose(p_cli, f.p_value, rel_tol=1e-4, abs_tol=1e-12):
+        mismatches.append(f"p: CLI {p_cli} vs API {f.p_value:.6g}")
+    # score the CLI's numbers with the API mode's measures (truth, dominance from the API row)
+    fitted = [s for s in cli_terms]
+    terms: dict[str, Any] = {}
+    for s, entry in api["terms"].items():
+        e = {k: entry[k] for k in ("truth", "dominant", "dominant_decades", "dense_decades")}
+        if s in cli_terms:
+            got = cli_terms[s]
+            half = (got["high"] - got["low"]) / (2.0 * 1.959963984540054)
+            e.update(
+                value=got["value"],
+                low=got["low"],
+                high=got["high"],
+                covered=bool(got["low"] <= e["truth"] <= got["high"]),
+                z=(got["value"] - e["truth"]) / half if half > 0 else math.inf,
+            )
+        else:
+            e.update(value=None, covered=False)
+        terms[s] = e
+    missing = [s for s in case.terms if terms[s]["dominant"] and s not in cli_terms]
+    return {
+        **row,
+        "fitted_terms": fitted,
+        "extra_terms": [s for s in fitted if s not in case.terms],
+        "p_value": p_cli if p_cli is not None else math.nan,
+        "rejected": bool(ch.get("rejected")),
+        "missing_dominant": missing,
+        "missing_resolvable": [s for s in missing if s in api["missing_resolvable"]],
+        "missing_resolvable_amplitude": [
+            s for s in missing if s in api["missing_resolvable_amplitude"]
+        ],
+        "missing_clear": [
+            s
+            for s in case.terms
+            if terms[s]["dominant_decades"] >= CLEAR_DECADES and s not in cli_terms
+        ],
+        "terms": terms,
+        "designed_taus": api["designed_taus"],
+        "fit_s": cli_s,
+        "worst_rel": worst_rel,
+        "mismatches": mismatches,
+        "ok": not mismatches,
+    }
+
+
+def unit_checks(folder: Path) -> list[dict[str, Any]]:
+    """Issue 12's example record (30 min, 100 Hz, seed 102) in deg/s, deg/h and rad/s.
+
+    Simulated by ``allanite simulate`` (deg/s) and rescaled; ``allanite fit`` with the
+    matching ``--units``, and the rad/s file without ``--units`` (the user forgot it): N as
+    printed, its unit, the JSON's unit and the text's channel line.
+    """
+    from allanite.examples import example_model
+
+    example_model().save(folder / "m.json")
+    rec = folder / "s.npy"
+    model = str(folder / "m.json")
+    simulate = ["simulate", model, "--fs", "100", "--duration", "30min", "--seed", "102"]
+    done = run_cli([*simulate, "-o", str(rec)])
+    if done.returncode != 0:
+        return [{"error": done.stderr.strip()}]
+    x = np.load(rec)
+    out = []
+    for name, factor, units in (
+        ("deg/s", 1.0, "deg/s"),
+        ("deg/h", 3600.0, "deg/h"),
+        ("rad/s", math.pi / 180.0, "rad/s"),
+        ("rad/s", math.pi / 180.0, None),
+    ):
+        path = folder / f"s_{name.replace('/', '_')}.npy"
+        np.save(path, x * factor)
+        flags = [str(path), "--fs", "100"] + (["--units", units] if units else [])
+        js = run_cli(["fit", *flags, "--json"])
+        text = run_cli(["fit", *flags])
+        ch = json.loads(js.stdout)["channels"][0] if js.returncode == 0 else {}
+        n = {r["symbol"]: r for r in ch.get("coefficients", [])}.get("N", {})
+        out.append(
+            {
+                "file": name,
+                "flags": flags[1:],
+                "returncode": js.returncode,
+                "N": n.get("value"),
+                "N_unit": n.get("unit"),
+                "json_units": ch.get("units"),
+                "model_rate_unit": ch.get("model", {}).get("units", {}).get("rate"),
+                "text_channel_line": text.stdout.splitlines()[0] if text.stdout else None,
+                "stderr": (js.stderr + text.stderr).strip()[-500:],
+            }
+        )
+    return out
+
+
+def summarise_cli(
+    rows: list[dict[str, Any]], checks: list[dict[str, Any]] | None = None
+) -> dict[str, Any]:
+    """The API mode's measures on the CLI's results, and the CLI-vs-API comparison."""
+    ran = [r for r in rows if "terms" in r]
+    summary: dict[str, Any] = summarise(ran) if ran else {"records": 0}
+    cases = [r["case"] for r in rows]
+    forms = [r["form"] for r in rows]
+
+    def count(values: list[Any]) -> dict[str, int]:
+        out: dict[str, int] = {}
+        for v in values:
+            out[str(v)] = out.get(str(v), 0) + 1
+        return dict(sorted(out.items()))
+
+    summary["cli"] = {
+        "records": len(rows),
+        "agree": sum(bool(r["ok"]) for r in rows),
+        "mismatches": [
+            {"case": r["case"]["index"], "form": r["form"], "mismatches": r["mismatches"]}
+            for r in rows
+            if not r["ok"]
+        ],
+        "worst_rel": max((r.get("worst_rel", 0.0) for r in ran), default=math.nan),
+        "cover": {
+            "unit": count([c["unit"] for c in cases]),
+            "input": count([c["input"] for c in cases]),
+            "taus": count([c["taus"] for c in cases]),
+            "n": count([c["n"] for c in cases]),
+            "format": count([f["fmt"] for f in forms]),
+            "layout": count([f["layout"] for f in forms]),
+            "time_column": count([f["time_column"] for f in forms]),
+        },
+        "unit_checks": checks or [],
+        "cli_seconds": {
+            "median": float(np.median([r["cli_s"] for r in rows])) if rows else math.nan,
+            "max": float(np.max([r["cli_s"] for r in rows])) if rows else math.nan,
+        },
+    }
+    return summary
+
+
+def markdown_cli(summary: dict[str, Any], command: str) -> str:
+    """The API mode's table for the CLI's results, then the comparison with the API."""
+    c = summary["cli"]
+    head = markdown(summary, command) if summary.get("records") else f"`{command}`\n"
+    head = head.replace("# validate_fit (", "# validate_fit --cli (", 1)
+    lines = [
+        "",
+        "## CLI against the API on the same records",
+        "",
+        f"`allanite fit FILE ... --json -o model.json` on {c['records']} records written as a "
+        "user has them (npy, CSV with a units header, one or six channels, a time column); "
+        f"the same record through `allanite.fit`: {c['agree']}/{c['records']} agree (same "
+        f"terms, coefficients and 95 % bounds within {CLI_REL:g} relative after converting "
+        "the CLI's customary units back, the same p-value and rejection, the JSON's rate unit "
+        "the record's, the `-o` model equal to the JSON's). Largest relative difference: "
+        f"{c['worst_rel']:.2g}. CLI wall time per record (subprocess, reading, AVAR, fit, six "
+        f"channels where six): median {c['cli_seconds']['median']:.1f} s, max "
+        f"{c['cli_seconds']['max']:.1f} s.",
+        "",
+        "Records by "
+        + "; ".join(
+            f"{k}: " + ", ".join(f"{v} {n}" for v, n in cov.items())
+            for k, cov in c["cover"].items()
+        ),
+        "",
+        "### mismatches",
+    ]
+    lines += [f"- {json.dumps(m, default=str)}" for m in c["mismatches"]] or ["none"]
+    lines += [
+        "",
+        "## units: issue 12's example record in deg/s, deg/h, rad/s, and without --units",
+        "",
+        "| file | flags | N | JSON units | model rate unit | text |",
+        "|---|---|---|---|---|---|",
+    ]
+    for k in c.get("unit_checks", []):
+        n = "-" if k.get("N") is None else f"{k['N']:.4g} {k['N_unit']}"
+        lines.append(
+            f"| {k.get('file')} | `{' '.join(k.get('flags', []))}` | {n} | {k.get('json_units')} "
+            f"| {k.get('model_rate_unit')} | {k.get('text_channel_line')} |"
+        )
+    return head.rstrip("\n") + "\n" + "\n".join(lines) + "\n"
+
+
+def main_cli(args: argparse.Namespace, argv: list[str]) -> int:
+    """``--cli``: the CLI records (:func:`cli_grid`), scored and compared with the API."""
+    import tempfile
+
+    pairs = cli_grid(args.grid_seed)
+    if args.limit:
+        pairs = pairs[: args.limit]
+    stem = Path(args.output) if args.output else RESULTS / "validate_fit_cli"
+    command = "python benchmarks/validate_fit.py" + " ".join(["", *argv])
+    rows: list[dict[str, Any]] = []
+    start = time.perf_counter()
+    with tempfile.TemporaryDirectory(prefix="validate_fit_cli_") as tmp:
+        checks = unit_checks(Path(tmp))
+        for k in checks:
+            print(f"units: {json.dumps(k)}", flush=True)
+
+        def summarise_run(rows: list[dict[str, Any]]) -> dict[str, Any]:
+            return summarise_cli(rows, checks)
+
+        for case, form in pairs:
+            row = run_case_cli(case, form, Path(tmp))
+            rows.append(row)
+            print(
+                f"[{len(rows)}/{len(pairs)}] {'+'.join(case.terms):<10} n={case.n:<9} "
+                f"fs={case.fs:<7g} {case.taus:<6} {case.input:<5} {case.unit:<5} {form.fmt} "
+                f"{form.layout}{' t' if form.time_column else ''} -> "
+                f"{','.join(row.get('fitted_terms', []))} cli {row['cli_s']:.1f}s "
+                f"{'OK' if row['ok'] else row['mismatches']}",
+                flush=True,
+            )
+            if len(rows) % 5 == 0 or len(rows) == len(pairs):
+                save(stem, rows, len(pairs), start, summarise_run, markdown_cli, command)
+    return 0 if all(r["ok"] for r in rows) else 1
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the grid and write the results."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -675,12 +1138,20 @@ def main(argv: list[str] | None = None) -> int:
         metavar="COUNT",
         help="the designed ambiguous set instead (minor terms dominating nowhere; 120 records)",
     )
+    parser.add_argument(
+        "--cli",
+        action="store_true",
+        help="the CLI records: written to files, run through `allanite fit FILE --json -o`, "
+        "scored and compared with the API (results/validate_fit_cli)",
+    )
     args = parser.parse_args(argv)
     if args.ambiguous:
         command = "python benchmarks/validate_fit.py" + " ".join(
             [""] + (argv if argv is not None else sys.argv[1:])
         )
         return main_ambiguous(args.ambiguous, command)
+    if args.cli:
+        return main_cli(args, argv if argv is not None else sys.argv[1:])
     if args.summarise:
         path = Path(args.summarise)
         stored = json.loads(path.read_text(encoding="utf-8"))

@@ -229,14 +229,18 @@ def read_text_table(
         raise InputError(
             "a header line but no data rows; check that the right file was given", path=source
         )
+    detected = delimiter is None
     if delimiter is None:
         delimiter = _sniff([line for _, line in body])
     names: tuple[str, ...] | None = None
+    first_data = body[0][0]
+    first_row = _split(body[0][1], delimiter)
     if header:
         header_line = head[0][1]
         names = tuple(f.strip().strip("\"'") for f in _split(header_line, delimiter))
-    first_data = body[0][0]
-    first_row = _split(body[0][1], delimiter)
+        if detected and len(first_row) == 1 and not any(c in header_line for c in _CANDIDATES if c):
+            # one column: its name is the whole line, spaces included ("gyro [deg/s]")
+            names = (header_line.strip().strip("\"'"),)
     n_cols = len(first_row)
     converters: dict[int | str, Callable[[str], Any]] = {}
     for k, field in enumerate(first_row):
