@@ -65,7 +65,7 @@ FULL_REPLICATES_MAX = 2**18
 #: length of the short replicates at the real rate (63 Welch segments of 4096 samples)
 SHORT_LENGTH = 2**17
 #: the reference of the Welch features adds at most this share to a log-PSD bin's variance
-REFERENCE_SHARE = 0.1
+REFERENCE_SHARE = 0.2
 #: effects tied to the start of the record: no short replicate can stand for them
 START_TERMS = ("warmup",)
 
