@@ -353,7 +353,8 @@ def real_cases(
     the control's explanation says how; an injected effect counts as named when the set names
     it and the control's set does not (a Gauss-Markov process: a ``tau_c`` within a factor 3 of
     the injected one, in the set and not in the control's; a ramp: its slope within a factor 3,
-    so that a vanishing ramp that only takes the level evidence does not count).
+    so that a vanishing ramp that only takes the level evidence does not count; a resonance:
+    its frequency within 10 %, the z gyro has one of its own near 20 Hz).
     """
     from diagnosis_adis16405 import FS, fit_model, load
 
@@ -391,16 +392,18 @@ def real_named(row: dict[str, Any], control: list[dict[str, Any]]) -> bool:
     """Whether a real-base row names its injected effect where its control does not."""
     name = REAL_EFFECT.get(row["injected"], row["injected"])
     accepted = EQUIVALENT.get(name, {name})
-    if name not in ("markov", "ramp"):
+    if name not in ("markov", "ramp", "resonance"):
         return bool(
             any(e["effect"] in accepted for e in row["effects"])
             and not any(e["effect"] in accepted for e in control)
         )
-    key = "tau_c" if name == "markov" else "R"
+    key, tol = {"markov": ("tau_c", 3.0), "ramp": ("R", 3.0), "resonance": ("frequency", 1.1)}[name]
     truth = REAL_INJECTED[row["injected"]][1][key] if name == "markov" else row["truth_value"]
 
     def near(effects: list[dict[str, Any]]) -> bool:
-        return any(e["effect"] == name and 1 / 3 <= e["params"][key] / truth <= 3 for e in effects)
+        return any(
+            e["effect"] == name and 1 / tol <= e["params"][key] / truth <= tol for e in effects
+        )
 
     return near(row["effects"]) and not near(control)
 
@@ -536,6 +539,8 @@ def evaluate(case: Case, seed: int, n_mc: int) -> dict[str, Any]:
             row["named"] = bool(named & EQUIVALENT.get(name, {name}))
             if name == "ramp":
                 row["truth_value"] = float(case.extra.R)
+            if name == "resonance":
+                row["truth_value"] = float(case.extra.frequency)
         return row
     if case.effect in IN_VOCABULARY:
         named = {x.effect for x in d.explanation.effects} if d.explanation else set()
