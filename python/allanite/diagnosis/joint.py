@@ -316,7 +316,9 @@ def explain(
             left = {e: bool(s) and e not in told for e, s in significant.items()}
             others_a = [a for j, a in enumerate(chosen) if j != i]
             kept = on_top(others_a, others_c, tm_bg, left)
-            if not kept or kept[0].effect == chosen[i].effect:
+            # the same term added or rescaled (white, rescale:white) is the same effect: only
+            # the spectral misfit's rounding could tell them apart, so the incumbent stays
+            if not kept or by_effect[kept[0].effect].term_cls is chosen_c[i].term_cls:
                 continue
             chosen[i], chosen_c[i] = kept[0], by_effect[kept[0].effect]
             extras[i] = _extra(kept[0], tm_bg)
