@@ -324,7 +324,9 @@ def _attribute(
     attribution = rank(cands, analysis.tau_model, **test)
     explanation = None
     if attribution:
-        explanation = explain(attribution[0], cands, analysis.tau_model, **test)
+        explanation = explain(
+            attribution[0], cands, analysis.tau_model, frequency=analysis.frequency, **test
+        )
     return _Found(attribution, explanation, {c.effect: c for c in cands}, sig, unavailable)
 
 

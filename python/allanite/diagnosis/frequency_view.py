@@ -205,6 +205,40 @@ class FrequencyView:
         ]
         return p, bands, np.asarray(z, dtype=np.float64)
 
+    def shape_misfit(self, extra_psd: NDArray[np.float64]) -> float:
+        r"""Misfit of the spectrum's shape after adding an effect of one-sided PSD ``extra_psd``.
+
+        The band means of the log ratio ``r(f) - log(1 + extra(f) / sim(f))`` over the
+        broadband test bands, each normalised by its null spread, summed in squares:
+
+        .. math:: F = \sum_b z_b^2, \qquad z_b = \frac{\overline{r_b}}{s_b},
+
+        which is ``chi2`` with as many degrees of freedom as bands when the effect is right
+        (nearly independent bands of nearly Gaussian means). Bins within ``LINE_HALF_WIDTH``
+        of a detected line are left out (lines are the line detector's business; a sinusoid has
+        no PSD), and the spread of a band that loses bins grows as ``sqrt(n / n_kept)``. ``F``
+        compares look-alikes that the tau view cannot tell apart: a Gauss-Markov knee (a flat
+        spectrum below ``1 / (2 pi tau_c)``) against a ``1/f`` line, a random walk's ``1/f^2``
+        against a flicker's ``1/f``.
+        """
+        fs = 2.0 * float(self.f[-1])
+        _, groups = _band_index(self.f, fs)
+        if len(groups) != self.band_sd.size:
+            raise ValueError("the frequency view has no band spreads; run frequency_view first")
+        keep = np.ones(self.f.size, dtype=bool)
+        df = float(self.f[1] - self.f[0]) if self.f.size > 1 else 1.0
+        for line in self.lines:
+            keep &= np.abs(self.f - line.frequency_hz) > LINE_HALF_WIDTH * df
+        shift = np.log(np.maximum(1.0 + np.asarray(extra_psd) / self.sim_psd, 1e-12))
+        r = np.log(self.ratio) - shift
+        total = 0.0
+        for g, sd in zip(groups, self.band_sd, strict=True):
+            kept = g[keep[g]]
+            if kept.size == 0:
+                continue
+            total += (float(r[kept].mean()) / (sd * np.sqrt(g.size / kept.size))) ** 2
+        return total
+
     @property
     def p_value(self) -> float:
         """Bonferroni combination of the line and broadband tests."""

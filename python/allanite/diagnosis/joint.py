@@ -20,6 +20,17 @@ In both steps the time view's window-mean spreads include the slow noise of the 
 effects already in the set (:func:`with_level_background`): a ramp or a warm-up on top of
 Gauss-Markov noise is judged against that noise, not against the bare simulation.
 
+Spectral shape: in both steps the candidates on top of the set are ordered by their penalised
+score *plus* the misfit of the spectrum's shape with the set and the candidate added
+(:meth:`~allanite.diagnosis.frequency_view.FrequencyView.shape_misfit`, ``F = sum_b z_b^2``
+over the broadband bands, ``chi2`` with one degree of freedom per band when the set is right;
+each effect contributes its exact sampled PSD, a ramp or warm-up none, since every Welch
+segment loses its mean). The tau view's penalised likelihood alone cannot tell look-alikes
+apart whose Allan variances nearly coincide over the flagged taus (a Gauss-Markov process next
+to more white noise and more flicker; a random walk and flicker at long taus); their spectra
+differ (a Lorentzian knee against a ``1/f`` line, ``1/f^2`` against ``1/f``), so the pair
+whose combined spectrum fits wins.
+
 Backward check: an effect is dropped again when removing it (the others kept) raises ``T`` by
 less than the ``chi2_{1-alpha}(k)`` quantile and it is the only one to explain none of the
 evidence, i.e. it no longer earns its parameters in the presence of the later effects.
@@ -39,6 +50,7 @@ from scipy import stats
 
 from allanite.diagnosis.attribution import Attribution, rank
 from allanite.diagnosis.candidates import Candidate
+from allanite.diagnosis.frequency_view import FrequencyView
 from allanite.diagnosis.tau_view import TauModel
 from allanite.diagnosis.time_view import TimeView, added_level_variance
 
@@ -178,6 +190,31 @@ def _extra(a: Attribution, tm: TauModel) -> NDArray[np.float64]:
     return np.asarray(a.sim_avar_after, dtype=np.float64) - tm.sim_avar
 
 
+def effect_psd(
+    a: Attribution, c: Candidate, f: NDArray[np.float64], dt: float
+) -> NDArray[np.float64]:
+    """One-sided PSD (on ``f``) the fitted effect ``a`` adds to the simulated sensor.
+
+    A rescale adds ``(s^2 - 1)`` times its term's PSD, a replacement (``lowpass``) the
+    difference of the two terms' PSDs, any other effect its own sampled PSD
+    (:meth:`allanite.terms.Term.psd_sampled`). A term without a PSD (a ramp, a warm-up) adds
+    none: each Welch segment loses its mean, and with it almost all of a slow level shape.
+    """
+    values = {k: a.params[k] for k in c.free}
+    try:
+        with np.errstate(all="ignore"):
+            if c.base is not None:
+                out = (values["scale"] ** 2 - 1.0) * c.base.psd_sampled(f, dt)
+            else:
+                out = c.term(values).psd_sampled(f, dt)
+                if c.replaces is not None:
+                    out = out - c.replaces.psd_sampled(f, dt)
+    except NotImplementedError:
+        return np.zeros_like(f)
+    out = np.asarray(out, dtype=np.float64)
+    return np.where(np.isfinite(out), out, 0.0)
+
+
 def _same_slot(c: Candidate, chosen: list[Candidate]) -> bool:
     """Whether ``c`` changes a model term already changed or adds a type already chosen.
 
@@ -202,8 +239,13 @@ def explain(
     significant: dict[str, bool],
     time_view: TimeView | None,
     duration: float,
+    frequency: FrequencyView | None = None,
 ) -> Explanation:
-    """Forward selection from ``best``, then the backward check (see the module docstring)."""
+    """Forward selection from ``best``, then the backward check (see the module docstring).
+
+    With ``frequency`` (the frequency view of the same record), candidates on top of the set
+    are ordered by score plus the spectral shape misfit of the set with them.
+    """
     by_effect = {c.effect: c for c in candidates}
     chosen = [best]
     chosen_c = [by_effect[best.effect]]
@@ -230,7 +272,19 @@ def explain(
             time_view=with_level_background(time_view, on, on_c, tm, duration, cache),
             duration=duration,
         )
-        return [a for a in kept if a.evidence["tau"]["delta_T"] > -worse]
+        kept = [a for a in kept if a.evidence["tau"]["delta_T"] > -worse]
+        if frequency is None or len(kept) < 2:
+            return kept
+        f = frequency.f
+        bg = np.zeros_like(f)
+        for a, c in zip(on, on_c, strict=True):
+            bg = bg + effect_psd(a, c, f, tm.dt)
+
+        def joint_score(a: Attribution) -> float:
+            extra = bg + effect_psd(a, by_effect[a.effect], f, tm.dt)
+            return a.score + frequency.shape_misfit(extra)
+
+        return sorted(kept, key=joint_score)
 
     while len(chosen) < MAX_EFFECTS:
         total = np.sum(extras, axis=0)
@@ -262,7 +316,9 @@ def explain(
             left = {e: bool(s) and e not in told for e, s in significant.items()}
             others_a = [a for j, a in enumerate(chosen) if j != i]
             kept = on_top(others_a, others_c, tm_bg, left)
-            if not kept or kept[0].effect == chosen[i].effect:
+            # the same term added or rescaled (white, rescale:white) is the same effect: only
+            # the spectral misfit's rounding could tell them apart, so the incumbent stays
+            if not kept or by_effect[kept[0].effect].term_cls is chosen_c[i].term_cls:
                 continue
             chosen[i], chosen_c[i] = kept[0], by_effect[kept[0].effect]
             extras[i] = _extra(kept[0], tm_bg)

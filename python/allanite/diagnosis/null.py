@@ -126,7 +126,12 @@ def _log_gamma_shape(var: NDArray[np.float64]) -> NDArray[np.float64]:
 
 
 def rescaled_log_gamma(
-    ens: NullEnsemble, name: str, ratio: float
+    ens: NullEnsemble,
+    name: str,
+    ratio: float,
+    *,
+    reference: NDArray[np.float64] | None = None,
+    n_reference: int | None = None,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Like :func:`rescaled` for the log of a mean of chi-square pieces (a Welch PSD).
 
@@ -136,14 +141,24 @@ def rescaled_log_gamma(
     line detector (a maximum over bins) anti-conservative. Each null residual is therefore
     mapped through its quantile: ``u = F_a(x)`` under the shape ``a_s`` of the short replicates
     (from their variance, ``psi'(a_s) = var``), ``x_N = F^{-1}_{a_N}(u)`` with ``a_N = a_s /
-    ratio``; the result is scaled by ``sqrt(1 + var_s / (n var_N))`` for the error of the
+    ratio``; the result is scaled by ``sqrt(1 + var_s / (n var_n))`` for the error of the
     reference (the short replicates' mean), and the reference moves from the short law's mean
     to the long one's.
+
+    ``reference`` (the mean of the feature over ``n_reference`` short replicates, those of
+    ``ens`` included) replaces the replicates' mean: the reference error then adds
+    ``var_s / (n_reference var_n)`` instead of ``var_s / (n var_n)``.
     """
     if not 0.0 < ratio <= 1.0:
         raise ValueError(f"ratio of piece counts must lie in (0, 1], got {ratio}")
     null = ens.null[name]
     n = null.shape[0]
+    if (reference is None) != (n_reference is None):
+        raise ValueError("give both reference and n_reference, or neither")
+    if n_reference is not None and n_reference < n:
+        raise ValueError(
+            f"n_reference ({n_reference}) must count the ensemble's {n} replicates too"
+        )
     var_s = null.var(axis=0, ddof=1) * (n - 1.0) / n
     a_s = _log_gamma_shape(var_s)
     a_n = a_s / ratio
@@ -153,8 +168,9 @@ def rescaled_log_gamma(
     u = np.clip(u, 1e-300, 1.0 - 1e-16)
     mapped = np.log(special.gammaincinv(a_n, u) / a_n) - mean_n
     var_n = special.polygamma(1, a_n)
-    mapped = mapped * np.sqrt(1.0 + var_s / (n * var_n))
-    ref = ens.ref[name] - mean_s + mean_n
+    n_ref = n if n_reference is None else n_reference
+    mapped = mapped * np.sqrt(1.0 + var_s / (n_ref * var_n))
+    ref = (ens.ref[name] if reference is None else reference) - mean_s + mean_n
     return np.asarray(ref, dtype=np.float64), np.asarray(mapped, dtype=np.float64)
 
 

@@ -16,6 +16,12 @@ than :data:`FULL_REPLICATES_MAX` samples, each view gets a null whose cost does 
   its skewness: :func:`allanite.diagnosis.null.rescaled_log_gamma`);
   the spike maximum over ``N`` samples is the maximum of ``N / N_short`` short records (Gumbel
   location ``+ beta ln(N / N_short)``);
+* the reference of the Welch features (``log_psd``, ``log_line_psd``): the mean over the
+  ``n_mc`` short replicates has an error that adds ``var_s / (n_mc var_N) ~ (N / N_short) /
+  n_mc`` to the variance of a long record's log-PSD bin (40 % at 1e7 samples with
+  ``n_mc = 200``, 4x at 1e8): as many more short replicates as bring that share down to
+  :data:`REFERENCE_SHARE` are simulated for the reference alone (Welch features only, about
+  ``N / (REFERENCE_SHARE N_short)`` in all, :func:`reference_replicates`);
 * window-scale statistics of the time view (``level``, ``jump``, ``dyn``, ``kurt_lf`` over
   ``L/16`` and ``L/4`` samples): ``n_mc`` *decimated* replicates, the model simulated over the
   real duration at the rate ``fs / D`` (``N / D`` ~ 2^16 samples,
@@ -47,7 +53,9 @@ from allanite.diagnosis.time_view import TimePlan, kurtosis_blocks, time_feature
 
 __all__ = [
     "FULL_REPLICATES_MAX",
+    "REFERENCE_SHARE",
     "SHORT_LENGTH",
+    "reference_replicates",
     "scaled_ensemble",
     "uses_scaled_null",
 ]
@@ -56,6 +64,8 @@ __all__ = [
 FULL_REPLICATES_MAX = 2**18
 #: length of the short replicates at the real rate (63 Welch segments of 4096 samples)
 SHORT_LENGTH = 2**17
+#: the reference of the Welch features adds at most this share to a log-PSD bin's variance
+REFERENCE_SHARE = 0.2
 #: effects tied to the start of the record: no short replicate can stand for them
 START_TERMS = ("warmup",)
 
@@ -94,6 +104,43 @@ def _replicates(
             if progress is not None and (i % step == 0 or i == total):
                 progress(stage, i, total)
     return out
+
+
+def reference_replicates(n: int, nperseg: int, n_mc: int) -> int:
+    """Short replicates (those of the null included) for the Welch reference of ``n`` samples.
+
+    The reference's error adds ``var_s / (n_ref var_N) = k_N / (n_ref k_s)`` (``k`` the Welch
+    segment counts) to the variance of a log-PSD bin of the record; ``n_ref`` is the smallest
+    count that keeps this at or below :data:`REFERENCE_SHARE`, and never below ``n_mc``.
+    """
+    step = nperseg // 2
+    k_s = (SHORT_LENGTH - nperseg) // step + 1
+    k_n = (n - nperseg) // step + 1
+    return int(max(n_mc, np.ceil(k_n / (REFERENCE_SHARE * k_s))))
+
+
+def _welch_reference(
+    model: Any,
+    fs: float,
+    nperseg: int,
+    count: int,
+    seed: int,
+    progress: Progress | None,
+    stage: str,
+) -> Features:
+    """Sum of the Welch features over ``count`` further short replicates (the reference only)."""
+    sums: Features = {}
+
+    def welch(x: NDArray[np.float64]) -> Features:
+        for k, v in frequency_features(x, fs, nperseg).items():
+            sums[k] = sums[k] + v if k in sums else v.copy()
+        return {}
+
+    _replicates(
+        model, SHORT_LENGTH, fs, count, seed, welch, progress, stage + " (spectrum reference)",
+        0, count,
+    )  # fmt: skip
+    return sums
 
 
 def scaled_ensemble(
@@ -141,8 +188,20 @@ def scaled_ensemble(
     null: dict[str, NDArray[np.float64]] = {}
     step = nperseg // 2
     segs = ((n_s - nperseg) // step + 1) / ((n - nperseg) // step + 1)
+    n_ref = reference_replicates(n, nperseg, n_mc)
+    more = (
+        _welch_reference(model, fs, nperseg, n_ref - n_mc, seed + 3_000_017, progress, stage)
+        if n_ref > n_mc
+        else {}
+    )
     for name in ("log_psd", "log_line_psd"):
-        ref[name], null[name] = rescaled_log_gamma(ens_s, name, segs)
+        if more:
+            mean = (ens_s.ref[name] * n_mc + more[name]) / n_ref
+            ref[name], null[name] = rescaled_log_gamma(
+                ens_s, name, segs, reference=mean, n_reference=n_ref
+            )
+        else:
+            ref[name], null[name] = rescaled_log_gamma(ens_s, name, segs)
     ref["hf"], null["hf"] = rescaled(
         ens_s, "hf", (plan_s.length - 1) / (plan.length - 1), log_mean=True, pool=True
     )

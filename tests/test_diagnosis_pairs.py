@@ -1,0 +1,165 @@
+"""Joint attribution of look-alikes (spectral shape) and the Welch reference of long records.
+
+Fixed seeds; statistical tolerances from the estimates' own uncertainty.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy import special, stats
+
+import allanite.diagnosis.engine as engine
+from allanite.diagnosis import diagnose
+from allanite.diagnosis.null import NullEnsemble, rescaled_log_gamma
+from allanite.diagnosis.scaled_null import REFERENCE_SHARE, SHORT_LENGTH, reference_replicates
+from allanite.model import NoiseModel
+from allanite.terms import TERM_TYPES
+
+UNITS = {"rate": "deg/s", "time": "s"}
+T = TERM_TYPES
+
+
+def base_model(fs: float) -> NoiseModel:
+    """The validation suite's MEMS-like gyro (white, quantization, flicker, random walk)."""
+    return NoiseModel(
+        (T["white"](N=0.05), T["quantization"](Q=0.2 / fs), T["flicker"](B=0.01),
+         T["rrw"](K=0.0008)),
+        UNITS,
+    )  # fmt: skip
+
+
+# --- the spectral shape misfit ----------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def markov_record() -> tuple[NoiseModel, np.ndarray, object]:
+    """White-noise model; real = model + a strong Gauss-Markov process + a 13.7 Hz line."""
+    fs, n = 100.0, 2**15
+    model = NoiseModel((T["white"](N=0.05),), UNITS)
+    gm = T["markov"](sigma=0.1, tau_c=0.5)
+    real = model.plus(gm).plus(T["sine"](amplitude=0.05, frequency=13.7))
+    x = np.asarray(real.simulate(n, fs=fs, seed=3), dtype=np.float64).ravel()
+    return model, x, gm
+
+
+def test_shape_misfit_is_chi2_for_the_true_effect_and_large_without_it(markov_record) -> None:  # type: ignore[no-untyped-def]
+    model, x, gm = markov_record
+    d = diagnose(x, model, fs=100.0, units="deg/s", n_mc=60, seed=4)
+    fv = d.frequency
+    assert fv.lines, "the 13.7 Hz line must be detected (its bins are left out of F)"
+    n_bands = fv.band_sd.size
+    limit = float(stats.chi2.isf(1e-3, n_bands))
+    f_true = fv.shape_misfit(gm.psd_sampled(fv.f, 0.01))
+    f_none = fv.shape_misfit(np.zeros_like(fv.f))
+    # the true effect leaves chance (chi2 with one degree of freedom per band); the line,
+    # which has no PSD, does not count against it
+    assert f_true < limit
+    assert f_none > 5 * limit
+    # flicker has the wrong shape (a 1/f line instead of the Lorentzian knee) at any level
+    # within a factor 10 of the one with the process's Allan variance at its peak (1.89 tau_c)
+    tau = np.array([1.89 * 0.5])
+    b = float(np.sqrt(gm.avar(tau, 0.01)[0] / (2 * np.log(2) / np.pi)))
+    f_flicker = [
+        fv.shape_misfit(T["flicker"](B=b * s).psd_sampled(fv.f, 0.01))
+        for s in np.logspace(-1, 1, 41)
+    ]
+    assert min(f_flicker) > limit
+
+
+def test_shape_misfit_needs_band_spreads(markov_record) -> None:  # type: ignore[no-untyped-def]
+    from dataclasses import replace
+
+    model, x, _ = markov_record
+    d = diagnose(x, model, fs=100.0, units="deg/s", n_mc=40, seed=4)
+    with pytest.raises(ValueError, match="band spreads"):
+        replace(d.frequency, band_sd=np.zeros(0)).shape_misfit(np.zeros_like(d.frequency.f))
+
+
+def test_joint_step_uses_the_spectrum_to_tell_markov_from_flicker(monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """The validation's pair 'white + Gauss-Markov' (medium, its seeds): both effects fit the
+    tau view about equally with flicker instead of the Gauss-Markov process; the spectrum's
+    Lorentzian knee decides. Without the frequency view in the joint step, flicker is chosen."""
+    fs, n = 100.0, 2**16
+    base = base_model(fs)
+    white = T["white"](N=0.07137335627619547)
+    gm = T["markov"](sigma=0.04524026557169484, tau_c=2.0)
+    seed = 1000 + 17 * 1
+    x = np.asarray(base.simulate(n, fs=fs, seed=seed), dtype=np.float64).ravel()
+    for term, s in ((white, seed + 7), (gm, seed + 13)):
+        x = (
+            x
+            + np.asarray(
+                NoiseModel((term,), UNITS).simulate(n, fs=fs, seed=s, allow_aliasing=True)
+            ).ravel()
+        )
+    kw = {"fs": fs, "units": "deg/s", "holdout": 0.5, "n_mc": 60, "seed": seed + 1}
+    d = diagnose(x, base, **kw)
+    named = {a.effect for a in d.explanation.effects}
+    assert "markov" in named
+    assert named & {"white", "rescale:white"}
+    assert "flicker" not in named
+    assert "rescale:flicker" not in named
+
+    original = engine.explain
+
+    def tau_only(*args, **kwargs):  # type: ignore[no-untyped-def]
+        kwargs["frequency"] = None
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(engine, "explain", tau_only)
+    d0 = diagnose(x, base, **kw)
+    named0 = {a.effect for a in d0.explanation.effects}
+    assert named0 & {"flicker", "rescale:flicker"}
+    assert "markov" not in named0
+
+
+# --- the Welch reference of long records -------------------------------------------------------
+
+
+def test_reference_replicates_keep_the_reference_share() -> None:
+    nperseg, n_mc = 4096, 200
+    k_s = (SHORT_LENGTH - nperseg) // (nperseg // 2) + 1
+    assert reference_replicates(2**20, nperseg, n_mc) == n_mc  # share already below 0.2
+    for n in (10**7, 10**8):
+        n_ref = reference_replicates(n, nperseg, n_mc)
+        k_n = (n - nperseg) // (nperseg // 2) + 1
+        assert k_n / (n_ref * k_s) <= REFERENCE_SHARE < k_n / ((n_ref - 1) * k_s)
+    assert reference_replicates(10**7, nperseg, n_mc) == 388
+
+
+def test_rescaled_log_gamma_with_a_larger_reference() -> None:
+    """Log of a mean of exponentials (the Welch bins of 2^17 vs 1e7 samples, 63 vs 4881
+    segments, n_mc = 200): a reference over the 388 replicates :func:`reference_replicates`
+    asks for has the smaller error the law predicts, and the null residuals carry that error."""
+    rng = np.random.default_rng(21)
+    k_s, k, n_s, bins = 63, 4881, 200, 100
+    n_more = reference_replicates(10**7, 4096, n_s) - n_s
+
+    def feature(pieces: int, count: int) -> np.ndarray:
+        return np.log(rng.exponential(size=(count, pieces, bins)).mean(axis=1))
+
+    short = feature(k_s, n_s)
+    more = feature(k_s, n_more)
+    ens = NullEnsemble.from_model([{"f": f} for f in short])
+    n_ref = n_s + n_more
+    mean = (short.sum(axis=0) + more.sum(axis=0)) / n_ref
+    ref, null = rescaled_log_gamma(ens, "f", k_s / k, reference=mean, n_reference=n_ref)
+    ref0, null0 = rescaled_log_gamma(ens, "f", k_s / k)
+    truth = special.digamma(k) - np.log(k)  # E log(mean of k unit exponentials)
+    var_s = special.polygamma(1, k_s)
+    # reference errors: chi-square over the bins with their predicted variances
+    for r, count in ((ref, n_ref), (ref0, n_s)):
+        z2 = float(np.sum((r - truth) ** 2) / (var_s / count))
+        assert stats.chi2.ppf(1e-4, bins) < z2 < stats.chi2.isf(1e-4, bins)
+    # the null spread: the long law's plus the reference's share (0.39 -> 0.2)
+    var_n = special.polygamma(1, k)
+    for nl, count in ((null, n_ref), (null0, n_s)):
+        expected = var_n * (1.0 + var_s / (count * var_n))
+        got = float(nl.var(axis=0, ddof=1).mean())
+        se = expected * np.sqrt(2.0 / ((n_s - 1) * bins))  # of a variance from n_s draws per bin
+        assert abs(got - expected) < 4 * se
+    with pytest.raises(ValueError, match="both"):
+        rescaled_log_gamma(ens, "f", 0.5, reference=mean)
+    with pytest.raises(ValueError, match="must count"):
+        rescaled_log_gamma(ens, "f", 0.5, reference=mean, n_reference=n_s - 1)
