@@ -483,12 +483,37 @@ inline PrefixCursor prefix_cursor(const PhaseRef& phase, const PrefixPlan& plan,
   return cur;
 }
 
+/// out[j] = d3(j), the third difference at lag m of one channel of the phase from row b on
+/// (row stride rs), for j < n. Loops of their own (this one and interleave_lanes), so that they
+/// vectorise; the lanes' chains that read them are SLP only.
+ALLANITE_TARGET_CLONES static void lane_third_differences(const double* b, std::int64_t m, std::int64_t rs,
+                                                          std::int64_t n, double* out) noexcept {
+  const Taps<3> t{{b, b + m * rs, b + 2 * m * rs, b + 3 * m * rs}, rs};
+  if (rs == 1) {
+    for (std::int64_t j = 0; j < n; ++j) out[j] = tap_diff(t, j);
+  } else {
+    for (std::int64_t j = 0; j < n; ++j) out[j] = tap_diff(t, j * rs);
+  }
+}
+
+/// out[j * 4 + k] = in[k * n + j]: four lanes' rows of n terms interleaved (a transpose).
+ALLANITE_TARGET_CLONES static void interleave_lanes(const double* __restrict in, std::int64_t n,
+                                                    double* __restrict out) noexcept {
+  for (std::int64_t j = 0; j < n; ++j) {
+    out[j * 4] = in[j];
+    out[j * 4 + 1] = in[n + j];
+    out[j * 4 + 2] = in[2 * n + j];
+    out[j * 4 + 3] = in[3 * n + j];
+  }
+}
+
 /// Modified AVAR sums of one factor beyond kTileMaxM (no other factor shares its rows). The
 /// terms are cut into four lanes of whole blocks; in each lane the window
 /// w_j = S[j+3m] - 3 S[j+2m] + 3 S[j+m] - S[j] starts from prefix cursors and moves on by the
-/// third difference of the phase, w_{j+1} = w_j + d3(j), kept as a TwoSum pair. The lanes are
-/// independent dependency chains run side by side; no prefix sums are stored. The lanes'
-/// block sums go to per-lane compensated totals, added to totals in lane order.
+/// third difference of the phase, w_{j+1} = w_j + d3(j), kept as a TwoSum pair (a block's d3
+/// are computed lane by lane, vectorised, then interleaved so that the chains read vectors).
+/// The lanes are independent dependency chains run side by side; no prefix sums are stored.
+/// The lanes' block sums go to per-lane compensated totals, added to totals in lane order.
 ALLANITE_TARGET_CLONES ALLANITE_SLP_ONLY static void add_modified_single(const PhaseRef& phase, const PrefixPlan& plan,
                                                       std::int64_t m, std::int64_t count, NeumaierSum* totals) {
   constexpr int kLanes = 4;
@@ -520,7 +545,8 @@ ALLANITE_TARGET_CLONES ALLANITE_SLP_ONLY static void add_modified_single(const P
     const SplitTaps t{{hi[0], hi[1], hi[2], hi[3]}, {lo[0], lo[1], lo[2], lo[3]}, nc};
     for (Eigen::Index c = 0; c < nc; ++c) w0[static_cast<std::size_t>(k * nc + c)] = tap_diff(t, c);
   }
-  std::vector<double> d3(static_cast<std::size_t>(kLanes * chunk));
+  static_assert(kLanes == 4, "interleave_lanes interleaves four lanes");
+  std::vector<double> d3(static_cast<std::size_t>(kLanes * chunk)), rows(d3.size());
   for (Eigen::Index c = 0; c < nc; ++c) {
     double hi[kLanes], lo[kLanes];
     NeumaierSum lane_total[kLanes];
@@ -533,15 +559,9 @@ ALLANITE_TARGET_CLONES ALLANITE_SLP_ONLY static void add_modified_single(const P
       std::int64_t n[kLanes];
       for (int k = 0; k < kLanes; ++k) {
         n[k] = std::max<std::int64_t>(0, std::min(chunk, len[k] - start));
-        const double* b = x + (first[k] + start) * rs;
-        const Taps<3> t{{b, b + m * rs, b + 2 * m * rs, b + 3 * m * rs}, rs};
-        double* out = d3.data() + k;  // interleaved: term j of lane k at j * kLanes + k
-        if (rs == 1) {
-          for (std::int64_t j = 0; j < n[k]; ++j) out[j * kLanes] = tap_diff(t, j);
-        } else {
-          for (std::int64_t j = 0; j < n[k]; ++j) out[j * kLanes] = tap_diff(t, j * rs);
-        }
+        lane_third_differences(x + (first[k] + start) * rs, m, rs, n[k], rows.data() + k * chunk);
       }
+      interleave_lanes(rows.data(), chunk, d3.data());  // term j of lane k at j * kLanes + k
       double a[4][kLanes] = {};  // a[r][k]: lane k's partial sum r (the lanes one vector)
       const std::int64_t common = *std::min_element(n, n + kLanes) / 4 * 4;
       std::int64_t j = 0;
