@@ -14,10 +14,15 @@
 
 #include <Eigen/Core>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <stdexcept>
 #include <string>
 #include <vector>
+
+#if defined(__linux__)
+#include <sys/mman.h>
+#endif
 
 #include "allanite/compensated.hpp"
 
@@ -52,6 +57,23 @@ void column_mean(const StridedMap<T>& x, Eigen::Index c, double& mean1, double& 
   corr = s2.value() / static_cast<double>(n);
 }
 
+/// Ask for transparent huge pages on a large array about to be written for the first time
+/// (Linux, where THP is in "madvise" mode): one page fault per 2 MiB instead of per 4 KiB,
+/// which is a quarter of the phase build at 1e7 samples. Only a hint; ignored elsewhere.
+inline void advise_huge_pages(double* data, std::size_t count) noexcept {
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+  constexpr std::uintptr_t kHuge = std::uintptr_t{1} << 21;
+  const auto begin = reinterpret_cast<std::uintptr_t>(data);
+  const std::uintptr_t end = begin + count * sizeof(double);
+  const std::uintptr_t first = (begin + kHuge - 1) & ~(kHuge - 1);
+  if (end >= first + kHuge)
+    madvise(reinterpret_cast<void*>(first), (end - first) & ~(kHuge - 1), MADV_HUGEPAGE);
+#else
+  (void)data;
+  (void)count;
+#endif
+}
+
 template <class T>
 void check_finite(const StridedMap<T>& x) {
   if constexpr (std::is_floating_point_v<T>) {
@@ -82,6 +104,7 @@ RowMatrix build_phase(const StridedMap<T>& x, InputKind kind) {
 
   if (kind == InputKind::Angle) {
     RowMatrix phase(n, nc);
+    detail::advise_huge_pages(phase.data(), static_cast<std::size_t>(phase.size()));
     const double kbar = 0.5 * static_cast<double>(n - 1);
     // sum (k - kbar)^2 = n (n^2 - 1) / 12, exact enough in double for n < 2^50
     const double nn = static_cast<double>(n);
@@ -110,6 +133,7 @@ RowMatrix build_phase(const StridedMap<T>& x, InputKind kind) {
   }
 
   RowMatrix phase(n + 1, nc);
+  detail::advise_huge_pages(phase.data(), static_cast<std::size_t>(phase.size()));
   phase.row(0).setZero();
   for (Eigen::Index c = 0; c < nc; ++c) {
     double mean1 = 0.0, corr = 0.0;

@@ -100,31 +100,42 @@ inline std::int64_t n_terms(VarianceKind kind, std::int64_t M, std::int64_t m) {
 namespace detail {
 
 /// Terms per summation block. Every sum of squared differences is accumulated in blocks of
-/// kSumBlock consecutive terms (four interleaved partial sums by j mod 4, combined pairwise),
-/// and the block sums are folded into a Neumaier total. The block grid is anchored at term 0,
-/// so a sum split at multiples of kSumBlock (chunks of a file, see streaming.hpp) gives
-/// exactly the same bits as one pass.
+/// kSumBlock consecutive terms (P interleaved partial sums by j mod P, combined pairwise; P =
+/// kPartials<Taps> of the estimator's taps), and the block sums are folded into a Neumaier
+/// total. The block grid is anchored at term 0, so a sum split at multiples of kSumBlock
+/// (chunks of a file, see streaming.hpp) gives exactly the same bits as one pass.
 constexpr std::int64_t kSumBlock = 1024;
-static_assert(kSumBlock % 4 == 0, "block must hold whole groups of four terms");
+static_assert(kSumBlock % 8 == 0, "block must hold whole groups of partial sums");
 
-/// Add sum_{j<count} value(j, c)^2 to totals[c] for every channel c, blockwise (see kSumBlock).
-/// Term j = 0 must sit on a block boundary of the whole sum.
-template <class Fn>
+/// The block sum of P partial sums a[0], a[stride], ..., combined pairwise.
+template <int P>
+ALLANITE_ALWAYS_INLINE double combine_partials(const double* a, std::size_t stride = 1) noexcept {
+  static_assert(P == 4 || P == 8, "4 or 8 partial sums");
+  const double low = (a[0] + a[stride]) + (a[2 * stride] + a[3 * stride]);
+  if constexpr (P == 4) {
+    return low;
+  } else {
+    return low + ((a[4 * stride] + a[5 * stride]) + (a[6 * stride] + a[7 * stride]));
+  }
+}
+
+/// Add sum_{j<count} value(j, c)^2 to totals[c] for every channel c, blockwise (see kSumBlock)
+/// with P partial sums. Term j = 0 must sit on a block boundary of the whole sum.
+template <int P, class Fn>
 void add_squares(std::int64_t count, Eigen::Index nc, Fn&& value, NeumaierSum* totals) {
   const auto unc = static_cast<std::size_t>(nc);
-  std::vector<double> acc(4 * unc);
+  std::vector<double> acc(P * unc);
   for (std::int64_t start = 0; start < count; start += kSumBlock) {
     const std::int64_t end = std::min(count, start + kSumBlock);
     std::fill(acc.begin(), acc.end(), 0.0);
     for (std::int64_t j = start; j < end; ++j) {
-      double* a = acc.data() + static_cast<std::size_t>((j - start) & 3) * unc;
+      double* a = acc.data() + static_cast<std::size_t>((j - start) % P) * unc;
       for (Eigen::Index c = 0; c < nc; ++c) {
         const double d = value(j, c);
         a[c] += d * d;
       }
     }
-    for (std::size_t c = 0; c < unc; ++c)
-      totals[c].add((acc[c] + acc[unc + c]) + (acc[2 * unc + c] + acc[3 * unc + c]));
+    for (std::size_t c = 0; c < unc; ++c) totals[c].add(combine_partials<P>(acc.data() + c, unc));
   }
 }
 
@@ -151,6 +162,15 @@ struct SplitTaps {
   const double* l[4];
   std::int64_t step;
 };
+
+/// Partial sums per block of an estimator's squares: eight (two AVX2 vectors, so that the adds
+/// of two chains overlap instead of each waiting on the last) for the plain differences; four
+/// for the modified estimator's split taps, whose eight loads per term leave no registers
+/// for more.
+template <class TapsT>
+constexpr int kPartials = 8;
+template <>
+constexpr int kPartials<SplitTaps> = 4;
 
 template <int Order>
 ALLANITE_ALWAYS_INLINE double tap_diff(const Taps<Order>& t, std::int64_t i) noexcept {
@@ -188,25 +208,21 @@ ALLANITE_ALWAYS_INLINE SplitTaps advanced(const SplitTaps& t, std::int64_t k) no
 /// Single-channel, unit-step hot path of add_squares (same arithmetic and order, unrolled).
 template <class TapsT>
 ALLANITE_ALWAYS_INLINE void add_diff_squares_1ch_impl(const TapsT& t, std::int64_t count, NeumaierSum& total) {
+  constexpr int P = kPartials<TapsT>;
   for (std::int64_t start = 0; start < count; start += kSumBlock) {
     const std::int64_t end = std::min(count, start + kSumBlock);
-    double a[4] = {0.0, 0.0, 0.0, 0.0};
+    double a[P] = {};
     std::int64_t j = start;
-    for (; j + 4 <= end; j += 4) {
-      const double d0 = tap_diff(t, j);
-      const double d1 = tap_diff(t, j + 1);
-      const double d2 = tap_diff(t, j + 2);
-      const double d3 = tap_diff(t, j + 3);
-      a[0] += d0 * d0;
-      a[1] += d1 * d1;
-      a[2] += d2 * d2;
-      a[3] += d3 * d3;
+    for (; j + P <= end; j += P) {
+      double d[P];
+      for (int r = 0; r < P; ++r) d[r] = tap_diff(t, j + r);
+      for (int r = 0; r < P; ++r) a[r] += d[r] * d[r];
     }
     for (; j < end; ++j) {
       const double d = tap_diff(t, j);
-      a[(j - start) & 3] += d * d;
+      a[(j - start) % P] += d * d;
     }
-    total.add((a[0] + a[1]) + (a[2] + a[3]));
+    total.add(combine_partials<P>(a));
   }
 }
 
@@ -224,29 +240,30 @@ ALLANITE_TARGET_CLONES static void add_diff_squares_1ch(const SplitTaps& t, std:
 }
 
 /// Few-channel path of add_squares with the channel count known at compile time: the
-/// 4 x NC partial sums live in registers (same arithmetic and order as add_squares).
+/// P x NC partial sums live in registers (same arithmetic and order as add_squares).
 template <int NC, class TapsT>
 ALLANITE_ALWAYS_INLINE void add_diff_squares_nc_impl(const TapsT& t, std::int64_t count, NeumaierSum* totals) {
+  constexpr int P = kPartials<TapsT>;
   const std::int64_t step = t.step;
   for (std::int64_t start = 0; start < count; start += kSumBlock) {
     const std::int64_t end = std::min(count, start + kSumBlock);
-    double a[4][NC] = {};
+    double a[P][NC] = {};
     std::int64_t j = start;
     if (step == NC) {
-      // consecutive rows: four terms of every channel are 4 NC adjacent values, and a[r][c]
+      // consecutive rows: P terms of every channel are P NC adjacent values, and a[r][c]
       // is laid out in the same order, so this loop vectorises
-      double flat[4 * NC] = {};
-      for (; j + 4 <= end; j += 4) {
+      double flat[P * NC] = {};
+      for (; j + P <= end; j += P) {
         const TapsT local = advanced(t, j * NC);  // in registers: stores to flat cannot alias
-        for (int k = 0; k < 4 * NC; ++k) {
+        for (int k = 0; k < P * NC; ++k) {
           const double d = tap_diff(local, k);
           flat[k] += d * d;
         }
       }
-      for (int k = 0; k < 4 * NC; ++k) a[k / NC][k % NC] = flat[k];
+      for (int k = 0; k < P * NC; ++k) a[k / NC][k % NC] = flat[k];
     }
-    for (; j + 4 <= end; j += 4) {
-      for (int r = 0; r < 4; ++r) {
+    for (; j + P <= end; j += P) {
+      for (int r = 0; r < P; ++r) {
         const std::int64_t i = (j + r) * step;
         for (int c = 0; c < NC; ++c) {
           const double d = tap_diff(t, i + c);
@@ -255,13 +272,13 @@ ALLANITE_ALWAYS_INLINE void add_diff_squares_nc_impl(const TapsT& t, std::int64_
       }
     }
     for (; j < end; ++j) {
-      const std::int64_t r = (j - start) & 3;
+      const std::int64_t r = (j - start) % P;
       for (int c = 0; c < NC; ++c) {
         const double d = tap_diff(t, j * step + c);
         a[r][c] += d * d;
       }
     }
-    for (int c = 0; c < NC; ++c) totals[c].add((a[0][c] + a[1][c]) + (a[2][c] + a[3][c]));
+    for (int c = 0; c < NC; ++c) totals[c].add(combine_partials<P>(&a[0][c], NC));
   }
 }
 
@@ -293,8 +310,8 @@ inline void add_diff_squares(const TapsT& t, std::int64_t count, Eigen::Index nc
     case 4: add_diff_squares_nc_impl<4>(t, count, totals); return;
     default: break;
   }
-  add_squares(count, nc, [&t](std::int64_t j, Eigen::Index c) { return tap_diff(t, j * t.step + c); },
-              totals);
+  add_squares<kPartials<TapsT>>(
+      count, nc, [&t](std::int64_t j, Eigen::Index c) { return tap_diff(t, j * t.step + c); }, totals);
 }
 
 /// Prefix sums S[k] = sum_{i<k} x[i] of the phase (rows 0..M) for the modified estimator:
@@ -466,12 +483,37 @@ inline PrefixCursor prefix_cursor(const PhaseRef& phase, const PrefixPlan& plan,
   return cur;
 }
 
+/// out[j] = d3(j), the third difference at lag m of one channel of the phase from row b on
+/// (row stride rs), for j < n. Loops of their own (this one and interleave_lanes), so that they
+/// vectorise; the lanes' chains that read them are SLP only.
+ALLANITE_TARGET_CLONES static void lane_third_differences(const double* b, std::int64_t m, std::int64_t rs,
+                                                          std::int64_t n, double* out) noexcept {
+  const Taps<3> t{{b, b + m * rs, b + 2 * m * rs, b + 3 * m * rs}, rs};
+  if (rs == 1) {
+    for (std::int64_t j = 0; j < n; ++j) out[j] = tap_diff(t, j);
+  } else {
+    for (std::int64_t j = 0; j < n; ++j) out[j] = tap_diff(t, j * rs);
+  }
+}
+
+/// out[j * 4 + k] = in[k * n + j]: four lanes' rows of n terms interleaved (a transpose).
+ALLANITE_TARGET_CLONES static void interleave_lanes(const double* __restrict in, std::int64_t n,
+                                                    double* __restrict out) noexcept {
+  for (std::int64_t j = 0; j < n; ++j) {
+    out[j * 4] = in[j];
+    out[j * 4 + 1] = in[n + j];
+    out[j * 4 + 2] = in[2 * n + j];
+    out[j * 4 + 3] = in[3 * n + j];
+  }
+}
+
 /// Modified AVAR sums of one factor beyond kTileMaxM (no other factor shares its rows). The
 /// terms are cut into four lanes of whole blocks; in each lane the window
 /// w_j = S[j+3m] - 3 S[j+2m] + 3 S[j+m] - S[j] starts from prefix cursors and moves on by the
-/// third difference of the phase, w_{j+1} = w_j + d3(j), kept as a TwoSum pair. The lanes are
-/// independent dependency chains run side by side; no prefix sums are stored. The lanes'
-/// block sums go to per-lane compensated totals, added to totals in lane order.
+/// third difference of the phase, w_{j+1} = w_j + d3(j), kept as a TwoSum pair (a block's d3
+/// are computed lane by lane, vectorised, then interleaved so that the chains read vectors).
+/// The lanes are independent dependency chains run side by side; no prefix sums are stored.
+/// The lanes' block sums go to per-lane compensated totals, added to totals in lane order.
 ALLANITE_TARGET_CLONES ALLANITE_SLP_ONLY static void add_modified_single(const PhaseRef& phase, const PrefixPlan& plan,
                                                       std::int64_t m, std::int64_t count, NeumaierSum* totals) {
   constexpr int kLanes = 4;
@@ -503,7 +545,8 @@ ALLANITE_TARGET_CLONES ALLANITE_SLP_ONLY static void add_modified_single(const P
     const SplitTaps t{{hi[0], hi[1], hi[2], hi[3]}, {lo[0], lo[1], lo[2], lo[3]}, nc};
     for (Eigen::Index c = 0; c < nc; ++c) w0[static_cast<std::size_t>(k * nc + c)] = tap_diff(t, c);
   }
-  std::vector<double> d3(static_cast<std::size_t>(kLanes * chunk));
+  static_assert(kLanes == 4, "interleave_lanes interleaves four lanes");
+  std::vector<double> d3(static_cast<std::size_t>(kLanes * chunk)), rows(d3.size());
   for (Eigen::Index c = 0; c < nc; ++c) {
     double hi[kLanes], lo[kLanes];
     NeumaierSum lane_total[kLanes];
@@ -516,15 +559,9 @@ ALLANITE_TARGET_CLONES ALLANITE_SLP_ONLY static void add_modified_single(const P
       std::int64_t n[kLanes];
       for (int k = 0; k < kLanes; ++k) {
         n[k] = std::max<std::int64_t>(0, std::min(chunk, len[k] - start));
-        const double* b = x + (first[k] + start) * rs;
-        const Taps<3> t{{b, b + m * rs, b + 2 * m * rs, b + 3 * m * rs}, rs};
-        double* out = d3.data() + k;  // interleaved: term j of lane k at j * kLanes + k
-        if (rs == 1) {
-          for (std::int64_t j = 0; j < n[k]; ++j) out[j * kLanes] = tap_diff(t, j);
-        } else {
-          for (std::int64_t j = 0; j < n[k]; ++j) out[j * kLanes] = tap_diff(t, j * rs);
-        }
+        lane_third_differences(x + (first[k] + start) * rs, m, rs, n[k], rows.data() + k * chunk);
       }
+      interleave_lanes(rows.data(), chunk, d3.data());  // term j of lane k at j * kLanes + k
       double a[4][kLanes] = {};  // a[r][k]: lane k's partial sum r (the lanes one vector)
       const std::int64_t common = *std::min_element(n, n + kLanes) / 4 * 4;
       std::int64_t j = 0;
