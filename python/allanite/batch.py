@@ -22,8 +22,10 @@ Datasheet. Either form of :mod:`allanite.datasheet`: the compact ``{"N": 0.01, "
 0.3, "unit": "deg/sqrt(h)"}, {"quantity": "adev", "tau": 1, "max": 0.01, "unit":
 "deg/s"}]}``. Each limit is judged with the interval (:func:`allanite.datasheet.check_limits`):
 *pass* when the whole interval meets it, *marginal* when only the interval crosses it, *fail*
-when the estimate violates it, *missing* when not measured. A row passes unless a check fails
-or the record could not be analysed.
+when the estimate violates it; a term the fit left out is judged by its upper limit
+(``<name>_upper``): *pass* when that is within the limit, *undetermined* when it is not (the
+record cannot tell); *missing* when not measured at all. A row passes unless a check fails or
+the record could not be analysed (*marginal* and *undetermined* are undecided, not failed).
 """
 
 from __future__ import annotations
@@ -41,7 +43,15 @@ from numpy.typing import NDArray
 
 from allanite._deprecation import keyword_only_fs
 from allanite.confidence import DEFAULT_LEVEL
-from allanite.datasheet import Check, Datasheet, Limit, Measured, check_limits, verdict
+from allanite.datasheet import (
+    Check,
+    Datasheet,
+    Limit,
+    Measured,
+    check_limits,
+    undetected_measured,
+    verdict,
+)
 from allanite.errors import InputError
 from allanite.extras import require
 from allanite.units import record_rate_unit
@@ -62,10 +72,15 @@ class BatchResult:
     columns : tuple of str
         ``record, channel, n_samples, fs, units, p_value, rejected`` (the goodness-of-fit
         test rejects the fitted model); per coefficient ``<name>,
-        <name>_low, <name>_high`` (estimate and ``level`` interval); ``check_<quantity>`` per
-        datasheet limit (``pass``/``marginal``/``fail``/``missing``); ``status`` (the worst
-        check, ``pass`` without a datasheet, ``error`` when the record or channel could not be
-        analysed), ``pass`` (status is pass or marginal) and ``error`` (the message).
+        <name>_low, <name>_high`` (estimate and ``level`` interval) and, with
+        ``terms="auto"``, ``<name>_upper`` for Q, N, B, K, R (the ``level`` upper limit when
+        the fit left the term out, :attr:`allanite.fit.FitResult.undetected`; empty when it
+        was fitted); ``check_<quantity>`` per datasheet limit
+        (``pass``/``marginal``/``fail``/``undetermined``/``missing``, see
+        :mod:`allanite.datasheet`); ``status`` (the worst check, ``pass`` without a
+        datasheet, ``error`` when the record or channel could not be analysed), ``pass``
+        (status is pass, marginal or undetermined: nothing failed) and ``error`` (the
+        message).
     rows : tuple of tuple
         The table (None where a value does not exist).
     datasheet : Datasheet or None
@@ -220,12 +235,15 @@ def _fit_row(single: Any, task: _Task, rate: str | None) -> dict[str, Any]:
         coefficients[name] = (_finite(coef.value), _finite(low), _finite(high))
         measured[name] = Measured(coef.value, low, high, coef.unit, coef.unit)
     checks: list[Check] = []
+    bounds = undetected_measured(result, task.level)
     if task.sheet is not None:
         low_dev, high_dev = single.ci(task.level)
         curve = (single.tau, single.dev, low_dev, high_dev, rate)
-        checks = check_limits(task.sheet, "", measured, curve)
+        checks = check_limits(task.sheet, "", measured, curve, bounds)
+    upper = {name: _finite(bound.high) for name, bound in bounds.items()}
     return {
         "coefficients": coefficients,
+        "upper": upper,
         "p_value": _finite(result.p_value),
         "rejected": bool(result.rejected),
         # one status per limit, None where a limit is for another sensor (left out)
@@ -295,13 +313,21 @@ def _table(per_record: Sequence[list[dict[str, Any]]], task: _Task) -> BatchResu
         _check_names(task.sheet, names)
     checks = _limit_columns(task.sheet)
     columns = ["record", "channel", "n_samples", "fs", "units", "p_value", "rejected"]
+    # terms="auto": the upper limit of each candidate the fit left out (FitResult.undetected)
+    bounded = [n for n in AUTO_COEFFICIENTS if n in names] if task.terms == "auto" else []
     for name in names:
         columns += [name, f"{name}_low", f"{name}_high"]
+        columns += [f"{name}_upper"] if name in bounded else []
     columns += [*checks, "status", "pass", "error"]
     table = []
     for rows in per_record:
         for row in rows:
             values = row.get("coefficients", {})
+            upper = row.get("upper", {})
+            cells = []
+            for name in names:
+                cells += list(values.get(name, (None, None, None)))
+                cells += [upper.get(name)] if name in bounded else []
             statuses = row.get("checks") or [None] * len(checks)
             status = "error" if row["error"] is not None else verdict(statuses)
             table.append(
@@ -313,10 +339,10 @@ def _table(per_record: Sequence[list[dict[str, Any]]], task: _Task) -> BatchResu
                     row.get("units"),
                     row.get("p_value"),
                     row.get("rejected"),
-                    *[v for name in names for v in values.get(name, (None, None, None))],
+                    *cells,
                     *statuses,
                     status,
-                    status in ("pass", "marginal"),
+                    status in ("pass", "marginal", "undetermined"),
                     row["error"],
                 )
             )

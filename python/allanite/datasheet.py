@@ -29,9 +29,23 @@ interval from its EDF):
 * *marginal*: the estimate lies within but the interval crosses a limit (the data cannot
   decide at that level);
 * *pass*: the whole interval lies within the limits;
-* *missing*: the quantity was not measured (a term the fit did not select, or ``tau``
-  outside the measured range). A coefficient whose term the fit did not select shows no sign
-  of that term, so it *fails* a positive ``min``; otherwise *missing* does not fail.
+* *undetermined* or *pass* for a term the fit did not select but bounds from above
+  (:attr:`allanite.fit.FitResult.undetected`, the upper end :math:`u` of the interval of the
+  fit with the term): *pass* when :math:`u \le \max` (whatever the term is, it meets the
+  limit), *undetermined* when :math:`u > \max` (the record neither shows the term nor rules
+  out a value above the limit: a longer record decides). Against a positive ``min`` it
+  *fails* when :math:`u < \min` and is *undetermined* otherwise. Shown as ``NOT DETERMINED
+  (<= u)``; the check's ``high`` and ``upper`` hold :math:`u`, ``value`` and ``low`` are None;
+* *missing*: the quantity was not measured and has no upper limit either (an explicit term
+  list without it, or ``tau`` outside the measured range). A coefficient whose term the fit
+  did not select shows no sign of that term, so it *fails* a positive ``min``; otherwise
+  *missing* does not fail.
+
+Exit codes (``allanite fit``, ``report``, ``batch``): only *fail* fails (exit 1). *marginal*
+and *undetermined* are undecided, not failed: exit 0, but :func:`verdict` ranks them above
+*pass* (``fail`` > ``marginal`` > ``undetermined`` > ``pass``), the tables show them in
+capitals and the JSON/CSV carry the status, so a production gate that wants proof of
+conformity requires ``status == "pass"``.
 
 References: IEEE Std 952-1997 annex C (reading noise coefficients off an Allan plot);
 ISO/IEC Guide 98-4:2012 (JCGM 106), conformity decisions with measurement uncertainty.
@@ -62,10 +76,11 @@ __all__ = [
     "check_limits",
     "check_quantity",
     "quantities",
+    "undetected_measured",
     "verdict",
 ]
 
-STATUSES: tuple[str, ...] = ("pass", "marginal", "fail", "missing")
+STATUSES: tuple[str, ...] = ("pass", "marginal", "fail", "undetermined", "missing")
 
 
 @dataclass(frozen=True)
@@ -330,14 +345,20 @@ class Check:
     low: float | None
     high: float | None
     status: str
+    upper: float | None = None
 
     @property
     def passed(self) -> bool:
         """True unless the check failed outright."""
         return self.status != "fail"
 
+    def status_text(self) -> str:
+        """``PASS``, ``MARGINAL``, ... ; with the upper limit of an undetected term:
+        ``NOT DETERMINED (<= 12.3)`` or ``PASS (not detected, <= 0.05)``."""
+        return status_text(self.status, self.upper)
+
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready dictionary."""
+        """JSON-ready dictionary (``upper``: the upper limit of a term the fit left out)."""
         return {
             "quantity": self.limit.quantity,
             "tau": self.limit.tau,
@@ -349,7 +370,37 @@ class Check:
             "low": self.low,
             "high": self.high,
             "status": self.status,
+            "upper": self.upper,
         }
+
+
+def status_text(status: str, upper: float | None = None) -> str:
+    """A check's status for a table: ``NOT DETERMINED (<= u)`` for *undetermined*, ..."""
+    if upper is None:
+        return "NOT DETERMINED" if status == "undetermined" else status.upper()
+    if status == "undetermined":
+        return f"NOT DETERMINED (<= {upper:.3g})"
+    return f"{status.upper()} (not detected, <= {upper:.3g})"
+
+
+def undetected_measured(fit: Any, level: float) -> dict[str, Measured]:
+    """The upper limits of the terms a fit left out, as :class:`Measured` (model units).
+
+    From :attr:`allanite.fit.FitResult.undetected` and, for a term the record may show a
+    little of (an AMBIGUOUS addition), :attr:`~allanite.fit.FitResult.exchangeable`: the
+    upper end of its ``level`` interval in the fit with the term. Value 0, interval
+    ``[0, upper]``; empty for anything without these (a bare model, explicit terms).
+    """
+    fitted = getattr(fit, "coefficients", {})
+    out = {}
+    left_out = {**getattr(fit, "exchangeable", {}), **getattr(fit, "undetected", {})}
+    for symbol, coef in left_out.items():
+        if symbol in fitted:
+            continue
+        high = float(coef.ci(level)[1])
+        if math.isfinite(high):
+            out[symbol] = Measured(0.0, 0.0, high, coef.unit, coef.unit)
+    return out
 
 
 def _status(limit: Limit, m: Measured) -> str:
@@ -377,6 +428,7 @@ def check_limits(
     channel: str,
     coefficients: dict[str, Measured],
     adev: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, str | None],
+    undetected: dict[str, Measured] | None = None,
 ) -> list[Check]:
     """Check one channel against every limit of ``sheet``.
 
@@ -392,13 +444,19 @@ def check_limits(
         ``(tau, dev, low, high, rate_unit)`` of the measured deviation. The rate unit says
         which sensor the channel is: limits in units of another sensor (an accelerometer
         limit in m/s/sqrt(h) for a gyro channel) do not apply to it and are left out.
+    undetected : dict, optional
+        Upper limits of the terms the fit left out (:func:`undetected_measured`): a limit on
+        one of them is judged by its upper limit (*pass* or *undetermined*, see the module
+        docstring) instead of *missing*.
 
     Returns
     -------
     list of Check
-        One per applicable limit; ``missing`` when the quantity was not measured (no such
-        fitted term, or ``tau`` outside the measured range), ``fail`` for a term the fit did
-        not find when the limit asks for a positive minimum.
+        One per applicable limit; ``pass``/``undetermined`` (or ``fail`` against a positive
+        minimum) by the upper limit of a term in ``undetected``; ``missing`` when the
+        quantity was not measured (no such fitted term, or ``tau`` outside the measured
+        range), ``fail`` for a term the fit did not find when the limit asks for a positive
+        minimum.
 
     Raises
     ------
@@ -413,6 +471,10 @@ def check_limits(
         if sensor is not None and limit.sensor not in (None, sensor):
             continue  # e.g. an accelerometer limit and a gyro channel
         measured: Measured | None = None
+        bound = (undetected or {}).get(limit.quantity)
+        if limit.quantity not in coefficients and bound is not None:
+            checks.append(_bounded(limit, channel, bound))
+            continue
         if limit.quantity == "adev":
             at = adev_at(tau, dev, low, high, float(limit.tau or 0.0))
             if at is not None and (rate is not None or not limit.unit):
@@ -421,21 +483,7 @@ def check_limits(
                 )
                 measured = Measured(value, lo, hi, limit.unit)
         elif limit.quantity in coefficients:
-            c = coefficients[limit.quantity]
-            target = limit.unit or c.model_unit
-            if target is None:
-                raise ValueError(
-                    f"limit on {limit.quantity} has no unit and the record's units are unknown; "
-                    "give the limit's unit or the record's (--units)"
-                )
-            if limit.unit and _record_units(c.unit):
-                raise ValueError(
-                    f"the limit on {limit.quantity} is in {limit.unit} but the record's "
-                    "unit is not known; give the record's unit (--units) or write the "
-                    "limit in record units (compact form)"
-                )
-            value, lo, hi = (convert(v, c.unit, target) for v in (c.value, c.low, c.high))
-            measured = Measured(value, lo, hi, limit.unit)
+            measured = Measured(*_converted(limit, coefficients[limit.quantity]), limit.unit)
         if measured is None:
             absent = limit.quantity != "adev" and limit.min is not None and limit.min > 0
             checks.append(Check(limit, channel, None, None, None, "fail" if absent else "missing"))
@@ -451,6 +499,36 @@ def check_limits(
                 )
             )
     return checks
+
+
+def _converted(limit: Limit, c: Measured) -> tuple[float, float, float]:
+    """``(value, low, high)`` of ``c`` in the limit's unit (the model's for a compact limit)."""
+    target = limit.unit or c.model_unit
+    if target is None:
+        raise ValueError(
+            f"limit on {limit.quantity} has no unit and the record's units are unknown; "
+            "give the limit's unit or the record's (--units)"
+        )
+    if limit.unit and _record_units(c.unit):
+        raise ValueError(
+            f"the limit on {limit.quantity} is in {limit.unit} but the record's "
+            "unit is not known; give the record's unit (--units) or write the "
+            "limit in record units (compact form)"
+        )
+    value, lo, hi = (convert(v, c.unit, target) for v in (c.value, c.low, c.high))
+    return value, lo, hi
+
+
+def _bounded(limit: Limit, channel: str, bound: Measured) -> Check:
+    """The check of a term the fit left out, by its upper limit (module docstring)."""
+    upper = _converted(limit, bound)[2]
+    if limit.min is not None and limit.min > 0:
+        status = "fail" if upper < limit.min else "undetermined"
+    elif limit.max is not None and upper > limit.max:
+        status = "undetermined"
+    else:
+        status = "pass"
+    return Check(limit, channel, None, None, upper, status, upper)
 
 
 def _sensor(rate: str | None) -> str | None:
@@ -472,12 +550,14 @@ def _record_units(unit: str) -> bool:
 
 
 def verdict(statuses: Iterable[str | None]) -> str:
-    """The worst of ``statuses``: ``fail`` > ``marginal`` > ``pass`` (``missing`` is neutral).
+    """The worst of ``statuses``: ``fail`` > ``marginal`` > ``undetermined`` > ``pass``.
+
+    ``missing`` is neutral.
 
     ``pass`` when there are none or all are missing (pass ``[c.status for c in checks]``).
     """
     seen = set(statuses)
-    for status in ("fail", "marginal"):
+    for status in ("fail", "marginal", "undetermined"):
         if status in seen:
             return status
     return "pass"

@@ -17,6 +17,11 @@ all equal is refused, since it has no noise to analyse.
   away from zero: raw ADC counts with an offset.
 * **stuck segments.** A value repeated for far longer than the record's own runs of equal
   samples (ten times their 99.9th percentile, and at least 20 samples).
+* **wrong --units?** Noise coefficients outside the range of any real sensor
+  (:data:`COEFFICIENT_BOUNDS`): a deg/h record given as deg/s has 3600 times its angle random
+  walk. The finding names the common unit of the same quantity that would put every checked
+  coefficient back in range (the one closest to a typical sensor), e.g. "the record looks like
+  deg/h given as deg/s: N would be 0.367 deg/sqrt(h)".
 
 The slopes come from :mod:`allanite.report.slopes` (half-decade windows, points with at least
 20 EDF), so the checks read the curve the way the report's slope table does.
@@ -33,11 +38,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from allanite.report.slopes import MIN_EDF, local_slopes, slope_table
+from allanite.units import SYMBOL_POWERS, coefficient_unit, convert, sensor_kind
 
 __all__ = [
     "Finding",
     "check_allan",
     "check_channel_units",
+    "check_coefficients",
     "check_samples",
     "refuse_constant",
     "stuck_segments",
@@ -60,6 +67,48 @@ MIN_STUCK = 20
 STUCK_FACTOR = 10.0
 #: at most this many stuck segments are listed per channel
 MAX_LISTED = 3
+
+#: Range of the noise coefficients of real sensors, per sensor kind and symbol:
+#: ``(lowest, highest, typical, unit)`` (None: no bound on that side). Gyros: angle random
+#: walk from strategic-grade ring-laser and hemispherical resonator gyros (~1e-4 deg/sqrt(h))
+#: to the cheapest consumer MEMS (a few deg/sqrt(h)), a decade of margin each side, so
+#: [1e-5, 100] deg/sqrt(h); bias instability up to 1e5 deg/h (~30 deg/s, beyond the
+#: turn-on bias of any gyro; consumer MEMS are 1-100 deg/h; 1e4 deg/h would flag synthetic
+#: records of benchmarks/validate_fit.py's grid, whose B reaches 8e4 deg/h with N 0.01
+#: deg/sqrt(h), a mix-up no unit explains). Accelerometers: velocity random walk from
+#: navigation grade (~1e-3 m/s/sqrt(h), 5 ug/sqrt(Hz)) to consumer MEMS (~0.3 m/s/sqrt(h),
+#: 1 mg/sqrt(Hz)), a decade and more of margin: [1e-5, 10] m/s/sqrt(h); bias instability up
+#: to 1e6 ug (1 g; consumer MEMS are 10-1000 ug; the validate_fit grid's synthetic
+#: m/s^2 records reach 1.1e5 ug). No lower bound on B (an upper limit of a
+#: term the record hardly shows can be tiny). ``typical`` ranks the candidate units of a
+#: suggested mix-up (the geometric middle of the classes).
+COEFFICIENT_BOUNDS: dict[str, dict[str, tuple[float | None, float | None, float, str]]] = {
+    "gyro": {
+        "N": (1e-5, 100.0, 0.03, "deg/sqrt(h)"),
+        "B": (None, 1e5, 1.0, "deg/h"),
+    },
+    "accelerometer": {
+        "N": (1e-5, 10.0, 0.01, "m/s/sqrt(h)"),
+        "B": (None, 1e6, 100.0, "ug"),
+    },
+}
+#: units a record is commonly given in, by mistake for one another (same dimension only)
+COMMON_UNITS = (
+    "deg/s",
+    "deg/h",
+    "rad/s",
+    "mrad/s",
+    "rad/h",
+    "m/s^2",
+    "g",
+    "mg",
+    "ug",
+    "deg",
+    "rad",
+    "mrad",
+    "arcsec",
+    "m/s",
+)
 
 
 @dataclass(frozen=True)
@@ -355,3 +404,114 @@ def check_channel_units(channels: Sequence[str], unit: str) -> list[Finding]:
                     )
                 )
     return out
+
+
+def _out_of_range(
+    scaled: dict[str, float], bounds: dict[str, tuple[float | None, float | None, float, str]]
+) -> list[str]:
+    """The symbols whose value (in the bound's unit) lies outside the bounds."""
+    bad = []
+    for symbol, value in scaled.items():
+        lo, hi, _, _ = bounds[symbol]
+        if (lo is not None and value < lo) or (hi is not None and value > hi):
+            bad.append(symbol)
+    return bad
+
+
+def check_coefficients(
+    values: dict[str, float | None],
+    unit: str | None,
+    *,
+    input: str = "rate",
+    channel: str = "ch0",
+) -> list[Finding]:
+    """Noise coefficients outside any real sensor's range: a wrong ``--units``?
+
+    Parameters
+    ----------
+    values : dict
+        Coefficient by symbol (``N``, ``B``, ...; others are ignored, None = not measured)
+        in the record's rate unit times seconds to the term's power (a fit's
+        ``model.coefficients()``, or the slope readouts of :mod:`allanite.fit.classic`).
+    unit : str or None
+        The record's unit as given (``deg/s``, ``deg`` for an angle record, ...); no check
+        without one.
+    input : {"rate", "increment", "angle"}
+        What the samples are (the rate unit of the coefficients follows from it).
+    channel : str
+        Channel name for the message.
+
+    Returns
+    -------
+    list of Finding
+        At most one (code ``"implausible_units"``), naming the coefficients out of range, the
+        bounds (:data:`COEFFICIENT_BOUNDS`) and, when one exists, the common unit
+        (:data:`COMMON_UNITS`) that would make every checked coefficient plausible.
+    """
+    from allanite.units import record_rate_unit
+
+    if unit is None:
+        return []
+    try:
+        rate = record_rate_unit(unit, input)
+        kind = sensor_kind(rate) if rate is not None else "unknown"
+    except ValueError:
+        return []
+    bounds = COEFFICIENT_BOUNDS.get(kind)
+    if bounds is None or rate is None:
+        return []
+    scaled = {}
+    for symbol, value in values.items():
+        if symbol in bounds and value is not None and np.isfinite(value) and value > 0:
+            own = coefficient_unit(rate, *SYMBOL_POWERS[symbol])
+            scaled[symbol] = convert(float(value), own, bounds[symbol][3])
+    bad = _out_of_range(scaled, bounds)
+    if not bad:
+        return []
+    seen = ", ".join(f"{s} = {scaled[s]:.4g} {bounds[s][3]}" for s in bad)
+    limits = "; ".join(
+        f"{s} {_bounds_text(bounds[s])} {bounds[s][3]}" for s in bad
+    )
+    # every coefficient scales with the unit of the samples: x given in `unit` but really in
+    # `other` is x * convert(1, other, unit) in `unit`
+    best: tuple[float, str, dict[str, float]] | None = None
+    for other in COMMON_UNITS:
+        if other == unit:
+            continue
+        try:
+            factor = convert(1.0, other, unit)
+        except ValueError:
+            continue
+        moved = {s: v * factor for s, v in scaled.items()}
+        if _out_of_range(moved, bounds):
+            continue
+        score = sum(abs(np.log10(v / bounds[s][2])) for s, v in moved.items())
+        if best is None or score < best[0]:
+            best = (score, other, moved)
+    verb = "is" if len(bad) == 1 else "are"
+    what = f"channel {channel}: {seen} {verb} outside any real {kind}'s range ({limits})"
+    if best is None:
+        return [
+            Finding(
+                "implausible_units",
+                channel,
+                f"{what}: check --units ({unit}) and --scale",
+            )
+        ]
+    _, other, moved = best
+    would = ", ".join(f"{s} would be {moved[s]:.3g} {bounds[s][3]}" for s in moved)
+    return [
+        Finding(
+            "implausible_units",
+            channel,
+            f"{what}: the record looks like {other} given as {unit}: {would}; if so, pass "
+            f"--units {other}",
+        )
+    ]
+
+
+def _bounds_text(bound: tuple[float | None, float | None, float, str]) -> str:
+    lo, hi, _, _ = bound
+    if lo is not None and hi is not None:
+        return f"{lo:g} to {hi:g}"
+    return f"<= {hi:g}" if hi is not None else f">= {lo:g}"

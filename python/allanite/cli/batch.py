@@ -33,8 +33,10 @@ A datasheet is JSON or YAML, compact in the record's units
   {"device": "...", "limits": [{"quantity": "N", "max": 0.3, "unit": "deg/sqrt(h)"},
                               {"quantity": "adev", "tau": 1, "max": 0.01, "unit": "deg/s"}]}
 A limit PASSes when the whole interval meets it, is MARGINAL when only the interval crosses
-it, FAILs when the estimate violates it. Exit code 0 when no record fails (marginal is not a
-failure), 1 when one fails or cannot be analysed, 2 on bad input.
+it, FAILs when the estimate violates it. A term the fit did not detect is judged by its upper
+limit (column <name>_upper): PASS when within the limit, NOT DETERMINED (<= upper) when above
+(the record cannot tell). Exit code 0 when no record fails (MARGINAL and NOT DETERMINED are
+undecided, not failures), 1 when one fails or cannot be analysed, 2 on bad input.
 """
 
 
@@ -134,6 +136,8 @@ def _cell(v: Any) -> str:
         return "PASS" if v else "FAIL"
     if isinstance(v, float):
         return f"{v:.4g}"
+    if v == "undetermined":
+        return "NOT DETERMINED"
     return str(v).upper() if v in ("pass", "marginal", "fail", "missing", "error") else str(v)
 
 
@@ -159,7 +163,7 @@ def _customary(values: dict[str, Any], shown: list[str]) -> dict[str, Any]:
     out = dict(values)
     for name in (c for c in shown if c in SYMBOL_POWERS):
         _, factor = _display_unit(values.get("units"), name)
-        for key in (name, f"{name}_low", f"{name}_high"):
+        for key in (name, f"{name}_low", f"{name}_high", f"{name}_upper"):
             if isinstance(out.get(key), float):
                 out[key] = out[key] * factor
     return out
@@ -174,7 +178,7 @@ def _text_table(result: Any, limits: bool = True) -> str:
     """
     columns = list(result.columns)
     shown = [c for c in columns if c not in ("n_samples", "fs", "units", "pass", "error")]
-    shown = [c for c in shown if not c.endswith(("_low", "_high"))]
+    shown = [c for c in shown if not c.endswith(("_low", "_high", "_upper"))]
     header = [c if c != "p_value" else "p" for c in shown]
     cells = []
     for row in result.rows:
@@ -189,6 +193,11 @@ def _text_table(result: Any, limits: bool = True) -> str:
                 text = "OK"
             if f"{c}_low" in values and values[c] is not None:
                 text += f" [{_cell(values[c + '_low'])}, {_cell(values[c + '_high'])}]"
+            elif values.get(f"{c}_upper") is not None:  # not detected: its upper limit
+                text = f"<= {_cell(values[c + '_upper'])}"
+            upper = values.get(f"{c.removeprefix('check_')}_upper")
+            if c.startswith("check_") and upper is not None and values[c] == "undetermined":
+                text = f"NOT DETERMINED (<= {_cell(upper)})"
             line.append(text)
         cells.append(line)
     widths = [max([len(h)] + [len(r[i]) for r in cells]) for i, h in enumerate(header)]

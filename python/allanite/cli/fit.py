@@ -13,6 +13,7 @@ from allanite.cli.record_options import (
     avar_from_args,
     dump_json,
     read_sensors,
+    warn_coefficients,
     warn_implausible,
 )
 from allanite.io.atomic import atomic_output
@@ -29,8 +30,11 @@ EXAMPLES = """examples:
   allanite fit imu.csv --time-column t --channels gx,gy,gz,ax,ay,az \
       --units deg/s,deg/s,deg/s,m/s^2,m/s^2,m/s^2          # six-axis: a table per sensor
 
-exit codes: 0 fitted (and every datasheet limit met or undecided), 1 a datasheet limit failed,
-2 bad input (no output written).
+datasheet checks: PASS, MARGINAL (the interval crosses the limit), FAIL, and for a term the fit
+did not detect its upper limit: PASS (not detected, <= u) or NOT DETERMINED (<= u) when u is
+above the limit (a longer record decides); MISSING when nothing bounds it.
+exit codes: 0 fitted (and every datasheet limit met or undecided: MARGINAL, NOT DETERMINED),
+1 a datasheet limit failed, 2 bad input (no output written).
 """
 
 
@@ -118,7 +122,7 @@ def goodness(fit: Any, level: float) -> dict[str, Any]:
 
 def run(args: argparse.Namespace) -> int:
     """Run ``allanite fit``."""
-    from allanite.datasheet import Datasheet, check_limits
+    from allanite.datasheet import Datasheet, check_limits, status_text, undetected_measured
     from allanite.report.coefficients import coefficient_table
 
     sheet = Datasheet.load(args.datasheet) if args.datasheet else None
@@ -132,7 +136,7 @@ def run(args: argparse.Namespace) -> int:
     analysed = []
     for record in sensors:
         result = avar_from_args(record, args)
-        analysed.append((warn_implausible(record, args, result), result))
+        analysed.append((warn_implausible(record, args, result, readouts=False), result))
     work = [(record, result, c) for record, result in analysed for c in range(record.n_channels)]
     channels = []
     fits = []
@@ -140,19 +144,26 @@ def run(args: argparse.Namespace) -> int:
         name = record.channels[c]
         fit = fit_result(result.channel(c))
         fits.append(fit)
+        warnings = (
+            [] if fit is None else warn_coefficients(_model_of(fit).coefficients(), record, args, name)
+        )
         rows = coefficient_table(fit, result.units, args.level)
         checks = []
         if sheet is not None:
             one = result.channel(c)
             lo, hi = one.ci(args.level)
             measured = {r.symbol: r.measured() for r in rows}
-            checks = check_limits(sheet, name, measured, (one.tau, one.dev, lo, hi, one.units))
+            curve = (one.tau, one.dev, lo, hi, one.units)
+            checks = check_limits(
+                sheet, name, measured, curve, undetected_measured(fit, args.level)
+            )
         channels.append(
             {
                 "channel": name,
                 "sensor": _model_of(fit).sensor,
                 "units": result.units,
                 "checks": [k.to_dict() for k in checks],
+                "warnings": warnings,
                 "model": _model_of(fit).to_dict(),
                 **goodness(fit, args.level),
                 "coefficients": [
@@ -213,11 +224,21 @@ def run(args: argparse.Namespace) -> int:
             for line in fit_lines(fits[channels.index(item)], args.level):
                 print(f"  {line}")
             for check in item["checks"]:
-                value = "not measured" if check["value"] is None else f"{check['value']:.4g}"
-                print(f"  datasheet {check['quantity']}: {value} -> {check['status'].upper()}")
+                print(f"  {_check_line(check, status_text)}")
         if args.output:
             print(_written(args.output, channels))
     return 1 if failed else 0
+
+
+def _check_line(check: dict[str, Any], status_text: Any) -> str:
+    """``datasheet B: not detected (<= 8.57 deg/h) -> NOT DETERMINED``, ``datasheet N: ...``."""
+    unit = f" {check['unit']}" if check["unit"] else ""
+    status = status_text(check["status"])
+    if check["upper"] is not None:
+        value = f"not detected (<= {check['upper']:.3g}{unit})"
+    else:
+        value = "not measured" if check["value"] is None else f"{check['value']:.4g}{unit}"
+    return f"datasheet {check['quantity']}: {value} -> {status}"
 
 
 def _written(path: str, channels: list[dict[str, Any]]) -> str:

@@ -21,7 +21,13 @@ from allanite.io.options import ReadOptions
 from allanite.io.readers import FORMATS, read_record
 from allanite.io.record import INPUT_KINDS, Record
 from allanite.io.timebase import GAP_POLICIES
-from allanite.plausibility import check_allan, check_channel_units, check_samples, refuse_constant
+from allanite.plausibility import (
+    check_allan,
+    check_channel_units,
+    check_coefficients,
+    check_samples,
+    refuse_constant,
+)
 from allanite.variance import KINDS, AllanResult, avar
 
 __all__ = [
@@ -34,6 +40,7 @@ __all__ = [
     "read_sensors",
     "record_command",
     "unit_list",
+    "warn_coefficients",
     "warn_implausible",
 ]
 
@@ -391,15 +398,29 @@ def avar_from_args(record: Record, args: argparse.Namespace) -> AllanResult:
         )
 
 
+#: nominal Allan-deviation slope of the readouts the units check trusts
+READOUT_SLOPES = {"N": -0.5, "B": 0.0}
+#: ... within this much (white noise reads -0.5 +- 0.02 on a clean record; a -1/2 line laid
+#: on the last, noisy taus of a record without white noise touches at -0.43)
+READOUT_TOLERANCE = 0.05
+
+
 def warn_implausible(
-    record: Record, args: argparse.Namespace, result: AllanResult | None = None
+    record: Record,
+    args: argparse.Namespace,
+    result: AllanResult | None = None,
+    *,
+    readouts: bool = True,
 ) -> Record:
     """Run the plausibility checks, print each finding on stderr, return the record with them.
 
     The findings (:mod:`allanite.plausibility`: angle given as rate, rate given as angle,
-    counts without a scale, stuck segments) are appended to ``record.warnings``, so the JSON
+    counts without a scale, stuck segments, noise coefficients (the slope readouts) outside
+    any real sensor's range, i.e. a wrong ``--units``) are appended to ``record.warnings``, so the JSON
     summary and the report carry them too. ``result`` is the record's Allan analysis; without
-    it a quick one (50-point log grid) is computed for the slope checks.
+    it a quick one (50-point log grid) is computed for the slope checks. ``readouts=False``
+    leaves out the coefficient check on the slope readouts (``allanite fit`` checks its
+    fitted coefficients instead, :func:`warn_coefficients`).
     """
     part = record.longest_segment()
     fs = part.require_fs()
@@ -415,6 +436,21 @@ def warn_implausible(
         scale=record.scale,
         short_dev=dev[0],
     ) + check_allan(result, part.channels)
+    if readouts and result.kind in ("overlapping", "standard"):  # readouts of an Allan dev.
+        from allanite.fit.classic import classic_readout
+
+        for c, name in enumerate(part.channels):
+            readout = classic_readout(result.tau, dev[:, c])
+            # only lines that touch the curve where it has their slope (a -1/2 line laid on
+            # the noisy last taus of a record without white noise is not an N)
+            clean = {
+                s: v
+                for s, v in readout.values.items()
+                if s in READOUT_SLOPES
+                and readout.slope.get(s) is not None
+                and abs(float(readout.slope[s] or 0.0) - READOUT_SLOPES[s]) <= READOUT_TOLERANCE
+            }
+            findings += check_coefficients(clean, part.units, input=part.input, channel=name)
     command = getattr(args, "command", None) or "allanite"
     for finding in findings:
         print(f"allanite {command}: warning: {finding.message}", file=sys.stderr)
@@ -423,6 +459,21 @@ def warn_implausible(
     return dataclasses.replace(
         record, warnings=record.warnings + tuple(f.message for f in findings)
     )
+
+
+def warn_coefficients(
+    values: dict[str, float | None], record: Record, args: argparse.Namespace, channel: str
+) -> list[str]:
+    """Check noise coefficients against real sensors' ranges; print and return the warnings.
+
+    :func:`allanite.plausibility.check_coefficients` (a wrong ``--units``); the messages are
+    printed on stderr as ``allanite COMMAND: warning: ...``.
+    """
+    command = getattr(args, "command", None) or "allanite"
+    findings = check_coefficients(values, record.units, input=record.input, channel=channel)
+    for finding in findings:
+        print(f"allanite {command}: warning: {finding.message}", file=sys.stderr)
+    return [f.message for f in findings]
 
 
 def dump_json(data: Any) -> str:
