@@ -87,9 +87,13 @@ def test_multichannel_rows_and_minimum_limits():
     assert len(res) == 6
     assert res.column("channel") == ["0", "1", "2"] * 2
     assert res.column("check_N") == ["pass"] * 6
-    # no sign of a ramp fails a positive minimum; a zero minimum is simply not measured
+    # no sign of a ramp, and an upper limit below the positive minimum: fails it
     assert res.column("check_R") == ["fail"] * 6
-    assert res.column("check_K") == ["missing"] * 6
+    assert all(0.0 < r < 1.0 for r in res.column("R_upper"))
+    # a term left out is bounded by its upper limit: K >= 0 holds whatever it is
+    assert res.column("K") == [None] * 6
+    assert all(k > 0.0 for k in res.column("K_upper"))
+    assert res.column("check_K") == ["pass"] * 6
     assert not any(res.column("pass"))
 
 
@@ -144,8 +148,14 @@ def test_paths_and_datasheet_files(tmp_path):
     res.to_csv(out)
     head = out.read_text().splitlines()[0]
     assert head.startswith(
-        "record,channel,n_samples,fs,units,p_value,rejected,Q,Q_low,Q_high,N,N_low"
+        "record,channel,n_samples,fs,units,p_value,rejected,Q,Q_low,Q_high,Q_upper,N,N_low"
     )
+    # white noise only: B is not detected, its upper limit is below the limit and in the CSV
+    assert res.column("check_B") == ["pass"] * 3
+    assert all(0.0 < b <= 0.01 for b in res.column("B_upper"))
+    row = out.read_text().splitlines()[1].split(",")
+    upper = row[head.split(",").index("B_upper")]
+    assert float(upper) == res.column("B_upper")[0]
     assert head.endswith("check_N,check_B,status,pass,error")
     assert json.loads(res.to_json())["columns"] == list(res.columns)
 

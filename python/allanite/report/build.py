@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from allanite.confidence import DEFAULT_LEVEL
-from allanite.datasheet import Check, Datasheet, adev_at, check_limits
+from allanite.datasheet import Check, Datasheet, adev_at, check_limits, undetected_measured
 from allanite.io.atomic import atomic_output
 from allanite.io.record import Record
 from allanite.report import html as h
@@ -353,7 +353,8 @@ def _datasheet_section(
         for c, name in enumerate(device.record.channels):
             measured = {k.symbol: k.measured() for k in coefficients.get((d, c), [])}
             label = f"{device.label}: {name}" if len(devices) > 1 else name
-            checks += check_limits(sheet, label, measured, _rate_adev(device, c, level))
+            bounds = undetected_measured(device.fit(c), level)
+            checks += check_limits(sheet, label, measured, _rate_adev(device, c, level), bounds)
     verdict = "fail" if any(c.status == "fail" for c in checks) else "pass"
     rows = [
         [
@@ -361,7 +362,11 @@ def _datasheet_section(
             c.limit.label,
             c.limit.bounds_text(),
             h.fmt(c.value),
-            "–" if c.low is None else f"{h.fmt(c.low)} … {h.fmt(c.high)}",
+            f"≤ {h.fmt(c.upper)} (not detected)"
+            if c.upper is not None
+            else "–"
+            if c.low is None
+            else f"{h.fmt(c.low)} … {h.fmt(c.high)}",
             h.badge(c.status),
         ]
         for c in checks
@@ -376,8 +381,9 @@ def _datasheet_section(
         )
         + '<p class="note">PASS: the whole confidence interval meets the limit; MARGINAL: the '
         "estimate meets it but the interval crosses it; FAIL: the estimate violates it; "
-        "MISSING: the quantity was not measured (no such fitted term or τ outside the "
-        "measured range).</p>"
+        "UNDETERMINED: a term the fit did not detect whose upper limit lies above the limit "
+        "(below it: PASS); MISSING: the quantity was not measured (no such fitted term or τ "
+        "outside the measured range).</p>"
     )
     return body, checks
 
