@@ -13,7 +13,13 @@ from scipy.signal import lfilter
 import allanite
 from allanite.cli import main
 from allanite.model import NoiseModel
-from allanite.plausibility import check_allan, check_samples, refuse_constant, stuck_segments
+from allanite.plausibility import (
+    check_allan,
+    check_coefficients,
+    check_samples,
+    refuse_constant,
+    stuck_segments,
+)
 from allanite.terms import Flicker, GaussMarkov, Quantization, RateRandomWalk, White
 from fit_generator import simulate
 
@@ -252,3 +258,100 @@ def test_units_that_contradict_channel_names_are_warned(
     code, _, err = _cli([*argv, "--units", "deg/s,m/s^2"], capsys)
     assert code == 0
     assert "named like" not in err
+
+
+# --- wrong --units: coefficients outside any real sensor's range (check_coefficients) --------
+
+
+def test_coefficients_in_every_sensor_class_and_unit_are_not_flagged() -> None:
+    """N from strategic grade to consumer MEMS, B ten times N in deg/h, in deg/s, rad/s, deg/h
+    and as an angle record: nothing is flagged."""
+    from allanite.units import convert
+
+    for n_dph in (1e-4, 1e-3, 0.01, 0.1, 1.0, 10.0):
+        for unit, kind in (("deg/s", "rate"), ("rad/s", "rate"), ("deg/h", "rate"), ("rad", "angle")):
+            rate = unit if kind == "rate" else "rad/s"
+            values = {
+                "N": convert(n_dph, "deg/sqrt(h)", f"{rate}*sqrt(s)"),
+                "B": convert(10 * n_dph, "deg/h", rate),
+                "K": None,
+            }
+            assert check_coefficients(values, unit, input=kind) == [], (n_dph, unit)
+    # an accelerometer: 0.01 ... 1 m/s/sqrt(h), 10 ... 1000 ug, in m/s^2, g and mg
+    for vrw in (1e-3, 0.01, 0.1, 1.0):
+        for unit in ("m/s^2", "g", "mg"):
+            values = {
+                "N": convert(vrw, "m/s/sqrt(h)", f"{unit}*sqrt(s)"),
+                "B": convert(1000 * vrw, "ug", unit),
+            }
+            assert check_coefficients(values, unit) == [], (vrw, unit)
+    assert check_coefficients({"N": 1e6}, None) == []  # no unit: nothing to judge
+
+
+def test_implausible_coefficients_name_the_likely_unit() -> None:
+    from allanite.units import convert
+
+    # a navigation gyro (N 0.003 deg/sqrt(h)) recorded in deg/h and declared deg/s reads
+    # N = 10.8 deg/sqrt(h), a bad but real MEMS value: no check on magnitudes can tell
+    n = convert(0.003, "deg/sqrt(h)", "deg/h*sqrt(s)")  # the numbers, read as deg/s*sqrt(s)
+    assert check_coefficients({"N": n}, "deg/s") == []
+    # a consumer gyro (0.3 deg/sqrt(h)) the same way reads 1080: flagged, deg/h named
+    n = convert(0.3, "deg/sqrt(h)", "deg/h*sqrt(s)")
+    (finding,) = check_coefficients({"N": n}, "deg/s", channel="gz")
+    assert finding.code == "implausible_units" and finding.channel == "gz"
+    assert "channel gz: N = 1080 deg/sqrt(h) is outside any real gyro's range" in (
+        finding.message
+    )
+    assert "deg/h given as deg/s: N would be 0.3 deg/sqrt(h); if so, pass --units deg/h" in (
+        finding.message
+    )
+    # too small: a 0.01 deg/sqrt(h) gyro's deg/s numbers declared as mrad/h
+    n = convert(0.01, "deg/sqrt(h)", "deg/s*sqrt(s)")
+    (finding,) = check_coefficients({"N": n}, "mrad/h")
+    assert "(N 1e-05 to 100 deg/sqrt(h))" in finding.message
+    assert "deg/s given as mrad/h: N would be 0.01 deg/sqrt(h)" in finding.message
+    # bias instability alone out of range (1e6 deg/h): flagged with its bound
+    (finding,) = check_coefficients({"B": convert(1e6, "deg/h", "deg/s")}, "deg/s")
+    assert "B = 1e+06 deg/h is outside" in finding.message and "B <= 100000 deg/h" in (
+        finding.message
+    )
+    # an accelerometer's ug numbers declared m/s^2 (VRW 0.05 m/s/sqrt(h))
+    n = convert(0.05, "m/s/sqrt(h)", "ug*sqrt(s)")
+    (finding,) = check_coefficients({"N": n}, "m/s^2")
+    assert "real accelerometer's range" in finding.message
+    assert "ug given as m/s^2: N would be 0.05 m/s/sqrt(h)" in finding.message
+    # an angle record: the suggestion is an angle unit
+    n = convert(0.3, "deg/sqrt(h)", "arcsec/s*sqrt(s)")
+    (finding,) = check_coefficients({"N": n}, "deg", input="angle")
+    assert "arcsec given as deg" in finding.message and "--units arcsec" in finding.message
+
+
+def test_wrong_units_warned_by_fit_and_analyze(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The reviewers' case: a deg/h record fitted with --units deg/s gave N = 1321 deg/sqrt(h),
+    exit 0, no warning. Now fit and analyze name the mix-up; the right unit is silent."""
+    from allanite.examples import example_model
+
+    rate = example_model().simulate(60_000, fs=FS, seed=102).ravel() * 3600.0  # deg/h
+    path = tmp_path / "dph.npy"
+    np.save(path, rate)
+    code, out, err = _cli(["fit", str(path), "--fs", "100", "--units", "deg/s", "--json"], capsys)
+    assert code == 0
+    channel = json.loads(out)["channels"][0]
+    n = next(c["value"] for c in channel["coefficients"] if c["symbol"] == "N")
+    assert n > 100.0  # deg/sqrt(h): the fit itself is unchanged
+    (warning,) = channel["warnings"]
+    assert f"N = {n:.4g} deg/sqrt(h) is outside any real gyro's range" in warning
+    assert f"deg/h given as deg/s: N would be {n / 3600:.3g} deg/sqrt(h)" in warning
+    assert "pass --units deg/h" in warning
+    assert err.count("warning:") == 1 and warning in err
+    code, out, err = _cli(["fit", str(path), "--fs", "100", "--units", "deg/h"], capsys)
+    assert code == 0 and "outside any real" not in err
+    code, out, err = _cli(["analyze", str(path), "--fs", "100", "--units", "deg/s"], capsys)
+    assert code == 0 and "deg/h given as deg/s" in err
+    code, out, err = _cli(["analyze", str(path), "--fs", "100", "--units", "deg/h"], capsys)
+    assert "outside any real" not in err
+    # the README's example: no warning
+    code, out, err = _cli(["fit", "--example"], capsys)
+    assert code == 0 and "warning" not in err
