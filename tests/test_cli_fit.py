@@ -11,6 +11,7 @@ import pytest
 import allanite
 from allanite.cli import main
 from allanite.confidence import DEFAULT_LEVEL
+from allanite.datasheet import undetected_measured
 
 fit_module = pytest.importorskip("allanite.fit", reason="the fitter (issue 3) is not installed")
 if not hasattr(fit_module, "fit"):
@@ -98,3 +99,47 @@ def test_fit_cli_datasheet_exit_codes(tmp_path: Path, capsys: pytest.CaptureFixt
     assert out["passed"] is False
     expected = fit_module.fit(allanite.avar(RATE[:20_000], fs=FS, points=30, units="deg/s"))
     assert out["channels"][0]["checks"][0]["value"] == pytest.approx(60 * expected["N"].value)
+
+
+def test_datasheet_on_a_term_not_detected(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """White noise only: B is not fitted, but its upper limit decides a loose B limit (PASS)
+    and leaves a tight one NOT DETERMINED (exit 0: undecided, not failed); fit and batch,
+    text, JSON and CSV."""
+    data = tmp_path / "rate.npy"
+    np.save(data, RATE[:20_000])
+    rec = allanite.avar(RATE[:20_000], fs=FS, points=30, units="deg/s")
+    f = fit_module.fit(rec)
+    assert "B" not in f.coefficients  # left out (here an AMBIGUOUS addition, with a bound)
+    upper = 3600 * undetected_measured(f, DEFAULT_LEVEL)["B"].high  # deg/h
+    sheet = tmp_path / "sheet.json"
+    limits = [
+        {"quantity": "B", "max": 2 * upper, "unit": "deg/h"},
+        {"quantity": "B", "max": upper / 2, "unit": "deg/h"},
+    ]
+    sheet.write_text(json.dumps({"limits": limits}))
+    common = ["fit", str(data), "--fs", "100", "--units", "deg/s", "--points", "30"]
+    assert main([*common, "--datasheet", str(sheet)]) == 0
+    text = capsys.readouterr().out
+    assert f"datasheet B: not detected (<= {upper:.3g} deg/h) -> PASS" in text
+    assert f"datasheet B: not detected (<= {upper:.3g} deg/h) -> NOT DETERMINED" in text
+    assert "MISSING" not in text
+    assert main([*common, "--datasheet", str(sheet), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    checks = out["channels"][0]["checks"]
+    assert [c["status"] for c in checks] == ["pass", "undetermined"]
+    assert checks[1]["value"] is None and checks[1]["upper"] == pytest.approx(upper)
+    assert out["passed"] is True
+    # batch: the same verdicts, the upper limit in the table and the exit code 0
+    csv = tmp_path / "lot.csv"
+    argv = ["batch", str(data), "--fs", "100", "--units", "deg/s", "--points", "30"]
+    assert main([*argv, "--datasheet", str(sheet), "--no-progress"]) == 0
+    text = capsys.readouterr().out
+    assert f"NOT DETERMINED (<= {upper:.4g})" in text and f"<= {upper:.4g}" in text
+    assert main([*argv, "--datasheet", str(sheet), "--no-progress", "-o", str(csv)]) == 0
+    head, row = csv.read_text().splitlines()[:2]
+    cells = dict(zip(head.split(","), row.split(","), strict=True))
+    assert cells["check_B"] == "pass" and cells["check_B_2"] == "undetermined"
+    assert cells["status"] == "undetermined" and cells["pass"] == "True"
+    assert float(cells["B_upper"]) == pytest.approx(upper / 3600)

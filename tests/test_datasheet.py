@@ -7,7 +7,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from allanite.datasheet import Datasheet, Limit, Measured, check_limits, verdict
+from allanite.datasheet import (
+    Datasheet,
+    Limit,
+    Measured,
+    check_limits,
+    undetected_measured,
+    verdict,
+)
 from allanite.errors import InputError
 
 FULL = {
@@ -91,3 +98,58 @@ def test_absent_terms_and_the_verdict() -> None:
         {"limits": [{"quantity": "adev", "tau": 100, "min": 1.0, "unit": "deg/s"}]}
     )
     assert check_limits(far, "x", {}, CURVE)[0].status == "missing"
+
+
+def test_undetected_terms_are_judged_by_their_upper_limit() -> None:
+    """B not fitted but bounded (FitResult.undetected): PASS when the upper limit meets the
+    limit, UNDETERMINED when it does not; against a positive minimum FAIL below it."""
+    # upper limit 2 deg/h (in the model's units, deg/s)
+    bound = {"B": Measured(0.0, 0.0, 2.0 / 3600.0, "deg/s", "deg/s")}
+    sheet = Datasheet.from_dict(
+        {
+            "limits": [
+                {"quantity": "B", "max": 5.0, "unit": "deg/h"},
+                {"quantity": "B", "max": 1.0, "unit": "deg/h"},
+                {"quantity": "B", "min": 3.0, "unit": "deg/h"},
+                {"quantity": "B", "min": 1.0, "unit": "deg/h"},
+                {"quantity": "B", "min": 0.0, "unit": "deg/h"},
+            ]
+        }
+    )
+    checks = check_limits(sheet, "gx", {}, CURVE, bound)
+    assert [c.status for c in checks] == ["pass", "undetermined", "fail", "undetermined", "pass"]
+    assert all(c.value is None and c.upper == pytest.approx(2.0) for c in checks)
+    assert checks[1].status_text() == "NOT DETERMINED (<= 2)"
+    assert checks[0].status_text() == "PASS (not detected, <= 2)"
+    assert checks[1].to_dict()["upper"] == pytest.approx(2.0)
+    # a fitted value wins over a bound; without the bound the old rules hold
+    fitted = {"B": Measured(1e-4, 5e-5, 2e-4, "deg/s", "deg/s")}
+    assert check_limits(sheet, "gx", fitted, CURVE, bound)[0].status == "pass"
+    assert check_limits(sheet, "gx", fitted, CURVE, bound)[0].upper is None
+    assert [c.status for c in check_limits(sheet, "gx", {}, CURVE)][:3] == [
+        "missing",
+        "missing",
+        "fail",
+    ]
+    # compact limits (record units) too
+    compact = Datasheet.from_dict({"B": 1e-4})
+    assert check_limits(compact, "gx", {}, CURVE, bound)[0].status == "undetermined"
+    # the verdict: fail > marginal > undetermined > pass
+    assert verdict(["pass", "undetermined", "missing"]) == "undetermined"
+    assert verdict(["undetermined", "marginal"]) == "marginal"
+    assert verdict(["undetermined", "fail"]) == "fail"
+
+
+def test_undetected_measured_from_a_fit() -> None:
+    """The bounds come from the fit: every auto-fit candidate left out, none for a model."""
+    import allanite
+    from allanite.fit import fit
+
+    rng = np.random.default_rng(5)
+    res = allanite.avar(0.01 * rng.standard_normal(50_000), fs=100.0, units="deg/s")
+    f = fit(res)
+    bounds = undetected_measured(f, 0.95)
+    assert set(bounds) == {*f.undetected, *f.exchangeable} - set(f.coefficients)
+    assert "B" in bounds and "N" not in bounds
+    assert bounds["B"].high == pytest.approx(f.undetected["B"].ci(0.95)[1])
+    assert undetected_measured(f.model, 0.95) == {}

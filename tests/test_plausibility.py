@@ -269,7 +269,12 @@ def test_coefficients_in_every_sensor_class_and_unit_are_not_flagged() -> None:
     from allanite.units import convert
 
     for n_dph in (1e-4, 1e-3, 0.01, 0.1, 1.0, 10.0):
-        for unit, kind in (("deg/s", "rate"), ("rad/s", "rate"), ("deg/h", "rate"), ("rad", "angle")):
+        for unit, kind in (
+            ("deg/s", "rate"),
+            ("rad/s", "rate"),
+            ("deg/h", "rate"),
+            ("rad", "angle"),
+        ):
             rate = unit if kind == "rate" else "rad/s"
             values = {
                 "N": convert(n_dph, "deg/sqrt(h)", f"{rate}*sqrt(s)"),
@@ -299,9 +304,7 @@ def test_implausible_coefficients_name_the_likely_unit() -> None:
     n = convert(0.3, "deg/sqrt(h)", "deg/h*sqrt(s)")
     (finding,) = check_coefficients({"N": n}, "deg/s", channel="gz")
     assert finding.code == "implausible_units" and finding.channel == "gz"
-    assert "channel gz: N = 1080 deg/sqrt(h) is outside any real gyro's range" in (
-        finding.message
-    )
+    assert "channel gz: N = 1080 deg/sqrt(h) is outside any real gyro's range" in (finding.message)
     assert "deg/h given as deg/s: N would be 0.3 deg/sqrt(h); if so, pass --units deg/h" in (
         finding.message
     )

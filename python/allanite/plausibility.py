@@ -469,9 +469,7 @@ def check_coefficients(
     if not bad:
         return []
     seen = ", ".join(f"{s} = {scaled[s]:.4g} {bounds[s][3]}" for s in bad)
-    limits = "; ".join(
-        f"{s} {_bounds_text(bounds[s])} {bounds[s][3]}" for s in bad
-    )
+    limits = "; ".join(f"{s} {_bounds_text(bounds[s])} {bounds[s][3]}" for s in bad)
     # every coefficient scales with the unit of the samples: x given in `unit` but really in
     # `other` is x * convert(1, other, unit) in `unit`
     best: tuple[float, str, dict[str, float]] | None = None

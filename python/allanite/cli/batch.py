@@ -180,6 +180,15 @@ def _text_table(result: Any, limits: bool = True) -> str:
     shown = [c for c in columns if c not in ("n_samples", "fs", "units", "pass", "error")]
     shown = [c for c in shown if not c.endswith(("_low", "_high", "_upper"))]
     header = [c if c != "p_value" else "p" for c in shown]
+    # check_<quantity>[_k] column -> its limit's quantity (the columns follow the limits)
+    limits = result.datasheet.limits if result.datasheet is not None else ()
+    quantity = dict(
+        zip(
+            [c for c in columns if c.startswith("check_")],
+            [x.quantity for x in limits],
+            strict=True,
+        )
+    )
     cells = []
     for row in result.rows:
         values = _customary(dict(zip(columns, row, strict=True)), shown)
@@ -195,7 +204,7 @@ def _text_table(result: Any, limits: bool = True) -> str:
                 text += f" [{_cell(values[c + '_low'])}, {_cell(values[c + '_high'])}]"
             elif values.get(f"{c}_upper") is not None:  # not detected: its upper limit
                 text = f"<= {_cell(values[c + '_upper'])}"
-            upper = values.get(f"{c.removeprefix('check_')}_upper")
+            upper = values.get(f"{quantity.get(c)}_upper")
             if c.startswith("check_") and upper is not None and values[c] == "undetermined":
                 text = f"NOT DETERMINED (<= {_cell(upper)})"
             line.append(text)

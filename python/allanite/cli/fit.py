@@ -145,7 +145,9 @@ def run(args: argparse.Namespace) -> int:
         fit = fit_result(result.channel(c))
         fits.append(fit)
         warnings = (
-            [] if fit is None else warn_coefficients(_model_of(fit).coefficients(), record, args, name)
+            []
+            if fit is None
+            else warn_coefficients(_model_of(fit).coefficients(), record, args, name)
         )
         rows = coefficient_table(fit, result.units, args.level)
         checks = []
