@@ -150,6 +150,7 @@ def test_undetected_measured_from_a_fit() -> None:
     f = fit(res)
     bounds = undetected_measured(f, 0.95)
     assert set(bounds) == {*f.undetected, *f.exchangeable} - set(f.coefficients)
-    assert "B" in bounds and "N" not in bounds
+    assert "B" in bounds
+    assert "N" not in bounds
     assert bounds["B"].high == pytest.approx(f.undetected["B"].ci(0.95)[1])
     assert undetected_measured(f.model, 0.95) == {}

@@ -303,7 +303,8 @@ def test_implausible_coefficients_name_the_likely_unit() -> None:
     # a consumer gyro (0.3 deg/sqrt(h)) the same way reads 1080: flagged, deg/h named
     n = convert(0.3, "deg/sqrt(h)", "deg/h*sqrt(s)")
     (finding,) = check_coefficients({"N": n}, "deg/s", channel="gz")
-    assert finding.code == "implausible_units" and finding.channel == "gz"
+    assert finding.code == "implausible_units"
+    assert finding.channel == "gz"
     assert "channel gz: N = 1080 deg/sqrt(h) is outside any real gyro's range" in (finding.message)
     assert "deg/h given as deg/s: N would be 0.3 deg/sqrt(h); if so, pass --units deg/h" in (
         finding.message
@@ -315,9 +316,8 @@ def test_implausible_coefficients_name_the_likely_unit() -> None:
     assert "deg/s given as mrad/h: N would be 0.01 deg/sqrt(h)" in finding.message
     # bias instability alone out of range (1e6 deg/h): flagged with its bound
     (finding,) = check_coefficients({"B": convert(1e6, "deg/h", "deg/s")}, "deg/s")
-    assert "B = 1e+06 deg/h is outside" in finding.message and "B <= 100000 deg/h" in (
-        finding.message
-    )
+    assert "B = 1e+06 deg/h is outside" in finding.message
+    assert "B <= 100000 deg/h" in (finding.message)
     # an accelerometer's ug numbers declared m/s^2 (VRW 0.05 m/s/sqrt(h))
     n = convert(0.05, "m/s/sqrt(h)", "ug*sqrt(s)")
     (finding,) = check_coefficients({"N": n}, "m/s^2")
@@ -326,7 +326,8 @@ def test_implausible_coefficients_name_the_likely_unit() -> None:
     # an angle record: the suggestion is an angle unit
     n = convert(0.3, "deg/sqrt(h)", "arcsec/s*sqrt(s)")
     (finding,) = check_coefficients({"N": n}, "deg", input="angle")
-    assert "arcsec given as deg" in finding.message and "--units arcsec" in finding.message
+    assert "arcsec given as deg" in finding.message
+    assert "--units arcsec" in finding.message
 
 
 def test_wrong_units_warned_by_fit_and_analyze(
@@ -348,13 +349,17 @@ def test_wrong_units_warned_by_fit_and_analyze(
     assert f"N = {n:.4g} deg/sqrt(h) is outside any real gyro's range" in warning
     assert f"deg/h given as deg/s: N would be {n / 3600:.3g} deg/sqrt(h)" in warning
     assert "pass --units deg/h" in warning
-    assert err.count("warning:") == 1 and warning in err
+    assert err.count("warning:") == 1
+    assert warning in err
     code, out, err = _cli(["fit", str(path), "--fs", "100", "--units", "deg/h"], capsys)
-    assert code == 0 and "outside any real" not in err
+    assert code == 0
+    assert "outside any real" not in err
     code, out, err = _cli(["analyze", str(path), "--fs", "100", "--units", "deg/s"], capsys)
-    assert code == 0 and "deg/h given as deg/s" in err
+    assert code == 0
+    assert "deg/h given as deg/s" in err
     code, out, err = _cli(["analyze", str(path), "--fs", "100", "--units", "deg/h"], capsys)
     assert "outside any real" not in err
     # the README's example: no warning
     code, out, err = _cli(["fit", "--example"], capsys)
-    assert code == 0 and "warning" not in err
+    assert code == 0
+    assert "warning" not in err

@@ -353,8 +353,11 @@ class Check:
         return self.status != "fail"
 
     def status_text(self) -> str:
-        """``PASS``, ``MARGINAL``, ... ; with the upper limit of an undetected term:
-        ``NOT DETERMINED (<= 12.3)`` or ``PASS (not detected, <= 0.05)``."""
+        """The status for a table, with the upper limit of a term the fit left out.
+
+        ``PASS``, ``MARGINAL``, ...; ``NOT DETERMINED (<= 12.3)`` or ``PASS (not detected,
+        <= 0.05)`` for an undetected term.
+        """
         return status_text(self.status, self.upper)
 
     def to_dict(self) -> dict[str, Any]:

@@ -425,7 +425,7 @@ def check_coefficients(
     input: str = "rate",
     channel: str = "ch0",
 ) -> list[Finding]:
-    """Noise coefficients outside any real sensor's range: a wrong ``--units``?
+    """Find noise coefficients outside any real sensor's range (a wrong ``--units``).
 
     Parameters
     ----------

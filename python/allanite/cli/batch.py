@@ -181,14 +181,9 @@ def _text_table(result: Any, limits: bool = True) -> str:
     shown = [c for c in shown if not c.endswith(("_low", "_high", "_upper"))]
     header = [c if c != "p_value" else "p" for c in shown]
     # check_<quantity>[_k] column -> its limit's quantity (the columns follow the limits)
-    limits = result.datasheet.limits if result.datasheet is not None else ()
-    quantity = dict(
-        zip(
-            [c for c in columns if c.startswith("check_")],
-            [x.quantity for x in limits],
-            strict=True,
-        )
-    )
+    sheet = result.datasheet.limits if result.datasheet is not None else ()
+    checks = [c for c in columns if c.startswith("check_")]
+    quantity = dict(zip(checks, [x.quantity for x in sheet], strict=True))
     cells = []
     for row in result.rows:
         values = _customary(dict(zip(columns, row, strict=True)), shown)

@@ -416,9 +416,10 @@ def warn_implausible(
 
     The findings (:mod:`allanite.plausibility`: angle given as rate, rate given as angle,
     counts without a scale, stuck segments, noise coefficients (the slope readouts) outside
-    any real sensor's range, i.e. a wrong ``--units``) are appended to ``record.warnings``, so the JSON
-    summary and the report carry them too. ``result`` is the record's Allan analysis; without
-    it a quick one (50-point log grid) is computed for the slope checks. ``readouts=False``
+    any real sensor's range, i.e. a wrong ``--units``) are appended to ``record.warnings``,
+    so the JSON summary and the report carry them too. ``result`` is the record's Allan
+    analysis; without it a quick one (50-point log grid) is computed for the slope checks.
+    ``readouts=False``
     leaves out the coefficient check on the slope readouts (``allanite fit`` checks its
     fitted coefficients instead, :func:`warn_coefficients`).
     """
