@@ -147,3 +147,39 @@ def test_datasheet_on_a_term_not_detected(
     assert cells["status"] == "undetermined"
     assert cells["pass"] == "True"
     assert float(cells["B_upper"]) == pytest.approx(upper / 3600)
+
+
+def test_fit_text_short_on_a_six_axis_white_noise_file(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Six channels of white noise: additions the record shows no evidence of (zero estimate
+    or a chi-square drop below 1) are listed once per channel as "not detected" with their
+    upper limit, not as AMBIGUOUS lines; every line stays readable (<= 170 characters)."""
+    from allanite.fit.result import NO_EVIDENCE_CHI2
+
+    rng = np.random.default_rng(3)
+    x = np.hstack([rng.standard_normal((60_000, 3)), 0.02 * rng.standard_normal((60_000, 3))])
+    path = tmp_path / "imu.npy"
+    np.save(path, x)
+    code = main(["fit", str(path), "--fs", "100", "--units", "deg/s,deg/s,deg/s,m/s^2,m/s^2,m/s^2"])
+    assert code == 0
+    text = capsys.readouterr().out
+    assert max(len(line) for line in text.splitlines()) <= 170
+    assert text.count("not detected (95 % upper limits): ") == 6
+    weak = 0
+    for c in range(6):
+        unit = "deg/s" if c < 3 else "m/s^2"
+        f = fit_module.fit(allanite.avar(x[:, c], fs=FS, units=unit))
+        note, undetected = f.ambiguity_note(), f.undetected_line()
+        for alt in f.alternatives:
+            coef = f.exchangeable[alt["symbol_in"]]
+            silent = alt["symbol_out"] is None and (
+                coef.value <= 0 or alt["delta_chi2"] < NO_EVIDENCE_CHI2
+            )
+            weak += silent
+            shown = f"{alt['symbol_in']} <= " in undetected
+            assert shown == silent, (c, alt)
+            assert (f"{alt['swap_in']} {alt['symbol_in']} =" in note) != silent, (c, alt)
+        # the JSON keeps every alternative with its note
+        assert len(f.alternatives_dict()) == len(f.alternatives)
+    assert weak >= 3  # the case this test is about occurs on this record

@@ -17,7 +17,11 @@ from allanite.model import NoiseModel
 from allanite.notebook import fit_html
 from allanite.units import convert, customary_unit, display_unit, parse_unit
 
-__all__ = ["Coefficient", "Comparison", "ComparisonRow", "FitResult"]
+__all__ = ["NO_EVIDENCE_CHI2", "Coefficient", "Comparison", "ComparisonRow", "FitResult"]
+
+#: an addition lowering the chi-square by less than this (one standard deviation of a
+#: one-parameter improvement) is shown as "not detected", not AMBIGUOUS (display only)
+NO_EVIDENCE_CHI2 = 1.0
 
 
 @dataclass(frozen=True)
@@ -223,49 +227,76 @@ class FitResult:
         """One line per alternative the record cannot tell from the chosen terms (else empty).
 
         E.g. ``AMBIGUOUS: flicker B = 0.0039 [0, 0.015] deg/h fits the excess at tau =
-        328-1.31e+03 s as well as K ...: the record cannot tell them apart ...``.
+        328-1.31e+03 s as well as K ...: the record cannot tell them apart ...``. An addition
+        the record shows no evidence of (zero estimate, or a chi-square drop below
+        :data:`NO_EVIDENCE_CHI2`) is not ambiguous: it is listed
+        with its upper limit by :meth:`undetected_line` instead, which keeps the text short
+        (a six-axis file of white noise would otherwise print a dozen such lines); the JSON
+        (:meth:`alternatives_dict`) keeps every alternative with its note.
         """
-        lines = []
-        for alt in self.alternatives:
-            symbol, out = alt["symbol_in"], alt["symbol_out"]
-            coef = self.exchangeable.get(symbol)
-            if coef is None:
-                continue
-            unit = customary_unit(self.model.units["rate"], symbol, coef.unit)
-            factor = _factor(coef, unit)
-            lo, hi = coef.ci(level)
-            t1, t2 = alt["taus"]
-            where = f"{t1:.3g}" if t1 == t2 else f"{t1:.3g}-{t2:.3g}"
-            head = (
-                f"AMBIGUOUS: {alt['swap_in']} {symbol} = {coef.value * factor:.4g} "
-                f"[{lo * factor:.4g}, {hi * factor:.4g}] {unit}"
+        return "\n".join(
+            self._alternative_note(alt, level)
+            for alt in self.alternatives
+            if alt["symbol_in"] in self.exchangeable and not self._empty_addition(alt)
+        )
+
+    def _empty_addition(self, alt: dict[str, Any]) -> bool:
+        """An addition (no term swapped out) the record shows no evidence of.
+
+        Its estimate is zero, or it lowers the chi-square by less than 1 (less than one
+        standard deviation of a one-parameter improvement: noise).
+        """
+        coef = self.exchangeable.get(alt["symbol_in"])
+        if alt["symbol_out"] is not None or coef is None:
+            return False
+        drop = alt.get("delta_chi2")
+        return not coef.value > 0 or (drop is not None and float(drop) < NO_EVIDENCE_CHI2)
+
+    def _alternative_note(self, alt: dict[str, Any], level: float) -> str:
+        """The text line of one alternative (its swapped-in term in customary units)."""
+        symbol, out = alt["symbol_in"], alt["symbol_out"]
+        coef = self.exchangeable[symbol]
+        unit = customary_unit(self.model.units["rate"], symbol, coef.unit)
+        factor = _factor(coef, unit)
+        lo, hi = coef.ci(level)
+        t1, t2 = alt["taus"]
+        where = f"{t1:.3g}" if t1 == t2 else f"{t1:.3g}-{t2:.3g}"
+        head = (
+            f"AMBIGUOUS: {alt['swap_in']} {symbol} = {coef.value * factor:.4g} "
+            f"[{lo * factor:.4g}, {hi * factor:.4g}] {unit}"
+        )
+        if out is None:
+            return (
+                f"{head} may be present at tau = {where} s (chi2 drop "
+                f"{alt['delta_chi2']:.3g}, too small to select it); intervals from the fit "
+                "with it"
             )
-            if out is None:
-                lines.append(
-                    f"{head} may contribute at tau = {where} s (chi2 drop "
-                    f"{alt['delta_chi2']:.3g}, below the penalty): the record cannot show "
-                    "whether it is present; the intervals are those of the fit with it"
-                )
-            else:
-                lines.append(
-                    f"{head} fits the excess at tau = {where} s as well as {out} "
-                    f"(score {alt['score_delta']:+.3g}, within the penalty): the record cannot "
-                    f"tell them apart; the intervals are those of the fit with both"
-                )
-        return "\n".join(lines)
+        return (
+            f"{head} fits the excess at tau = {where} s as well as {out} (score "
+            f"{alt['score_delta']:+.3g}, within the penalty): the record cannot tell them "
+            "apart; intervals from the fit with both"
+        )
 
     def undetected_line(self, level: float = 0.95) -> str:
-        """One line of upper limits of the candidates not detected (empty when none)."""
+        """One line of upper limits of the candidates not detected (empty when none).
+
+        The terms of :attr:`undetected` and the additions the record shows no evidence of
+        (see :meth:`ambiguity_note`), in the order Q, N, B, K, R, customary units.
+        """
+        left_out = dict(self.undetected)
+        for alt in self.alternatives:
+            if alt["symbol_in"] in self.exchangeable and self._empty_addition(alt):
+                left_out[alt["symbol_in"]] = self.exchangeable[alt["symbol_in"]]
+        order = {s: k for k, s in enumerate("QNBKR")}
         parts = []
-        for symbol, coef in self.undetected.items():
+        for symbol in sorted(left_out, key=lambda s: (order.get(s, len(order)), s)):
+            coef = left_out[symbol]
             unit = customary_unit(self.model.units["rate"], symbol, coef.unit)
             hi = coef.ci(level)[1] * _factor(coef, unit)
             parts.append(f"{symbol} <= {hi:.3g} {unit}")
         if not parts:
             return ""
-        return f"not detected ({100 * level:g} % upper limits, fit with the term): " + ", ".join(
-            parts
-        )
+        return f"not detected ({100 * level:g} % upper limits): " + ", ".join(parts)
 
     def rejection_warning(self) -> str:
         """The plain warning of a rejected fit (empty when the fit is not rejected)."""
@@ -424,15 +455,14 @@ class FitResult:
         """JSON-ready :attr:`alternatives`, each with the swapped-in term's value and interval.
 
         ``value``, ``low`` and ``high`` are in the model's units (``unit``) and come from the
-        fit with all the exchangeable terms; ``note`` is the line of :meth:`ambiguity_note`.
+        fit with all the exchangeable terms; ``note`` is its text line (:meth:`ambiguity_note`
+        prints those of the alternatives the record shows some of).
         """
         out = []
-        notes = self.ambiguity_note(level).splitlines()
-        for alt, note in zip(
-            [a for a in self.alternatives if a["symbol_in"] in self.exchangeable],
-            notes,
-            strict=True,
-        ):
+        for alt in self.alternatives:
+            if alt["symbol_in"] not in self.exchangeable:
+                continue
+            note = self._alternative_note(alt, level)
             coef = self.exchangeable[alt["symbol_in"]]
             lo, hi = coef.ci(level)
             out.append(
