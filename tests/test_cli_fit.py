@@ -138,7 +138,7 @@ def test_datasheet_on_a_term_not_detected(
     assert main([*argv, "--datasheet", str(sheet), "--no-progress"]) == 0
     text = capsys.readouterr().out
     assert f"NOT DETERMINED (<= {upper:.4g})" in text
-    assert f"<= {upper:.4g}" in text
+    assert f"<={upper:.4g}" in text
     assert main([*argv, "--datasheet", str(sheet), "--no-progress", "-o", str(csv)]) == 0
     head, row = csv.read_text().splitlines()[:2]
     cells = dict(zip(head.split(","), row.split(","), strict=True))

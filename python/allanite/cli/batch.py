@@ -198,7 +198,7 @@ def _text_table(result: Any, limits: bool = True) -> str:
             if f"{c}_low" in values and values[c] is not None:
                 text += f" [{_cell(values[c + '_low'])}, {_cell(values[c + '_high'])}]"
             elif values.get(f"{c}_upper") is not None:  # not detected: its upper limit
-                text = f"<= {_cell(values[c + '_upper'])}"
+                text = f"<={_cell(values[c + '_upper'])}"
             upper = values.get(f"{quantity.get(c)}_upper")
             if c.startswith("check_") and upper is not None and values[c] == "undetermined":
                 text = f"NOT DETERMINED (<= {_cell(upper)})"
