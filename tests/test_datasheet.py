@@ -154,3 +154,25 @@ def test_undetected_measured_from_a_fit() -> None:
     assert "N" not in bounds
     assert bounds["B"].high == pytest.approx(f.undetected["B"].ci(0.95)[1])
     assert undetected_measured(f.model, 0.95) == {}
+
+
+def test_report_shows_upper_limits_and_undetermined(tmp_path: Path) -> None:
+    """The HTML report: the left-out terms' upper limits under the fit, and a datasheet
+    limit on one of them judged by it (UNDETERMINED / PASS, the bound shown)."""
+    from allanite.cli import main
+
+    rng = np.random.default_rng(5)
+    rec = tmp_path / "rate.npy"
+    np.save(rec, 0.01 * rng.standard_normal(50_000))
+    sheet = tmp_path / "sheet.json"
+    sheet.write_text(
+        '{"limits": [{"quantity": "R", "max": 1e-9, "unit": "deg/h^2"},'
+        ' {"quantity": "R", "max": 1e9, "unit": "deg/h^2"}]}'
+    )
+    out = tmp_path / "r.html"
+    argv = ["report", str(rec), "--fs", "100", "--units", "deg/s", "--datasheet", str(sheet)]
+    assert main([*argv, "-o", str(out)]) == 0
+    html = out.read_text()
+    assert "not detected (95 % upper limits): " in html
+    assert ">UNDETERMINED<" in html
+    assert "(not detected)" in html

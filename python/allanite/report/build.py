@@ -319,6 +319,9 @@ def _goodness(fit: Any) -> str:
     rejected = getattr(fit, "rejected", p < MISFIT_P)
     note = getattr(fit, "ambiguity_note", None)
     ambiguous = "" if note is None else note()
+    undetected = getattr(fit, "undetected_line", None)  # the left-out terms' upper limits
+    if undetected is not None and undetected():
+        ambiguous = "\n".join(x for x in (ambiguous, undetected()) if x)
     ambiguous = "".join(f'<p class="note">{h.escape(line)}</p>' for line in ambiguous.splitlines())
     if rejected:
         missed = getattr(fit, "missed_taus", None)
