@@ -86,8 +86,10 @@ def _size(a: attr.Attribution, an: Analysis) -> float:
 def test_zero_ramp_explained_level_without_the_rule(white_gap, monkeypatch):
     monkeypatch.setattr(attr, "NEGLIGIBLE_SE", 0.0)
     a = _fit("ramp", white_gap)
-    assert a is not None and a.params["R"] < 1e-6  # the defect: no size, credit for "level"
-    assert "level" in a.evidence["explained"] and a.shrinkage == 0.0
+    assert a is not None
+    assert a.params["R"] < 1e-6
+    assert "level" in a.evidence["explained"]
+    assert a.shrinkage == 0.0
     assert _size(a, white_gap) < 1e-3  # far below one standard error
 
 
@@ -102,7 +104,9 @@ def test_zero_ramp_gets_no_credit(white_gap):
 def test_zero_bursts_ranked_first_without_the_rule(slow_gap, monkeypatch):
     monkeypatch.setattr(attr, "NEGLIGIBLE_SE", 0.0)
     best = _rank(slow_gap)[0]
-    assert best.effect == "bursts" and best.params["N"] < 1e-6 and best.shrinkage == 0.0
+    assert best.effect == "bursts"
+    assert best.params["N"] < 1e-6
+    assert best.shrinkage == 0.0
 
 
 def test_zero_bursts_not_ranked(slow_gap):
