@@ -178,8 +178,8 @@ class TimeView:
     family_p : dict of float
         p-value of each family and of the record-wide statistics.
     kurtosis : dict
-        Excess kurtosis (``hf``: first differences, ``lf``: block means) of the real record
-        and of the simulated sensor.
+        Excess kurtosis (``hf``: first differences, ``hf_samples``: the samples minus their
+        running mean, ``lf``: block means) of the real record and of the simulated sensor.
     spike_times_s, spike_amplitudes : list of float
         Detected spikes (time and signed height above the local median).
     change_points_s : list of float
@@ -364,11 +364,9 @@ def time_view(
     spike_null = ens.null["spike"][:, 0]
     spike_r = float(ens.residual(real, "spike")[0])
     fam_p["spike"] = gumbel_sf(spike_r, spike_null)
-    k_at: dict[str, int] = {}
     for name, sign in (("kurt_hf", 0), ("kurt_lf", -1)):
         sd = ens.null[name].std(axis=0, ddof=1)
         zk = ens.residual(real, name) / np.where(sd > 0, sd, np.inf)
-        k_at[name] = int(np.argmax(np.abs(zk))) if name == "kurt_hf" else 0
         if sign == 0:  # two-sided: bursts and outliers (+), clipping (-)
             tail = 2.0 * stats.norm.sf(float(np.abs(zk).max()))
         else:  # one-sided: a two-level (telegraph) amplitude distribution is platykurtic
@@ -393,9 +391,11 @@ def time_view(
         spike_idx, spike_amp = _spikes(x, spike_thr)
         segments.extend(((k - 1) / fs, (k + 1) / fs) for k in spike_idx)
     kurt = {
-        # the sample-scale statistic that departs most (differences or samples)
-        "hf_real": float(real["kurt_hf"][k_at["kurt_hf"]]),
-        "hf_sim": float(ens.ref["kurt_hf"][k_at["kurt_hf"]]),
+        "hf_real": float(real["kurt_hf"][0]),
+        "hf_sim": float(ens.ref["kurt_hf"][0]),
+        # the samples minus their running mean (sample-level scale mixtures, dropped samples)
+        "hf_samples_real": float(real["kurt_hf"][-1]),
+        "hf_samples_sim": float(ens.ref["kurt_hf"][-1]),
         "lf_real": float(real["kurt_lf"][0]),
         "lf_sim": float(ens.ref["kurt_lf"][0]),
     }
