@@ -136,3 +136,37 @@ def test_measured_sizes_are_exempt(white_gap):
     white = _candidates()["white"]
     assert attr.negligible(white, {"N": 1e-9}, White(N=1e-9).avar(tm.tau, tm.dt), tm)
     assert not attr.negligible(white, {"N": 0.01}, White(N=0.01).avar(tm.tau, tm.dt), tm)
+
+
+# --- dropped angle samples at rest: the sample-level kurtosis (the OOV suite's false "closed")
+
+BASE = NoiseModel(
+    (White(N=0.05), RateRandomWalk(K=0.0008)), {"rate": "deg/s", "time": "s"}
+)  # fmt: skip
+
+
+def _dropped_angle(seed: int, n: int) -> np.ndarray:
+    """Angle samples at rest with one in ten dropped (runs of one): every tenth increment
+    spans two periods, i.e. one rate sample in ten has sqrt(2) times the noise."""
+    x = np.asarray(BASE.simulate(n, fs=FS, seed=seed), dtype=float).ravel()
+    angle = np.concatenate([[0.0], np.cumsum(x) / FS])
+    rng = np.random.default_rng(seed + 11)
+    keep = rng.random(angle.size) >= 0.1
+    keep[0] = True
+    return angle[keep]
+
+
+def test_dropped_angle_samples_at_rest_are_not_closed():
+    from allanite.diagnosis import diagnose
+
+    d = diagnose(_dropped_angle(1101, 2**15), BASE, fs=FS, units="deg/s", input="angle",
+                 n_mc=60, seed=2)  # fmt: skip
+    assert not d.closed
+    kurt = [u for u in d.unexplained if u.evidence == "kurt_hf"]
+    assert kurt, [u.evidence for u in d.unexplained]
+    size = kurt[0].size
+    # the samples carry the scale mixture's excess (~0.2), the differences half of it
+    excess_samples = size["excess_kurtosis_samples_real"] - size["excess_kurtosis_samples_sim"]
+    excess_diff = size["excess_kurtosis_real"] - size["excess_kurtosis_sim"]
+    assert excess_samples > excess_diff > 0.0
+    assert "of the samples: real" in kurt[0].text
