@@ -128,7 +128,7 @@ def test_measured_sizes_are_exempt(white_gap):
     assert not attr.negligible(spikes, {}, zero, tm)
     # a weak line: amplitude started at the detected line's and fitted near it
     line = Candidate("sine", Sine, free=("amplitude",), fixed={"frequency": 7.0},
-                     start={"amplitude": 1e-3})  # fmt: skip
+                     start={"amplitude": 1e-3}, measured=("amplitude",))  # fmt: skip
     assert not attr.negligible(line, {"amplitude": 5e-4}, zero, tm)
     # ... but not when the fit ran away to zero from it
     assert attr.negligible(line, {"amplitude": 1e-12}, zero, tm)

@@ -48,7 +48,8 @@ parameter below its own Fisher uncertainty). Such an effect explains no evidence
 with ``R ~ 1e-12`` does not move the window means, bursts with ``N ~ 1e-12`` do not raise the
 noise level. Exempt are the effects whose size another view measured: every parameter fixed
 from the views (spikes: count and height), or a free parameter started from a view's
-measurement (the amplitude of a detected line, the level of a band-pass excess) that ends
+measurement (``Candidate.measured``: the amplitude of a detected line, the level of a
+band-pass excess; not the model's N that ``white_drift`` starts from) that ends
 within ``MEASURED_FACTOR = 10`` of it; a weak line or rare spikes are real with a tau size of
 zero.
 """
@@ -264,7 +265,7 @@ def negligible(
     """
     if not cand.free:  # every parameter measured by the frequency/time views
         return False
-    for name in cand.free:
+    for name in cand.measured:
         start = cand.start.get(name)
         if start is not None and start > 0 and values[name] >= start / MEASURED_FACTOR:
             return False
