@@ -49,9 +49,10 @@ with ``R ~ 1e-12`` does not move the window means, bursts with ``N ~ 1e-12`` do 
 noise level. Exempt are the effects whose size another view measured: every parameter fixed
 from the views (spikes: count and height), or a free parameter started from a view's
 measurement (``Candidate.measured``: the amplitude of a detected line, the level of a
-band-pass excess; not the model's N that ``white_drift`` starts from) that ends
-within ``MEASURED_FACTOR = 10`` of it; a weak line or rare spikes are real with a tau size of
-zero.
+band-pass excess) that ends within ``MEASURED_FACTOR = 10`` of it; a weak line or rare spikes
+are real with a tau size of zero. ``white_drift`` keeps the record's mean noise level (tau size
+near zero): its size is the level ratio the time view measured, negligible within
+``LEVEL_NEGLIGIBLE`` (5 %) of one, as the headline words it.
 """
 
 from __future__ import annotations
@@ -68,7 +69,7 @@ from allanite.diagnosis.level_shape import level_misfit
 from allanite.diagnosis.tau_view import TauModel
 from allanite.diagnosis.time_view import TimeView, added_level_variance
 
-__all__ = ["Attribution", "fit_candidate", "negligible", "rank", "tau_size"]
+__all__ = ["LEVEL_NEGLIGIBLE", "Attribution", "fit_candidate", "negligible", "rank", "tau_size"]
 
 #: cap of one piece of evidence on the -2 ln p scale
 EVIDENCE_CAP = 1000.0
@@ -78,6 +79,11 @@ NEGLIGIBLE_SE = 1.0
 
 #: a parameter started at another view's measurement counts as measured within this factor
 MEASURED_FACTOR = 10.0
+
+#: a noise level within this relative rms of the typical level is negligible in size (the
+#: Allan variance in those windows within about +-10 %): the headline's wording, and the size
+#: of a ``white_drift`` whose level ratio the time view measured
+LEVEL_NEGLIGIBLE = 0.05
 
 
 @dataclass(frozen=True)
@@ -263,6 +269,8 @@ def negligible(
     bool
         True when its tau size is below ``NEGLIGIBLE_SE`` and no other view measured its size.
     """
+    if cand.effect == "white_drift":  # its size is the level ratio the time view measured
+        return bool(abs(cand.fixed["ratio"] - 1.0) < LEVEL_NEGLIGIBLE)
     if not cand.free:  # every parameter measured by the frequency/time views
         return False
     for name in cand.measured:

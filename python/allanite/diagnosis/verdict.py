@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from allanite.diagnosis.attribution import Attribution
+from allanite.diagnosis.attribution import LEVEL_NEGLIGIBLE, Attribution
 from allanite.diagnosis.candidates import Candidate
 from allanite.diagnosis.frequency_view import FrequencyView
 from allanite.diagnosis.joint import Explanation
@@ -74,9 +74,6 @@ EVIDENCE_TEXT = {
 #: variance of a short-tau Allan variance estimate by the factor ``1 + kappa / 2`` (Gaussian
 #: reference), i.e. by less than 10 %, so the Gaussian intervals stay within 5 %
 KURTOSIS_NEGLIGIBLE = 0.2
-#: a noise level within this relative rms of the typical level is reported as negligible in
-#: size (the Allan variance in those windows within about +-10 %)
-LEVEL_NEGLIGIBLE = 0.05
 #: an explanation whose effects shrink the tau gap by less than this is not named in the
 #: headline of a gap it leaves open (they explain nothing)
 SHRINKAGE_NEGLIGIBLE = 0.01
