@@ -170,3 +170,16 @@ def test_dropped_angle_samples_at_rest_are_not_closed():
     excess_diff = size["excess_kurtosis_real"] - size["excess_kurtosis_sim"]
     assert excess_samples > excess_diff > 0.0
     assert "of the samples: real" in kurt[0].text
+
+
+def test_white_drift_size_is_its_measured_ratio(white_gap):
+    """white_drift keeps the mean level (tau size ~0): its size is the time view's ratio."""
+    from allanite.terms import TERM_TYPES
+
+    tm = white_gap.tau_model
+    zero = np.zeros_like(tm.sim_avar)
+    for ratio, small in ((0.978, True), (1.02, True), (1.5, False), (0.6, False)):
+        cand = Candidate("white_drift", TERM_TYPES["white_drift"], free=("N",),
+                         fixed={"ratio": ratio, "t_start": 10.0, "t_end": 100.0,
+                                "duration": 163.84}, start={"N": 0.01})  # fmt: skip
+        assert attr.negligible(cand, {"N": 0.01}, zero, tm) is small
