@@ -35,6 +35,24 @@ law with ``k`` fewer degrees of freedom) exceeds ``alpha``. Effects whose scores
 less than the penalty of one parameter are listed as each other's ``alternatives``. The gap
 is ``G = max(0, T - T0)`` and the shrinkage ``1 - G_after / G_before`` (0 when the tau view
 shows no gap to shrink).
+
+Effects of negligible size
+--------------------------
+An effect is only an explanation when it has a size. :func:`negligible` is the one rule, used
+for the ranking and for every step of the joint attribution (both fit through
+:func:`fit_candidate`): a fitted effect whose *tau size* -- the Mahalanobis norm of the change
+it makes to the expected log Allan variances, ``sqrt(d^T C^{-1} d)``, i.e. its Allan variance
+contribution in the estimator's own standard errors -- is below ``NEGLIGIBLE_SE = 1`` is
+dropped, because the data cannot tell it from zero (for a one-amplitude effect this is its
+parameter below its own Fisher uncertainty). Such an effect explains no evidence either: a ramp
+with ``R ~ 1e-12`` does not move the window means, bursts with ``N ~ 1e-12`` do not raise the
+noise level. Exempt are the effects whose size another view measured: every parameter fixed
+from the views (spikes: count and height), or a free parameter started from a view's
+measurement (``Candidate.measured``: the amplitude of a detected line, the level of a
+band-pass excess) that ends within ``MEASURED_FACTOR = 10`` of it; a weak line or rare spikes
+are real with a tau size of zero. ``white_drift`` keeps the record's mean noise level (tau size
+near zero): its size is the level ratio the time view measured, negligible within
+``LEVEL_NEGLIGIBLE`` (5 %) of one, as the headline words it.
 """
 
 from __future__ import annotations
@@ -51,10 +69,21 @@ from allanite.diagnosis.level_shape import level_misfit
 from allanite.diagnosis.tau_view import TauModel
 from allanite.diagnosis.time_view import TimeView, added_level_variance
 
-__all__ = ["Attribution", "fit_candidate", "rank"]
+__all__ = ["LEVEL_NEGLIGIBLE", "Attribution", "fit_candidate", "negligible", "rank", "tau_size"]
 
 #: cap of one piece of evidence on the -2 ln p scale
 EVIDENCE_CAP = 1000.0
+
+#: an effect whose tau size is below this many of the tau view's standard errors is negligible
+NEGLIGIBLE_SE = 1.0
+
+#: a parameter started at another view's measurement counts as measured within this factor
+MEASURED_FACTOR = 10.0
+
+#: a noise level within this relative rms of the typical level is negligible in size (the
+#: Allan variance in those windows within about +-10 %): the headline's wording, and the size
+#: of a ``white_drift`` whose level ratio the time view measured
+LEVEL_NEGLIGIBLE = 0.05
 
 
 @dataclass(frozen=True)
@@ -209,6 +238,48 @@ def _degenerate(
     return False
 
 
+def tau_size(extra: NDArray[np.float64], tm: TauModel) -> float:
+    """Size of an added Allan variance ``extra`` in the tau view's own standard errors.
+
+    The Mahalanobis norm ``sqrt(d^T C^-1 d)`` of the change ``d`` it makes to the expected log
+    Allan variances (the tau view's statistic of the effect alone).
+    """
+    d = (tm.reference(extra) - tm.reference()) / np.sqrt(tm.real_scale)
+    return float(np.sqrt(max(float(d @ tm.cov_inv @ d), 0.0)))
+
+
+def negligible(
+    cand: Candidate, values: dict[str, float], extra: NDArray[np.float64], tm: TauModel
+) -> bool:
+    """Whether a fitted effect is too small to be named (see the module docstring).
+
+    Parameters
+    ----------
+    cand : Candidate
+        The candidate.
+    values : dict
+        Its fitted free parameters.
+    extra : numpy.ndarray
+        The Allan variance it adds on the tau grid.
+    tm : TauModel
+        The tau view it was fitted on.
+
+    Returns
+    -------
+    bool
+        True when its tau size is below ``NEGLIGIBLE_SE`` and no other view measured its size.
+    """
+    if cand.effect == "white_drift":  # its size is the level ratio the time view measured
+        return bool(abs(cand.fixed["ratio"] - 1.0) < LEVEL_NEGLIGIBLE)
+    if not cand.free:  # every parameter measured by the frequency/time views
+        return False
+    for name in cand.measured:
+        start = cand.start.get(name)
+        if start is not None and start > 0 and values[name] >= start / MEASURED_FACTOR:
+            return False
+    return tau_size(extra, tm) < NEGLIGIBLE_SE
+
+
 def _objective(cand: Candidate, tm: TauModel) -> Any:
     lo, hi = _bounds(cand, tm)
 
@@ -270,7 +341,7 @@ def fit_candidate(
     if cand.base is None and _degenerate(cand, logp, lo, tm.dt):
         return None
     extra = _extra(cand, logp, tm)
-    if extra is None:
+    if extra is None or negligible(cand, _values(cand, logp), extra, tm):
         return None
     k = len(cand.free)
     t_before, t_after = tm.statistic(), tm.statistic(extra)

@@ -123,6 +123,10 @@ class Candidate:
     replaces : Term or None
         A model term the effect replaces (``lowpass``: the model's white noise becomes
         low-passed white noise of the same N); its Allan variance is subtracted.
+    measured : tuple of str
+        Free parameters whose ``start`` is another view's measurement of the effect's size
+        (a detected line's amplitude, a band excess's level), not a mere starting guess: the
+        size rule :func:`allanite.diagnosis.attribution.negligible` accepts them near it.
     """
 
     effect: str
@@ -132,6 +136,7 @@ class Candidate:
     start: dict[str, float] = field(default_factory=dict)
     base: Term | None = None
     replaces: Term | None = None
+    measured: tuple[str, ...] = ()
 
     @property
     def explains(self) -> frozenset[str]:
@@ -286,11 +291,13 @@ def candidate_library(
             continue
         fixed: dict[str, float] = {}
         start: dict[str, float] = {}
+        measured: tuple[str, ...] = ()
         replaces: Term | None = None
         if effect == "sine" and lines:
             freq, amp = lines[0]
             fixed["frequency"] = freq
             start["amplitude"] = max(amp, 1e-300)
+            measured = ("amplitude",)
         elif effect == "spikes" and spikes is not None and spikes[1] > 0:
             # the time view counts and measures them: nothing left to fit
             fixed["amplitude"] = spikes[1]
@@ -312,6 +319,7 @@ def candidate_library(
             level = "N" if effect == "resonance" else "amplitude"
             fixed.update({k: v for k, v in band.params.items() if k != level})
             start[level] = band.params[level]
+            measured = (level,)
             if effect == "drifting_line":
                 fixed["duration"] = duration
         elif effect == "lowpass":
@@ -334,6 +342,7 @@ def candidate_library(
                 fixed=fixed,
                 start=start,
                 replaces=replaces,
+                measured=measured,
             )
         )
     for term in terms:

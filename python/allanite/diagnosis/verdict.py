@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from allanite.diagnosis.attribution import Attribution
+from allanite.diagnosis.attribution import LEVEL_NEGLIGIBLE, Attribution
 from allanite.diagnosis.candidates import Candidate
 from allanite.diagnosis.frequency_view import FrequencyView
 from allanite.diagnosis.joint import Explanation
@@ -74,9 +74,6 @@ EVIDENCE_TEXT = {
 #: variance of a short-tau Allan variance estimate by the factor ``1 + kappa / 2`` (Gaussian
 #: reference), i.e. by less than 10 %, so the Gaussian intervals stay within 5 %
 KURTOSIS_NEGLIGIBLE = 0.2
-#: a noise level within this relative rms of the typical level is reported as negligible in
-#: size (the Allan variance in those windows within about +-10 %)
-LEVEL_NEGLIGIBLE = 0.05
 #: an explanation whose effects shrink the tau gap by less than this is not named in the
 #: headline of a gap it leaves open (they explain nothing)
 SHRINKAGE_NEGLIGIBLE = 0.01
@@ -100,7 +97,9 @@ class Unexplained:
         ``tau_bands_s``, ``frequency_bands_hz``, ``frequency_lines_hz`` or ``time_segments_s``.
     size : dict
         How large: e.g. ``gap_after``; ``noise_level_ratio`` (rms ratio to the record's typical
-        level in the flagged windows); ``amplitude``; ``excess_kurtosis``.
+        level in the flagged windows); ``amplitude``; ``excess_kurtosis`` (``kurt_hf``: of the
+        first differences, and ``excess_kurtosis_samples`` of the samples minus their running
+        mean; negligible when both depart by less than ``KURTOSIS_NEGLIGIBLE``).
     p_value : float
         p-value of the evidence (after the effect, where it can be re-tested).
     text : str
@@ -275,6 +274,9 @@ def _time_item(name: str, tv: TimeView, p: float) -> Unexplained:
         key = name.split("_")[1]
         size["excess_kurtosis_real"] = tv.kurtosis.get(f"{key}_real", float("nan"))
         size["excess_kurtosis_sim"] = tv.kurtosis.get(f"{key}_sim", float("nan"))
+        if name == "kurt_hf" and "hf_samples_real" in tv.kurtosis:
+            size["excess_kurtosis_samples_real"] = tv.kurtosis["hf_samples_real"]
+            size["excess_kurtosis_samples_sim"] = tv.kurtosis["hf_samples_sim"]
     segs = where["time_segments_s"]
     text = f"time view: {what}"
     if "noise_level_ratio_max" in size:
@@ -291,12 +293,21 @@ def _time_item(name: str, tv: TimeView, p: float) -> Unexplained:
         text += f" ({int(size['count'])} found)"
     elif name.startswith("kurt"):
         real, sim = size["excess_kurtosis_real"], size["excess_kurtosis_sim"]
-        if abs(real - sim) < KURTOSIS_NEGLIGIBLE:
+        departs = abs(real - sim)
+        if "excess_kurtosis_samples_real" in size:
+            departs = max(
+                departs,
+                abs(size["excess_kurtosis_samples_real"] - size["excess_kurtosis_samples_sim"]),
+            )
+        if departs < KURTOSIS_NEGLIGIBLE:
             shape = "heavier" if real > sim else "lighter"
             text = f"time view: the sample-to-sample changes are slightly {shape}-tailed than "
             text += f"simulated (excess kurtosis {real:.3g}, simulated {sim:.3g}{_NEGLIGIBLE})"
         else:
             text += f" (real {real:.3g} vs simulated {sim:.3g})"
+        if "excess_kurtosis_samples_real" in size:
+            real, sim = size["excess_kurtosis_samples_real"], size["excess_kurtosis_samples_sim"]
+            text += f"; of the samples: real {real:.3g} vs simulated {sim:.3g}"
     return Unexplained("time", name, where, size, float(p), text + f", p = {p:.2g}")
 
 
