@@ -77,14 +77,21 @@ def test_shape_misfit_needs_band_spreads(markov_record) -> None:  # type: ignore
 
 
 def test_joint_step_uses_the_spectrum_to_tell_markov_from_flicker(monkeypatch) -> None:  # type: ignore[no-untyped-def]
-    """The validation's pair 'white + Gauss-Markov' (medium, its seeds): both effects fit the
-    tau view about equally with flicker instead of the Gauss-Markov process; the spectrum's
-    Lorentzian knee decides. Without the frequency view in the joint step, flicker is chosen."""
+    """The validation's pair 'white + Gauss-Markov' (medium): both effects fit the tau view
+    about equally with flicker instead of the Gauss-Markov process; the spectrum's Lorentzian
+    knee decides. Without the frequency view in the joint step, flicker is chosen.
+
+    The record is the pair's design with seed ``1000 + 17 * 11``. Of seeds ``k = 1 .. 11`` at
+    this strength, the joint step reaches the look-alike choice on its own evidence in two
+    (k = 9, 11: the frequency view turns flicker into ``markov``, none the other way); the
+    others name ``markov`` either way or find nothing beyond white noise. (The first seed of
+    the suite, k = 1, reached it only through a borderline kurtosis p-value before the
+    time view's kurtosis became two statistics.)"""
     fs, n = 100.0, 2**16
     base = base_model(fs)
     white = T["white"](N=0.07137335627619547)
     gm = T["markov"](sigma=0.04524026557169484, tau_c=2.0)
-    seed = 1000 + 17 * 1
+    seed = 1000 + 17 * 11
     x = np.asarray(base.simulate(n, fs=fs, seed=seed), dtype=np.float64).ravel()
     for term, s in ((white, seed + 7), (gm, seed + 13)):
         x = (
