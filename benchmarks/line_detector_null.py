@@ -5,12 +5,17 @@ model (n_mc = 40): the line p-value must be about uniform, and no record a false
 Run ``nice python benchmarks/line_detector_null.py``.
 """
 
+import argparse
 import time
 
 import numpy as np
 
 from allanite.diagnosis import diagnose
 from validate_diagnosis import base_model
+
+argparse.ArgumentParser(
+    description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+).parse_args()  # --help describes the run instead of starting it
 
 m = base_model(100.0)
 ps, sig, closed = [], 0, 0
