@@ -38,7 +38,9 @@ far larger share of its length) keeps the full-length replicate null.
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
 import numpy as np
@@ -68,6 +70,8 @@ SHORT_LENGTH = 2**17
 REFERENCE_SHARE = 0.2
 #: effects tied to the start of the record: no short replicate can stand for them
 START_TERMS = ("warmup",)
+#: threads simulating replicate batches (the results do not depend on it)
+WORKERS = min(4, os.cpu_count() or 1)
 
 Features = dict[str, NDArray[np.float64]]
 Progress = Callable[[str, int, int], None]
@@ -92,17 +96,38 @@ def _replicates(
     done0: int,
     total: int,
 ) -> list[Features]:
-    out: list[Features] = []
+    """Features of ``count`` replicates of ``n`` samples, simulated in batches of channels.
+
+    Batch ``b`` starting at replicate ``i`` is seeded ``seed + i`` whatever the thread that
+    runs it, and the results are collected in replicate order, so the ensemble is the same for
+    any number of :data:`WORKERS` (the simulation and the features release the GIL in numpy
+    and scipy, which is where the time goes).
+    """
     batch = int(max(1, min(count, 2**22 // n)))
     step = max(1, total // 10)
-    while len(out) < count:
-        k = min(batch, count - len(out))
-        block = simulate_model(model, n, fs, seed + len(out), n_channels=k)
-        for j in range(k):
-            out.append(features(np.ascontiguousarray(block[:, j])))
-            i = done0 + len(out)
-            if progress is not None and (i % step == 0 or i == total):
-                progress(stage, i, total)
+    starts = list(range(0, count, batch))
+
+    def run(start: int) -> list[Features]:
+        k = min(batch, count - start)
+        block = simulate_model(model, n, fs, seed + start, n_channels=k)
+        return [features(np.ascontiguousarray(block[:, j])) for j in range(k)]
+
+    out: list[Features] = []
+    workers = min(WORKERS, len(starts))
+    with ThreadPoolExecutor(max_workers=workers) as pool:
+        # at most two batches per worker in flight: memory stays ~ 2 x workers batches
+        pending = [pool.submit(run, s) for s in starts[: 2 * workers]]
+        following = iter(starts[2 * workers :])
+        while pending:
+            done = pending.pop(0).result()
+            nxt = next(following, None)
+            if nxt is not None:
+                pending.append(pool.submit(run, nxt))
+            for feats in done:
+                out.append(feats)
+                i = done0 + len(out)
+                if progress is not None and (i % step == 0 or i == total):
+                    progress(stage, i, total)
     return out
 
 
@@ -132,14 +157,14 @@ def _welch_reference(
     sums: Features = {}
 
     def welch(x: NDArray[np.float64]) -> Features:
-        for k, v in frequency_features(x, fs, nperseg).items():
-            sums[k] = sums[k] + v if k in sums else v.copy()
-        return {}
+        return frequency_features(x, fs, nperseg)
 
-    _replicates(
+    for feats in _replicates(
         model, SHORT_LENGTH, fs, count, seed, welch, progress, stage + " (spectrum reference)",
         0, count,
-    )  # fmt: skip
+    ):  # fmt: skip
+        for k, v in feats.items():  # in replicate order: the same sums for any thread count
+            sums[k] = sums[k] + v if k in sums else v.copy()
     return sums
 
 
