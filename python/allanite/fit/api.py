@@ -17,7 +17,7 @@ from allanite.fit.gls import GLSData, GLSSolution, score_interval, solve
 from allanite.fit.result import Coefficient, FitResult
 from allanite.fit.seed import SCALE, coefficient_bounds, seed_fit
 from allanite.fit.select import Ambiguity, n_params, select_terms
-from allanite.fit.spec import TermSpec, resolve_terms
+from allanite.fit.spec import AUTO_CANDIDATES, TermSpec, resolve_terms
 from allanite.io.record import Record
 from allanite.model import NoiseModel
 from allanite.terms import Flicker, Quantization, RateRamp, RateRandomWalk, Term, White
@@ -292,8 +292,9 @@ def _fit_gls(
     )
 
 
-#: the label of each automatic candidate's amplitude
-_SYMBOL = {"quantization": "Q", "white": "N", "flicker": "B", "rrw": "K", "ramp": "R"}
+#: the label of each automatic candidate's amplitude (its one parameter: Q, N, B, K, R), in
+#: the candidates' order
+_SYMBOL = {c.type: c.params[0].name for c in AUTO_CANDIDATES}
 
 #: share of the fitted Allan variance above which a swapped-in term is said to explain a tau
 _SHARE = 0.2
@@ -376,7 +377,8 @@ def _undetected(
         symbol = _SYMBOL.get(name, name)
         if symbol not in exchangeable:
             out[symbol] = _coefficients(sol, sol.model(units))[symbol]
-    return dict(sorted(out.items(), key=lambda kv: "QNBKR".find(kv[0])))
+    order = list(_SYMBOL.values())
+    return dict(sorted(out.items(), key=lambda kv: order.index(kv[0]) if kv[0] in order else -1))
 
 
 def _fit_seed(result: AllanResult, units: str) -> FitResult:
