@@ -292,9 +292,9 @@ def _fit_gls(
     )
 
 
-#: the label of each automatic candidate's amplitude (its one parameter: Q, N, B, K, R), in
+#: the label of each automatic candidate's amplitude (its IEEE symbol: Q, N, B, K, R), in
 #: the candidates' order
-_SYMBOL = {c.type: c.params[0].name for c in AUTO_CANDIDATES}
+_SYMBOL = {c.type: c.symbol for c in AUTO_CANDIDATES}
 
 #: share of the fitted Allan variance above which a swapped-in term is said to explain a tau
 _SHARE = 0.2

@@ -17,11 +17,34 @@ if TYPE_CHECKING:
     from allanite.simulation.streams import TermStream
     from allanite.variance import AllanResult
 
-__all__ = ["White"]
+__all__ = ["White", "WhiteLaws"]
+
+
+class WhiteLaws:
+    """The laws of white rate noise of amplitude ``N`` (rate * sqrt(s)), for a Term to inherit.
+
+    Shared by :class:`White` and the terms whose record-average power is white noise of
+    amplitude ``N`` (:class:`allanite.terms.WhiteDrift`: a level that moves over the record).
+    """
+
+    N: float
+
+    def avar(self, tau: ArrayLike, dt: float) -> NDArray[np.float64]:
+        """Allan variance ``N^2 / tau`` (exact for sampled white noise)."""
+        t, _, _ = averaging_factor(tau, dt)
+        return self.N**2 / t
+
+    def psd(self, f: ArrayLike) -> NDArray[np.float64]:
+        """One-sided PSD ``2 N^2`` in rate^2/Hz."""
+        return np.full(np.shape(f), 2.0 * self.N**2)
+
+    def psd_sampled(self, f: ArrayLike, dt: float) -> NDArray[np.float64]:
+        """White stays white after sampling: ``2 N^2``."""
+        return self.psd(f)
 
 
 @dataclass(frozen=True)
-class White(Term):
+class White(WhiteLaws, Term):
     r"""White rate noise, the angle random walk coefficient ``N`` (rate * sqrt(s)).
 
     Allan variance (exact for any sampled record, samples of variance :math:`N^2/\Delta t`):
@@ -52,19 +75,6 @@ class White(Term):
 
     def __post_init__(self) -> None:
         check_parameters(self)
-
-    def avar(self, tau: ArrayLike, dt: float) -> NDArray[np.float64]:
-        """Allan variance ``N^2 / tau`` (exact for sampled white noise)."""
-        t, _, _ = averaging_factor(tau, dt)
-        return self.N**2 / t
-
-    def psd(self, f: ArrayLike) -> NDArray[np.float64]:
-        """One-sided PSD ``2 N^2`` in rate^2/Hz."""
-        return np.full(np.shape(f), 2.0 * self.N**2)
-
-    def psd_sampled(self, f: ArrayLike, dt: float) -> NDArray[np.float64]:
-        """White stays white after sampling: ``2 N^2``."""
-        return self.psd(f)
 
     def stream(
         self, fs: float, n_channels: int, seed: Any, *, n_samples: int | None = None

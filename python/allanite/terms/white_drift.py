@@ -9,8 +9,9 @@ from typing import TYPE_CHECKING, Any, ClassVar
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from allanite.terms._checks import averaging_factor, check_parameters
+from allanite.terms._checks import check_parameters
 from allanite.terms.base import ParamSpec, Term
+from allanite.terms.white import WhiteLaws
 
 if TYPE_CHECKING:
     from allanite.simulation.streams import TermStream
@@ -49,7 +50,7 @@ def ramp_window_mean(
 
 
 @dataclass(frozen=True)
-class WhiteDrift(Term):
+class WhiteDrift(WhiteLaws, Term):
     r"""White noise of rms level ``N`` whose variance moves linearly from one level to another.
 
     The variance (per unit ``N^2``) is ``v0`` before ``t_start``, ``ratio^2 v0`` after
@@ -96,19 +97,6 @@ class WhiteDrift(Term):
         beta = self.ratio**2 - 1.0
         mean = ramp_window_mean(0.0, self.duration, self.t_start, self.t_end)
         return (1.0 + beta * ramp_fraction(t, self.t_start, self.t_end)) / (1.0 + beta * mean)
-
-    def avar(self, tau: ArrayLike, dt: float) -> NDArray[np.float64]:
-        """``N^2 / tau``: white noise of the record's mean power."""
-        t, _, _ = averaging_factor(tau, dt)
-        return self.N**2 / t
-
-    def psd(self, f: ArrayLike) -> NDArray[np.float64]:
-        """One-sided PSD ``2 N^2``, the average over the record."""
-        return np.full(np.shape(f), 2.0 * self.N**2)
-
-    def psd_sampled(self, f: ArrayLike, dt: float) -> NDArray[np.float64]:
-        """White stays white after sampling."""
-        return self.psd(f)
 
     def stream(
         self, fs: float, n_channels: int, seed: Any, *, n_samples: int | None = None
