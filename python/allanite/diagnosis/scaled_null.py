@@ -39,7 +39,7 @@ far larger share of its length) keeps the full-length replicate null.
 from __future__ import annotations
 
 import os
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
@@ -95,13 +95,14 @@ def _replicates(
     stage: str,
     done0: int,
     total: int,
-) -> list[Features]:
+) -> Iterator[Features]:
     """Features of ``count`` replicates of ``n`` samples, simulated in batches of channels.
 
     Batch ``b`` starting at replicate ``i`` is seeded ``seed + i`` whatever the thread that
     runs it, and the results are collected in replicate order, so the ensemble is the same for
     any number of :data:`WORKERS` (the simulation and the features release the GIL in numpy
-    and scipy, which is where the time goes).
+    and scipy, which is where the time goes). They are yielded as their batch completes, so a
+    caller that sums them holds only the batches in flight.
     """
     batch = int(max(1, min(count, 2**22 // n)))
     step = max(1, total // 10)
@@ -112,7 +113,7 @@ def _replicates(
         block = simulate_model(model, n, fs, seed + start, n_channels=k)
         return [features(np.ascontiguousarray(block[:, j])) for j in range(k)]
 
-    out: list[Features] = []
+    done_count = 0
     workers = min(WORKERS, len(starts))
     with ThreadPoolExecutor(max_workers=workers) as pool:
         # at most two batches per worker in flight: memory stays ~ 2 x workers batches
@@ -124,11 +125,11 @@ def _replicates(
             if nxt is not None:
                 pending.append(pool.submit(run, nxt))
             for feats in done:
-                out.append(feats)
-                i = done0 + len(out)
+                done_count += 1
+                i = done0 + done_count
                 if progress is not None and (i % step == 0 or i == total):
                     progress(stage, i, total)
-    return out
+                yield feats
 
 
 def reference_replicates(n: int, nperseg: int, n_mc: int) -> int:
@@ -204,10 +205,14 @@ def scaled_ensemble(
 
     total = 2 * n_mc
     ens_s = NullEnsemble.from_model(
-        _replicates(model, n_s, fs, n_mc, seed, short, progress, stage, 0, total)
+        list(_replicates(model, n_s, fs, n_mc, seed, short, progress, stage, 0, total))
     )
     ens_d = NullEnsemble.from_model(
-        _replicates(model, n_d, fs / d, n_mc, seed + 7_919, coarse, progress, stage, n_mc, total)
+        list(
+            _replicates(
+                model, n_d, fs / d, n_mc, seed + 7_919, coarse, progress, stage, n_mc, total
+            )
+        )
     )
     ref: Features = {}
     null: dict[str, NDArray[np.float64]] = {}
