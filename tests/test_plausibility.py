@@ -363,3 +363,28 @@ def test_wrong_units_warned_by_fit_and_analyze(
     code, out, err = _cli(["fit", "--example"], capsys)
     assert code == 0
     assert "warning" not in err
+
+
+def test_the_library_fit_runs_the_same_wrong_units_check() -> None:
+    """allanite.fit() warns where `allanite fit` does, with the fix spelled as a keyword;
+    the right unit is silent, and the CLI does not print the finding twice (above)."""
+    import warnings
+
+    from allanite.errors import ImplausibleInputWarning
+    from allanite.examples import example_model
+
+    rate = example_model().simulate(60_000, fs=FS, seed=102).ravel() * 3600.0  # deg/h
+    with pytest.warns(ImplausibleInputWarning) as caught:
+        fitted = allanite.fit(rate, fs=FS, units="deg/s")
+    (warning,) = [w for w in caught if issubclass(w.category, ImplausibleInputWarning)]
+    message = str(warning.message)
+    (expected,) = check_coefficients(fitted.model.coefficients(), "deg/s", spelling="python")
+    assert message == expected.message
+    assert "deg/h given as deg/s" in message
+    assert "pass units='deg/h'" in message
+    assert "--units" not in message
+    assert warning.filename == __file__  # points at the caller's line
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ImplausibleInputWarning)
+        allanite.fit(rate, fs=FS, units="deg/h")
+        allanite.fit(allanite.avar(rate, fs=FS, units="deg/h", taus="octave"))

@@ -109,7 +109,9 @@ def test_customary_units_and_coefficients() -> None:
     from allanite.terms import TERM_TYPES
 
     assert customary_rate("deg/s") == "deg/h"
-    assert customary_rate("rad/s") == "rad/h"
+    assert customary_rate("rad/s") == "deg/h"  # ROS/PX4 gyros read like datasheets
+    assert customary_rate("dph") == "deg/h"
+    assert customary_rate("arcsec/s") == "arcsec/h"
     assert customary_rate("furlong/s") is None
     assert customary_rate(None) is None
     white = TERM_TYPES["white"](N=0.01)
@@ -389,3 +391,17 @@ def test_slope_table_says_why_a_bias_instability_band_is_not_in_the_model() -> N
     assert "so its selection found no B term" in html
     # without a fit the column is not shown
     assert "in the fitted model" not in build_report([DeviceAnalysis(record, result)]).html
+
+
+def test_every_check_status_has_a_coloured_badge() -> None:
+    import re
+
+    from allanite.datasheet import STATUSES, status_text
+    from allanite.report import html as h
+
+    colours = dict(re.findall(r"\.(\w+) \{ background: (#[0-9a-f]{6}); \}", h.STYLE))
+    for status in STATUSES:
+        assert status in colours, f"no badge colour for {status!r}"
+        assert f'class="badge {status}">{status_text(status)}<' in h.badge(status)
+    assert len({colours[s] for s in STATUSES}) == len(STATUSES)  # each its own colour
+    assert ">NOT DETERMINED<" in h.badge("undetermined")  # as the CLI prints it

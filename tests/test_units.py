@@ -369,3 +369,27 @@ def test_documented_model_json_examples_load(path):
     for block in blocks:
         model = NoiseModel.from_dict(json.loads(block))
         assert model.sensor in ("gyro", "accelerometer")
+
+
+def test_rad_per_second_gyros_show_degrees_and_keep_si_in_the_model():
+    """ROS and PX4 gyros record rad/s; their customary line reads like a datasheet (deg/sqrt(h),
+    deg/h), the model (its JSON) keeps rad/s, and both are the same physical coefficients."""
+    expected = {"N": "deg/sqrt(h)", "B": "deg/h", "K": "deg/h/sqrt(h)", "R": "deg/h^2"}
+    for rate in ("rad/s", "mrad/s", "rpm", "deg/s"):
+        for name, unit in expected.items():
+            assert customary_unit(rate, name, coefficient_unit(rate, *_powers(name))) == unit
+    assert customary_unit("rad/s", "Q", coefficient_unit("rad/s", *_powers("Q"))) == "deg"
+    assert customary_unit("arcsec/s", "N", coefficient_unit("arcsec/s", 1, 0.5)) == (
+        "arcsec/sqrt(h)"
+    )
+    x = np.random.default_rng(5).standard_normal(50_000) * 0.01  # rad/s at 100 Hz
+    fitted = allanite.fit(x, fs=100.0, units="rad/s", terms=["N"])
+    (row,) = fitted.table("customary")
+    assert row["unit"] == "deg/sqrt(h)"
+    si = fitted["N"]
+    assert si.unit == "rad/sqrt(s)"
+    assert si.value == pytest.approx(0.01 / 10.0, rel=5 * si.stderr / si.value)
+    assert row["value"] == pytest.approx(convert(si.value, si.unit, "deg/sqrt(h)"), rel=1e-12)
+    model = json.loads(fitted.model.to_json())  # the SI value, as fitted
+    assert model["units"]["rate"] == "rad/s"
+    assert model["terms"][0]["N"] == si.value

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-__all__ = ["InputError", "MissingExtraError", "choose_one"]
+__all__ = ["ImplausibleInputWarning", "InputError", "MissingExtraError", "choose_one"]
 
 
 class InputError(ValueError):
@@ -22,6 +22,16 @@ class InputError(ValueError):
         super().__init__(where + message)
         self.path = path
         self.line = line
+
+
+class ImplausibleInputWarning(UserWarning):
+    """A record or its fitted coefficients look like a mistaken input (e.g. a wrong unit).
+
+    Issued by the library (:func:`allanite.fit`) for the findings of
+    :mod:`allanite.plausibility`; the CLI prints the same findings as
+    ``allanite COMMAND: warning: ...``. Silence it with
+    ``warnings.simplefilter("ignore", ImplausibleInputWarning)``.
+    """
 
 
 class MissingExtraError(ImportError):

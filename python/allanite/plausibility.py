@@ -30,13 +30,15 @@ The slopes come from :mod:`allanite.report.slopes` (half-decade windows, points 
 from __future__ import annotations
 
 import re
-from collections.abc import Iterator, Sequence
+import warnings
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import NDArray
 
+from allanite.errors import ImplausibleInputWarning
 from allanite.report.slopes import MIN_EDF, local_slopes, slope_table
 from allanite.units import SYMBOL_POWERS, coefficient_unit, convert, sensor_kind
 
@@ -48,6 +50,7 @@ __all__ = [
     "check_samples",
     "refuse_constant",
     "stuck_segments",
+    "warn_coefficients",
 ]
 
 #: kinds whose power-law slopes are those of the Allan deviation (-1, -1/2, 0, +1/2, +1)
@@ -419,17 +422,18 @@ def _out_of_range(
 
 
 def check_coefficients(
-    values: dict[str, float | None],
+    values: Mapping[str, float | None],
     unit: str | None,
     *,
     input: str = "rate",
     channel: str = "ch0",
+    spelling: Literal["cli", "python"] = "cli",
 ) -> list[Finding]:
     """Find noise coefficients outside any real sensor's range (a wrong ``--units``).
 
     Parameters
     ----------
-    values : dict
+    values : mapping
         Coefficient by symbol (``N``, ``B``, ...; others are ignored, None = not measured)
         in the record's rate unit times seconds to the term's power (a fit's
         ``model.coefficients()``, or the slope readouts of :mod:`allanite.fit.classic`).
@@ -440,6 +444,9 @@ def check_coefficients(
         What the samples are (the rate unit of the coefficients follows from it).
     channel : str
         Channel name for the message.
+    spelling : {"cli", "python"}
+        How the fix is spelled: ``--units deg/h`` for the command line, ``units='deg/h'``
+        for a library call.
 
     Returns
     -------
@@ -493,7 +500,9 @@ def check_coefficients(
             Finding(
                 "implausible_units",
                 channel,
-                f"{what}: check --units ({unit}) and --scale",
+                f"{what}: check --units ({unit}) and --scale"
+                if spelling == "cli"
+                else f"{what}: check units={unit!r} and the samples' scale factor",
             )
         ]
     _, other, moved = best
@@ -503,9 +512,41 @@ def check_coefficients(
             "implausible_units",
             channel,
             f"{what}: the record looks like {other} given as {unit}: {would}; if so, pass "
-            f"--units {other}",
+            + (f"--units {other}" if spelling == "cli" else f"units={other!r}"),
         )
     ]
+
+
+def warn_coefficients(
+    values: Mapping[str, float | None],
+    unit: str | None,
+    *,
+    input: str = "rate",
+    channel: str = "ch0",
+    stacklevel: int = 2,
+) -> list[Finding]:
+    """Run :func:`check_coefficients` for a library call and ``warnings.warn`` each finding.
+
+    The library's side of the wrong-units check (the CLI prints the same findings on stderr):
+    each finding becomes an :class:`~allanite.errors.ImplausibleInputWarning` whose fix is
+    spelled as a keyword (``units='deg/h'``).
+
+    Parameters
+    ----------
+    values, unit, input, channel
+        As for :func:`check_coefficients`.
+    stacklevel : int
+        Passed to :func:`warnings.warn` (count from this function's caller).
+
+    Returns
+    -------
+    list of Finding
+        The findings warned about.
+    """
+    findings = check_coefficients(values, unit, input=input, channel=channel, spelling="python")
+    for finding in findings:
+        warnings.warn(finding.message, ImplausibleInputWarning, stacklevel=stacklevel + 1)
+    return findings
 
 
 def _bounds_text(bound: tuple[float | None, float | None, float, str]) -> str:

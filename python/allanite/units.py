@@ -63,6 +63,7 @@ __all__ = [
     "Unit",
     "coefficient_unit",
     "convert",
+    "customary_gyro_rate",
     "customary_unit",
     "display_unit",
     "integral_unit",
@@ -663,13 +664,45 @@ ACCELEROMETER_CUSTOMARY: dict[str, str] = {
 }
 
 
+#: angles whose gyros datasheets quote in degrees: a rad/s (ROS, PX4) or rev/min gyro's
+#: coefficients are shown in deg/sqrt(h), deg/h, ...; the degree family keeps its own angle
+CUSTOMARY_GYRO_ANGLE: dict[str, str] = {
+    "rad": "deg",
+    "mrad": "deg",
+    "urad": "deg",
+    "µrad": "deg",
+    "rev": "deg",
+}
+
+
+def customary_gyro_rate(rate: str | None) -> str | None:
+    """The rate unit whose :func:`display_unit` s are a gyro's customary ones, or None.
+
+    The angle of ``rate`` per hour, radians and revolutions shown as degrees
+    (:data:`CUSTOMARY_GYRO_ANGLE`): ``deg/s`` and ``rad/s`` give ``deg/h`` (N in deg/√h, B in
+    deg/h, K in deg/h/√h, R in deg/h²), ``arcsec/s`` gives ``arcsec/h``. None when ``rate``
+    is not an angle per time unit.
+
+    Parameters
+    ----------
+    rate : str or None
+        A rate unit (``deg/s``, ``rad/s``, ``dph``, ...).
+    """
+    split = None if rate is None else _split_rate(rate)
+    if split is None or split[0] not in ANGLE_UNITS:
+        return None
+    return f"{CUSTOMARY_GYRO_ANGLE.get(split[0], split[0])}/h"
+
+
 def customary_unit(rate: str, name: str | tuple[float, float], unit: str | Unit) -> str:
     """The customary unit of a coefficient of a model in ``rate`` (as datasheets quote it).
 
-    Gyroscopes: the angle of ``rate`` per hour (:func:`display_unit` with ``<angle>/h``:
-    N in deg/√h, B in deg/h, K in deg/h/√h, R in deg/h²). Accelerometers: velocity random
-    walk in m/s/√h, bias instability and Gauss-Markov sigma in µg, acceleration random walk
-    in m/s/h^1.5, velocity quantization in m/s, ramp in m/s²/h (:data:`ACCELEROMETER_CUSTOMARY`).
+    Gyroscopes: the angle of ``rate`` per hour, radians shown as degrees
+    (:func:`customary_gyro_rate`: N in deg/√h, B in deg/h, K in deg/h/√h, R in deg/h² for
+    deg/s and rad/s alike; the model keeps its own unit, e.g. rad/s/√Hz in the JSON).
+    Accelerometers: velocity random walk in m/s/√h, bias instability and Gauss-Markov sigma
+    in µg, acceleration random walk in m/s/h^1.5, velocity quantization in m/s, ramp in
+    m/s²/h (:data:`ACCELEROMETER_CUSTOMARY`).
     Anything else (the record unit, a parameter without a customary unit) keeps ``unit``.
 
     Parameters
@@ -689,11 +722,10 @@ def customary_unit(rate: str, name: str | tuple[float, float], unit: str | Unit)
     symbol = name.rsplit("_", 1)[0] if isinstance(name, str) and name[-1:].isdigit() else name
     candidate: str | None = None
     if kind == "gyro":
-        split = _split_rate(rate)
-        angle = split[0] if split is not None else None
-        if angle is not None and angle in ANGLE_UNITS:
+        customary = customary_gyro_rate(rate)
+        if customary is not None:
             try:
-                candidate = display_unit(f"{angle}/h", own)
+                candidate = display_unit(customary, own)
             except ValueError:
                 candidate = None
     elif kind == "accelerometer" and isinstance(symbol, str):

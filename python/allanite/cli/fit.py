@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+import warnings
 from typing import Any
 
 from allanite.cli.progress import progress
@@ -16,6 +17,7 @@ from allanite.cli.record_options import (
     warn_coefficients,
     warn_implausible,
 )
+from allanite.errors import ImplausibleInputWarning
 from allanite.io.atomic import atomic_output
 from allanite.variance import AllanResult
 
@@ -85,7 +87,11 @@ def fit_result(result: AllanResult) -> Any:
     fit = _fit_function()
     if fit is None or result.kind != "overlapping":
         return None
-    return fit(result)
+    with warnings.catch_warnings():
+        # the library's wrong-units warning: the CLI prints the same check with its own
+        # spelling of the fix (--units), through warn_coefficients
+        warnings.simplefilter("ignore", ImplausibleInputWarning)
+        return fit(result)
 
 
 def _model_of(fit: Any) -> Any:
@@ -122,8 +128,7 @@ def goodness(fit: Any, level: float) -> dict[str, Any]:
 
 def run(args: argparse.Namespace) -> int:
     """Run ``allanite fit``."""
-    from allanite.datasheet import Datasheet, check_limits, status_text, undetected_measured
-    from allanite.report.coefficients import coefficient_table
+    from allanite.datasheet import Datasheet
 
     sheet = Datasheet.load(args.datasheet) if args.datasheet else None
     if _fit_function() is None:
@@ -141,54 +146,73 @@ def run(args: argparse.Namespace) -> int:
     channels = []
     fits = []
     for record, result, c in progress(work, desc="fitting", total=len(work)):
-        name = record.channels[c]
         fit = fit_result(result.channel(c))
         fits.append(fit)
-        warnings = (
-            []
-            if fit is None
-            else warn_coefficients(_model_of(fit).coefficients(), record, args, name)
-        )
-        rows = coefficient_table(fit, result.units, args.level)
-        checks = []
-        if sheet is not None:
-            one = result.channel(c)
-            lo, hi = one.ci(args.level)
-            measured = {r.symbol: r.measured() for r in rows}
-            curve = (one.tau, one.dev, lo, hi, one.units)
-            checks = check_limits(
-                sheet, name, measured, curve, undetected_measured(fit, args.level)
-            )
-        channels.append(
+        channels.append(_channel_summary(fit, record, result, c, sheet, args))
+    _write_outputs(analysed[0], fits[0], args)
+    failed = [k for item in channels for k in item["checks"] if k["status"] == "fail"]
+    if args.json:
+        summary = analysed[0][0].summary()
+        if len(sensors) > 1:
+            summary["units"] = [r.units for r in sensors for _ in r.channels]
+            summary["channels"] = [name for r in sensors for name in r.channels]
+        print(dump_json({"record": summary, "channels": channels, "passed": not failed}))
+    else:
+        _print_channels(channels, fits, args)
+    return 1 if failed else 0
+
+
+def _channel_summary(
+    fit: Any, record: Any, result: AllanResult, c: int, sheet: Any, args: argparse.Namespace
+) -> dict[str, Any]:
+    """One channel's fit as the JSON/text output holds it: coefficients, checks, warnings."""
+    from allanite.datasheet import check_limits, undetected_measured
+    from allanite.report.coefficients import coefficient_table
+
+    name = record.channels[c]
+    unit_warnings = (
+        [] if fit is None else warn_coefficients(_model_of(fit).coefficients(), record, args, name)
+    )
+    rows = coefficient_table(fit, result.units, args.level)
+    checks = []
+    if sheet is not None:
+        one = result.channel(c)
+        lo, hi = one.ci(args.level)
+        measured = {r.symbol: r.measured() for r in rows}
+        curve = (one.tau, one.dev, lo, hi, one.units)
+        checks = check_limits(sheet, name, measured, curve, undetected_measured(fit, args.level))
+    return {
+        "channel": name,
+        "sensor": _model_of(fit).sensor,
+        "units": result.units,
+        "checks": [k.to_dict() for k in checks],
+        "warnings": unit_warnings,
+        "model": _model_of(fit).to_dict(),
+        **goodness(fit, args.level),
+        "coefficients": [
             {
-                "channel": name,
-                "sensor": _model_of(fit).sensor,
-                "units": result.units,
-                "checks": [k.to_dict() for k in checks],
-                "warnings": warnings,
-                "model": _model_of(fit).to_dict(),
-                **goodness(fit, args.level),
-                "coefficients": [
-                    {
-                        "term": r.term,
-                        "quantity": r.quantity,
-                        "symbol": r.symbol,
-                        "value": r.value,
-                        "low": r.low,
-                        "high": r.high,
-                        "unit": r.unit,
-                    }
-                    for r in rows
-                ],
+                "term": r.term,
+                "quantity": r.quantity,
+                "symbol": r.symbol,
+                "value": r.value,
+                "low": r.low,
+                "high": r.high,
+                "unit": r.unit,
             }
-        )
-    record, result = analysed[0]
+            for r in rows
+        ],
+    }
+
+
+def _write_outputs(first: tuple[Any, AllanResult], fit: Any, args: argparse.Namespace) -> None:
+    """``--plot`` and ``-o``: the first channel's figure and model file."""
+    record, result = first
     if args.plot:
         from allanite.plot import model_figure, save_figure
 
         fig = model_figure(
             result,
-            fits[0],
+            fit,
             channel=0,
             labels=list(record.channels),
             level=args.level,
@@ -197,39 +221,38 @@ def run(args: argparse.Namespace) -> int:
         save_figure(fig, args.plot)
     if args.output:
         with atomic_output(args.output) as tmp:
-            tmp.write_text(_model_of(fits[0]).to_json(), encoding="utf-8")
-        if getattr(fits[0], "rejected", False):
+            tmp.write_text(_model_of(fit).to_json(), encoding="utf-8")
+        if getattr(fit, "rejected", False):
             print(
                 f"allanite fit: warning: wrote {args.output}, but the model of channel "
                 f"{record.channels[0]} is REJECTED by its goodness-of-fit test "
-                f"(p = {fits[0].p_value:.3g}); check it before use",
+                f"(p = {fit.p_value:.3g}); check it before use",
                 file=sys.stderr,
             )
-    failed = [k for item in channels for k in item["checks"] if k["status"] == "fail"]
-    if args.json:
-        summary = record.summary()
-        if len(sensors) > 1:
-            summary["units"] = [r.units for r in sensors for _ in r.channels]
-            summary["channels"] = [name for r in sensors for name in r.channels]
-        print(dump_json({"record": summary, "channels": channels, "passed": not failed}))
-    else:
-        for item in channels:
-            print(f"channel {item['channel']} ({_what(item)}):")
-            for row in item["coefficients"]:
-                interval = (
-                    "" if row["low"] != row["low"] else f"  [{row['low']:.4g}, {row['high']:.4g}]"
-                )
-                print(
-                    f"  {row['quantity'] or row['term']:>26} {row['symbol']:>6} = "
-                    f"{row['value']:.4g} {row['unit']}{interval}"
-                )
-            for line in fit_lines(fits[channels.index(item)], args.level):
-                print(f"  {line}")
-            for check in item["checks"]:
-                print(f"  {_check_line(check, status_text)}")
-        if args.output:
-            print(_written(args.output, channels))
-    return 1 if failed else 0
+
+
+def _print_channels(
+    channels: list[dict[str, Any]], fits: list[Any], args: argparse.Namespace
+) -> None:
+    """The text output: per channel its coefficients, goodness of fit and datasheet checks."""
+    from allanite.datasheet import status_text
+
+    for item, fit in zip(channels, fits, strict=True):
+        print(f"channel {item['channel']} ({_what(item)}):")
+        for row in item["coefficients"]:
+            interval = (
+                "" if row["low"] != row["low"] else f"  [{row['low']:.4g}, {row['high']:.4g}]"
+            )
+            print(
+                f"  {row['quantity'] or row['term']:>26} {row['symbol']:>6} = "
+                f"{row['value']:.4g} {row['unit']}{interval}"
+            )
+        for line in fit_lines(fit, args.level):
+            print(f"  {line}")
+        for check in item["checks"]:
+            print(f"  {_check_line(check, status_text)}")
+    if args.output:
+        print(_written(args.output, channels))
 
 
 def _check_line(check: dict[str, Any], status_text: Any) -> str:

@@ -526,6 +526,12 @@ def fit(
         Model, coefficients with ``value``, ``stderr`` and ``ci(level)``, goodness of fit,
         residuals, the IEEE slope-method readouts (``classic``).
 
+    Warns
+    -----
+    ImplausibleInputWarning
+        Coefficients outside any real sensor's range, e.g. a deg/h record given as deg/s
+        (:func:`allanite.plausibility.check_coefficients`, the check ``allanite fit`` prints).
+
     Raises
     ------
     ValueError
@@ -554,14 +560,24 @@ def fit(
     # no silent deg/s: a curve without a unit is fitted in the record's own unit
     rate = rate_unit(units or result.units or RECORD_UNIT).text
     if method == "seed":
-        return _fit_seed(result, rate)
-    return _fit_gls(
-        result,
-        specs,
-        auto,
-        rate,
-        float(penalty),
-        float(max_fraction),
-        float(misfit_level),
-        float(min_ratio),
+        fitted = _fit_seed(result, rate)
+    else:
+        fitted = _fit_gls(
+            result,
+            specs,
+            auto,
+            rate,
+            float(penalty),
+            float(max_fraction),
+            float(misfit_level),
+            float(min_ratio),
+        )
+    # the CLI's wrong-units check, one implementation (lazy: plausibility reads the report's
+    # slope table, and the report package imports the fit)
+    from allanite.plausibility import warn_coefficients
+
+    names = result.meta.get("channels") or ["ch0"]
+    warn_coefficients(
+        fitted.model.coefficients(), rate, input="rate", channel=str(names[0]), stacklevel=3
     )
+    return fitted

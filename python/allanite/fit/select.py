@@ -188,14 +188,45 @@ def _delta_chi2(
 RAMP, RRW = "ramp", "rrw"
 
 
+@dataclass(frozen=True)
+class _Context:
+    """What every test after the search reads: the candidates, their fits and the curve.
+
+    Attributes
+    ----------
+    specs : sequence of TermSpec
+        The candidate terms.
+    by_names : dict
+        The evaluated subsets' candidates, by their term types.
+    data : GLSData
+        The curve.
+    edf : numpy.ndarray
+        EDF of the points.
+    penalty : float
+        Penalty per parameter (also the threshold of the likelihood-ratio tests).
+    misfit_level : float
+        Significance level of the goodness-of-fit test.
+    """
+
+    specs: Sequence[TermSpec]
+    by_names: dict[frozenset[str], Candidate]
+    data: GLSData
+    edf: NDArray[np.float64]
+    penalty: float
+    misfit_level: float
+
+    def delta_chi2(self, base: Candidate, added: str) -> float:
+        """:func:`_delta_chi2` of ``added`` against ``base`` on this curve."""
+        return _delta_chi2(base, added, self.specs, self.data, self.edf)
+
+    def usable(self, candidate: Candidate | None) -> bool:
+        """Whether ``candidate`` exists and its goodness-of-fit test does not reject it."""
+        return candidate is not None and not candidate.p_value < self.misfit_level
+
+
 def _ramp_against_rrw(
     chosen: Candidate,
-    specs: Sequence[TermSpec],
-    by_names: dict[frozenset[str], Candidate],
-    data: GLSData,
-    edf: NDArray[np.float64],
-    penalty: float,
-    misfit_level: float,
+    ctx: _Context,
 ) -> dict[str, Any] | None:
     r"""Test a chosen ramp against its stationary look-alike, the rate random walk.
 
@@ -223,30 +254,24 @@ def _ramp_against_rrw(
         ``alternative`` (term names), ``delta_chi2``, ``kept``.
     """
     names = chosen.names
-    by_type = {s.cls.type: s for s in specs}
+    by_type = {s.cls.type: s for s in ctx.specs}
     if RAMP not in names or RRW not in by_type:
         return None
     alternative = (names - {RAMP}) | {RRW}
-    alt = by_names.get(frozenset(alternative))
+    alt = ctx.by_names.get(frozenset(alternative))
     if alt is None:
         return None
-    delta = _delta_chi2(alt, RAMP, specs, data, edf)
-    usable = not alt.p_value < misfit_level
+    delta = ctx.delta_chi2(alt, RAMP)
     return {
         "alternative": sorted(alternative),
         "delta_chi2": delta,
-        "kept": bool(delta >= penalty or not usable),
+        "kept": bool(delta >= ctx.penalty or not ctx.usable(alt)),
     }
 
 
 def _add_significant(
     chosen: Candidate,
-    specs: Sequence[TermSpec],
-    by_names: dict[frozenset[str], Candidate],
-    data: GLSData,
-    edf: NDArray[np.float64],
-    penalty: float,
-    misfit_level: float,
+    ctx: _Context,
 ) -> tuple[Candidate, dict[str, dict[str, float]]]:
     r"""Add the terms that are significant against the chosen model (the ramp test's mirror).
 
@@ -272,20 +297,19 @@ def _add_significant(
     excluded: set[str] = set()
     while True:
         tests: dict[str, float] = {}
-        for spec in specs:
+        for spec in ctx.specs:
             name = spec.cls.type
             if name in chosen.names or name in excluded:
                 continue
-            superset = by_names.get(chosen.names | {name})
-            if superset is None or superset.p_value < misfit_level:
+            if not ctx.usable(ctx.by_names.get(chosen.names | {name})):
                 continue
-            tests[name] = _delta_chi2(chosen, name, specs, data, edf)
+            tests[name] = ctx.delta_chi2(chosen, name)
         best = max(tests, key=lambda k: tests[k], default=None)
-        if best is None or tests[best] < penalty:
+        if best is None or tests[best] < ctx.penalty:
             return chosen, additions
-        new = by_names[chosen.names | {best}]
+        new = ctx.by_names[chosen.names | {best}]
         if best == RAMP:
-            test = _ramp_against_rrw(new, specs, by_names, data, edf, penalty, misfit_level)
+            test = _ramp_against_rrw(new, ctx)
             if test is not None and not test["kept"]:
                 excluded.add(best)
                 continue
@@ -333,12 +357,7 @@ ADD_EVIDENCE = 0.01
 
 def _exchangeable(
     chosen: Candidate,
-    specs: Sequence[TermSpec],
-    by_names: dict[frozenset[str], Candidate],
-    data: GLSData,
-    edf: NDArray[np.float64],
-    penalty: float,
-    misfit_level: float,
+    ctx: _Context,
 ) -> Ambiguity | None:
     r"""Find the alternatives the record cannot tell from the chosen subset.
 
@@ -365,24 +384,24 @@ def _exchangeable(
         for every candidate left out, the fit with it (``with_term``: the upper limits of
         the terms not detected).
     """
-    if chosen.p_value < misfit_level:
+    if not ctx.usable(chosen):
         return None  # a rejected model: the intervals already carry the model discrepancy
     names = chosen.names
     best: dict[str, dict[str, Any]] = {}
     fits: dict[str, GLSSolution] = {}
-    for key, cand in by_names.items():
+    for key, cand in ctx.by_names.items():
         out, into = names - key, key - names
-        if len(into) != 1 or len(out) > 1 or cand.p_value < misfit_level:
+        if len(into) != 1 or len(out) > 1 or not ctx.usable(cand):
             continue
         (i,) = tuple(into)
         if out:
             delta = cand.score - chosen.score
-            if not delta < penalty:
+            if not delta < ctx.penalty:
                 continue
             entry = {"swap_out": next(iter(out)), "score_delta": float(delta)}
         else:
-            drop = _delta_chi2(chosen, i, specs, data, edf)
-            if not ADD_EVIDENCE < drop < penalty:
+            drop = ctx.delta_chi2(chosen, i)
+            if not ADD_EVIDENCE < drop < ctx.penalty:
                 continue
             entry = {"swap_out": None, "score_delta": float(cand.score - chosen.score)}
             entry["delta_chi2"] = float(drop)
@@ -391,16 +410,16 @@ def _exchangeable(
         best[i] = {"terms": sorted(key), "swap_in": i, **entry, "p_value": cand.p_value}
         fits[i] = cand.solution
     alternatives = sorted(best.values(), key=lambda a: a["score_delta"])
-    union = by_names.get(names | set(best))
+    union = ctx.by_names.get(names | set(best))
     if union is None:  # too many parameters for the taus: each term's own superset instead
-        alternatives = [a for a in alternatives if names | {a["swap_in"]} in by_names]
+        alternatives = [a for a in alternatives if names | {a["swap_in"]} in ctx.by_names]
     involved = {a["swap_out"] for a in alternatives if a["swap_out"] is not None}
     # every candidate left out, with the fit that has it: the alternatives' fallback and
     # the upper limits of the terms not detected
     added = {
         i: sup.solution
-        for i in {s.cls.type for s in specs} - names
-        if (sup := by_names.get(names | {i})) is not None and not sup.p_value < misfit_level
+        for i in {s.cls.type for s in ctx.specs} - names
+        if (sup := ctx.by_names.get(names | {i})) is not None and ctx.usable(sup)
     }
     return Ambiguity(
         tuple(alternatives),
@@ -457,10 +476,11 @@ def select_terms(
         pool = found
     chosen = min(pool.values(), key=lambda c: c.score)
     by_names = {c.names: c for c in found.values()}
-    ramp_test = _ramp_against_rrw(chosen, specs, by_names, data, edf, penalty, misfit_level)
+    ctx = _Context(specs, by_names, data, edf, penalty, misfit_level)
+    ramp_test = _ramp_against_rrw(chosen, ctx)
     if ramp_test is not None and not ramp_test["kept"]:
         chosen = by_names[frozenset(ramp_test["alternative"])]
-    chosen, additions = _add_significant(chosen, specs, by_names, data, edf, penalty, misfit_level)
+    chosen, additions = _add_significant(chosen, ctx)
     kept = chosen.names
     selection = []
     for spec in specs:
@@ -484,5 +504,5 @@ def select_terms(
         }
         for key, c in sorted(found.items(), key=lambda kv: kv[1].score)
     ]
-    ambiguity = _exchangeable(chosen, specs, by_names, data, edf, penalty, misfit_level)
+    ambiguity = _exchangeable(chosen, ctx)
     return chosen.solution, ambiguity, tuple(selection), subsets

@@ -20,6 +20,7 @@ import numpy as np
 
 from allanite.confidence import DEFAULT_LEVEL
 from allanite.datasheet import Check, Datasheet, adev_at, check_limits, undetected_measured
+from allanite.datasheet import verdict as checks_verdict
 from allanite.io.atomic import atomic_output
 from allanite.io.record import Record
 from allanite.report import html as h
@@ -358,7 +359,7 @@ def _datasheet_section(
             label = f"{device.label}: {name}" if len(devices) > 1 else name
             bounds = undetected_measured(device.fit(c), level)
             checks += check_limits(sheet, label, measured, _rate_adev(device, c, level), bounds)
-    verdict = "fail" if any(c.status == "fail" for c in checks) else "pass"
+    verdict = checks_verdict(c.status for c in checks)
     rows = [
         [
             c.channel,
@@ -602,7 +603,7 @@ def build_report(
     sheet_html = ""
     if datasheet is not None:
         sheet_html, checks = _datasheet_section(datasheet, devices, coefficients, level)
-        verdict = "fail" if any(c.status == "fail" for c in checks) else "pass"
+        verdict = checks_verdict(c.status for c in checks)
         body.append(
             f'<p class="verdict">Datasheet check ({h.escape(datasheet.device)}): '
             f"{h.badge(verdict)}</p>"

@@ -20,10 +20,10 @@ from typing import Any
 from allanite.confidence import DEFAULT_LEVEL
 from allanite.datasheet import Measured
 from allanite.units import (
-    ANGLE_UNITS,
     Unit,
     coefficient_unit,
     convert,
+    customary_gyro_rate,
     customary_unit,
     parse_unit,
     sensor_kind,
@@ -65,13 +65,11 @@ class CoefficientRow:
 def customary_rate(rate: str | None) -> str | None:
     """Gyro rate unit whose :func:`~allanite.units.display_unit` s are the customary ones.
 
-    ``deg/s`` gives ``deg/h`` (N in deg/√h, B in deg/h, K in deg/h/√h, R in deg/h²); None when
-    ``rate`` is not an angular rate (accelerometers use :func:`allanite.units.customary_unit`).
+    :func:`allanite.units.customary_gyro_rate`: ``deg/s`` and ``rad/s`` give ``deg/h`` (N in
+    deg/√h, B in deg/h, K in deg/h/√h, R in deg/h²); None when ``rate`` is not an angular
+    rate (accelerometers use :func:`allanite.units.customary_unit`).
     """
-    if rate is None:
-        return None
-    angle = rate.split("/")[0].strip()
-    return f"{angle}/h" if angle in ANGLE_UNITS else None
+    return customary_gyro_rate(rate)
 
 
 def _sensor(rate: str | None) -> str:

@@ -10,6 +10,8 @@ import base64
 import html
 from collections.abc import Iterable, Sequence
 
+from allanite.datasheet import status_text
+
 __all__ = ["STYLE", "badge", "data_uri", "document", "escape", "figure", "fmt", "section", "table"]
 
 STYLE = """
@@ -35,6 +37,7 @@ figcaption { color: #5b6773; font-size: 0.88em; margin-top: 4px; }
          font-size: 0.85em; color: #fff; }
 .pass { background: #2e8b57; } .fail { background: #c0392b; }
 .marginal { background: #d68910; } .missing { background: #7f8c8d; }
+.undetermined { background: #2874a6; }
 .verdict { font-size: 1.1em; margin: 8px 0 14px; }
 .warn { background: #fff6e0; border-left: 4px solid #d68910; padding: 6px 10px; margin: 6px 0; }
 .note { color: #5b6773; font-size: 0.88em; }
@@ -102,8 +105,12 @@ def table(
 
 
 def badge(status: str) -> str:
-    """Render a coloured pass/fail/marginal/missing badge."""
-    return f'<span class="badge {escape(status)}">{escape(status.upper())}</span>'
+    """Render a coloured badge of a check's status (one of :data:`allanite.datasheet.STATUSES`).
+
+    Every status has its colour in :data:`STYLE`; the text is the one the CLI prints
+    (:func:`allanite.datasheet.status_text`: ``NOT DETERMINED`` for ``undetermined``).
+    """
+    return f'<span class="badge {escape(status)}">{escape(status_text(status))}</span>'
 
 
 def section(title: str, body: str, *, anchor: str | None = None) -> str:
