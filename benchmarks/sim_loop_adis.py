@@ -28,6 +28,7 @@ import numpy as np
 
 import allanite
 from allanite.formats import px4_plugin, read_config, write_config
+from allanite.formats.base import describe_term
 from allanite.formats.corrected import corrected_model, representable
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -126,8 +127,9 @@ def main() -> int:
             if representable(a.effect, str(a.term["type"]), px4_plugin.HOLDS)
         )
         nxt = RESULTS / f"sim_loop_adis_round{k + 1}.sdf"
+        target = config.with_model("gyro", corrected)
         written = write_config(
-            config.with_model("gyro", corrected),
+            target,
             nxt,
             rate=FS,
             template=path,
@@ -145,8 +147,24 @@ def main() -> int:
         print(f"  {what}", flush=True)
         for line in written.report():
             print(f"  {line}", flush=True)
+        # what this round folded in, and what of it the export could not hold (its own notes)
+        before, after = config.model("gyro"), target.model("gyro")
+        folded = [t for t in after.terms if t not in before.terms]
+        lost = {describe_term(t): written.lost("gyro", t) for t in folded}
+        entry["best"]["lost"] = {term: lines for term, lines in lost.items() if lines}
+        stop = None
         if nxt.read_text() == path.read_text():
-            entry["best"]["stopped"] = "the corrected config equals this one"
+            stop = "the corrected config equals this one"
+        elif folded and all(lost.values()):
+            notes = "; ".join(sorted({line for lines in lost.values() for line in lines}))
+            stop = (
+                f"the PX4 plugin cannot hold what this round folded in "
+                f"({', '.join(lost)}): {notes}; another round would fold it in again"
+            )
+        if stop is not None:
+            entry["best"]["stopped"] = stop
+            print(f"  stopped: {stop}", flush=True)
+            nxt.unlink()  # not a config of the loop: the previous one is the corrected config
             break
         path = nxt
     out = {

@@ -220,3 +220,51 @@ def test_an_allan_result_prints_in_one_line():
     assert "fs=10 Hz" in text
     assert "units='deg/s'" in text
     assert len(text) < 200
+
+
+def _record_call_extras() -> dict[str, tuple[tuple, dict]]:
+    """How to call each public function of allanite.__all__ with a Record as its first argument
+    (the other arguments it requires). A new public function must be added here."""
+    model = allanite.NoiseModel((allanite.White(N=0.3),), {"rate": "deg/s", "time": "s"})
+    extras: dict[str, tuple[tuple, dict]] = {
+        name: ((), {}) for name in ("avar", "avar_large", "fit", "read_record", *DEVIATIONS)
+    }
+    extras["batch"] = ((), {})  # takes an iterable of records: called with [record]
+    extras["diagnose"] = ((model,), {"n_mc": 20, "seed": 1})
+    return extras
+
+
+def test_every_public_function_accepts_a_record():
+    """Introspection over allanite.__all__: each function takes a Record in place of samples,
+    with its fs, input and unit (no fs given), and raw samples need fs (keyword-only)."""
+    functions = {
+        name: obj
+        for name in allanite.__all__
+        if inspect.isfunction(obj := getattr(allanite, name))
+    }
+    extras = _record_call_extras()
+    assert set(functions) == set(extras), "a public function without a Record call in this test"
+    x = _white(8000, seed=9) * 0.3
+    record = Record(samples=x[:, None], fs=50.0, input="rate", units="deg/s", channels=("gz",))
+    for name, func in functions.items():
+        params = list(inspect.signature(func).parameters.values())
+        if "fs" in inspect.signature(func).parameters:
+            assert inspect.signature(func).parameters["fs"].kind is inspect.Parameter.KEYWORD_ONLY
+        doc = func.__doc__ or ""
+        assert "Record" in doc, f"{name}'s docstring does not say it takes a Record"
+        args, kwargs = extras[name]
+        first = [record] if name == "batch" else record
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            out = func(first, *args, **kwargs)
+        assert out is not None, name
+        if isinstance(out, allanite.AllanResult):
+            assert out.fs == 50.0 and out.units == "deg/s", name
+        assert params[0].kind is not inspect.Parameter.KEYWORD_ONLY, name
+
+
+def test_read_record_returns_a_record_unchanged_and_refuses_options_with_it():
+    record = Record(samples=_white()[:, None], fs=10.0, input="rate", units="deg/s")
+    assert allanite.read_record(record) is record
+    with pytest.raises(TypeError, match=r"the Record is read already.*record\.select"):
+        allanite.read_record(record, fs=20.0)

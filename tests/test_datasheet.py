@@ -156,7 +156,9 @@ def test_undetected_measured_from_a_fit() -> None:
     assert undetected_measured(f.model, 0.95) == {}
 
 
-def test_report_shows_upper_limits_and_undetermined(tmp_path: Path) -> None:
+def test_report_shows_upper_limits_and_undetermined(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     """The HTML report: the left-out terms' upper limits under the fit, and a datasheet
     limit on one of them judged by it (UNDETERMINED / PASS, the bound shown)."""
     from allanite.cli import main
@@ -174,5 +176,6 @@ def test_report_shows_upper_limits_and_undetermined(tmp_path: Path) -> None:
     assert main([*argv, "-o", str(out)]) == 0
     html = out.read_text()
     assert "not detected (95 % upper limits): " in html
-    assert ">UNDETERMINED<" in html
+    assert ">NOT DETERMINED<" in html  # the badge says what the CLI prints
+    assert "datasheet sheet: NOT DETERMINED" in capsys.readouterr().out
     assert "(not detected)" in html

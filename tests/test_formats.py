@@ -591,3 +591,26 @@ def test_projection_reports_its_true_worst_error_on_many_models():
         reported = float(text.split("largest ADEV error ")[1].split(" %")[0])
         true = 100 * np.max(np.abs(out.model.adev(taus, 0.01) / model.adev(taus, 0.01) - 1))
         assert abs(true - reported) < 0.06  # the text rounds to 0.1 %
+
+
+def test_written_names_the_terms_the_format_could_not_hold():
+    """Written.lost: a second Gauss-Markov process in the PX4 plugin (which has one) is
+    projected away and named; the terms the file holds are not (sim_loop_adis stops on it)."""
+    from allanite.formats.base import describe_term
+
+    white = White(N=6e-4)
+    slow = GaussMarkov(sigma=8.7e-4, tau_c=1000.0)
+    fast = GaussMarkov(sigma=1.9e-3, tau_c=0.024)
+    gyro = sensor_model([white, slow, fast], "gyro")
+    written = format_module("px4-plugin").write(ImuConfig(gyro=gyro, rate=100.0), rate=100.0)
+    (line,) = written.lost("gyro", fast)
+    assert line in written.report()
+    assert line.startswith("projected gyro: ")
+    assert describe_term(fast) in line.split(" -> ")[0]
+    assert written.lost("accel", fast) == []
+    held = format_module("px4-plugin").write(
+        ImuConfig(gyro=sensor_model([white, slow], "gyro"), rate=100.0), rate=100.0
+    )
+    assert held.report() == []
+    assert held.lost("gyro", slow) == []
+    assert held.lost("gyro", white) == []

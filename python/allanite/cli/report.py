@@ -171,10 +171,12 @@ def run(args: argparse.Namespace) -> int:
         for figure_path in exported:
             print(f"wrote {figure_path}")
         if sheet is not None:
+            from allanite.datasheet import status_text, verdict
+
             failed = [c for c in report.checks if c.status == "fail"]
-            verdict = "FAIL" if failed else "PASS"
+            overall = status_text(verdict(c.status for c in report.checks))  # as the HTML badge
             print(
-                f"datasheet {sheet.device}: {verdict}"
+                f"datasheet {sheet.device}: {overall}"
                 + (f" ({len(failed)} limit(s) failed)" if failed else "")
             )
     return 0 if report.passed else 1

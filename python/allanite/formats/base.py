@@ -22,6 +22,7 @@ __all__ = [
     "SENSORS",
     "ImuConfig",
     "Written",
+    "describe_term",
     "merge_same",
     "need_rate",
     "number",
@@ -123,6 +124,33 @@ class Written:
     def report(self) -> list[str]:
         """One line per dropped term and per projection (empty when the format held all)."""
         return [f"dropped {d}" for d in self.dropped] + [f"projected {p}" for p in self.projections]
+
+    def lost(self, sensor: str, term: Term) -> list[str]:
+        """The :meth:`report` lines in which the format dropped ``term`` or projected it away.
+
+        A term the format cannot hold as it is (a second Gauss-Markov process where the format
+        has one, a sensor filter) is named on the left of a projection (``... -> ...``) or in
+        a dropped line, as :func:`describe_term` spells it; empty when the file holds it.
+
+        Parameters
+        ----------
+        sensor : {"gyro", "accel"}
+            The sensor the term belongs to.
+        term : Term
+            The term, in the units the config is written in (SI).
+        """
+        named = describe_term(term)
+        return [
+            line
+            for line in self.report()
+            if line.split(" ", 1)[1].startswith(f"{sensor}: ") and named in line.split(" -> ")[0]
+        ]
+
+
+def describe_term(term: Term) -> str:
+    """A term as the export notes spell it: ``markov (sigma=0.001884, tau_c=0.0238)``."""
+    values = ", ".join(f"{k}={v:.4g}" for k, v in term.to_dict().items() if k != "type")
+    return f"{term.type} ({values})"
 
 
 def number(value: Any, where: str) -> float:

@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import optimize
 
-from allanite.formats.base import ImuConfig, merge_same, sensor_model
+from allanite.formats.base import ImuConfig, describe_term, merge_same, sensor_model
 from allanite.model import NoiseModel
 from allanite.terms import GaussMarkov, RateRandomWalk, Term, White
 
@@ -49,11 +49,6 @@ class Projection:
 def default_tau_range(dt: float) -> tuple[float, float]:
     """The tau range used when none is given: 10 samples to one hour."""
     return (10.0 * dt, max(3600.0, 100.0 * dt))
-
-
-def _describe(term: Term) -> str:
-    values = ", ".join(f"{k}={v:.4g}" for k, v in term.to_dict().items() if k != "type")
-    return f"{term.type} ({values})"
 
 
 #: a projected Gauss-Markov correlation time is at most this many times the longest tau
@@ -167,8 +162,9 @@ def project(
             kept.append(white)
             seen.add("white")
             projected_fast.append(
-                f"{sensor}: {_describe(term)} -> {_describe(white)}: the format has no sensor "
-                f"filter, so the ADEV below ~{1.0 / term.values()['bandwidth']:.3g} s differs"
+                f"{sensor}: {describe_term(term)} -> {describe_term(white)}: the format has no "
+                f"sensor filter, so the ADEV below ~{1.0 / term.values()['bandwidth']:.3g} s "
+                "differs"
             )
         else:
             share = 0.0
@@ -176,12 +172,12 @@ def project(
                 total = model.avar(taus, dt)
                 share = float(np.max(np.sqrt(term.avar(taus, dt) / np.maximum(total, 1e-300))))
             dropped.append(
-                f"{sensor}: {_describe(term)}, up to {100 * share:.0f} % of the ADEV over {rng}"
+                f"{sensor}: {describe_term(term)}, up to {100 * share:.0f} % of the ADEV over {rng}"
             )
     projections: list[str] = list(projected_fast)
     slot = "markov" if "markov" in holds else "rrw" if "rrw" in holds else None
     if slow and slot is None:
-        dropped.extend(f"{sensor}: {_describe(t)} (no slow term in the format)" for t in slow)
+        dropped.extend(f"{sensor}: {describe_term(t)} (no slow term in the format)" for t in slow)
     elif slot is not None and slow:
         replaced = [t for t in kept if t.type == slot]
         fixed = [t for t in kept if t.type != slot and t.stationary]
@@ -205,8 +201,8 @@ def project(
                     worst_joint,
                 )
         kept = [*others, *new]
-        sources = ", ".join(_describe(t) for t in [*replaced, *slow])
-        result = ", ".join(_describe(t) for t in new)
+        sources = ", ".join(describe_term(t) for t in [*replaced, *slow])
+        result = ", ".join(describe_term(t) for t in new)
         projections.append(
             f"{sensor}: {sources} -> {result} matching the Allan deviation over "
             f"{rng} (largest ADEV error {100 * worst:.1f} %)"

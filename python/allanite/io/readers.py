@@ -577,17 +577,20 @@ def from_frame(frame: Any, *, source: str = "DataFrame", **options: Any) -> Reco
 
 
 def read_record(
-    source: str | os.PathLike[str] | Any,
+    source: str | os.PathLike[str] | Record | Any,
     options: ReadOptions | None = None,
     **changes: Any,
 ) -> Record:
-    """Read a record from a file or a pandas DataFrame.
+    """Read a record from a file or a pandas DataFrame (a Record is returned as it is).
 
     Parameters
     ----------
-    source : path or pandas.DataFrame
+    source : path, pandas.DataFrame or Record
         The file (format from its suffix unless ``options.format`` is given; unknown suffixes
-        are read as text) or a DataFrame.
+        are read as text) or a DataFrame. A :class:`~allanite.io.Record` is already read: it
+        comes back unchanged, so code that takes "a path or a record" can call this on
+        either (reader options do not apply to it: select channels with
+        ``record.select([...])``).
     options : ReadOptions, optional
         How to read it (:class:`~allanite.io.options.ReadOptions`: sampling frequency, input
         kind, unit, columns, time column, gaps, scale, format and layout); default: all
@@ -603,9 +606,17 @@ def read_record(
     Raises
     ------
     TypeError
-        For a keyword that is not a reader option (the message lists them).
+        For a keyword that is not a reader option (the message lists them), or reader
+        options given with a Record.
     """
     opts = (options if options is not None else ReadOptions()).replace(**changes)
+    if isinstance(source, Record):
+        if options is not None or changes:
+            raise TypeError(
+                "read_record(record, ...): the Record is read already, reader options do not "
+                "apply to it; leave them out (select channels with record.select([...]))"
+            )
+        return source
     if not isinstance(source, (str, os.PathLike)):
         return from_frame(source, **opts.table())
     path = Path(source)
