@@ -238,9 +238,7 @@ def test_every_public_function_accepts_a_record():
     """Introspection over allanite.__all__: each function takes a Record in place of samples,
     with its fs, input and unit (no fs given), and raw samples need fs (keyword-only)."""
     functions = {
-        name: obj
-        for name in allanite.__all__
-        if inspect.isfunction(obj := getattr(allanite, name))
+        name: obj for name in allanite.__all__ if inspect.isfunction(obj := getattr(allanite, name))
     }
     extras = _record_call_extras()
     assert set(functions) == set(extras), "a public function without a Record call in this test"
@@ -259,7 +257,8 @@ def test_every_public_function_accepts_a_record():
             out = func(first, *args, **kwargs)
         assert out is not None, name
         if isinstance(out, allanite.AllanResult):
-            assert out.fs == 50.0 and out.units == "deg/s", name
+            assert out.fs == 50.0, name
+            assert out.units == "deg/s", name
         assert params[0].kind is not inspect.Parameter.KEYWORD_ONLY, name
 
 
