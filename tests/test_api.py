@@ -267,3 +267,33 @@ def test_read_record_returns_a_record_unchanged_and_refuses_options_with_it():
     assert allanite.read_record(record) is record
     with pytest.raises(TypeError, match=r"the Record is read already.*record\.select"):
         allanite.read_record(record, fs=20.0)
+
+
+def test_no_confidence_level_default_but_the_one():
+    """Every ``level``/``confidence`` parameter in the package defaults to DEFAULT_LEVEL
+    (found by walking every module's functions and methods, not from a hand-kept list)."""
+    import importlib
+    import pkgutil
+
+    from allanite.confidence import DEFAULT_LEVEL
+
+    checked: set[str] = set()
+    wrong = []
+    for info in pkgutil.walk_packages(allanite.__path__, "allanite."):
+        if info.name.startswith(("allanite.gui", "allanite.__main__")):
+            continue  # needs a display / runs the CLI
+        try:
+            module = importlib.import_module(info.name)
+        except ImportError:  # an optional extra that is not installed
+            continue
+        for owner in [module, *(c for _, c in inspect.getmembers(module, inspect.isclass))]:
+            for _, func in inspect.getmembers(owner, inspect.isfunction):
+                if getattr(func, "__module__", None) != module.__name__:
+                    continue
+                for param in inspect.signature(func).parameters.values():
+                    if param.name in ("level", "confidence") and isinstance(param.default, float):
+                        checked.add(f"{module.__name__}.{func.__qualname__}")
+                        if param.default != DEFAULT_LEVEL:
+                            wrong.append(f"{module.__name__}.{func.__qualname__}")
+    assert {"allanite.fit.result.FitResult.table", "allanite.fit.result.Coefficient.ci"} <= checked
+    assert not wrong, f"confidence defaults other than {DEFAULT_LEVEL}: {wrong}"

@@ -102,7 +102,8 @@ def fit_lines(fit: Any, level: float) -> list[str]:
     """The text lines under the coefficients: interval level, chi-square, p, rejection."""
     if getattr(fit, "method", None) != "gls":
         return [f"brackets: {100 * level:g} % intervals"]
-    return fit.goodness_line(level).splitlines()
+    lines: list[str] = fit.goodness_line(level).splitlines()
+    return lines
 
 
 def goodness(fit: Any, level: float) -> dict[str, Any]:

@@ -251,7 +251,9 @@ def _whittle_block(
     # |H_i|^2 |H_j|^2 = 4 sin^4 sin^4 / (m_i m_j sin^2(pi f dt))^2
     envelope = 4.0 / np.sin(np.pi * centre * dt) ** 4
     weight = envelope * a.psd_sampled(centre, dt) * b.psd_sampled(centre, dt)
-    block = np.tensordot(weight, integrals, axes=(0, 0)) / np.outer(mm, mm) ** 2
+    block: NDArray[np.float64] = (
+        np.tensordot(weight, integrals, axes=(0, 0)) / np.outer(mm, mm) ** 2
+    )
     # two means over nested spans share only the shorter one: Cov ~ W_ij / max(L_i, L_j)
     eff = n - 2.0 * mm
     block /= dt * np.maximum.outer(eff, eff)
@@ -347,8 +349,9 @@ class CovarianceBasis:
     def __call__(self, weights: NDArray[np.float64]) -> NDArray[np.float64]:
         """Covariance matrix for the term weights ``weights`` (one per term)."""
         w = np.asarray(weights, dtype=np.float64)
-        cov = np.einsum("a,b,abij->ij", w, w, self.basis)
-        return 0.5 * (cov + cov.T)
+        cov: NDArray[np.float64] = np.einsum("a,b,abij->ij", w, w, self.basis)
+        out: NDArray[np.float64] = 0.5 * (cov + cov.T)
+        return out
 
 
 def avar_covariance(

@@ -12,6 +12,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import stats
 
+from allanite.confidence import DEFAULT_LEVEL
 from allanite.fit.classic import ClassicReadout
 from allanite.model import NoiseModel
 from allanite.notebook import fit_html
@@ -47,7 +48,7 @@ class Coefficient:
     unit: str
     interval: Callable[[float], tuple[float, float]] = field(repr=False, compare=False)
 
-    def ci(self, level: float = 0.95) -> tuple[float, float]:
+    def ci(self, level: float = DEFAULT_LEVEL) -> tuple[float, float]:
         """Two-sided confidence interval ``(low, high)`` at ``level`` (e.g. 0.95)."""
         if not 0.0 < level < 1.0:
             raise ValueError(f"level must lie in (0, 1), got {level}")
@@ -206,7 +207,7 @@ class FitResult:
         """The taus (seconds) the model misses singly (see :attr:`misfit`)."""
         return np.asarray(self.tau[self.misfit], dtype=np.float64)
 
-    def goodness_line(self, level: float = 0.95) -> str:
+    def goodness_line(self, level: float = DEFAULT_LEVEL) -> str:
         """One line: interval level, generalized chi-square, p, and whether rejected.
 
         Empty for ``method="seed"`` (no goodness-of-fit test).
@@ -223,7 +224,7 @@ class FitResult:
             return text + ": model not rejected" + note
         return text + "\n" + self.rejection_warning() + note
 
-    def ambiguity_note(self, level: float = 0.95) -> str:
+    def ambiguity_note(self, level: float = DEFAULT_LEVEL) -> str:
         """One line per alternative the record cannot tell from the chosen terms (else empty).
 
         E.g. ``AMBIGUOUS: flicker B = 0.0039 [0, 0.015] deg/h fits the excess at tau =
@@ -277,7 +278,7 @@ class FitResult:
             "apart; intervals from the fit with both"
         )
 
-    def undetected_line(self, level: float = 0.95) -> str:
+    def undetected_line(self, level: float = DEFAULT_LEVEL) -> str:
         """One line of upper limits of the candidates not detected (empty when none).
 
         The terms of :attr:`undetected` and the additions the record shows no evidence of
@@ -370,7 +371,7 @@ class FitResult:
         return units.get(base, self.coefficients[name].unit)
 
     def table(
-        self, units: str | Mapping[str, str] | None = None, level: float = 0.95
+        self, units: str | Mapping[str, str] | None = None, level: float = DEFAULT_LEVEL
     ) -> list[dict[str, Any]]:
         """Coefficients as rows ``{name, value, stderr, low, high, unit}``.
 
@@ -402,7 +403,7 @@ class FitResult:
         return rows
 
     def format_table(
-        self, units: str | Mapping[str, str] | None = "customary", level: float = 0.95
+        self, units: str | Mapping[str, str] | None = "customary", level: float = DEFAULT_LEVEL
     ) -> str:
         """Plain-text version of :meth:`table`, with the goodness of fit.
 
@@ -422,7 +423,7 @@ class FitResult:
             lines.append(self.goodness_line(level))
         return "\n".join(lines)
 
-    def to_dict(self, level: float = 0.95) -> dict[str, Any]:
+    def to_dict(self, level: float = DEFAULT_LEVEL) -> dict[str, Any]:
         """JSON-ready dictionary: model, coefficients with intervals, goodness of fit."""
         return {
             "method": self.method,
@@ -451,7 +452,7 @@ class FitResult:
             ],
         }
 
-    def alternatives_dict(self, level: float = 0.95) -> list[dict[str, Any]]:
+    def alternatives_dict(self, level: float = DEFAULT_LEVEL) -> list[dict[str, Any]]:
         """JSON-ready :attr:`alternatives`, each with the swapped-in term's value and interval.
 
         ``value``, ``low`` and ``high`` are in the model's units (``unit``) and come from the
@@ -470,7 +471,7 @@ class FitResult:
             )
         return out
 
-    def to_json(self, level: float = 0.95, **kwargs: Any) -> str:
+    def to_json(self, level: float = DEFAULT_LEVEL, **kwargs: Any) -> str:
         """JSON text of :meth:`to_dict`."""
         return json.dumps(self.to_dict(level), **kwargs)
 
@@ -479,7 +480,7 @@ class FitResult:
         self,
         reference: Mapping[str, Any] | NoiseModel | FitResult,
         *,
-        level: float = 0.95,
+        level: float = DEFAULT_LEVEL,
     ) -> Comparison:
         """Compare with a datasheet (limits) or a reference device (values).
 

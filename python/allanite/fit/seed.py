@@ -62,7 +62,8 @@ def seed_fit(tau: NDArray[np.float64], var: NDArray[np.float64]) -> SeedFit:
     scale = np.sqrt(np.max(np.abs(y)) / np.max(basis, axis=0))
 
     def residual(p: NDArray[np.float64]) -> NDArray[np.float64]:
-        return basis @ (p * scale) ** 2 - y
+        out: NDArray[np.float64] = basis @ (p * scale) ** 2 - y
+        return out
 
     # start from the non-negative linear solution (as a curve-fitting user would seed it)
     lin, _ = optimize.nnls(basis * scale**2, y)

@@ -129,9 +129,10 @@ def read_config(
     text = read_text_file(path, CONFIG_TEXT)
     name = format or detect_format(path, text)
     try:
-        return format_module(name).read(text, rate=rate)
+        config: ImuConfig = format_module(name).read(text, rate=rate)
     except ValueError as exc:
         raise ValueError(f"{path} ({name}): {exc}") from None
+    return config
 
 
 def write_config(

@@ -19,7 +19,7 @@ def load_yaml(text: str, what: str) -> dict[str, Any]:
     """Parse YAML as OpenCV-style configs write it (``%YAML:1.0``, ``!!opencv-matrix`` tags)."""
     yaml = require("yaml", extra="yaml", purpose=f"reading {what}", package="pyyaml")
 
-    class Loader(yaml.SafeLoader):  # type: ignore[name-defined]
+    class Loader(yaml.SafeLoader):  # type: ignore[name-defined,misc]
         pass
 
     def any_tag(loader: Any, suffix: str, node: Any) -> Any:

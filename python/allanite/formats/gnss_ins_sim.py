@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import ast
 import math
+from collections.abc import Callable
 from typing import Any
 
 from allanite.formats._text import number_text
@@ -80,7 +81,9 @@ def _value(node: ast.AST) -> Any:
             return _value(arg)
     if isinstance(node, ast.BinOp) and isinstance(node.op, (ast.Mult, ast.Div)):
         a, b = _value(node.left), _value(node.right)
-        op = (lambda x, y: x * y) if isinstance(node.op, ast.Mult) else (lambda x, y: x / y)
+        op: Callable[[Any, Any], Any] = (
+            (lambda x, y: x * y) if isinstance(node.op, ast.Mult) else (lambda x, y: x / y)
+        )
         if isinstance(a, list):
             return [op(x, b) for x in a]
         if isinstance(b, list):

@@ -269,7 +269,9 @@ def _noise_type(text: str, where: str) -> str:
     return found[0]
 
 
-def _coefficients(script: _Script, values: dict[str, str], where: str) -> tuple[list, list, str]:
+def _coefficients(
+    script: _Script, values: dict[str, str], where: str
+) -> tuple[list[float], list[float], str]:
     """Numerator, denominator and a description of ``BiasInstabilityCoefficients``."""
     num, den, how = [1.0], [1.0, -0.5], "the default fractalcoef (Denominator [1 -0.5])"
     text = script.resolve(values.get(COEFFICIENTS, "")).strip()
@@ -303,7 +305,13 @@ def _coefficients(script: _Script, values: dict[str, str], where: str) -> tuple[
 
 
 def _bias_term(
-    bi: float, num: list, den: list, how: str, rate: float, where: str, notes: list[str]
+    bi: float,
+    num: list[float],
+    den: list[float],
+    how: str,
+    rate: float,
+    where: str,
+    notes: list[str],
 ) -> Term:
     """The term of ``filter(num, den, bi * randn)`` sampled at ``rate``."""
     dt = 1.0 / rate

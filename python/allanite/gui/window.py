@@ -246,14 +246,14 @@ class MainWindow(QtWidgets.QMainWindow):
     def _show_figure(self, fig: Any) -> None:
         from matplotlib.backends.backend_qtagg import FigureCanvasQTAgg
 
-        canvas = FigureCanvasQTAgg(fig)
+        canvas = FigureCanvasQTAgg(fig)  # type: ignore[no-untyped-call]
         if self._canvas is not None:
             self.plot_layout.removeWidget(self._canvas)
             self._canvas.setParent(None)
             self._canvas.deleteLater()
         self._canvas = canvas
         self.plot_layout.addWidget(canvas)
-        canvas.draw_idle()
+        canvas.draw_idle()  # type: ignore[no-untyped-call]
 
     def _options_from_widgets(self) -> None:
         o = self.session.options
