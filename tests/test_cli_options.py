@@ -61,3 +61,26 @@ def test_dump_json_is_strict() -> None:
 def test_rate_unit(input: str, units: str | None, expected: str | None) -> None:
     record = Record(samples=np.zeros((4, 1)), fs=1.0, input=input, units=units)
     assert rate_unit(record) == expected
+
+
+def test_cli_errors_name_the_option_not_the_keyword(tmp_path, capsys) -> None:
+    """A newcomer running `allanite fit run1.npz` is told `--key NAME`, then `--fs HZ`: the
+    library's "key= (CLI: --key NAME)" is said once, in the command line's spelling."""
+    from allanite.cli import cli_spelling, main
+
+    path = tmp_path / "two.npz"
+    x = np.random.default_rng(1).standard_normal(1000)
+    np.savez(path, gyro=x, accel=x)
+    assert main(["fit", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert "choose one with --key NAME" in err
+    assert "key=" not in err
+    assert "CLI:" not in err
+    assert main(["fit", str(path), "--key", "gyro"]) == 2
+    err = capsys.readouterr().err
+    assert "the sampling frequency is unknown; give it with --fs HZ" in err
+    assert "fs=" not in err
+    assert cli_spelling("give rate= (CLI: --rate HZ; diagnose: --sim-rate HZ)") == (
+        "give --rate HZ (diagnose: --sim-rate HZ)"
+    )
+    assert cli_spelling("no keyword here (--time-column)") == "no keyword here (--time-column)"

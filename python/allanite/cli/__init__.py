@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import re
 import sys
 from collections.abc import Sequence
 
@@ -60,6 +61,24 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+#: a library message's fix with its command-line spelling: ``key= (CLI: --key NAME)``
+_BOTH_SPELLINGS = re.compile(r"\b\w+=\S* \(CLI: ([^;)]+)(?:; ([^)]*))?\)")
+
+
+def cli_spelling(message: str) -> str:
+    """A library error message as the command line says it: only the option of each fix.
+
+    ``choose one with key= (CLI: --key NAME)`` becomes ``choose one with --key NAME``; a
+    second spelling for one subcommand stays in brackets (``--rate HZ (diagnose:
+    --sim-rate HZ)``).
+    """
+
+    def option(match: re.Match[str]) -> str:
+        return match.group(1) + (f" ({match.group(2)})" if match.group(2) else "")
+
+    return _BOTH_SPELLINGS.sub(option, message)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``allanite`` console script; returns the exit code."""
     from allanite.errors import InputError, MissingExtraError
@@ -77,7 +96,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return EXIT_OK
     except (InputError, ValueError, TypeError, OSError, MissingExtraError) as exc:
-        message = " ".join(str(exc).split())
+        message = cli_spelling(" ".join(str(exc).split()))
         print(f"allanite {args.command}: error: {message}", file=sys.stderr)
         return EXIT_USAGE
     except KeyboardInterrupt:

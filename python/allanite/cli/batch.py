@@ -9,6 +9,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
+from allanite.cli import cli_spelling
 from allanite.cli.progress import progress_bars
 from allanite.cli.record_options import add_record_arguments, read_options
 from allanite.confidence import DEFAULT_LEVEL
@@ -217,7 +218,7 @@ def _text_table(result: Any, limits: bool = True) -> str:
     return "\n".join(
         [line.rstrip() for line in lines]
         + _unit_legend(result, shown)
-        + [f"error: {e}" for e in errors]
+        + [f"error: {cli_spelling(e)}" for e in errors]
     )
 
 
