@@ -84,3 +84,22 @@ def test_cli_errors_name_the_option_not_the_keyword(tmp_path, capsys) -> None:
         "give --rate HZ (diagnose: --sim-rate HZ)"
     )
     assert cli_spelling("no keyword here (--time-column)") == "no keyword here (--time-column)"
+
+
+def test_every_subcommand_help_has_examples_each_on_its_own_lines() -> None:
+    """`allanite COMMAND --help` ends with examples; a continuation backslash that Python ate
+    ("az       --units") would run two example lines into one."""
+    import re
+
+    from allanite.cli import SUBCOMMANDS, build_parser
+
+    parser = build_parser()
+    subparsers = next(a for a in parser._actions if a.dest == "command").choices
+    for name in SUBCOMMANDS:
+        text = subparsers[name].format_help()
+        assert "examples:" in text, f"allanite {name} --help has no examples"
+        examples = text.split("examples:", 1)[1]
+        for line in examples.splitlines():
+            assert not re.search(r"\S {3,}--\w", line.split("#")[0]), (name, line)
+            if line.strip().startswith("allanite "):
+                assert line.strip().split()[1] in (name, "fit", "analyze"), (name, line)

@@ -29,7 +29,7 @@ EXAMPLES = """examples:
   allanite fit run1.npz --key gyro_counts --fs 100 --scale 0.05 --units deg/s --channels 0 \\
       --plot fit.png --json
   allanite fit dut.csv --time-column t --units deg/s --datasheet limits.json
-  allanite fit imu.csv --time-column t --channels gx,gy,gz,ax,ay,az \
+  allanite fit imu.csv --time-column t --channels gx,gy,gz,ax,ay,az \\
       --units deg/s,deg/s,deg/s,m/s^2,m/s^2,m/s^2          # six-axis: a table per sensor
 
 datasheet checks: PASS, MARGINAL (the interval crosses the limit), FAIL, and for a term the fit

@@ -40,6 +40,9 @@ def register(subparsers: Any) -> None:
         "model",
         help="noise models in simulator/estimator formats (convert)",
         description="Work with IMU noise models in the formats simulators and estimators read.",
+        epilog="examples:\n  allanite model convert model.json kalibr.yaml --rate 200\n"
+        "Run 'allanite model convert --help' for the formats and more examples.",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     sub = parser.add_subparsers(dest="model_command", metavar="ACTION", required=True)
     conv = sub.add_parser(

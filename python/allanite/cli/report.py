@@ -28,7 +28,7 @@ EXAMPLES = """examples:
   allanite report dut.csv --time-column t --units deg/s --reference ref.csv \\
       --datasheet limits.json -o dut.html --png
   allanite report real.npy --fs 400 --units rad/s --sim-model model.json -o gap.html
-  allanite report imu.csv --time-column t --channels gx,gy,gz,ax,ay,az \
+  allanite report imu.csv --time-column t --channels gx,gy,gz,ax,ay,az \\
       --units deg/s,m/s^2 -o imu.html                    # six-axis: gyro and accelerometer
 
 exit codes: 0 report written (datasheet passed or not given), 1 report written but a datasheet

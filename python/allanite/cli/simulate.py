@@ -11,6 +11,13 @@ from typing import Any
 
 __all__ = ["register", "run"]
 
+EXAMPLES = """examples:
+  allanite fit --example -o model.json                       # a model to simulate from
+  allanite simulate model.json --fs 100 --duration 2h --seed 1 -o sim.npy
+  allanite simulate model.json --fs 400 -n 3.6e5 --output angle --n-channels 3 -o sim.csv
+  allanite analyze sim.npy --fs 100 --units deg/s            # the simulated Allan deviation
+"""
+
 
 def register(subparsers: Any) -> None:
     """Add the ``simulate`` subcommand."""
@@ -20,6 +27,8 @@ def register(subparsers: Any) -> None:
         description="Simulate rate, angle-increment or angle samples from a noise model (JSON, "
         "as written by 'allanite fit'), streamed in bounded memory to .npy, .csv or raw float64 "
         "(.bin/.raw/.f64). The same seed gives the same samples.",
+        epilog=EXAMPLES,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("model", help="noise model JSON file")
     parser.add_argument("--fs", type=float, required=True, help="sampling frequency in Hz")
