@@ -436,9 +436,7 @@ def test_batch_prints_the_units_fit_prints(
     assert "units: Q in deg, N in deg/sqrt(h), B in deg/h, K in deg/h/sqrt(h)" in out
     assert main(["batch", str(path)]) == 1
     out = capsys.readouterr().out
-    assert (
-        f"error: {path}: the sampling frequency is unknown; give it with --fs HZ" in out
-    )
+    assert f"error: {path}: the sampling frequency is unknown; give it with --fs HZ" in out
     assert f"{path}: {path}" not in out
 
 
@@ -541,7 +539,7 @@ def test_simulate_given_a_config_names_the_conversion(
 def test_slope_regions_do_not_repeat_a_class() -> None:
     """Regression: "15.9 – 39 s slope -0.17 (0)" then "43.6 – 61 s slope -0.24 (0)"."""
     import allanite
-    from allanite.report.slopes import slope_table
+    from allanite.slopes import slope_table
     from allanite.terms import Flicker, RateRandomWalk
 
     model = NoiseModel(

@@ -129,3 +129,54 @@ def test_no_new_function_over_100_lines():
 @pytest.mark.parametrize("name", sorted(LONG_FUNCTIONS))
 def test_the_long_function_list_is_not_stale(name):
     assert name in _long_functions(), f"{name} is no longer long: drop it from LONG_FUNCTIONS"
+
+
+#: imports that go up the layers of docs/architecture.md, each stated there
+LAYER_EXCEPTIONS = {
+    # the Jupyter views draw their figures lazily; those plot modules import only leaves
+    ("allanite.notebook", "allanite.plot.allan"),
+    ("allanite.notebook", "allanite.plot.diagnosis"),
+    ("allanite.notebook", "allanite.plot.export"),
+}
+
+
+def _layers() -> list[list[str]]:
+    """The layer table of docs/architecture.md, bottom first: the modules of each row."""
+    text = (ROOT / "docs" / "architecture.md").read_text(encoding="utf-8")
+    table = text.split("| layer | modules |", 1)[1].split("\n\n", 1)[0]
+    graph = import_graph()
+    layers = []
+    for row in table.strip().splitlines()[1:]:
+        cell = re.sub(r"\([^)]*\)", "", row.split("|")[2])  # (descriptions) name no layer
+        names = re.findall(r"`([\w.]+)`", cell)
+        full = [n if n.startswith("allanite") else f"allanite.{n}" for n in names]
+        layers.append([n for n in full if n in graph])
+    return layers
+
+
+def test_imports_go_down_the_documented_layers():
+    layers = _layers()
+    assert len(layers) == 8, "the layer table of docs/architecture.md"
+
+    def layer(module: str) -> int | None:
+        found = [
+            (len(name), i)
+            for i, names in enumerate(layers)
+            for name in names
+            if module == name or module.startswith(name + ".")
+        ]
+        return max(found)[1] if found else None
+
+    graph = import_graph()
+    unplaced = sorted(m for m in graph if m != "allanite" and layer(m) is None)
+    assert not unplaced, f"modules docs/architecture.md's layer table does not place: {unplaced}"
+    upward = [
+        f"{m} -> {d}"
+        for m, targets in graph.items()
+        if m != "allanite"
+        for d in targets
+        if d != "allanite"
+        and layer(d) > layer(m)  # type: ignore[operator]
+        and (m, d) not in LAYER_EXCEPTIONS
+    ]
+    assert not upward, f"imports up the layers of docs/architecture.md: {upward}"

@@ -23,7 +23,7 @@ all equal is refused, since it has no noise to analyse.
   coefficient back in range (the one closest to a typical sensor), e.g. "the record looks like
   deg/h given as deg/s: N would be 0.367 deg/sqrt(h)".
 
-The slopes come from :mod:`allanite.report.slopes` (half-decade windows, points with at least
+The slopes come from :mod:`allanite.slopes` (half-decade windows, points with at least
 20 EDF), so the checks read the curve the way the report's slope table does.
 """
 
@@ -39,7 +39,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from allanite.errors import ImplausibleInputWarning
-from allanite.report.slopes import MIN_EDF, local_slopes, slope_table
+from allanite.slopes import MIN_EDF, local_slopes, slope_table
 from allanite.units import SYMBOL_POWERS, coefficient_unit, convert, sensor_kind
 
 __all__ = [

@@ -23,7 +23,7 @@ from allanite.fit.classic import ClassicReadout, classic_readout
 from allanite.io.atomic import atomic_output
 from allanite.io.record import Record
 from allanite.report.coefficients import customary_rate
-from allanite.report.slopes import MIN_EDF, SlopeRow, slope_table
+from allanite.slopes import MIN_EDF, SlopeRow, slope_table
 from allanite.units import coefficient_unit, convert, display_unit
 from allanite.variance import AllanResult
 

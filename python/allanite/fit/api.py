@@ -20,6 +20,7 @@ from allanite.fit.select import Ambiguity, n_params, select_terms
 from allanite.fit.spec import AUTO_CANDIDATES, TermSpec, resolve_terms
 from allanite.io.record import Record
 from allanite.model import NoiseModel
+from allanite.plausibility import warn_coefficients
 from allanite.terms import Flicker, Quantization, RateRamp, RateRandomWalk, Term, White
 from allanite.units import RECORD_UNIT, SYMBOL_POWERS, coefficient_unit, rate_unit
 from allanite.variance import AllanResult, avar
@@ -572,10 +573,7 @@ def fit(
             float(misfit_level),
             float(min_ratio),
         )
-    # the CLI's wrong-units check, one implementation (lazy: plausibility reads the report's
-    # slope table, and the report package imports the fit)
-    from allanite.plausibility import warn_coefficients
-
+    # the wrong-units check the CLI prints, one implementation
     names = result.meta.get("channels") or ["ch0"]
     warn_coefficients(
         fitted.model.coefficients(), rate, input="rate", channel=str(names[0]), stacklevel=3

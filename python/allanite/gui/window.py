@@ -399,7 +399,7 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def _draw_adev(self) -> None:
         from allanite.plot import allan_figure
-        from allanite.report.slopes import slope_table
+        from allanite.slopes import slope_table
 
         chosen = self._selected_or_raise()
         result = self._display()

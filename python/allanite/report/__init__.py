@@ -9,7 +9,7 @@ from __future__ import annotations
 from allanite.datasheet import Check, Datasheet, Limit, check_limits
 from allanite.report.build import DeviceAnalysis, Report, build_report
 from allanite.report.coefficients import CoefficientRow, coefficient_table, customary_rate
-from allanite.report.slopes import SlopeRow, slope_table
+from allanite.slopes import SlopeRow, slope_table
 
 __all__ = [
     "Check",

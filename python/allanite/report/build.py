@@ -25,7 +25,7 @@ from allanite.io.atomic import atomic_output
 from allanite.io.record import Record
 from allanite.report import html as h
 from allanite.report.coefficients import CoefficientRow, coefficient_table
-from allanite.report.slopes import MIN_EDF, slope_table
+from allanite.slopes import MIN_EDF, slope_table
 from allanite.units import sensor_kind
 from allanite.variance import AllanResult
 
