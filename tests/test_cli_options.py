@@ -103,3 +103,33 @@ def test_every_subcommand_help_has_examples_each_on_its_own_lines() -> None:
             assert not re.search(r"\S {3,}--\w", line.split("#")[0]), (name, line)
             if line.strip().startswith("allanite "):
                 assert line.strip().split()[1] in (name, "fit", "analyze"), (name, line)
+
+
+def test_reader_flags_are_the_read_options_and_survive_record_command() -> None:
+    """read_record's options object is the CLI's: every ReadOptions field has a flag, and the
+    command record_command writes for the next step reads the record the same way."""
+    import dataclasses
+    import shlex
+
+    from allanite.cli import build_parser
+    from allanite.cli.record_options import read_options, record_command
+    from allanite.io import ReadOptions
+
+    argv = [
+        "analyze", "imu.bag", "--fs", "200", "--input", "angle", "--units", "deg",
+        "--channels", "gx,gy", "--time-column", "t", "--time-scale", "1e-9", "--gaps", "split",
+        "--scale", "0.05", "--format", "raw", "--delimiter", ";", "--header", "no",
+        "--key", "imu", "--dtype", "int16", "--n-channels", "3", "--byte-order", "big",
+        "--offset", "16", "--topic", "/imu1",
+    ]  # fmt: skip
+    parser = build_parser()
+    options = read_options(parser.parse_args(argv))
+    defaults = ReadOptions()
+    unchanged = [
+        f.name
+        for f in dataclasses.fields(ReadOptions)
+        if getattr(options, f.name) == getattr(defaults, f.name)
+    ]
+    assert not unchanged, f"ReadOptions fields no CLI flag sets: {unchanged}"
+    again = shlex.split(record_command("fit", "imu.bag", parser.parse_args(argv)))
+    assert read_options(parser.parse_args(again[1:])) == options

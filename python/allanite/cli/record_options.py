@@ -341,6 +341,7 @@ _READER_FLAGS: dict[str, tuple[str, Any]] = {
     "n_channels": ("--n-channels", None),
     "byte_order": ("--byte-order", None),
     "offset": ("--offset", None),
+    "topic": ("--topic", None),
 }
 
 
