@@ -7,8 +7,11 @@ best effect folded into the config (``--write-corrected``: what the plugin can h
 projected), the corrected config re-simulated with the plugin's own discrete law
 (``tests/sim_laws.px4_plugin``, an independent implementation of gazebo_imu_plugin.cpp) and
 diagnosed again as a simulated record. The measured gap of the next round is compared with
-the shrinkage the diagnosis reported. Writes ``results/sim_loop_adis.json`` and the configs
-``results/sim_loop_adis_round*.sdf``.
+the shrinkage the diagnosis reported. The loop stops when the gap is closed, when no
+attributed effect fits the format, or when everything a round folded in is lost in the export
+(``Written.lost``: the export's own "dropped"/"projected" notes, quoted in the output), since
+another round would fold it in again. Writes ``results/sim_loop_adis.json`` and the configs
+``results/sim_loop_adis_round*.sdf`` the loop used.
 
 Run: ``nice python benchmarks/sim_loop_adis.py`` (needs ../shared/data; ~5 min on 2 cores),
 the same as ``allanite diagnose run2.npz --key gyro_counts --channels 0 --scale 0.05 --units
