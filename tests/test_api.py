@@ -297,3 +297,49 @@ def test_no_confidence_level_default_but_the_one():
                             wrong.append(f"{module.__name__}.{func.__qualname__}")
     assert {"allanite.fit.result.FitResult.table", "allanite.fit.result.Coefficient.ci"} <= checked
     assert not wrong, f"confidence defaults other than {DEFAULT_LEVEL}: {wrong}"
+
+
+#: public functions whose fs stays positional, and why
+POSITIONAL_FS = {
+    "stream": "Term.stream(fs, n_channels, seed), the Term protocol the simulation calls",
+    "flicker_stream": "a generator behind Term.stream, same protocol",
+    "gauss_markov_stream": "a generator behind Term.stream, same protocol",
+    "averaged_gauss_markov": "a generator behind Term.stream, same protocol",
+    "random_walk_stream": "a generator behind Term.stream, same protocol",
+    "check_fs": "the validator of an fs value itself",
+    "resolve_source": "variance-internal: resolves (source, fs, input, units) for avar",
+}
+
+
+def test_fs_is_keyword_only_in_every_public_function_outside_diagnosis():
+    """Walk every module's __all__ (functions and public methods): fs is keyword-only. The
+    diagnosis package's internals are its owners' (listed in the report, not here)."""
+    import importlib
+    import pkgutil
+
+    positional = []
+    for info in pkgutil.walk_packages(allanite.__path__, "allanite."):
+        if info.name.startswith(("allanite.gui", "allanite.cli", "allanite.__main__")):
+            continue
+        if info.name.startswith("allanite.diagnosis."):
+            continue
+        try:
+            module = importlib.import_module(info.name)
+        except ImportError:  # an optional extra that is not installed
+            continue
+        for name in getattr(module, "__all__", []):
+            obj = getattr(module, name)
+            members = [(name, obj)]
+            if inspect.isclass(obj):
+                members = [
+                    (attr, value)
+                    for attr, value in vars(obj).items()
+                    if inspect.isfunction(value) and not attr.startswith("_")
+                ]
+            for attr, func in members:
+                if not inspect.isfunction(func) or attr in POSITIONAL_FS:
+                    continue
+                param = inspect.signature(func).parameters.get("fs")
+                if param is not None and param.kind is not inspect.Parameter.KEYWORD_ONLY:
+                    positional.append(f"{info.name}.{attr}")
+    assert not positional, f"fs given by position in {sorted(set(positional))}"

@@ -31,7 +31,7 @@ def test_source_example_fft_versus_time_series_peak():
     n = int(100.3 * FS)  # 200.6 periods: not an integer number
     a1 = REL * A_STAND
     x = _record(rng, n, {1: (a1, 0.7)}, drift=0.02)
-    res = synchronous_error(x, FS, amplitude=A_STAND, frequency=F0)
+    res = synchronous_error(x, fs=FS, amplitude=A_STAND, frequency=F0)
     expected_sigma = SIGMA_N * math.sqrt(2.0 / n)
     assert res.fundamental.uncertainty == pytest.approx(expected_sigma, rel=0.15)
     assert abs(res.a1 - a1) < Z * res.fundamental.uncertainty
@@ -61,7 +61,7 @@ def test_uncertainty_is_calibrated_by_monte_carlo(colored):
             from scipy.signal import lfilter
 
             x += lfilter([1.0], [1.0, -phi], e)
-        res = synchronous_error(x, FS, amplitude=A_STAND, frequency=F0, harmonics=(3,))
+        res = synchronous_error(x, fs=FS, amplitude=A_STAND, frequency=F0, harmonics=(3,))
         h3 = res.harmonics[0]
         z1.append((res.a1 - a[1][0]) / res.fundamental.uncertainty)
         z3.append((h3.amplitude - a[3][0]) / h3.uncertainty)
@@ -78,7 +78,7 @@ def test_dry_friction_odd_harmonics_are_found():
     n = int(60.7 * FS)
     true = {1: (0.4, 0.0), 3: (0.08, 0.5), 5: (0.05, 1.1), 7: (0.03, -0.4)}
     x = _record(rng, n, true)
-    res = synchronous_error(x, FS, amplitude=A_STAND, frequency=F0)
+    res = synchronous_error(x, fs=FS, amplitude=A_STAND, frequency=F0)
     assert [h.order for h in res.harmonics] == [3, 5, 7, 9]
     for h in res.harmonics:
         amp = true.get(h.order, (0.0, 0.0))[0]
@@ -97,7 +97,7 @@ def test_no_leakage_for_a_non_integer_number_of_periods():
     t = np.arange(n) / FS
     x = 0.3 * np.sin(2 * np.pi * F0 * t) + 0.01 * np.sin(2 * np.pi * 3 * F0 * t) + 5.0
     x = x + 1e-9 * np.random.default_rng(5).standard_normal(n)
-    res = synchronous_error(x, FS, amplitude=A_STAND, frequency=F0)
+    res = synchronous_error(x, fs=FS, amplitude=A_STAND, frequency=F0)
     assert res.a1 == pytest.approx(0.3, rel=1e-7)
     assert res.harmonics[0].amplitude == pytest.approx(0.01, rel=1e-6)
     # the nearest rectangular-window FFT bin would lose about a third (scalloping)
@@ -109,26 +109,30 @@ def test_no_leakage_for_a_non_integer_number_of_periods():
 def test_harmonics_above_nyquist_are_skipped():
     rng = np.random.default_rng(6)
     x = _record(rng, 4000, {1: (0.3, 0.0)})
-    res = synchronous_error(x, FS, amplitude=A_STAND, frequency=15.0)
+    res = synchronous_error(x, fs=FS, amplitude=A_STAND, frequency=15.0)
     assert [h.order for h in res.harmonics] == [3, 5]  # 105 and 135 Hz exceed 100 Hz
 
 
 def test_bad_input():
     x = np.zeros(4000)
     with pytest.raises(ValueError, match="1-D"):
-        synchronous_error(np.zeros((10, 2)), FS, amplitude=1.0, frequency=F0)
+        synchronous_error(np.zeros((10, 2)), fs=FS, amplitude=1.0, frequency=F0)
     with pytest.raises(ValueError, match="NaN"):
-        synchronous_error(np.array([0.0, np.nan] * 2000), FS, amplitude=1.0, frequency=F0)
+        synchronous_error(np.array([0.0, np.nan] * 2000), fs=FS, amplitude=1.0, frequency=F0)
     with pytest.raises(ValueError, match="amplitude"):
-        synchronous_error(x, FS, amplitude=0.0, frequency=F0)
+        synchronous_error(x, fs=FS, amplitude=0.0, frequency=F0)
     with pytest.raises(ValueError, match="Nyquist"):
-        synchronous_error(x, FS, amplitude=1.0, frequency=150.0)
+        synchronous_error(x, fs=FS, amplitude=1.0, frequency=150.0)
     with pytest.raises(ValueError, match="periods"):
-        synchronous_error(x[:200], FS, amplitude=1.0, frequency=F0)
+        synchronous_error(x[:200], fs=FS, amplitude=1.0, frequency=F0)
     with pytest.raises(ValueError, match="harmonic orders"):
-        synchronous_error(x, FS, amplitude=1.0, frequency=F0, harmonics=(1,))
+        synchronous_error(x, fs=FS, amplitude=1.0, frequency=F0, harmonics=(1,))
     with pytest.raises(TypeError, match="fs"):
-        synchronous_error(x, "200", amplitude=1.0, frequency=F0)
+        synchronous_error(x, fs="200", amplitude=1.0, frequency=F0)
+    with pytest.raises(
+        TypeError, match=r"fs is keyword-only: synchronous_error\(rate, fs=\.\.\.\)"
+    ):
+        synchronous_error(x, FS, amplitude=1.0, frequency=F0)
 
 
 def test_chunked_fit_equals_one_block(monkeypatch):
@@ -136,9 +140,9 @@ def test_chunked_fit_equals_one_block(monkeypatch):
 
     rng = np.random.default_rng(7)
     x = _record(rng, 20_071, {1: (0.3, 0.4), 5: (0.02, 0.0)}, drift=0.05)
-    whole = synchronous_error(x, FS, amplitude=A_STAND, frequency=F0)
+    whole = synchronous_error(x, fs=FS, amplitude=A_STAND, frequency=F0)
     monkeypatch.setattr(sync, "_CHUNK", 997)
-    chunked = synchronous_error(x, FS, amplitude=A_STAND, frequency=F0)
+    chunked = synchronous_error(x, fs=FS, amplitude=A_STAND, frequency=F0)
     assert chunked.a1 == pytest.approx(whole.a1, rel=1e-10)
     assert chunked.harmonics[1].amplitude == pytest.approx(whole.harmonics[1].amplitude, rel=1e-9)
     assert chunked.peak_reading == pytest.approx(whole.peak_reading, rel=1e-12)

@@ -65,7 +65,7 @@ def test_default_path_on_generated_gyros_no_false_alarm_and_wrong_input_caught()
         right = allanite.avar(rate, fs=FS), allanite.avar(angle, fs=FS, input="angle")
         for res, x in zip(right, (rate, angle), strict=True):
             dev0 = np.atleast_1d(res.dev[0])
-            found = check_allan(res) + check_samples(x, FS, input=res.input, short_dev=dev0)
+            found = check_allan(res) + check_samples(x, fs=FS, input=res.input, short_dev=dev0)
             assert found == [], (seed, [f.message for f in found])
         caught["angle_as_rate"] += "angle_as_rate" in _codes(
             check_allan(allanite.avar(angle, fs=FS))
@@ -95,13 +95,13 @@ def test_counts_without_scale() -> None:
     rng = np.random.default_rng(2)
     counts = np.round(rng.standard_normal(50_000) * 3 + 5000).astype(np.int16)
     dev0 = np.atleast_1d(allanite.avar(counts, fs=FS).dev[0])
-    found = check_samples(counts, FS, short_dev=dev0)
+    found = check_samples(counts, fs=FS, short_dev=dev0)
     assert [f.code for f in found] == ["counts_without_scale"]
     assert "raw counts without a scale factor? give the units per count (--scale)" in str(found[0])
-    assert check_samples(counts, FS, short_dev=dev0, scale=0.01) == []
-    assert check_samples(counts - 5000, FS, short_dev=dev0) == []  # centred: plausible
+    assert check_samples(counts, fs=FS, short_dev=dev0, scale=0.01) == []
+    assert check_samples(counts - 5000, fs=FS, short_dev=dev0) == []  # centred: plausible
     floats = counts + rng.uniform(-0.5, 0.5, counts.size)  # not whole numbers
-    assert check_samples(floats, FS, short_dev=dev0) == []
+    assert check_samples(floats, fs=FS, short_dev=dev0) == []
 
 
 @pytest.mark.parametrize("seed", range(8))

@@ -230,8 +230,8 @@ def stuck_segments(x: NDArray[Any]) -> list[tuple[int, int]]:
 
 def check_samples(
     samples: NDArray[Any],
-    fs: float,
     *,
+    fs: float,
     input: str = "rate",
     channels: Sequence[str] = (),
     scale: float | None = None,

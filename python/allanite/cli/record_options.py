@@ -432,7 +432,7 @@ def warn_implausible(
     dev = np.asarray(result.dev, dtype=np.float64).reshape(result.tau.size, -1)
     findings = check_samples(
         part.samples,
-        fs,
+        fs=fs,
         input=part.input,
         channels=part.channels,
         scale=record.scale,

@@ -127,7 +127,7 @@ def run(args: argparse.Namespace) -> int:
     format_of(args.out)  # fail on a bad suffix before any work
     _refuse_config(args.model)
     model = NoiseModel.load(args.model)
-    n = record_length(args.fs, args.samples, args.duration)
+    n = record_length(args.samples, args.duration, fs=args.fs)
     if args.n_channels < 1:
         raise ValueError(f"--n-channels must be at least 1, got {args.n_channels}")
     check_free_space(args.out, output_size(args.out, n, args.n_channels))

@@ -36,6 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from allanite._deprecation import keyword_only_fs
 from allanite.impact._checks import positive as _check_positive
 
 __all__ = ["HarmonicAmplitude", "SynchronousError", "synchronous_error"]
@@ -196,10 +197,11 @@ def _noise_psd(
     return out
 
 
+@keyword_only_fs
 def synchronous_error(
     rate: ArrayLike,
-    fs: float,
     *,
+    fs: float,
     amplitude: float,
     frequency: float,
     harmonics: Sequence[int] = (3, 5, 7, 9),

@@ -76,8 +76,8 @@ def parse_duration(text: str | float) -> float:
     return seconds
 
 
-def record_length(fs: float, n: int | None = None, duration: str | float | None = None) -> int:
-    """Return the number of samples from ``n`` or ``duration`` (one of them) at ``fs``."""
+def record_length(n: int | None = None, duration: str | float | None = None, *, fs: float) -> int:
+    """Return the number of samples from ``n`` or ``duration`` (one of them) at ``fs`` Hz."""
     rate = check_fs(fs)
     if (n is None) == (duration is None):
         raise ValueError("give the record length as n (samples) or duration (seconds), not both")
@@ -183,7 +183,7 @@ def simulate_chunks(
     """
     n_channels = renamed(n_channels, channels, new="n_channels", old="channels", default=1)
     rate = check_fs(fs)
-    total = record_length(rate, n, duration)
+    total = record_length(n, duration, fs=rate)
     if output not in OUTPUTS:
         raise ValueError(f"unknown output {output!r}; use 'rate', 'angle' or 'increment'")
     if isinstance(chunk, bool) or not isinstance(chunk, numbers.Integral) or chunk < 1:
@@ -262,7 +262,7 @@ def simulate(
     """
     n_channels = renamed(n_channels, channels, new="n_channels", old="channels", default=1)
     rate = check_fs(fs)
-    total = record_length(rate, n, duration)
+    total = record_length(n, duration, fs=rate)
     pieces = list(
         simulate_chunks(
             model,

@@ -173,7 +173,7 @@ def write_record(
     """
     format_of(path)  # fail on a bad suffix before any work
     n_channels = renamed(n_channels, channels, new="n_channels", old="channels", default=1)
-    total = record_length(fs, n, duration)
+    total = record_length(n, duration, fs=fs)
     if (
         isinstance(n_channels, bool)
         or not isinstance(n_channels, (int, np.integer))
