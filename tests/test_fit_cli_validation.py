@@ -95,7 +95,7 @@ def _fit_json(args: list[str], capsys: pytest.CaptureFixture[str]) -> dict[str, 
 
 def test_cli_units_deg_h_rad_s_and_none(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     # issue 12's "N 60x wrong": the same record in deg/s, deg/h and rad/s gives the same
-    # customary coefficients (deg/sqrt(h) for deg units), and without --units the CLI says the
+    # customary coefficients (deg/sqrt(h), for rad/s too), and without --units the CLI says the
     # coefficients are in the record's own units instead of silently assuming deg/s
     fs, n_true = 100.0, 0.01  # deg/sqrt(s)
     rate = np.random.default_rng(12).normal(size=30_000) * n_true * np.sqrt(fs)
@@ -106,10 +106,9 @@ def test_cli_units_deg_h_rad_s_and_none(tmp_path: Path, capsys: pytest.CaptureFi
     common = ["--fs", "100", "--taus", "octave"]
     got = {u: _fit_json([str(p), *common, "--units", u], capsys) for u, p in files.items()}
     n = {u: {r["symbol"]: r for r in ch["coefficients"]}["N"] for u, ch in got.items()}
-    assert n["deg/s"]["unit"] == n["deg/h"]["unit"] == "deg/sqrt(h)"
+    assert n["deg/s"]["unit"] == n["deg/h"]["unit"] == n["rad/s"]["unit"] == "deg/sqrt(h)"
     assert n["deg/h"]["value"] == pytest.approx(n["deg/s"]["value"], rel=1e-9)
-    assert n["rad/s"]["unit"] == "rad/sqrt(h)"
-    assert np.rad2deg(n["rad/s"]["value"]) == pytest.approx(n["deg/s"]["value"], rel=1e-9)
+    assert n["rad/s"]["value"] == pytest.approx(n["deg/s"]["value"], rel=1e-9)
     # the API on the deg/s record: N in deg/sqrt(s), 60 x that in deg/sqrt(h)
     api = fit_module.fit(allanite.avar(rate, fs=fs, taus="octave", units="deg/s"))
     assert n["deg/s"]["value"] == pytest.approx(60.0 * api["N"].value, rel=1e-9)
@@ -146,8 +145,9 @@ def test_one_column_csv_with_a_units_header(
     assert ch["units"] == "rad/s"
     api = fit_module.fit(allanite.avar(angle, fs=fs, input="angle", taus="octave", units="rad/s"))
     n = {r["symbol"]: r for r in ch["coefficients"]}["N"]
-    assert n["unit"] == "rad/sqrt(h)"
-    assert n["value"] == pytest.approx(60.0 * api["N"].value, rel=1e-9)
+    assert n["unit"] == "deg/sqrt(h)"  # customary; the model keeps rad/s
+    assert ch["model"]["units"]["rate"] == "rad/s"
+    assert n["value"] == pytest.approx(60.0 * np.rad2deg(api["N"].value), rel=1e-9)
     # several columns still split at the delimiter; a ragged one-column file is still refused
     two = tmp_path / "two.csv"
     np.savetxt(
