@@ -16,6 +16,7 @@ The graph is built from the source with :mod:`ast` (nothing is imported). Every 
 from __future__ import annotations
 
 import ast
+import functools
 from pathlib import Path
 
 PACKAGE = Path(__file__).resolve().parents[1] / "python" / "allanite"
@@ -42,8 +43,12 @@ def _type_checking_lines(tree: ast.Module) -> set[int]:
     return lines
 
 
+@functools.cache
 def import_graph() -> dict[str, set[str]]:
-    """Module -> the allanite modules it imports (see the module docstring for the rules)."""
+    """Module -> the allanite modules it imports (see the module docstring for the rules).
+
+    Built once per session (the tests only read it).
+    """
     modules = _modules()
 
     def owner(name: str) -> str | None:
