@@ -381,10 +381,29 @@ def test_the_library_fit_runs_the_same_wrong_units_check() -> None:
     (expected,) = check_coefficients(fitted.model.coefficients(), "deg/s", spelling="python")
     assert message == expected.message
     assert "deg/h given as deg/s" in message
-    assert "pass units='deg/h'" in message
-    assert "--units" not in message
+    assert "pass units='deg/h' (CLI: --units deg/h)" in message
     assert warning.filename == __file__  # points at the caller's line
     with warnings.catch_warnings():
         warnings.simplefilter("error", ImplausibleInputWarning)
         allanite.fit(rate, fs=FS, units="deg/h")
         allanite.fit(allanite.avar(rate, fs=FS, units="deg/h", taus="octave"))
+
+
+def test_batch_warns_about_wrong_units_as_the_cli_speaks(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """`allanite batch` reaches the check through the library fit: one line in the CLI's own
+    form (the channel named as in the table, --units), not a Python warning."""
+    from allanite.examples import example_model
+
+    rate = example_model().simulate(60_000, fs=FS, seed=102).ravel() * 3600.0  # deg/h
+    path = tmp_path / "dph.npy"
+    np.save(path, rate)
+    code, out, err = _cli(["batch", str(path), "--fs", "100", "--units", "deg/s"], capsys)
+    assert code == 0
+    (line,) = err.strip().splitlines()
+    assert line.startswith("allanite batch: warning: channel col0: N = ")
+    assert line.endswith("if so, pass --units deg/h")
+    assert "ImplausibleInputWarning" not in err
+    code, out, err = _cli(["batch", str(path), "--fs", "100", "--units", "deg/h"], capsys)
+    assert "warning" not in err

@@ -30,6 +30,7 @@ the record could not be analysed (*marginal* and *undetermined* are undecided, n
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import os
@@ -265,6 +266,8 @@ def _analyse(task: _Task) -> list[dict[str, Any]]:
         result = avar_large(samples, fs=fs, input=input_kind, units=rate, **task.avar_options)
     except (InputError, ValueError, TypeError, OSError) as exc:
         return [{"record": task.name, "channel": None, "error": " ".join(str(exc).split())}]
+    if len(names) == result.n_channels:  # the fit's findings name the channel as the table does
+        result = dataclasses.replace(result, meta={**result.meta, "channels": list(names)})
     rows = []
     for c in range(result.n_channels):
         row: dict[str, Any] = {

@@ -445,8 +445,9 @@ def check_coefficients(
     channel : str
         Channel name for the message.
     spelling : {"cli", "python"}
-        How the fix is spelled: ``--units deg/h`` for the command line, ``units='deg/h'``
-        for a library call.
+        How the fix is spelled: ``--units deg/h`` for the command line, ``units='deg/h'
+        (CLI: --units deg/h)`` for a library call (the CLI prints it as ``--units deg/h``,
+        :func:`allanite.cli.cli_spelling`).
 
     Returns
     -------
@@ -502,7 +503,8 @@ def check_coefficients(
                 channel,
                 f"{what}: check --units ({unit}) and --scale"
                 if spelling == "cli"
-                else f"{what}: check units={unit!r} and the samples' scale factor",
+                else f"{what}: check units={unit!r} (CLI: --units) and the reader's scale= (CLI: "
+                "--scale)",
             )
         ]
     _, other, moved = best
@@ -512,7 +514,11 @@ def check_coefficients(
             "implausible_units",
             channel,
             f"{what}: the record looks like {other} given as {unit}: {would}; if so, pass "
-            + (f"--units {other}" if spelling == "cli" else f"units={other!r}"),
+            + (
+                f"--units {other}"
+                if spelling == "cli"
+                else f"units={other!r} (CLI: --units {other})"
+            ),
         )
     ]
 

@@ -14,7 +14,9 @@ import argparse
 import importlib
 import re
 import sys
-from collections.abc import Sequence
+import warnings
+from collections.abc import Callable, Sequence
+from typing import Any
 
 __all__ = ["SUBCOMMANDS", "build_parser", "main"]
 
@@ -79,9 +81,28 @@ def cli_spelling(message: str) -> str:
     return _BOTH_SPELLINGS.sub(option, message)
 
 
+def _warning_printer(command: str, default: Callable[..., None]) -> Callable[..., None]:
+    """Return a ``warnings.showwarning`` for a subcommand.
+
+    A library's finding about the input (:class:`~allanite.errors.ImplausibleInputWarning`)
+    is printed as ``allanite COMMAND: warning: ...`` in the command line's spelling; any
+    other warning as Python shows it.
+    """
+    from allanite.errors import ImplausibleInputWarning
+
+    def show(message: Warning | str, category: type[Warning], *args: Any, **kwargs: Any) -> None:
+        if issubclass(category, ImplausibleInputWarning):
+            text = cli_spelling(" ".join(str(message).split()))
+            print(f"allanite {command}: warning: {text}", file=sys.stderr)
+        else:
+            default(message, category, *args, **kwargs)
+
+    return show
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``allanite`` console script; returns the exit code."""
-    from allanite.errors import InputError, MissingExtraError
+    from allanite.errors import ImplausibleInputWarning, InputError, MissingExtraError
 
     parser = build_parser()
     args = parser.parse_args(argv)
@@ -89,7 +110,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.print_help(sys.stderr)
         return EXIT_USAGE
     try:
-        return int(args.func(args) or 0)
+        with warnings.catch_warnings():
+            # findings about the input are advice the CLI prints, whatever the -W filters
+            warnings.simplefilter("always", ImplausibleInputWarning)
+            warnings.showwarning = _warning_printer(args.command, warnings.showwarning)
+            return int(args.func(args) or 0)
     except BrokenPipeError:  # the reader of stdout went away (e.g. `| head`): not an error
         import os
 

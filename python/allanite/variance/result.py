@@ -216,8 +216,14 @@ class AllanResult:
             if index != 0:
                 raise IndexError(f"channel {index} out of range for a single-channel result")
             return self
+        names = self.meta.get("channels")
+        meta = {**self.meta, "channels": [names[index]]} if names else self.meta
         return dataclasses.replace(
-            self, var=self.var[:, index], edf=self.edf[:, index], alpha=self.alpha[:, index]
+            self,
+            var=self.var[:, index],
+            edf=self.edf[:, index],
+            alpha=self.alpha[:, index],
+            meta=meta,
         )
 
     def to_dict(self) -> dict[str, Any]:
