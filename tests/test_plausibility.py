@@ -399,11 +399,11 @@ def test_batch_warns_about_wrong_units_as_the_cli_speaks(
     rate = example_model().simulate(60_000, fs=FS, seed=102).ravel() * 3600.0  # deg/h
     path = tmp_path / "dph.npy"
     np.save(path, rate)
-    code, out, err = _cli(["batch", str(path), "--fs", "100", "--units", "deg/s"], capsys)
+    code, _out, err = _cli(["batch", str(path), "--fs", "100", "--units", "deg/s"], capsys)
     assert code == 0
     (line,) = err.strip().splitlines()
     assert line.startswith("allanite batch: warning: channel col0: N = ")
     assert line.endswith("if so, pass --units deg/h")
     assert "ImplausibleInputWarning" not in err
-    code, out, err = _cli(["batch", str(path), "--fs", "100", "--units", "deg/h"], capsys)
+    code, _out, err = _cli(["batch", str(path), "--fs", "100", "--units", "deg/h"], capsys)
     assert "warning" not in err
