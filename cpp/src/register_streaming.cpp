@@ -41,6 +41,42 @@ class StateArray {
   std::vector<NeumaierSum> sums_;
 };
 
+/// A writable (C, LaneSum::kStateSize) float64 C-contiguous array of LaneSum states (his, then
+/// los), written back on scope exit.
+class LaneStateArray {
+ public:
+  LaneStateArray(py::array& state, Eigen::Index nc) : arr_(state) {
+    constexpr int width = LaneSum::kStateSize;
+    if (!py::isinstance<py::array_t<double>>(state) || state.ndim() != 2 || state.shape(0) != nc ||
+        state.shape(1) != width || !(state.flags() & py::array::c_style))
+      throw py::value_error("state must be a C-contiguous float64 array of shape (" + std::to_string(nc) + ", " +
+                            std::to_string(width) + "); create it with np.zeros((channels, SUM_LANES_STATE))");
+    const auto* p = static_cast<const double*>(state.data());
+    sums_.resize(static_cast<std::size_t>(nc));
+    for (std::size_t c = 0; c < sums_.size(); ++c)
+      for (int r = 0; r < LaneSum::kLanes; ++r) {
+        sums_[c].hi[r] = p[c * width + r];
+        sums_[c].lo[r] = p[c * width + LaneSum::kLanes + r];
+      }
+  }
+  void store() {
+    if (!arr_.writeable()) throw py::value_error("state must be writable");
+    auto* p = static_cast<double*>(arr_.mutable_data());
+    constexpr int width = LaneSum::kStateSize;
+    for (std::size_t c = 0; c < sums_.size(); ++c)
+      for (int r = 0; r < LaneSum::kLanes; ++r) {
+        p[c * width + r] = sums_[c].hi[r];
+        p[c * width + LaneSum::kLanes + r] = sums_[c].lo[r];
+      }
+  }
+  LaneSum* data() { return sums_.data(); }
+  [[nodiscard]] std::size_t size() const { return sums_.size(); }
+
+ private:
+  py::array& arr_;
+  std::vector<LaneSum> sums_;
+};
+
 std::vector<double> per_channel(const py::array_t<double, py::array::forcecast>& v, Eigen::Index nc,
                                 const char* name) {
   if (v.ndim() != 1 || v.shape(0) != nc)
@@ -78,14 +114,23 @@ void stream_sums(const py::array& x, std::int64_t k0, py::array& state,
                  const py::array_t<double, py::array::forcecast>& a,
                  const py::array_t<double, py::array::forcecast>& b) {
   const Eigen::Index nc = x.ndim() == 2 ? x.shape(1) : 0;
-  StateArray st(state, nc);
+  LaneStateArray st(state, nc);
   const auto va = per_channel(a, nc, "a"), vb = per_channel(b, nc, "b");
   dispatch(x, [&](const auto& view) {
     py::gil_scoped_release release;
     stream::check_finite_chunk(view, k0);
-    stream::add_shifted(view, va.data(), vb.data(), st.data());
+    stream::add_shifted(view, k0, va.data(), vb.data(), st.data());
   });
   st.store();
+}
+
+py::array_t<double> stream_sums_value(py::array& state) {
+  const Eigen::Index nc = state.ndim() == 2 ? state.shape(0) : 0;
+  LaneStateArray st(state, nc);
+  py::array_t<double> out(static_cast<py::ssize_t>(st.size()));
+  auto* o = out.mutable_data();
+  for (std::size_t c = 0; c < st.size(); ++c) o[c] = st.data()[c].value();
+  return out;
 }
 
 void stream_moment(const py::array& x, std::int64_t k0, double kbar,
@@ -168,8 +213,11 @@ void diff_square_sums(const std::vector<py::array>& windows, std::int64_t term_s
 void register_streaming(py::module_& m) {
   m.attr("SUM_BLOCK") = detail::kSumBlock;
   m.def("stream_sums", &stream_sums, py::arg("x"), py::arg("k0"), py::arg("state"), py::arg("a"), py::arg("b"),
-        "state[c] += sum_k (x[k, c] - a[c]) - b[c] (compensated, carried in state (C, 2)); checks "
-        "that the chunk (first sample k0) is finite.");
+        "state[c] += sum_k (x[k, c] - a[c]) - b[c] (compensated, lanes by sample index, carried in state "
+        "(C, SUM_LANES_STATE)); checks that the chunk (first sample k0) is finite.");
+  m.attr("SUM_LANES_STATE") = LaneSum::kStateSize;
+  m.def("stream_sums_value", &stream_sums_value, py::arg("state"),
+        "Totals (C,) of the lane states of stream_sums (the rounding of build_phase's means).");
   m.def("stream_moment", &stream_moment, py::arg("x"), py::arg("k0"), py::arg("kbar"), py::arg("mean1"),
         py::arg("corr"), py::arg("state"),
         "state[c] += sum_k (k0 + k - kbar) ((x[k, c] - mean1[c]) - corr[c]).");

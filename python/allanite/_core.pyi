@@ -10,6 +10,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 SUM_BLOCK: int
+SUM_LANES_STATE: int
 
 # register_variances.cpp ---------------------------------------------------------------------
 
@@ -85,7 +86,10 @@ def running_sum(
 def stream_sums(
     x: NDArray[np.generic], k0: int, state: NDArray[np.float64], a: ArrayLike, b: ArrayLike
 ) -> None:
-    """Accumulate the per-channel sums of a chunk into ``state``."""
+    """Accumulate the per-channel sums of a chunk into ``state`` ``(C, SUM_LANES_STATE)``."""
+
+def stream_sums_value(state: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Totals ``(C,)`` of the lane states of :func:`stream_sums`."""
 
 def stream_moment(
     x: NDArray[np.generic],

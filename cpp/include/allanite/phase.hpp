@@ -2,7 +2,7 @@
 // "phase" array (the integrated signal in units of sample-rate * samples), the common input
 // of every Allan-family kernel.
 //
-// rate / increment: subtract the mean (two-stage compensated mean, so a bias of 1e10 leaves an
+// rate / increment: subtract the mean (two-stage compensated mean, LaneSum, so a bias of 1e10 leaves an
 //   offset of about one rounding of the noise), then accumulate with Neumaier summation:
 //   phase[0] = 0, phase[k+1] = sum_{i<=k} (y[i] - mean). Length N + 1.
 // angle: subtract the least-squares line theta[k] - (a + b (k - kbar)), evaluated in
@@ -45,15 +45,23 @@ inline InputKind parse_input_kind(const std::string& s) {
 
 namespace detail {
 
-/// Two-stage compensated mean of column c: mean1 + correction, both returned.
+/// First sample of column c and the step between its rows, for add_shifted_lanes.
+template <class T>
+const T* column_start(const StridedMap<T>& x, Eigen::Index c) noexcept {
+  return x.data() + c * x.innerStride();
+}
+
+/// Two-stage compensated mean of column c: mean1 + correction, both returned. Each stage is a
+/// LaneSum over the samples (lanes by sample index, as the chunked passes of streaming.hpp).
 template <class T>
 void column_mean(const StridedMap<T>& x, Eigen::Index c, double& mean1, double& corr) {
   const Eigen::Index n = x.rows();
-  NeumaierSum s1;
-  for (Eigen::Index k = 0; k < n; ++k) s1.add(static_cast<double>(x(k, c)));
+  const T* p = column_start(x, c);
+  LaneSum s1;
+  add_shifted_lanes(p, x.outerStride(), n, 0, 0.0, 0.0, s1);
   mean1 = s1.value() / static_cast<double>(n);
-  NeumaierSum s2;
-  for (Eigen::Index k = 0; k < n; ++k) s2.add(static_cast<double>(x(k, c)) - mean1);
+  LaneSum s2;
+  add_shifted_lanes(p, x.outerStride(), n, 0, mean1, 0.0, s2);
   corr = s2.value() / static_cast<double>(n);
 }
 

@@ -4,8 +4,8 @@
 // A record too large for memory is read in chunks; each pass below consumes chunks in order
 // and performs exactly the floating-point operations of build_phase on the same values in the
 // same order, so the phase written chunk by chunk equals the in-memory phase bit for bit:
-//   pass 1  s1 += x                              -> mean1 = s1 / n
-//   pass 2  s2 += x - mean1                      -> corr  = s2 / n
+//   pass 1  s1 += x                              -> mean1 = s1 / n   (LaneSum, lanes by sample)
+//   pass 2  s2 += x - mean1                      -> corr  = s2 / n   (LaneSum)
 //   rate/increment: pass 3  acc += (x - mean1) - corr, phase[k + 1] = acc
 //   angle: pass 3  sxy += (k - kbar) ((x - mean1) - corr) -> slope = sxy / sxx
 //          pass 4  phase[k] = double-double residual of x - mean1 - corr - slope (k - kbar)
@@ -38,11 +38,12 @@ void check_finite_chunk(const StridedMap<T>& x, std::int64_t k0) {
   }
 }
 
-/// acc[c] += (x(k, c) - a[c]) - b[c] for every row k (pass 1 with a = b = 0, pass 2 with b = 0).
+/// acc[c] += (x(k, c) - a[c]) - b[c] for every row k (pass 1 with a = b = 0, pass 2 with b = 0),
+/// row k in lane k0 + k of the LaneSum (the first row of the chunk is sample k0).
 template <class T>
-void add_shifted(const StridedMap<T>& x, const double* a, const double* b, NeumaierSum* acc) {
+void add_shifted(const StridedMap<T>& x, std::int64_t k0, const double* a, const double* b, LaneSum* acc) {
   for (Eigen::Index c = 0; c < x.cols(); ++c)
-    for (Eigen::Index k = 0; k < x.rows(); ++k) acc[c].add((static_cast<double>(x(k, c)) - a[c]) - b[c]);
+    add_shifted_lanes(detail::column_start(x, c), x.outerStride(), x.rows(), k0, a[c], b[c], acc[c]);
 }
 
 /// acc[c] += (k - kbar) ((x(k, c) - mean1[c]) - corr[c]), k = k0 + row (angle slope, pass 3).

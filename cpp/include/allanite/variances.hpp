@@ -34,20 +34,7 @@
 #include "allanite/parallel.hpp"
 #include "allanite/phase.hpp"
 
-// The hot loops are compiled twice, for AVX2 and for the baseline ISA, and picked at load time
-// (GCC function multi-versioning). Each lane performs the same IEEE operations in the same
-// order either way (no FMA contraction: -ffp-contract=off), so the clones agree bit for bit.
-// The loop bodies are forced inline into the clones: otherwise both call one baseline copy.
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__)
-#define ALLANITE_TARGET_CLONES __attribute__((target_clones("avx2", "default")))
-#define ALLANITE_ALWAYS_INLINE inline __attribute__((always_inline))
-// for 4-lane bodies that vectorise as they are (SLP), where loop vectorisation adds shuffles
-#define ALLANITE_SLP_ONLY __attribute__((optimize("no-tree-loop-vectorize")))
-#else
-#define ALLANITE_SLP_ONLY
-#define ALLANITE_TARGET_CLONES
-#define ALLANITE_ALWAYS_INLINE inline
-#endif
+// The hot loops: ALLANITE_TARGET_CLONES and friends (simd.hpp, via compensated.hpp).
 
 namespace allanite {
 

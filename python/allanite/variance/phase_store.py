@@ -197,7 +197,7 @@ def build_phase_store(
         if progress is not None:
             progress("phase", done, passes * n_total if n_total else max(done, 1))
 
-    s1 = np.zeros((nc, 2))
+    s1 = np.zeros((nc, _core.SUM_LANES_STATE))
     n = 0
     for chunk in record.chunks(chunk_rows):
         _core.stream_sums(chunk, n, s1, zeros, zeros)
@@ -206,14 +206,14 @@ def build_phase_store(
     if n < 3:
         raise ValueError(f"record too short: need at least 3 samples, got {n}")
     nn = float(n)
-    mean1 = _value(s1) / nn
-    s2 = np.zeros((nc, 2))
+    mean1 = _core.stream_sums_value(s1) / nn
+    s2 = np.zeros((nc, _core.SUM_LANES_STATE))
     k0 = 0
     for chunk in record.chunks(chunk_rows):
         _core.stream_sums(chunk, k0, s2, mean1, zeros)
         k0 += chunk.shape[0]
         tick(chunk.shape[0], n)
-    corr = _value(s2) / nn
+    corr = _core.stream_sums_value(s2) / nn
 
     rows = n if input == "angle" else n + 1
     in_memory = max_memory_bytes is None or rows * nc * _ITEM <= max_memory_bytes
