@@ -325,3 +325,20 @@ def test_tau_blocked_pass_equals_one_factor_at_a_time(kind, channels):
     alone = np.vstack([_core.variance(phase, [int(m)], kind, 1) for m in factors])
     for threads in (1, 2, 3):
         assert np.array_equal(_core.variance(phase, factors, kind, threads), alone)
+
+
+@pytest.mark.parametrize("extra", [0, 4321])
+def test_chunked_phase_equals_core_phase_across_phase_blocks(extra):
+    """Records of several PHASE_BLOCK blocks (a partial last one or none), read in chunks that
+    end inside blocks, on block edges, or hold several blocks: the same bits as _core.phase
+    on any number of threads."""
+    block = int(_core.PHASE_BLOCK)
+    x = _record(2 * block + extra, c=2)
+    expected = _core.phase(x, "rate", threads=1)
+    assert np.array_equal(_core.phase(x, "rate", threads=2), expected)
+    for chunk_rows in (7919, block, block + 1, 3 * block):
+        with build_phase_store(
+            ArrayRecord(x), "rate", chunk_rows=chunk_rows, max_memory_bytes=None
+        ) as store:
+            got = store.read(0, np.empty((store.rows, store.channels)))
+            assert np.array_equal(got, expected), chunk_rows

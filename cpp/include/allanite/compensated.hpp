@@ -117,7 +117,7 @@ ALLANITE_ALWAYS_INLINE void add_shifted_lanes_impl(const T* x, std::ptrdiff_t st
   for (; k < n; ++k) lane_add(s, static_cast<int>((k0 + k) % L), (static_cast<double>(x[k * stride]) - a) - b);
 }
 
-ALLANITE_TARGET_CLONES static void add_shifted_lanes_contiguous(const double* x, std::int64_t n, std::int64_t k0,
+[[maybe_unused]] ALLANITE_TARGET_CLONES static void add_shifted_lanes_contiguous(const double* x, std::int64_t n, std::int64_t k0,
                                                                 double a, double b, LaneSum& s) noexcept {
   add_shifted_lanes_impl(x, 1, n, k0, a, b, s);
 }
