@@ -38,6 +38,10 @@ struct Pack4 {
     for (int i = 0; i < 4; ++i) a.v[i] -= b.v[i];
     return a;
   }
+  friend Pack4 operator*(Pack4 a, const Pack4& b) noexcept {
+    for (int i = 0; i < 4; ++i) a.v[i] *= b.v[i];
+    return a;
+  }
   Pack4& operator+=(const Pack4& b) noexcept { return *this = *this + b; }
 };
 #endif
