@@ -333,12 +333,13 @@ def test_chunked_phase_equals_core_phase_across_phase_blocks(extra):
     end inside blocks, on block edges, or hold several blocks: the same bits as _core.phase
     on any number of threads."""
     block = int(_core.PHASE_BLOCK)
-    x = _record(2 * block + extra, c=2)
-    expected = _core.phase(x, "rate", threads=1)
-    assert np.array_equal(_core.phase(x, "rate", threads=2), expected)
-    for chunk_rows in (7919, block, block + 1, 3 * block):
-        with build_phase_store(
-            ArrayRecord(x), "rate", chunk_rows=chunk_rows, max_memory_bytes=None
-        ) as store:
-            got = store.read(0, np.empty((store.rows, store.channels)))
-            assert np.array_equal(got, expected), chunk_rows
+    for channels in (1, 2):  # one: four blocks side by side in a vector; two: one by one
+        x = _record(4 * block + extra, c=channels)
+        expected = _core.phase(x, "rate", threads=1)
+        assert np.array_equal(_core.phase(x, "rate", threads=2), expected)
+        for chunk_rows in (7919, block, block + 1, 3 * block):
+            with build_phase_store(
+                ArrayRecord(x), "rate", chunk_rows=chunk_rows, max_memory_bytes=None
+            ) as store:
+                got = store.read(0, np.empty((store.rows, store.channels)))
+                assert np.array_equal(got, expected), (channels, chunk_rows)

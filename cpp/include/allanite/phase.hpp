@@ -23,8 +23,10 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #if defined(__linux__)
@@ -108,6 +110,33 @@ void accumulate_block(const T* x, std::ptrdiff_t stride, std::int64_t len, doubl
     acc.add((static_cast<double>(x[k * stride]) - mean1) - corr);
     out[k * ostride] = acc.value();
   }
+}
+
+/// accumulate_block on four blocks side by side, lane r the block whose samples start at x[r]
+/// (contiguous) and whose phase goes to out[r] (row stride ostride): each lane performs
+/// NeumaierSum::add as TwoSum, which yields the same error term, so every lane gives the bits
+/// of accumulate_block; four chains in one vector instead of one latency-bound chain.
+/// hi/lo: the lanes' states in and out.
+[[maybe_unused]] ALLANITE_TARGET_CLONES static void accumulate_blocks4(const double* const* x, std::int64_t len,
+                                                                       double mean1, double corr, double* hi,
+                                                                       double* lo, double* const* out,
+                                                                       std::ptrdiff_t ostride) noexcept {
+  Pack4 s, e;
+  std::memcpy(&s, hi, sizeof s);
+  std::memcpy(&e, lo, sizeof e);
+  const Pack4 pm = {mean1, mean1, mean1, mean1}, pc = {corr, corr, corr, corr};
+  for (std::int64_t k = 0; k < len; ++k) {
+    Pack4 v = {x[0][k], x[1][k], x[2][k], x[3][k]};
+    v = (v - pm) - pc;
+    const Pack4 t = s + v;
+    const Pack4 bb = t - s;
+    e += (s - (t - bb)) + (v - bb);
+    s = t;
+    const Pack4 value = s + e;
+    for (int r = 0; r < 4; ++r) out[r][k * ostride] = value[r];
+  }
+  std::memcpy(hi, &s, sizeof s);
+  std::memcpy(lo, &e, sizeof e);
 }
 
 namespace detail {
@@ -235,15 +264,42 @@ RowMatrix build_phase(const StridedMap<T>& x, InputKind kind, int threads = 1) {
   phase.row(0).setZero();
   const std::int64_t nb = phase_blocks(n);
   const std::vector<double> bases = phase_block_bases(v2.data(), nb, nc, corr.data());
-  parallel_for(static_cast<std::size_t>(nb), nthreads, [&](std::size_t task) {
-    const auto blk = static_cast<std::int64_t>(task);
-    const std::int64_t k0 = blk * kPhaseBlock, len = std::min(kPhaseBlock, n - k0);
+  // tasks of four blocks, side by side in one vector where the samples are contiguous float64
+  // (accumulate_blocks4), else one after the other; the same bits either way
+  constexpr std::int64_t kSide = 4;
+  parallel_for(static_cast<std::size_t>((nb + kSide - 1) / kSide), nthreads, [&](std::size_t task) {
+    const std::int64_t b0 = static_cast<std::int64_t>(task) * kSide, b1 = std::min(nb, b0 + kSide);
     for (Eigen::Index c = 0; c < nc; ++c) {
-      const auto i = static_cast<std::size_t>((blk * nc + c) * 2);
-      NeumaierSum acc(bases[i], bases[i + 1]);
-      accumulate_block(detail::column_start(x, c) + k0 * x.outerStride(), x.outerStride(), len,
-                       mean1[static_cast<std::size_t>(c)], corr[static_cast<std::size_t>(c)], acc,
-                       phase.data() + (k0 + 1) * nc + c, nc);
+      const double m1 = mean1[static_cast<std::size_t>(c)], cr = corr[static_cast<std::size_t>(c)];
+      const T* col = detail::column_start(x, c);
+      const std::int64_t rs = x.outerStride();
+      NeumaierSum acc[kSide];
+      std::int64_t done = 0;  // samples of every block of the task already accumulated
+      for (std::int64_t b = b0; b < b1; ++b) {
+        const auto i = static_cast<std::size_t>((b * nc + c) * 2);
+        acc[b - b0] = NeumaierSum(bases[i], bases[i + 1]);
+      }
+      if constexpr (std::is_same_v<T, double>) {
+        if (rs == 1 && b1 - b0 == kSide) {
+          const std::int64_t common = std::min(kPhaseBlock, n - (b1 - 1) * kPhaseBlock);
+          const double* xs[kSide];
+          double* outs[kSide];
+          double hi[kSide], lo[kSide];
+          for (int r = 0; r < kSide; ++r) {
+            xs[r] = col + (b0 + r) * kPhaseBlock;
+            outs[r] = phase.data() + ((b0 + r) * kPhaseBlock + 1) * nc + c;
+            hi[r] = acc[r].hi();
+            lo[r] = acc[r].lo();
+          }
+          accumulate_blocks4(xs, common, m1, cr, hi, lo, outs, nc);
+          for (int r = 0; r < kSide; ++r) acc[r] = NeumaierSum(hi[r], lo[r]);
+          done = common;
+        }
+      }
+      for (std::int64_t b = b0; b < b1; ++b) {
+        const std::int64_t k0 = b * kPhaseBlock + done, len = std::min(kPhaseBlock - done, n - k0);
+        accumulate_block(col + k0 * rs, rs, len, m1, cr, acc[b - b0], phase.data() + (k0 + 1) * nc + c, nc);
+      }
     }
   });
   return phase;
