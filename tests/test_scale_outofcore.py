@@ -343,3 +343,19 @@ def test_chunked_phase_equals_core_phase_across_phase_blocks(extra):
             ) as store:
                 got = store.read(0, np.empty((store.rows, store.channels)))
                 assert np.array_equal(got, expected), (channels, chunk_rows)
+
+
+def test_stream_sums_state_errors_name_the_fix():
+    """A state of the wrong shape or a read-only one is refused before any work, with the
+    shape to create."""
+    x = np.ones((10, 2))
+    zeros = np.zeros(2)
+    with pytest.raises(ValueError, match="SUM_LANES_STATE"):
+        _core.stream_sums(x, 0, np.zeros((2, 2)), zeros, zeros)
+    state = np.zeros((2, _core.SUM_LANES_STATE))
+    state.flags.writeable = False
+    with pytest.raises(ValueError, match="writable"):
+        _core.stream_sums(x, 0, state, zeros, zeros)
+    state = np.zeros((2, _core.SUM_LANES_STATE))
+    assert _core.stream_sums(x, 0, state, zeros, zeros).shape == (0, 2)  # no block completed
+    assert np.array_equal(_core.stream_sums_value(state), [10.0, 10.0])

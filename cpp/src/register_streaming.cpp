@@ -49,9 +49,10 @@ class LaneStateArray {
   LaneStateArray(py::array& state, Eigen::Index nc) : arr_(state) {
     constexpr int width = LaneSum::kStateSize;
     if (!py::isinstance<py::array_t<double>>(state) || state.ndim() != 2 || state.shape(0) != nc ||
-        state.shape(1) != width || !(state.flags() & py::array::c_style))
-      throw py::value_error("state must be a C-contiguous float64 array of shape (" + std::to_string(nc) + ", " +
-                            std::to_string(width) + "); create it with np.zeros((channels, SUM_LANES_STATE))");
+        state.shape(1) != width || !(state.flags() & py::array::c_style) || !state.writeable())
+      throw py::value_error("state must be a writable, C-contiguous float64 array of shape (" +
+                            std::to_string(nc) + ", " + std::to_string(width) +
+                            "); create it with np.zeros((channels, SUM_LANES_STATE))");
     const auto* p = static_cast<const double*>(state.data());
     sums_.resize(static_cast<std::size_t>(nc));
     for (std::size_t c = 0; c < sums_.size(); ++c)
@@ -61,7 +62,6 @@ class LaneStateArray {
       }
   }
   void store() {
-    if (!arr_.writeable()) throw py::value_error("state must be writable");
     auto* p = static_cast<double*>(arr_.mutable_data());
     constexpr int width = LaneSum::kStateSize;
     for (std::size_t c = 0; c < sums_.size(); ++c)
