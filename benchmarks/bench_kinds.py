@@ -19,8 +19,9 @@ kind / the overlapping kernel's (<= 2), identification / kernel (<= 0.5). The me
 a kernel is the time to stream the phase once per tau (``8 M`` bytes per tau) at the
 bandwidth of a numpy copy measured in the same run (read + write bytes / time); a kernel
 below its floor shares passes between taus (tiles in cache). Every timing is the best of
-``--repeat`` (allantools and the oracle included); the 1-minute load average is recorded
-before and after each record size, since the machine may be shared.
+``--repeat`` after one untimed warm-up call (allantools and the oracle included, so that no
+kind runs cold); the 1-minute load average is recorded before and after each record size and
+each kind, since the machine may be shared.
 
 Writes benchmarks/results/bench_kinds.json and .md.
 
@@ -34,6 +35,7 @@ import argparse
 import json
 import os
 import platform
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any, Literal
 
@@ -66,6 +68,13 @@ def copy_bandwidth(n_bytes: int, repeat: int) -> float:
     return 2.0 * src.nbytes / seconds
 
 
+def _warm_best(fn: Callable[[], Any], repeat: int) -> tuple[float, Any]:
+    """``_best`` after one untimed call, so that no kind and no stage is timed cold (first
+    touch of its arrays, first start of its threads, lazy imports)."""
+    fn()
+    return _best(fn, repeat)
+
+
 def _allantools(kind: str, y: np.ndarray, m: np.ndarray) -> np.ndarray:
     import allantools
 
@@ -88,16 +97,19 @@ def bench_kind(
     floor_per_tau: float,
 ) -> dict[str, Any]:
     """Timings and differences of one kind on one record (see the module docstring)."""
-    t_kernel, var = _best(lambda: np.asarray(_core.variance(phase, m, kind, threads)), repeat)
+    load = os.getloadavg()[0]
+    t_kernel, var = _warm_best(lambda: np.asarray(_core.variance(phase, m, kind, threads)), repeat)
     var1 = np.asarray(_core.variance(phase, m, kind, 1))
-    t_id, _ = _best(
+    t_id, _ = _warm_best(
         lambda: identify_alpha(phase, m, kind, data="frequency", threads=threads), repeat
     )
-    t_e2e, res = _best(lambda: allanite.avar(y, fs=1.0, kind=kind, m=m, threads=threads), repeat)
-    t_given, _ = _best(
+    t_e2e, res = _warm_best(
+        lambda: allanite.avar(y, fs=1.0, kind=kind, m=m, threads=threads), repeat
+    )
+    t_given, _ = _warm_best(
         lambda: allanite.avar(y, fs=1.0, kind=kind, m=m, alpha=0, threads=threads), repeat
     )
-    t_at, v_at = _best(lambda: _allantools(kind, y, m), repeat)
+    t_at, v_at = _warm_best(lambda: _allantools(kind, y, m), repeat)
     entry: dict[str, Any] = {
         "seconds": {
             "kernel": t_kernel,
@@ -112,18 +124,19 @@ def bench_kind(
             "allantools": float(np.max(np.abs(v_at / var[:, 0] - 1))),
         },
         "memory_floor_seconds": floor_per_tau * m.size,
+        "load_average_1min": {"before": load, "after": os.getloadavg()[0]},
     }
     if oracle:
         # the oracle's modified variance is O(N m) per tau: there it runs on m <= 16 only,
         # and its ratio is taken against the kernel on the same taus
         sub = m <= ORACLE_MODIFIED_MAX_M if kind == "modified" else np.ones(m.size, bool)
-        t_ref, v_ref = _best(
+        t_ref, v_ref = _warm_best(
             lambda: np.asarray(reference.variance(y, m[sub], kind, input="rate")).reshape(-1),
             repeat,
         )
         t_sub = t_kernel
         if not sub.all():
-            t_sub, _ = _best(lambda: _core.variance(phase, m[sub], kind, threads), repeat)
+            t_sub, _ = _warm_best(lambda: _core.variance(phase, m[sub], kind, threads), repeat)
         entry["seconds"]["reference"] = t_ref
         entry["reference_taus"] = int(sub.sum())
         entry["max_rel_diff"]["reference"] = float(np.max(np.abs(v_ref / var[sub, 0] - 1)))
@@ -141,7 +154,7 @@ def bench_size(n: int, points: int, repeat: int, threads: int, oracle: bool) -> 
     m = m[m <= min(_core.max_m(k, n + 1) for k in KINDS)]
     bandwidth = copy_bandwidth(8 * (n + 1), repeat)
     floor_per_tau = 8.0 * (n + 1) / bandwidth
-    t_phase, phase = _best(lambda: _core.phase(x2, "rate"), repeat)
+    t_phase, phase = _warm_best(lambda: _core.phase(x2, "rate", threads), repeat)
     kinds = {
         kind: bench_kind(
             kind,

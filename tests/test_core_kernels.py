@@ -252,3 +252,29 @@ def test_modified_prefix_plan_segment_edges(n: int) -> None:
     )
     np.testing.assert_allclose(got, want, rtol=RTOL, atol=0)
     assert np.array_equal(np.asarray(_core.variance(phase, factors, "modified", 1)), got)
+
+
+@pytest.mark.parametrize("kind", ["overlapping", "hadamard", "total"])
+def test_phase_blocks_match_reference_on_a_bias(kind: str) -> None:
+    """The phase is built in blocks of PHASE_BLOCK samples (each restarted from its base, the
+    blocks on threads, four of them side by side in one vector for a contiguous channel): on
+    a record of several blocks and a partial one, white noise on a 1e10 bias and on none, the
+    variances at factors that straddle block edges match the oracle, and the phase has the
+    same bits for one, two or three threads and for a channel alone (contiguous: the vector
+    path) or beside another (strided: one block after the other)."""
+    block = int(_core.PHASE_BLOCK)
+    n = 5 * block + 777
+    rng = np.random.default_rng(77)
+    x = np.column_stack([1e10 + rng.standard_normal(n), rng.standard_normal(n)])
+    phase = _core.phase(x, "rate", threads=1)
+    for threads in (2, 3):
+        assert np.array_equal(_core.phase(x, "rate", threads=threads), phase)
+    for c in range(2):
+        alone = _core.phase(np.ascontiguousarray(x[:, [c]]), "rate", threads=2)
+        assert np.array_equal(alone[:, 0], phase[:, c])
+    factors = np.array([1, 7, block - 1, block, block + 3, n // 3 - 1])
+    got = np.asarray(_core.variance(phase, factors, kind, 2))
+    want = np.column_stack(
+        [np.asarray(oracle.variance(x[:, c], factors, kind, input="rate")) for c in range(2)]
+    )
+    np.testing.assert_allclose(got, want, rtol=RTOL, atol=0)

@@ -325,3 +325,37 @@ def test_tau_blocked_pass_equals_one_factor_at_a_time(kind, channels):
     alone = np.vstack([_core.variance(phase, [int(m)], kind, 1) for m in factors])
     for threads in (1, 2, 3):
         assert np.array_equal(_core.variance(phase, factors, kind, threads), alone)
+
+
+@pytest.mark.parametrize("extra", [0, 4321])
+def test_chunked_phase_equals_core_phase_across_phase_blocks(extra):
+    """Records of several PHASE_BLOCK blocks (a partial last one or none), read in chunks that
+    end inside blocks, on block edges, or hold several blocks: the same bits as _core.phase
+    on any number of threads."""
+    block = int(_core.PHASE_BLOCK)
+    for channels in (1, 2):  # one: four blocks side by side in a vector; two: one by one
+        x = _record(4 * block + extra, c=channels)
+        expected = _core.phase(x, "rate", threads=1)
+        assert np.array_equal(_core.phase(x, "rate", threads=2), expected)
+        for chunk_rows in (7919, block, block + 1, 3 * block):
+            with build_phase_store(
+                ArrayRecord(x), "rate", chunk_rows=chunk_rows, max_memory_bytes=None
+            ) as store:
+                got = store.read(0, np.empty((store.rows, store.channels)))
+                assert np.array_equal(got, expected), (channels, chunk_rows)
+
+
+def test_stream_sums_state_errors_name_the_fix():
+    """A state of the wrong shape or a read-only one is refused before any work, with the
+    shape to create."""
+    x = np.ones((10, 2))
+    zeros = np.zeros(2)
+    with pytest.raises(ValueError, match="SUM_LANES_STATE"):
+        _core.stream_sums(x, 0, np.zeros((2, 2)), zeros, zeros)
+    state = np.zeros((2, _core.SUM_LANES_STATE))
+    state.flags.writeable = False
+    with pytest.raises(ValueError, match="writable"):
+        _core.stream_sums(x, 0, state, zeros, zeros)
+    state = np.zeros((2, _core.SUM_LANES_STATE))
+    assert _core.stream_sums(x, 0, state, zeros, zeros).shape == (0, 2)  # no block completed
+    assert np.array_equal(_core.stream_sums_value(state), [10.0, 10.0])

@@ -3,6 +3,7 @@
 #include <pybind11/numpy.h>
 #include <pybind11/stl.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -41,6 +42,42 @@ class StateArray {
   std::vector<NeumaierSum> sums_;
 };
 
+/// A writable (C, LaneSum::kStateSize) float64 C-contiguous array of LaneSum states (his, then
+/// los), written back on scope exit.
+class LaneStateArray {
+ public:
+  LaneStateArray(py::array& state, Eigen::Index nc) : arr_(state) {
+    constexpr int width = LaneSum::kStateSize;
+    if (!py::isinstance<py::array_t<double>>(state) || state.ndim() != 2 || state.shape(0) != nc ||
+        state.shape(1) != width || !(state.flags() & py::array::c_style) || !state.writeable())
+      throw py::value_error("state must be a writable, C-contiguous float64 array of shape (" +
+                            std::to_string(nc) + ", " + std::to_string(width) +
+                            "); create it with np.zeros((channels, SUM_LANES_STATE))");
+    const auto* p = static_cast<const double*>(state.data());
+    sums_.resize(static_cast<std::size_t>(nc));
+    for (std::size_t c = 0; c < sums_.size(); ++c)
+      for (int r = 0; r < LaneSum::kLanes; ++r) {
+        sums_[c].hi[r] = p[c * width + r];
+        sums_[c].lo[r] = p[c * width + LaneSum::kLanes + r];
+      }
+  }
+  void store() {
+    auto* p = static_cast<double*>(arr_.mutable_data());
+    constexpr int width = LaneSum::kStateSize;
+    for (std::size_t c = 0; c < sums_.size(); ++c)
+      for (int r = 0; r < LaneSum::kLanes; ++r) {
+        p[c * width + r] = sums_[c].hi[r];
+        p[c * width + LaneSum::kLanes + r] = sums_[c].lo[r];
+      }
+  }
+  LaneSum* data() { return sums_.data(); }
+  [[nodiscard]] std::size_t size() const { return sums_.size(); }
+
+ private:
+  py::array& arr_;
+  std::vector<LaneSum> sums_;
+};
+
 std::vector<double> per_channel(const py::array_t<double, py::array::forcecast>& v, Eigen::Index nc,
                                 const char* name) {
   if (v.ndim() != 1 || v.shape(0) != nc)
@@ -74,18 +111,62 @@ void dispatch(const py::array& x, Fn&& fn) {
   dispatch_dtype(x, run);
 }
 
-void stream_sums(const py::array& x, std::int64_t k0, py::array& state,
-                 const py::array_t<double, py::array::forcecast>& a,
-                 const py::array_t<double, py::array::forcecast>& b) {
+py::array_t<double> stream_sums(const py::array& x, std::int64_t k0, py::array& state,
+                                const py::array_t<double, py::array::forcecast>& a,
+                                const py::array_t<double, py::array::forcecast>& b) {
   const Eigen::Index nc = x.ndim() == 2 ? x.shape(1) : 0;
-  StateArray st(state, nc);
+  LaneStateArray st(state, nc);
   const auto va = per_channel(a, nc, "a"), vb = per_channel(b, nc, "b");
+  std::vector<double> done;
   dispatch(x, [&](const auto& view) {
     py::gil_scoped_release release;
     stream::check_finite_chunk(view, k0);
-    stream::add_shifted(view, va.data(), vb.data(), st.data());
+    stream::add_shifted(view, k0, va.data(), vb.data(), st.data(), done);
   });
   st.store();
+  py::array_t<double> out({static_cast<py::ssize_t>(done.size()) / std::max<py::ssize_t>(nc, 1),
+                           static_cast<py::ssize_t>(nc)});
+  std::copy(done.begin(), done.end(), out.mutable_data());
+  return out;
+}
+
+py::array_t<double> stream_sums_value(py::array& state) {
+  const Eigen::Index nc = state.ndim() == 2 ? state.shape(0) : 0;
+  LaneStateArray st(state, nc);
+  py::array_t<double> out(static_cast<py::ssize_t>(st.size()));
+  auto* o = out.mutable_data();
+  for (std::size_t c = 0; c < st.size(); ++c) o[c] = st.data()[c].value();
+  return out;
+}
+
+/// Checked (blocks, C) C-contiguous block values.
+const double* block_values(const py::array_t<double, py::array::c_style | py::array::forcecast>& v,
+                           std::int64_t& nb, Eigen::Index& nc) {
+  if (v.ndim() != 2) throw py::value_error("block values must be a 2-D (blocks, channels) array");
+  nb = v.shape(0);
+  nc = v.shape(1);
+  return v.data();
+}
+
+py::array_t<double> stream_block_total(const py::array_t<double, py::array::c_style | py::array::forcecast>& v) {
+  std::int64_t nb = 0;
+  Eigen::Index nc = 0;
+  const double* p = block_values(v, nb, nc);
+  py::array_t<double> out(static_cast<py::ssize_t>(nc));
+  for (Eigen::Index c = 0; c < nc; ++c) out.mutable_data()[c] = block_total(p, nb, nc, c);
+  return out;
+}
+
+py::array_t<double> stream_block_bases(const py::array_t<double, py::array::c_style | py::array::forcecast>& v,
+                                       const py::array_t<double, py::array::forcecast>& corr) {
+  std::int64_t nb = 0;
+  Eigen::Index nc = 0;
+  const double* p = block_values(v, nb, nc);
+  const auto cr = per_channel(corr, nc, "corr");
+  const std::vector<double> bases = phase_block_bases(p, nb, nc, cr.data());
+  py::array_t<double> out({static_cast<py::ssize_t>(nb), static_cast<py::ssize_t>(nc), py::ssize_t{2}});
+  std::copy(bases.begin(), bases.end(), out.mutable_data());
+  return out;
 }
 
 void stream_moment(const py::array& x, std::int64_t k0, double kbar,
@@ -101,15 +182,20 @@ void stream_moment(const py::array& x, std::int64_t k0, double kbar,
   st.store();
 }
 
-void stream_prefix(const py::array& x, const py::array_t<double, py::array::forcecast>& mean1,
-                   const py::array_t<double, py::array::forcecast>& corr, py::array& state, py::array& out) {
+void stream_prefix(const py::array& x, std::int64_t k0, const py::array_t<double, py::array::forcecast>& mean1,
+                   const py::array_t<double, py::array::forcecast>& corr,
+                   const py::array_t<double, py::array::c_style | py::array::forcecast>& bases, py::array& state,
+                   py::array& out) {
   const Eigen::Index nc = x.ndim() == 2 ? x.shape(1) : 0;
   StateArray st(state, nc);
   const auto m1 = per_channel(mean1, nc, "mean1"), cr = per_channel(corr, nc, "corr");
+  const std::int64_t last = k0 + (x.ndim() == 2 ? x.shape(0) : 0);
+  if (bases.ndim() != 3 || bases.shape(1) != nc || bases.shape(2) != 2 || bases.shape(0) < phase_blocks(last))
+    throw py::value_error("bases must be the (blocks, C, 2) array of stream_block_bases for the whole record");
   double* o = output_rows(out, x.shape(0), nc);
   dispatch(x, [&](const auto& view) {
     py::gil_scoped_release release;
-    stream::prefix_rows(view, m1.data(), cr.data(), st.data(), o);
+    stream::prefix_rows(view, k0, m1.data(), cr.data(), bases.data(), st.data(), o);
   });
   st.store();
 }
@@ -167,14 +253,26 @@ void diff_square_sums(const std::vector<py::array>& windows, std::int64_t term_s
 
 void register_streaming(py::module_& m) {
   m.attr("SUM_BLOCK") = detail::kSumBlock;
+  m.attr("PHASE_BLOCK") = kPhaseBlock;
+  m.attr("SUM_LANES_STATE") = LaneSum::kStateSize;
   m.def("stream_sums", &stream_sums, py::arg("x"), py::arg("k0"), py::arg("state"), py::arg("a"), py::arg("b"),
-        "state[c] += sum_k (x[k, c] - a[c]) - b[c] (compensated, carried in state (C, 2)); checks "
-        "that the chunk (first sample k0) is finite.");
+        "Sums of (x[k, c] - a[c]) - b[c] over the PHASE_BLOCK blocks of samples of a chunk (first sample "
+        "k0): returns the values (blocks, C) of the blocks completed in it; the current block's lanes are "
+        "carried in state (C, SUM_LANES_STATE). Checks that the chunk is finite.");
+  m.def("stream_sums_value", &stream_sums_value, py::arg("state"),
+        "Values (C,) of the partial block carried in a stream_sums state (the record's last block).");
+  m.def("stream_block_total", &stream_block_total, py::arg("values"),
+        "Totals (C,) of block values (blocks, C), in block order (the rounding of build_phase's means).");
+  m.def("stream_block_bases", &stream_block_bases, py::arg("values"), py::arg("corr"),
+        "Starting states (blocks, C, 2) of the accumulation in every block, from the second pass's block "
+        "values and the mean correction.");
   m.def("stream_moment", &stream_moment, py::arg("x"), py::arg("k0"), py::arg("kbar"), py::arg("mean1"),
         py::arg("corr"), py::arg("state"),
         "state[c] += sum_k (k0 + k - kbar) ((x[k, c] - mean1[c]) - corr[c]).");
-  m.def("stream_prefix", &stream_prefix, py::arg("x"), py::arg("mean1"), py::arg("corr"), py::arg("state"),
-        py::arg("out"), "Rate/increment phase rows of a chunk into out (L, C); state carries the sums.");
+  m.def("stream_prefix", &stream_prefix, py::arg("x"), py::arg("k0"), py::arg("mean1"), py::arg("corr"),
+        py::arg("bases"), py::arg("state"), py::arg("out"),
+        "Rate/increment phase rows of a chunk (first sample k0) into out (L, C); state (C, 2) carries the "
+        "sum, restarted from bases at every block.");
   m.def("stream_detrend", &stream_detrend, py::arg("x"), py::arg("k0"), py::arg("kbar"), py::arg("mean1"),
         py::arg("corr"), py::arg("slope"), py::arg("out"), "Angle phase rows (least-squares residual) into out.");
   m.def("diff_square_sums", &diff_square_sums, py::arg("windows"), py::arg("term_stride"), py::arg("count"),

@@ -18,7 +18,7 @@ namespace allanite::bind {
 namespace {
 
 template <class T>
-RowMatrix phase_typed(const py::array& x, InputKind kind) {
+RowMatrix phase_typed(const py::array& x, InputKind kind, int threads) {
   const auto itemsize = static_cast<py::ssize_t>(sizeof(T));
   const py::ssize_t s0 = x.strides(0), s1 = x.strides(1);
   if (s0 % itemsize != 0 || s1 % itemsize != 0)
@@ -27,15 +27,15 @@ RowMatrix phase_typed(const py::array& x, InputKind kind) {
   StridedMap<T> view(static_cast<const T*>(x.data()), x.shape(0), x.shape(1),
                      Strides(s0 / itemsize, s1 / itemsize));
   py::gil_scoped_release release;
-  return build_phase<T>(view, kind);
+  return build_phase<T>(view, kind, threads);
 }
 
-RowMatrix phase(const py::array& x, const std::string& input) {
+RowMatrix phase(const py::array& x, const std::string& input, int threads) {
   const InputKind kind = parse_input_kind(input);
   if (x.ndim() != 2)
     throw py::value_error("phase() expects a 2-D (samples, channels) array, got " +
                           std::to_string(x.ndim()) + " dimensions");
-  return dispatch_dtype(x, [&](auto tag) { return phase_typed<decltype(tag)>(x, kind); });
+  return dispatch_dtype(x, [&](auto tag) { return phase_typed<decltype(tag)>(x, kind, threads); });
 }
 
 RowMatrix variance(const Eigen::Ref<const RowMatrix>& phase_ref, const std::vector<std::int64_t>& ms,
@@ -71,9 +71,10 @@ RowMatrix lag1_acf(const py::array& x, const std::vector<std::int64_t>& ms, cons
 }  // namespace
 
 void register_variances(py::module_& m) {
-  m.def("phase", &phase, py::arg("x"), py::arg("input"),
+  m.def("phase", &phase, py::arg("x"), py::arg("input"), py::arg("threads") = 0,
         "Detrended, compensated phase (prefix sums) of a (N, C) record of rate, increment or "
-        "angle samples; returns (N+1, C) for rate/increment, (N, C) for angle.");
+        "angle samples; returns (N+1, C) for rate/increment, (N, C) for angle. The same bits for "
+        "any number of threads (0: all cores).");
   m.def("variance", &variance, py::arg("phase"), py::arg("m"), py::arg("kind"),
         py::arg("threads") = 0,
         "Allan-family variance (tau0 = 1, phase units) for each averaging factor in m; "

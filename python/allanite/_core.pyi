@@ -10,15 +10,17 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 SUM_BLOCK: int
+SUM_LANES_STATE: int
+PHASE_BLOCK: int
 
 # register_variances.cpp ---------------------------------------------------------------------
 
-def phase(x: NDArray[np.generic], input: str) -> NDArray[np.float64]:
+def phase(x: NDArray[np.generic], input: str, threads: int = 0) -> NDArray[np.float64]:
     """Detrended, compensated phase (prefix sums) of a 2-D ``(N, C)`` record.
 
     ``input`` is ``"rate"``/``"increment"`` (mean removed, ``(N + 1, C)`` result) or ``"angle"``
     (least-squares line removed, ``(N, C)``). ``x`` may be float64, float32, int16, int32 or
-    int64 and strided (no copy).
+    int64 and strided (no copy). The same bits for any ``threads`` (0: all cores).
     """
 
 def variance(
@@ -84,8 +86,20 @@ def running_sum(
 
 def stream_sums(
     x: NDArray[np.generic], k0: int, state: NDArray[np.float64], a: ArrayLike, b: ArrayLike
-) -> None:
-    """Accumulate the per-channel sums of a chunk into ``state``."""
+) -> NDArray[np.float64]:
+    """Values ``(blocks, C)`` of the ``PHASE_BLOCK`` blocks a chunk completes.
+
+    ``state`` ``(C, SUM_LANES_STATE)`` carries the current block.
+    """
+
+def stream_sums_value(state: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Values ``(C,)`` of the partial block carried in a :func:`stream_sums` state."""
+
+def stream_block_total(values: ArrayLike) -> NDArray[np.float64]:
+    """Totals ``(C,)`` of block values ``(blocks, C)`` in block order."""
+
+def stream_block_bases(values: ArrayLike, corr: ArrayLike) -> NDArray[np.float64]:
+    """Starting states ``(blocks, C, 2)`` of the accumulation in every block."""
 
 def stream_moment(
     x: NDArray[np.generic],
@@ -99,8 +113,10 @@ def stream_moment(
 
 def stream_prefix(
     x: NDArray[np.generic],
+    k0: int,
     mean1: ArrayLike,
     corr: ArrayLike,
+    bases: ArrayLike,
     state: NDArray[np.float64],
     out: NDArray[np.float64],
 ) -> None:

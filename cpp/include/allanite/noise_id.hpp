@@ -23,6 +23,7 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -61,12 +62,12 @@ constexpr std::int64_t kAcfTileBytes = 256 * 1024;
 
 /// Sums of u = v[k] - centre, u^2 and u[k] u[k-1] over k in [lo, hi) (k = 0 has no
 /// predecessor: v[-1] is never read), then v[k] = v[k+1] - v[k] for k < hi - 1: one level of
-/// a block of the difference cascade. Four interleaved partial sums each, so that the loops
-/// vectorise (as one 4-wide body: loop vectorisation would interleave 4 iterations through
-/// shuffles); compiled for AVX2 and the baseline ISA with the same arithmetic.
-ALLANITE_TARGET_CLONES ALLANITE_SLP_ONLY static void acf_level(double* v, std::int64_t lo, std::int64_t hi, double centre,
+/// a block of the difference cascade. Four interleaved partial sums each, one Pack4 (lane r:
+/// the terms k = r mod 4 after the start); compiled for AVX2 and the baseline ISA with the
+/// same arithmetic.
+ALLANITE_TARGET_CLONES static void acf_level(const double* v, std::int64_t lo, std::int64_t hi, double centre,
                                              double* sums) noexcept {
-  double a1[4] = {}, a2[4] = {}, ac[4] = {};
+  Pack4 a1 = {}, a2 = {}, ac = {};
   std::int64_t k = lo;
   if (k == 0 && k < hi) {
     const double u = v[0] - centre;
@@ -74,23 +75,58 @@ ALLANITE_TARGET_CLONES ALLANITE_SLP_ONLY static void acf_level(double* v, std::i
     a2[0] += u * u;
     ++k;
   }
-  for (; k + 4 <= hi; k += 4) {
-    double u[4], p[4];
-    for (int r = 0; r < 4; ++r) {
-      u[r] = v[k + r] - centre;
-      p[r] = v[k + r - 1] - centre;
-    }
-    for (int r = 0; r < 4; ++r) {
-      a1[r] += u[r];
-      a2[r] += u[r] * u[r];
-      ac[r] += u[r] * p[r];
-    }
+  const Pack4 c = {centre, centre, centre, centre};
+  for (; k + 4 <= hi; k += 4) {  // lane r: value k + r and its predecessor
+    Pack4 v0, v1;
+    std::memcpy(&v0, v + k - 1, sizeof v0);
+    std::memcpy(&v1, v + k, sizeof v1);
+    const Pack4 u = v1 - c;
+    const Pack4 p = v0 - c;
+    a1 += u;
+    a2 += u * u;
+    ac += u * p;
   }
   for (; k < hi; ++k) {
     const double u = v[k] - centre;
     a1[0] += u;
     a2[0] += u * u;
     ac[0] += u * (v[k - 1] - centre);
+  }
+  sums[0] = (a1[0] + a1[1]) + (a1[2] + a1[3]);
+  sums[1] = (a2[0] + a2[1]) + (a2[2] + a2[3]);
+  sums[2] = (ac[0] + ac[1]) + (ac[2] + ac[3]);
+}
+
+/// acf_level of the first differences w[k] = v[k + 1] - v[k] of v, without storing them (the
+/// same operations on the same values, so the same sums as acf_difference then acf_level):
+/// the frequency series' only level in the identification's first pass.
+ALLANITE_TARGET_CLONES static void acf_level_of_difference(const double* v, std::int64_t lo, std::int64_t hi,
+                                                           double centre, double* sums) noexcept {
+  Pack4 a1 = {}, a2 = {}, ac = {};
+  std::int64_t k = lo;
+  if (k == 0 && k < hi) {
+    const double u = (v[1] - v[0]) - centre;
+    a1[0] += u;
+    a2[0] += u * u;
+    ++k;
+  }
+  const Pack4 c = {centre, centre, centre, centre};
+  for (; k + 4 <= hi; k += 4) {  // lane r: difference k + r and its predecessor
+    Pack4 v0, v1, v2;
+    std::memcpy(&v0, v + k - 1, sizeof v0);
+    std::memcpy(&v1, v + k, sizeof v1);
+    std::memcpy(&v2, v + k + 1, sizeof v2);
+    const Pack4 u = (v2 - v1) - c;
+    const Pack4 p = (v1 - v0) - c;
+    a1 += u;
+    a2 += u * u;
+    ac += u * p;
+  }
+  for (; k < hi; ++k) {
+    const double u = (v[k + 1] - v[k]) - centre;
+    a1[0] += u;
+    a2[0] += u * u;
+    ac[0] += u * ((v[k] - v[k - 1]) - centre);
   }
   sums[0] = (a1[0] + a1[1]) + (a1[2] + a1[3]);
   sums[1] = (a2[0] + a2[1]) + (a2[2] + a2[3]);
@@ -152,6 +188,16 @@ struct AcfState {
     std::copy(buf.begin() + (size - keep), buf.begin() + size, tail);
     double* v = buf.data();
     std::int64_t len = size;
+    if constexpr (L == 1 && Off == 1) {  // level 1 alone: summed straight from the points
+      double sums[3];
+      acf_level_of_difference(v, std::max<std::int64_t>(0, history - 1), len - 1, centre[0], sums);
+      s1[0].add(sums[0]);
+      s2[0].add(sums[1]);
+      cross[0].add(sums[2]);
+      std::copy(tail, tail + keep, buf.begin());
+      history = size = keep;
+      return;
+    }
     for (int d = 0; d < D; ++d) {
       if (d >= Off) {
         // level d entry k is value j0 - history + k; new are k >= history - d (>= 0 at first)

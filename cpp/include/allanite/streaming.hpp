@@ -4,9 +4,10 @@
 // A record too large for memory is read in chunks; each pass below consumes chunks in order
 // and performs exactly the floating-point operations of build_phase on the same values in the
 // same order, so the phase written chunk by chunk equals the in-memory phase bit for bit:
-//   pass 1  s1 += x                              -> mean1 = s1 / n
-//   pass 2  s2 += x - mean1                      -> corr  = s2 / n
-//   rate/increment: pass 3  acc += (x - mean1) - corr, phase[k + 1] = acc
+//   pass 1  block values of x                    -> mean1 = block_total / n
+//   pass 2  block values of x - mean1            -> corr  = block_total / n, bases
+//   rate/increment: pass 3  acc += (x - mean1) - corr, phase[k + 1] = acc (acc = base at
+//                   each block start)
 //   angle: pass 3  sxy += (k - kbar) ((x - mean1) - corr) -> slope = sxy / sxx
 //          pass 4  phase[k] = double-double residual of x - mean1 - corr - slope (k - kbar)
 // The variance side needs no code here: detail::add_diff_squares (variances.hpp) takes the taps
@@ -15,10 +16,12 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "allanite/compensated.hpp"
 #include "allanite/phase.hpp"
@@ -38,11 +41,36 @@ void check_finite_chunk(const StridedMap<T>& x, std::int64_t k0) {
   }
 }
 
-/// acc[c] += (x(k, c) - a[c]) - b[c] for every row k (pass 1 with a = b = 0, pass 2 with b = 0).
+/// Calls fn(k, len, g) for the pieces of a chunk (rows [k, k + len), first sample g = k0 + k)
+/// that do not cross a kPhaseBlock boundary of the global grid.
+template <class Fn>
+void for_block_pieces(std::int64_t rows, std::int64_t k0, Fn&& fn) {
+  for (std::int64_t k = 0; k < rows;) {
+    const std::int64_t g = k0 + k;
+    const std::int64_t len = std::min(rows - k, (g / kPhaseBlock + 1) * kPhaseBlock - g);
+    fn(k, len, g);
+    k += len;
+  }
+}
+
+/// Pass 1 (a = b = 0) or 2 (b = 0) of a chunk whose first row is sample k0: partial[c] sums
+/// (x(k, c) - a[c]) - b[c] over the current block (lanes by sample index), and at each block's
+/// last sample its value goes to `done` (C values per block) and partial restarts: the block
+/// values of detail::block_sums (phase.hpp), whatever the chunks.
 template <class T>
-void add_shifted(const StridedMap<T>& x, const double* a, const double* b, NeumaierSum* acc) {
-  for (Eigen::Index c = 0; c < x.cols(); ++c)
-    for (Eigen::Index k = 0; k < x.rows(); ++k) acc[c].add((static_cast<double>(x(k, c)) - a[c]) - b[c]);
+void add_shifted(const StridedMap<T>& x, std::int64_t k0, const double* a, const double* b, LaneSum* partial,
+                 std::vector<double>& done) {
+  const Eigen::Index nc = x.cols();
+  for_block_pieces(x.rows(), k0, [&](std::int64_t k, std::int64_t len, std::int64_t g) {
+    for (Eigen::Index c = 0; c < nc; ++c)
+      add_shifted_lanes(detail::column_start(x, c) + k * x.outerStride(), x.outerStride(), len, g, a[c], b[c],
+                        partial[c]);
+    if ((g + len) % kPhaseBlock == 0)
+      for (Eigen::Index c = 0; c < nc; ++c) {
+        done.push_back(partial[c].value());
+        partial[c] = LaneSum{};
+      }
+  });
 }
 
 /// acc[c] += (k - kbar) ((x(k, c) - mean1[c]) - corr[c]), k = k0 + row (angle slope, pass 3).
@@ -56,16 +84,23 @@ void add_moment(const StridedMap<T>& x, std::int64_t k0, double kbar, const doub
     }
 }
 
-/// Rate/increment phase rows: acc += (x - mean1) - corr; out(k, c) = acc (row-major, L x C).
+/// Rate/increment phase rows of a chunk whose first row is sample k0 (row-major, L x C): at
+/// each block's first sample acc restarts from its base (bases (blocks, C, 2) from
+/// phase_block_bases), then accumulate_block, as build_phase.
 template <class T>
-void prefix_rows(const StridedMap<T>& x, const double* mean1, const double* corr, NeumaierSum* acc,
-                 double* out) {
+void prefix_rows(const StridedMap<T>& x, std::int64_t k0, const double* mean1, const double* corr,
+                 const double* bases, NeumaierSum* acc, double* out) {
   const Eigen::Index nc = x.cols();
-  for (Eigen::Index c = 0; c < nc; ++c)
-    for (Eigen::Index k = 0; k < x.rows(); ++k) {
-      acc[c].add((static_cast<double>(x(k, c)) - mean1[c]) - corr[c]);
-      out[k * nc + c] = acc[c].value();
+  for_block_pieces(x.rows(), k0, [&](std::int64_t k, std::int64_t len, std::int64_t g) {
+    for (Eigen::Index c = 0; c < nc; ++c) {
+      if (g % kPhaseBlock == 0) {
+        const std::int64_t i = ((g / kPhaseBlock) * nc + c) * 2;
+        acc[c] = NeumaierSum(bases[i], bases[i + 1]);
+      }
+      accumulate_block(detail::column_start(x, c) + k * x.outerStride(), x.outerStride(), len, mean1[c], corr[c],
+                       acc[c], out + k * nc + c, nc);
     }
+  });
 }
 
 /// Angle phase rows: the least-squares residual in double-double arithmetic (as build_phase).

@@ -34,20 +34,7 @@
 #include "allanite/parallel.hpp"
 #include "allanite/phase.hpp"
 
-// The hot loops are compiled twice, for AVX2 and for the baseline ISA, and picked at load time
-// (GCC function multi-versioning). Each lane performs the same IEEE operations in the same
-// order either way (no FMA contraction: -ffp-contract=off), so the clones agree bit for bit.
-// The loop bodies are forced inline into the clones: otherwise both call one baseline copy.
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__)
-#define ALLANITE_TARGET_CLONES __attribute__((target_clones("avx2", "default")))
-#define ALLANITE_ALWAYS_INLINE inline __attribute__((always_inline))
-// for 4-lane bodies that vectorise as they are (SLP), where loop vectorisation adds shuffles
-#define ALLANITE_SLP_ONLY __attribute__((optimize("no-tree-loop-vectorize")))
-#else
-#define ALLANITE_SLP_ONLY
-#define ALLANITE_TARGET_CLONES
-#define ALLANITE_ALWAYS_INLINE inline
-#endif
+// The hot loops: ALLANITE_TARGET_CLONES and friends (simd.hpp, via compensated.hpp).
 
 namespace allanite {
 
@@ -750,7 +737,10 @@ inline RowMatrix variance(const PhaseRef& phase, const std::vector<std::int64_t>
   detail::PrefixPlan plan;
   if (kind == VarianceKind::Modified) plan = detail::prefix_plan(phase);
   // Cache blocking over taus: the overlapping-type estimators at small m read the same rows,
-  // so they share passes (detail::variance_group); one group per thread, the other factors
+  // so they share passes (detail::variance_group); one group per thread. Beyond kTileMaxM the
+  // overlapping, Hadamard and total factors go in groups of kWideGroup neighbours (their first
+  // tap reads the same rows, the others stay in the last-level cache between the factors:
+  // one pass from memory for four factors instead of four); the modified and standard ones
   // are one task each. Longest tasks first keeps both cores busy to the end.
   std::vector<std::vector<std::size_t>> groups;
   std::vector<std::size_t> single;
@@ -768,6 +758,14 @@ inline RowMatrix variance(const PhaseRef& phase, const std::vector<std::int64_t>
     for (std::size_t a = 0; a < small.size(); ++a) groups[a % ng].push_back(small[a]);
   } else {
     single.insert(single.begin(), small.begin(), small.end());
+  }
+  if (tiled && kind != VarianceKind::Modified) {
+    constexpr std::size_t kWideGroup = 4;
+    std::vector<std::size_t> wide;
+    wide.swap(single);
+    for (std::size_t a = 0; a < wide.size(); a += kWideGroup)
+      groups.emplace_back(wide.begin() + static_cast<std::ptrdiff_t>(a),
+                          wide.begin() + static_cast<std::ptrdiff_t>(std::min(wide.size(), a + kWideGroup)));
   }
   parallel_for(groups.size() + single.size(), nthreads, [&](std::size_t task) {
     if (task < groups.size()) {

@@ -150,7 +150,7 @@ def avar(
     nthreads = check_threads(threads)
     q = fast_q(fast)
     arr, was_1d = prepare_record(samples)
-    phase = _core.phase(arr, what)
+    phase = _core.phase(arr, what, nthreads)
     n_phase = int(phase.shape[0])
     if progress is not None:
         progress("phase", arr.shape[0], arr.shape[0])

@@ -197,23 +197,28 @@ def build_phase_store(
         if progress is not None:
             progress("phase", done, passes * n_total if n_total else max(done, 1))
 
-    s1 = np.zeros((nc, 2))
-    n = 0
-    for chunk in record.chunks(chunk_rows):
-        _core.stream_sums(chunk, n, s1, zeros, zeros)
-        n += chunk.shape[0]
-        tick(chunk.shape[0], known)
+    def block_values(
+        mean: NDArray[np.float64], n_total: int | None
+    ) -> tuple[NDArray[np.float64], int]:
+        """Block values of x - mean (_core.stream_sums) over the record, and its length."""
+        state = np.zeros((nc, _core.SUM_LANES_STATE))
+        values: list[NDArray[np.float64]] = [np.zeros((0, nc))]
+        k0 = 0
+        for chunk in record.chunks(chunk_rows):
+            values.append(_core.stream_sums(chunk, k0, state, mean, zeros))
+            k0 += chunk.shape[0]
+            tick(chunk.shape[0], n_total)
+        if k0 % _core.PHASE_BLOCK:  # the last, partial block
+            values.append(_core.stream_sums_value(state).reshape(1, nc))
+        return np.concatenate(values), k0
+
+    v1, n = block_values(zeros, known)
     if n < 3:
         raise ValueError(f"record too short: need at least 3 samples, got {n}")
     nn = float(n)
-    mean1 = _value(s1) / nn
-    s2 = np.zeros((nc, 2))
-    k0 = 0
-    for chunk in record.chunks(chunk_rows):
-        _core.stream_sums(chunk, k0, s2, mean1, zeros)
-        k0 += chunk.shape[0]
-        tick(chunk.shape[0], n)
-    corr = _value(s2) / nn
+    mean1 = _core.stream_block_total(v1) / nn
+    v2, _ = block_values(mean1, n)
+    corr = _core.stream_block_total(v2) / nn
 
     rows = n if input == "angle" else n + 1
     in_memory = max_memory_bytes is None or rows * nc * _ITEM <= max_memory_bytes
@@ -240,11 +245,14 @@ def build_phase_store(
                 tick(chunk.shape[0], n)
         else:
             writer.write(np.zeros((1, nc)))
+            bases = _core.stream_block_bases(v2, corr)
             acc = np.zeros((nc, 2))
+            k0 = 0
             for chunk in record.chunks(chunk_rows):
                 block = out[: chunk.shape[0]]
-                _core.stream_prefix(chunk, mean1, corr, acc, block)
+                _core.stream_prefix(chunk, k0, mean1, corr, bases, acc, block)
                 writer.write(block)
+                k0 += chunk.shape[0]
                 tick(chunk.shape[0], n)
         if writer.row != rows:
             raise OSError(
