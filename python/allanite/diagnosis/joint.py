@@ -215,18 +215,56 @@ def effect_psd(
     return np.where(np.isfinite(out), out, 0.0)
 
 
+#: effects of which a set may hold a second process, when its correlation time is distinct
+REPEATABLE: dict[str, str] = {"markov": "tau_c"}
+
+#: a second process of a repeatable kind must have a correlation time more than this factor
+#: away from every process of that kind in the set (model or effects): closer, the two are
+#: one process of larger variance (the existing one rescaled)
+DISTINCT_FACTOR = 4.0
+
+
 def _same_slot(c: Candidate, chosen: list[Candidate]) -> bool:
     """Whether ``c`` changes a model term already changed or adds a type already chosen.
 
-    Adding white noise after rescaling it (or rescaling it twice) is the same effect.
+    Adding white noise after rescaling it (or rescaling it twice) is the same effect. A
+    process of a :data:`REPEATABLE` kind (a Gauss-Markov process) may be added once more next
+    to one already in the set (added or rescaled): two such processes with distinct
+    correlation times are two effects; :func:`_distinct` then checks the fitted one.
     """
     for d in chosen:
+        if c.effect in REPEATABLE and c.base is None and d.term_cls is c.term_cls:
+            if sum(e.effect == c.effect for e in chosen) < 2:
+                continue
         if c.effect == d.effect or c.term_cls is d.term_cls:  # white and rescale:white alike
             return True
         for t in (c.base, c.replaces):
             if t is not None and t in (d.base, d.replaces):
                 return True
     return False
+
+
+def _distinct(a: Attribution, c: Candidate, on: list[Attribution], on_c: list[Candidate]) -> bool:
+    """Whether a fitted repeatable effect ``a`` is a process distinct from those of the set.
+
+    Its correlation time must lie more than :data:`DISTINCT_FACTOR` away from that of every
+    process of its kind already in the set (an added one, or the model's term a rescale
+    scales); otherwise it is that process with more variance, which the set describes by
+    refitting it (exchange pass), not by a second one.
+    """
+    key = REPEATABLE.get(c.effect)
+    if key is None or c.base is not None:
+        return True
+    for b, d in zip(on, on_c, strict=True):
+        if d.term_cls is not c.term_cls:
+            continue
+        other = b.params.get(key) if d.base is None else d.base.values().get(key)
+        if other is None or not other > 0:
+            return False
+        ratio = a.params[key] / other
+        if 1.0 / DISTINCT_FACTOR <= ratio <= DISTINCT_FACTOR:
+            return False
+    return True
 
 
 def explain(
@@ -272,7 +310,11 @@ def explain(
             time_view=with_level_background(time_view, on, on_c, tm, duration, cache),
             duration=duration,
         )
-        kept = [a for a in kept if a.evidence["tau"]["delta_T"] > -worse]
+        kept = [
+            a
+            for a in kept
+            if a.evidence["tau"]["delta_T"] > -worse and _distinct(a, by_effect[a.effect], on, on_c)
+        ]
         if frequency is None or len(kept) < 2:
             return kept
         f = frequency.f
@@ -348,7 +390,7 @@ def explain(
     g0 = gaps[0]
     share = {}
     for j, a in enumerate(chosen):
-        share[a.effect] = float((gaps[j] - gaps[j + 1]) / g0) if g0 > 0 else 0.0
+        share[share_key(a.effect, share)] = float((gaps[j] - gaps[j + 1]) / g0) if g0 > 0 else 0.0
     share["remainder"] = float(gaps[-1] / g0) if g0 > 0 else 0.0
     explained = set().union(*(set(a.evidence.get("explained", [])) for a in chosen))
     return Explanation(
@@ -362,6 +404,16 @@ def explain(
         explained=sorted(explained),
         extra_avar=total,
     )
+
+
+def share_key(effect: str, share: dict[str, float]) -> str:
+    """The key of ``effect`` in ``share``: its name, ``<name>_2`` for a second process of it."""
+    if effect not in share:
+        return effect
+    n = 2
+    while f"{effect}_{n}" in share:
+        n += 1
+    return f"{effect}_{n}"
 
 
 def combined_terms(explanation: Explanation, model: Any) -> list[dict[str, Any]]:
