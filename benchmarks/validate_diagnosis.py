@@ -332,6 +332,10 @@ REAL_INJECTED = {
     "step": ("bias_steps", {"size": 0.1}),
     "ramp": ("ramp", {"R": 1e-5}),
 }
+#: injections sized above the default strength so that they are clear on top of the real run
+#: (the runs' own slow wander and rrw hide a ramp or a step of 8x the model's peak: on-top
+#: noncentralities 2-69 at 8x, 64-365 at 32x for the draws with a step in the fitted half)
+REAL_RHO = {"ramp": 32.0, "step": 32.0}
 #: the effect name a real-base injection is named by
 REAL_EFFECT = {"markov_fast": "markov"}
 #: the z gyro has a resonance of its own near 20 Hz (its controls name it): inject at 35 Hz
@@ -348,7 +352,8 @@ def real_cases(
 ) -> list[Case]:
     """Real-base cases: the model fitted on ADIS16405 run 1 (same axis) is the simulation; a
     segment of another run is the base record, alone (control) or with one effect injected
-    (strong: its Allan variance peaks at ``rho`` times the model's; ``seeds`` draws of each),
+    (strong: its Allan variance peaks at ``rho`` times the model's, :data:`REAL_RHO` for a
+    ramp and steps; ``seeds`` draws of each),
     or clipped (OOV).
 
     The run differs from run 1's model already (internal filter, short-correlation wander):
@@ -378,7 +383,7 @@ def real_cases(
                     params["burst_s"] = 0.05 * half / FS
                 if name == "step":
                     params["interval"] = half / FS / 2
-                term = scaled(T(kind, **params), model, FS, half, rho)
+                term = scaled(T(kind, **params), model, FS, half, REAL_RHO.get(name, rho))
                 for k in range(seeds):
                     suffix = f"-s{k}" if seeds > 1 else ""
                     out.append(Case(f"real{tag}-run{run}+{name}{suffix}", f"real:{name}", "real",
