@@ -1319,6 +1319,8 @@ def main() -> None:
             f"shrink={row.get('shrinkage', nan):.2f} hold={row.get('holdout_shrinkage', nan):.2f}",
             flush=True,
         )
+        if "effects" in row:  # real-base cases: the set, to follow a long run
+            print(f"    clear={row.get('clear')} set {_fmt_effects(row['effects'])}", flush=True)
     summary = summarize(rows)
     summary["seconds"] = time.perf_counter() - t0
     summary["n_mc"] = n_mc

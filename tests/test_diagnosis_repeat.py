@@ -85,7 +85,7 @@ def two_markov() -> tuple[NoiseModel, tuple[object, object], object]:
 
 
 def test_two_gauss_markov_processes_are_both_named(two_markov) -> None:  # type: ignore[no-untyped-def]
-    model, truth, d = two_markov
+    _, truth, d = two_markov
     gms = [a for a in d.explanation.effects if a.effect == "markov"]
     assert len(gms) == 2, [(a.effect, a.params) for a in d.explanation.effects]
     gms.sort(key=lambda a: a.params["tau_c"])
@@ -105,7 +105,8 @@ def test_the_two_process_model_pastes_and_simulates(two_markov) -> None:  # type
     combined = NoiseModel.from_dict({**model.to_dict(), "terms": terms})
     assert len(combined.terms_of_type("markov")) == 2
     x = np.asarray(combined.simulate(4096, fs=FS, seed=5), dtype=np.float64).ravel()
-    assert x.shape == (4096,) and np.all(np.isfinite(x))
+    assert x.shape == (4096,)
+    assert np.all(np.isfinite(x))
     # its Allan variance is the model's plus both processes' (they add)
     tau = np.array([0.01, 0.1, 1.0, 10.0])
     added = sum(term_from_dict(t).avar(tau, 1 / FS) for t in terms if t["type"] == "markov")
@@ -144,7 +145,8 @@ def test_a_ramp_is_not_read_as_a_process_at_the_bound(monkeypatch) -> None:  # t
         return [a.effect for a in ranked if np.log(a.params.get("tau_c", 1.0)) >= limit]
 
     ranked = rank(cands, tm, **test)
-    assert ranked and ranked[0].effect == "ramp"
+    assert ranked
+    assert ranked[0].effect == "ramp"
     assert at_bound(ranked) == []
     original = attribution._degenerate
     monkeypatch.setattr(

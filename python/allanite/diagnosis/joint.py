@@ -233,9 +233,9 @@ def _same_slot(c: Candidate, chosen: list[Candidate]) -> bool:
     correlation times are two effects; :func:`_distinct` then checks the fitted one.
     """
     for d in chosen:
-        if c.effect in REPEATABLE and c.base is None and d.term_cls is c.term_cls:
-            if sum(e.effect == c.effect for e in chosen) < 2:
-                continue
+        repeat = c.effect in REPEATABLE and c.base is None and d.term_cls is c.term_cls
+        if repeat and sum(e.effect == c.effect for e in chosen) < 2:
+            continue
         if c.effect == d.effect or c.term_cls is d.term_cls:  # white and rescale:white alike
             return True
         for t in (c.base, c.replaces):
@@ -388,7 +388,7 @@ def explain(
     k_total = sum(len(c.free) for c in chosen_c)
     p_after = tm.p_value(total, n_params=k_total)
     g0 = gaps[0]
-    share = {}
+    share: dict[str, float] = {}
     for j, a in enumerate(chosen):
         share[share_key(a.effect, share)] = float((gaps[j] - gaps[j + 1]) / g0) if g0 > 0 else 0.0
     share["remainder"] = float(gaps[-1] / g0) if g0 > 0 else 0.0
