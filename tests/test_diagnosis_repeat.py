@@ -153,3 +153,42 @@ def test_a_ramp_is_not_read_as_a_process_at_the_bound(monkeypatch) -> None:  # t
         attribution, "_degenerate", lambda c, logp, lo, dt, hi=None: original(c, logp, lo, dt)
     )
     assert set(at_bound(rank(cands, tm, **test))) == {"markov", "telegraph"}
+
+
+@pytest.mark.slow
+def test_real_base_gauss_markov_next_to_the_runs_own_wander(shared_data, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """ADIS16405 x gyro: run 1's fitted model as the simulation, run 3 with a 2-s Gauss-Markov
+    process injected as the record (the validation's real-base case). The run has its own
+    short-correlation wander (0.013-0.019 s), so one Gauss-Markov process fits a compromise
+    and loses to flicker; fitted as a pair, both processes are named. Without the pair step
+    (the previous selection) the injected process is not named."""
+    import allanite
+    import allanite.diagnosis.joint as joint
+
+    adis = shared_data / "imu" / "adis16405"
+
+    def load(run: int) -> np.ndarray:
+        with np.load(adis / f"run{run}.npz") as data:
+            return data["gyro_counts"][:, 0].astype(np.float64) * 0.05
+
+    fitted = allanite.fit(allanite.avar(load(1), fs=FS, taus="octave", units="deg/s"))
+    model = NoiseModel(fitted.model.terms, UNITS)
+    gm = T["markov"](sigma=0.0721, tau_c=2.0)  # Allan variance peak 8x the model's
+    n = 2**16
+    injected = NoiseModel((gm,), UNITS).simulate(n, fs=FS, seed=1092, allow_aliasing=True)
+    x = load(3)[:n] + np.asarray(injected, dtype=np.float64).ravel()
+    kw = {"fs": FS, "units": "deg/s", "holdout": 0.5, "n_mc": 60, "seed": 1086}
+
+    def processes(d) -> list[Attribution]:  # type: ignore[no-untyped-def]
+        return sorted(
+            (a for a in d.explanation.effects if a.effect == "markov"),
+            key=lambda a: a.params["tau_c"],
+        )
+
+    fast, slow = processes(diagnose(x, model, **kw))
+    rel = slow.params_sigma["tau_c"] / slow.params["tau_c"]
+    assert abs(np.log(slow.params["tau_c"] / gm.tau_c)) <= 3 * rel, (slow.params, rel)
+    assert fast.params["tau_c"] < gm.tau_c / DISTINCT_FACTOR**2  # the run's own wander
+    monkeypatch.setattr(joint, "_two_processes", lambda *args, **kwargs: None)
+    before = processes(diagnose(x, model, **kw))
+    assert all(abs(np.log(a.params["tau_c"] / gm.tau_c)) > np.log(3.0) for a in before)
