@@ -941,7 +941,7 @@ def table(summary: dict[str, Any]) -> str:
     for name, v in summary.get("real_per_case", {}).items():
         lines.append(
             f"| {name} | injected named={v['named_new']} (in the set: {v['named']}, clear="
-            f"{v.get('clear')}, lambda {v.get('lambda', float('nan')):.3g}), set "
+            f"{v.get('clear')}, lambda {v.get('lambda') or float('nan'):.3g}), set "
             f"{_fmt_effects(v['effects'])} (control "
             f"{v['control']}), closed={v['closed']}, unexplained in {v['views']} | | |"
         )
@@ -1321,15 +1321,17 @@ def main() -> None:
         )
         if "effects" in row:  # real-base cases: the set, to follow a long run
             print(f"    clear={row.get('clear')} set {_fmt_effects(row['effects'])}", flush=True)
+    RESULTS.mkdir(parents=True, exist_ok=True)
+    kind = "_pairs" if args.pairs else ("_quick" if args.quick else "")
+    stem = RESULTS / ("validate_diagnosis" + kind + args.tag)
+    # the rows first: a long run is not lost to a failure of the summary
+    stem.with_suffix(".json").write_text(json.dumps({"cases": rows}, indent=1, default=float))
     summary = summarize(rows)
     summary["seconds"] = time.perf_counter() - t0
     summary["n_mc"] = n_mc
     text = table(summary)
     print()
     print(text)
-    RESULTS.mkdir(parents=True, exist_ok=True)
-    kind = "_pairs" if args.pairs else ("_quick" if args.quick else "")
-    stem = RESULTS / ("validate_diagnosis" + kind + args.tag)
     stem.with_suffix(".json").write_text(
         json.dumps({"summary": summary, "cases": rows}, indent=1, default=float)
     )
