@@ -60,6 +60,7 @@ EQUIVALENT = {
     "flicker": {"flicker", "rescale:flicker"},
     "rrw": {"rrw", "rescale:rrw"},
     "quantization": {"quantization", "rescale:quantization"},
+    "ramp": {"ramp", "rescale:ramp"},  # a model with a ramp (the y gyro's): its slope rescaled
 }
 
 
@@ -401,7 +402,8 @@ def real_named(row: dict[str, Any], control: list[dict[str, Any]]) -> bool:
     Named: an effect of its kind (or an equivalent rescale) is in the set and not in the
     control's. A resonance: its frequency within 10 % (the z gyro has one of its own near
     20 Hz). A ramp: its slope within a factor 3 (a vanishing ramp that only takes the level
-    evidence does not count). A Gauss-Markov process: one with ``tau_c`` within a factor 3 of
+    evidence does not count; a rescale of the model's ramp, the y gyro's, counts with its
+    slope). A Gauss-Markov process: one with ``tau_c`` within a factor 3 of
     the injected one whose variance *beyond the control's* process of that ``tau_c`` (none:
     0) is within a factor 3 of the injected variance; a process like the run's own wander
     merges with it into one process of larger variance, which is that rule's reading.
@@ -419,7 +421,7 @@ def real_named(row: dict[str, Any], control: list[dict[str, Any]]) -> bool:
     def near(effects: list[dict[str, Any]]) -> list[dict[str, Any]]:
         return [
             e for e in effects
-            if e["effect"] == name and 1 / tol <= e["params"][key] / truth <= tol
+            if e["effect"] in accepted and 1 / tol <= e["params"][key] / truth <= tol
         ]  # fmt: skip
 
     if name != "markov":
