@@ -220,20 +220,29 @@ def _bounds(cand: Candidate, tm: TauModel) -> tuple[NDArray[np.float64], NDArray
 
 
 def _degenerate(
-    cand: Candidate, logp: NDArray[np.float64], lo: NDArray[np.float64], dt: float
+    cand: Candidate,
+    logp: NDArray[np.float64],
+    lo: NDArray[np.float64],
+    dt: float,
+    hi: NDArray[np.float64] | None = None,
 ) -> bool:
     """Whether the fit sits where the effect is not identified.
 
-    A parameter at its lower bound, or a correlation time shorter than one sample (a
-    Gauss-Markov or telegraph process with ``tau_c < dt`` is white noise at this sample rate):
-    a simpler candidate describes the same curve.
+    A parameter at its lower bound, a correlation time shorter than one sample (a
+    Gauss-Markov or telegraph process with ``tau_c < dt`` is white noise at this sample rate),
+    or a time parameter at its upper bound ``hi`` (four times the record: a Gauss-Markov or
+    telegraph process, or a warm-up, that never decorrelates within the record is a drift,
+    which the ramp and the random walk describe with fewer parameters): a simpler candidate
+    describes the same curve.
     """
     if np.any((logp - lo < 0.01) & (lo > -700.0)):
         return True
     specs = {p.name: p for p in cand.term_cls.params}
-    for name, v in zip(cand.free, logp, strict=True):
+    for i, (name, v) in enumerate(zip(cand.free, logp, strict=True)):
         spec = specs.get(name)
-        if spec is not None and spec.rate == 0 and spec.time == 1 and np.exp(v) < dt:
+        if spec is None or spec.rate != 0 or spec.time != 1:
+            continue
+        if np.exp(v) < dt or (hi is not None and hi[i] - v < 0.01):
             return True
     return False
 
@@ -338,7 +347,7 @@ def fit_candidate(
     if cand.free and (best is None or best.fun >= 1e299):
         return None
     logp = np.asarray(best.x if cand.free else [], dtype=np.float64)
-    if cand.base is None and _degenerate(cand, logp, lo, tm.dt):
+    if cand.base is None and _degenerate(cand, logp, lo, tm.dt, hi):
         return None
     extra = _extra(cand, logp, tm)
     if extra is None or negligible(cand, _values(cand, logp), extra, tm):

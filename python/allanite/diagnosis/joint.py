@@ -48,7 +48,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import stats
 
-from allanite.diagnosis.attribution import Attribution, rank
+from allanite.diagnosis.attribution import EVIDENCE_CAP, Attribution, fit_candidate, rank
 from allanite.diagnosis.candidates import Candidate
 from allanite.diagnosis.frequency_view import FrequencyView
 from allanite.diagnosis.tau_view import TauModel
@@ -186,8 +186,82 @@ def with_level_background(
     return replace(tv, level_sd=np.sqrt(tv.level_sd**2 + v), spread=spread)
 
 
-def _extra(a: Attribution, tm: TauModel) -> NDArray[np.float64]:
-    return np.asarray(a.sim_avar_after, dtype=np.float64) - tm.sim_avar
+def _own_extra(a: Attribution, c: Candidate, tm: TauModel) -> NDArray[np.float64]:
+    """Return the Allan variance the fitted effect ``a`` adds on the tau grid.
+
+    The candidate's own law at its fitted parameters, whatever ``a`` was fitted on top of.
+    """
+    with np.errstate(all="ignore"):
+        extra = c.extra_avar({k: a.params[k] for k in c.free}, tm.tau, tm.dt)
+    return np.asarray(extra, dtype=np.float64)
+
+
+def _two_processes(
+    c: Candidate,
+    tm_bg: TauModel,
+    fit_kw: dict[str, Any],
+    single: Attribution | None,
+    worse: float,
+) -> tuple[float, list[Attribution]] | None:
+    """Two processes of the repeatable kind ``c`` fitted together on top of the set.
+
+    A single process of the kind fits a compromise between two with distinct correlation
+    times (e.g. the 0.015-s wander of a MEMS gyro and a 2-s Gauss-Markov process read as one
+    of 0.5 s, or as flicker), so the pair is fitted as a unit: the first process started
+    :data:`DISTINCT_FACTOR` squared below and above the single fit's correlation time (the
+    tau grid's middle without one), the second on top of it (all starts), the first refitted
+    on top of the second. The pair is kept under the same rule as one effect (likelihood
+    ratio ``Delta T > chi2_{1-alpha}(k)`` with ``k`` both processes' parameters, or evidence
+    explained; not worse than ``chi2_{1-alpha}(1)``) and scored by the same penalised
+    criterion, ``T_after + k chi2_{1-alpha}(1) + `` the evidence both leave unexplained.
+
+    Returns
+    -------
+    (score, [first, second]) or None
+        None when no distinct pair passes.
+    """
+    key = REPEATABLE[c.effect]
+    alpha = float(fit_kw["alpha"])
+    evidence_p: dict[str, float] = fit_kw["evidence_p"]
+    left: dict[str, bool] = fit_kw["significant"]
+    per_param = float(stats.chi2.isf(alpha, 1))
+    ref = single.params[key] if single is not None else float(np.sqrt(tm_bg.tau[0] * tm_bg.tau[-1]))
+    best: tuple[float, list[Attribution]] | None = None
+    t_before = tm_bg.statistic()
+    for t0 in (ref / DISTINCT_FACTOR**2, ref * DISTINCT_FACTOR**2):
+        first = fit_candidate(replace(c, start={**c.start, key: t0}), tm_bg, **fit_kw)
+        if first is None:
+            continue
+        e1 = _own_extra(first, c, tm_bg)
+        second = fit_candidate(c, with_background(tm_bg, e1), **fit_kw)
+        if second is None or not _distinct(second, c, [first], [c]):
+            continue
+        e2 = _own_extra(second, c, tm_bg)
+        again = fit_candidate(
+            replace(c, start={**c.start, key: first.params[key]}),
+            with_background(tm_bg, e2),
+            **fit_kw,
+        )
+        if again is not None and _distinct(again, c, [second], [c]):
+            e_again = _own_extra(again, c, tm_bg)
+            if tm_bg.statistic(e_again + e2) < tm_bg.statistic(e1 + e2):
+                first, e1 = again, e_again
+        t_after = tm_bg.statistic(e1 + e2)
+        k = 2 * len(c.free)
+        explained = set(first.evidence.get("explained", [])) | set(
+            second.evidence.get("explained", [])
+        )
+        lr_p = float(stats.chi2.sf(max(t_before - t_after, 0.0), k))
+        if (lr_p >= alpha and not explained) or t_before - t_after <= -worse:
+            continue
+        unexplained = [e for e, sig in left.items() if sig and e not in explained]
+        penalty = sum(
+            min(-2.0 * np.log(max(evidence_p[e], 1e-300)), EVIDENCE_CAP) for e in unexplained
+        )
+        score = float(t_after + k * per_param + penalty)
+        if best is None or score < best[0]:
+            best = (score, [first, second])
+    return best
 
 
 def effect_psd(
@@ -215,18 +289,56 @@ def effect_psd(
     return np.where(np.isfinite(out), out, 0.0)
 
 
+#: effects of which a set may hold a second process, when its correlation time is distinct
+REPEATABLE: dict[str, str] = {"markov": "tau_c"}
+
+#: a second process of a repeatable kind must have a correlation time more than this factor
+#: away from every process of that kind in the set (model or effects): closer, the two are
+#: one process of larger variance (the existing one rescaled)
+DISTINCT_FACTOR = 4.0
+
+
 def _same_slot(c: Candidate, chosen: list[Candidate]) -> bool:
     """Whether ``c`` changes a model term already changed or adds a type already chosen.
 
-    Adding white noise after rescaling it (or rescaling it twice) is the same effect.
+    Adding white noise after rescaling it (or rescaling it twice) is the same effect. A
+    process of a :data:`REPEATABLE` kind (a Gauss-Markov process) may be added once more next
+    to one already in the set (added or rescaled): two such processes with distinct
+    correlation times are two effects; :func:`_distinct` then checks the fitted one.
     """
     for d in chosen:
+        repeat = c.effect in REPEATABLE and c.base is None and d.term_cls is c.term_cls
+        if repeat and sum(e.effect == c.effect for e in chosen) < 2:
+            continue
         if c.effect == d.effect or c.term_cls is d.term_cls:  # white and rescale:white alike
             return True
         for t in (c.base, c.replaces):
             if t is not None and t in (d.base, d.replaces):
                 return True
     return False
+
+
+def _distinct(a: Attribution, c: Candidate, on: list[Attribution], on_c: list[Candidate]) -> bool:
+    """Whether a fitted repeatable effect ``a`` is a process distinct from those of the set.
+
+    Its correlation time must lie more than :data:`DISTINCT_FACTOR` away from that of every
+    process of its kind already in the set (an added one, or the model's term a rescale
+    scales); otherwise it is that process with more variance, which the set describes by
+    refitting it (exchange pass), not by a second one.
+    """
+    key = REPEATABLE.get(c.effect)
+    if key is None or c.base is not None:
+        return True
+    for b, d in zip(on, on_c, strict=True):
+        if d.term_cls is not c.term_cls:
+            continue
+        other = b.params.get(key) if d.base is None else d.base.values().get(key)
+        if other is None or not other > 0:
+            return False
+        ratio = a.params[key] / other
+        if 1.0 / DISTINCT_FACTOR <= ratio <= DISTINCT_FACTOR:
+            return False
+    return True
 
 
 def explain(
@@ -249,42 +361,61 @@ def explain(
     by_effect = {c.effect: c for c in candidates}
     chosen = [best]
     chosen_c = [by_effect[best.effect]]
-    extras = [best.sim_avar_after - tm.sim_avar]
+    extras = [_own_extra(best, chosen_c[0], tm)]
     explained = set(best.evidence.get("explained", []))
     gaps = [tm.gap(), tm.gap(extras[0])]
     cache: dict[str, NDArray[np.float64]] = {}
     worse = float(stats.chi2.isf(alpha, 1))
 
     def on_top(
-        on: list[Attribution], on_c: list[Candidate], tm_bg: TauModel, left: dict[str, bool]
-    ) -> list[Attribution]:
+        on: list[Attribution],
+        on_c: list[Candidate],
+        tm_bg: TauModel,
+        left: dict[str, bool],
+        room: int = 1,
+    ) -> list[list[Attribution]]:
         """The candidates of another slot, ranked on top of the effects ``on``.
 
-        An effect that explains time/frequency evidence but makes the tau view significantly
-        worse is not an explanation of this record.
+        Each entry is a group of effects to add: one effect, or (with ``room`` for two) two
+        processes of a :data:`REPEATABLE` kind fitted together (:func:`_two_processes`), which
+        forward selection of one effect at a time never reaches when a single process of that
+        kind fits a compromise between them. An effect that explains time/frequency evidence
+        but makes the tau view significantly worse is not an explanation of this record.
         """
-        kept = rank(
-            [c for c in candidates if not _same_slot(c, on_c)],
-            tm_bg,
-            alpha=alpha,
-            evidence_p=evidence_p,
-            significant=left,
-            time_view=with_level_background(time_view, on, on_c, tm, duration, cache),
-            duration=duration,
-        )
-        kept = [a for a in kept if a.evidence["tau"]["delta_T"] > -worse]
-        if frequency is None or len(kept) < 2:
-            return kept
+        fit_kw: dict[str, Any] = {
+            "alpha": alpha,
+            "evidence_p": evidence_p,
+            "significant": left,
+            "time_view": with_level_background(time_view, on, on_c, tm, duration, cache),
+            "duration": duration,
+        }
+        kept = rank([c for c in candidates if not _same_slot(c, on_c)], tm_bg, **fit_kw)
+        kept = [
+            a
+            for a in kept
+            if a.evidence["tau"]["delta_T"] > -worse and _distinct(a, by_effect[a.effect], on, on_c)
+        ]
+        groups: list[tuple[float, list[Attribution]]] = [(a.score, [a]) for a in kept]
+        if room >= 2:
+            for c in candidates:
+                if c.effect not in REPEATABLE or any(d.term_cls is c.term_cls for d in on_c):
+                    continue
+                single = next((a for a in kept if a.effect == c.effect), None)
+                pair = _two_processes(c, tm_bg, fit_kw, single, worse)
+                if pair is not None:
+                    groups.append(pair)
+        if frequency is None or len(groups) < 2:
+            return [g for _, g in sorted(groups, key=lambda g: g[0])]
         f = frequency.f
         bg = np.zeros_like(f)
         for a, c in zip(on, on_c, strict=True):
             bg = bg + effect_psd(a, c, f, tm.dt)
 
-        def joint_score(a: Attribution) -> float:
-            extra = bg + effect_psd(a, by_effect[a.effect], f, tm.dt)
-            return a.score + frequency.shape_misfit(extra)
+        def joint_score(group: tuple[float, list[Attribution]]) -> float:
+            extra = bg + sum(effect_psd(a, by_effect[a.effect], f, tm.dt) for a in group[1])
+            return group[0] + frequency.shape_misfit(extra)
 
-        return sorted(kept, key=joint_score)
+        return [g for _, g in sorted(groups, key=joint_score)]
 
     while len(chosen) < MAX_EFFECTS:
         total = np.sum(extras, axis=0)
@@ -293,15 +424,15 @@ def explain(
         if tm.p_value(total, n_params=k_total) > alpha and not any(left.values()):
             break
         tm_bg = with_background(tm, total)
-        kept = on_top(chosen, chosen_c, tm_bg, left)
-        if not kept:
+        groups = on_top(chosen, chosen_c, tm_bg, left, room=MAX_EFFECTS - len(chosen))
+        if not groups:
             break
-        nxt = kept[0]
-        chosen.append(nxt)
-        chosen_c.append(by_effect[nxt.effect])
-        extras.append(_extra(nxt, tm_bg))
-        explained |= set(nxt.evidence.get("explained", []))
-        gaps.append(tm.gap(np.sum(extras, axis=0)))
+        for nxt in groups[0]:
+            chosen.append(nxt)
+            chosen_c.append(by_effect[nxt.effect])
+            extras.append(_own_extra(nxt, by_effect[nxt.effect], tm))
+            explained |= set(nxt.evidence.get("explained", []))
+            gaps.append(tm.gap(np.sum(extras, axis=0)))
     # exchange: each effect refitted against every candidate on top of the others
     for _ in range(2):
         swapped = False
@@ -315,13 +446,13 @@ def explain(
             )
             left = {e: bool(s) and e not in told for e, s in significant.items()}
             others_a = [a for j, a in enumerate(chosen) if j != i]
-            kept = on_top(others_a, others_c, tm_bg, left)
+            kept = [g[0] for g in on_top(others_a, others_c, tm_bg, left) if len(g) == 1]
             # the same term added or rescaled (white, rescale:white) is the same effect: only
             # the spectral misfit's rounding could tell them apart, so the incumbent stays
             if not kept or by_effect[kept[0].effect].term_cls is chosen_c[i].term_cls:
                 continue
             chosen[i], chosen_c[i] = kept[0], by_effect[kept[0].effect]
-            extras[i] = _extra(kept[0], tm_bg)
+            extras[i] = _own_extra(kept[0], chosen_c[i], tm)
             swapped = True
         if not swapped:
             break
@@ -346,9 +477,9 @@ def explain(
     k_total = sum(len(c.free) for c in chosen_c)
     p_after = tm.p_value(total, n_params=k_total)
     g0 = gaps[0]
-    share = {}
+    share: dict[str, float] = {}
     for j, a in enumerate(chosen):
-        share[a.effect] = float((gaps[j] - gaps[j + 1]) / g0) if g0 > 0 else 0.0
+        share[share_key(a.effect, share)] = float((gaps[j] - gaps[j + 1]) / g0) if g0 > 0 else 0.0
     share["remainder"] = float(gaps[-1] / g0) if g0 > 0 else 0.0
     explained = set().union(*(set(a.evidence.get("explained", [])) for a in chosen))
     return Explanation(
@@ -362,6 +493,16 @@ def explain(
         explained=sorted(explained),
         extra_avar=total,
     )
+
+
+def share_key(effect: str, share: dict[str, float]) -> str:
+    """The key of ``effect`` in ``share``: its name, ``<name>_2`` for a second process of it."""
+    if effect not in share:
+        return effect
+    n = 2
+    while f"{effect}_{n}" in share:
+        n += 1
+    return f"{effect}_{n}"
 
 
 def combined_terms(explanation: Explanation, model: Any) -> list[dict[str, Any]]:
