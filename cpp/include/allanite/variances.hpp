@@ -26,6 +26,7 @@
 #include <cmath>
 #include <optional>
 #include <cstdint>
+#include <cstring>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -154,9 +155,9 @@ struct Taps {
   std::int64_t step;  // elements between consecutive terms (row stride x term stride)
 };
 
-/// Taps of the modified estimator: the third difference at lag m of the prefix sums
-/// S = H + L of the phase (see PrefixPlan), term j of channel c at h[i][j * step + c] and
-/// l[i][j * step + c].
+/// Taps of the modified estimator's exact window: the third difference at lag m of the prefix
+/// sums S = H + L of the phase (see PrefixPlan), term j of channel c at h[i][j * step + c] and
+/// l[i][j * step + c] (read where a lane starts, see add_modified_lanes).
 struct SplitTaps {
   const double* h[4];
   const double* l[4];
@@ -164,13 +165,9 @@ struct SplitTaps {
 };
 
 /// Partial sums per block of an estimator's squares: eight (two AVX2 vectors, so that the adds
-/// of two chains overlap instead of each waiting on the last) for the plain differences; four
-/// for the modified estimator's split taps, whose eight loads per term leave no registers
-/// for more.
+/// of two chains overlap instead of each waiting on the last).
 template <class TapsT>
 constexpr int kPartials = 8;
-template <>
-constexpr int kPartials<SplitTaps> = 4;
 
 template <int Order>
 ALLANITE_ALWAYS_INLINE double tap_diff(const Taps<Order>& t, std::int64_t i) noexcept {
@@ -193,14 +190,6 @@ template <int Order>
 ALLANITE_ALWAYS_INLINE Taps<Order> advanced(const Taps<Order>& t, std::int64_t k) noexcept {
   Taps<Order> out = t;
   for (int i = 0; i <= Order; ++i) out.p[i] = t.p[i] + k;
-  return out;
-}
-ALLANITE_ALWAYS_INLINE SplitTaps advanced(const SplitTaps& t, std::int64_t k) noexcept {
-  SplitTaps out = t;
-  for (int i = 0; i < 4; ++i) {
-    out.h[i] = t.h[i] + k;
-    out.l[i] = t.l[i] + k;
-  }
   return out;
 }
 
@@ -231,10 +220,6 @@ ALLANITE_TARGET_CLONES static void add_diff_squares_1ch(const Taps<2>& t, std::i
   add_diff_squares_1ch_impl(t, count, total);
 }
 ALLANITE_TARGET_CLONES static void add_diff_squares_1ch(const Taps<3>& t, std::int64_t count,
-                                                        NeumaierSum& total) {
-  add_diff_squares_1ch_impl(t, count, total);
-}
-ALLANITE_TARGET_CLONES static void add_diff_squares_1ch(const SplitTaps& t, std::int64_t count,
                                                         NeumaierSum& total) {
   add_diff_squares_1ch_impl(t, count, total);
 }
@@ -287,10 +272,6 @@ ALLANITE_TARGET_CLONES static void add_diff_squares_3ch(const Taps<2>& t, std::i
   add_diff_squares_nc_impl<3>(t, count, totals);
 }
 ALLANITE_TARGET_CLONES static void add_diff_squares_3ch(const Taps<3>& t, std::int64_t count,
-                                                        NeumaierSum* totals) {
-  add_diff_squares_nc_impl<3>(t, count, totals);
-}
-ALLANITE_TARGET_CLONES static void add_diff_squares_3ch(const SplitTaps& t, std::int64_t count,
                                                         NeumaierSum* totals) {
   add_diff_squares_nc_impl<3>(t, count, totals);
 }
@@ -483,45 +464,188 @@ inline PrefixCursor prefix_cursor(const PhaseRef& phase, const PrefixPlan& plan,
   return cur;
 }
 
-/// out[j] = d3(j), the third difference at lag m of one channel of the phase from row b on
-/// (row stride rs), for j < n. Loops of their own (this one and interleave_lanes), so that they
-/// vectorise; the lanes' chains that read them are SLP only.
-ALLANITE_TARGET_CLONES static void lane_third_differences(const double* b, std::int64_t m, std::int64_t rs,
-                                                          std::int64_t n, double* out) noexcept {
-  const Taps<3> t{{b, b + m * rs, b + 2 * m * rs, b + 3 * m * rs}, rs};
+/// Terms per lane of the modified estimator's running window in the tiled pass (see
+/// add_modified_lanes): four lanes make a summation block.
+constexpr std::int64_t kModLane = kSumBlock / 4;
+
+/// The step of the modified estimator's window, w(j+1) - w(j) = d3(j), the third difference at
+/// lag m of the phase, written differences first: x3 - x0 and x2 - x1 round relative to the
+/// differences (exactly, by Sterbenz, where the phase is far from zero), not to |x|.
+ALLANITE_ALWAYS_INLINE double window_step(double x0, double x1, double x2, double x3) noexcept {
+  return (x3 - x0) - 3.0 * (x2 - x1);
+}
+
+/// out[j] = window_step of term j (one channel of the phase from row b on, row stride rs) for
+/// j < avail, 0 for avail <= j < n (the step after the last term would read past the phase).
+ALLANITE_TARGET_CLONES static void window_steps(const double* b, std::int64_t m, std::int64_t rs, std::int64_t avail,
+                                                std::int64_t n, double* out) noexcept {
+  const double* b1 = b + m * rs;
+  const double* b2 = b + 2 * m * rs;
+  const double* b3 = b + 3 * m * rs;
   if (rs == 1) {
-    for (std::int64_t j = 0; j < n; ++j) out[j] = tap_diff(t, j);
+    for (std::int64_t j = 0; j < avail; ++j) out[j] = window_step(b[j], b1[j], b2[j], b3[j]);
   } else {
-    for (std::int64_t j = 0; j < n; ++j) out[j] = tap_diff(t, j * rs);
+    for (std::int64_t j = 0; j < avail; ++j) out[j] = window_step(b[j * rs], b1[j * rs], b2[j * rs], b3[j * rs]);
+  }
+  for (std::int64_t j = std::max<std::int64_t>(avail, 0); j < n; ++j) out[j] = 0.0;
+}
+
+/// The running window of one lane of the modified estimator: `n` terms from the window
+/// hi + lo, moved on by the steps d[0 .. n) (readable up to n rounded up to 4), squares added
+/// to acc. The arithmetic, in groups of four steps from the lane's start (shared bit for bit by
+/// lane_groups): with w = hi + lo (kExact) or hi, p1 = d0, p2 = p1 + d1, p3 = p2 + d2,
+/// p4 = p3 + d3, the windows of the group are w, w + p1, w + p2, w + p3 (missing terms count
+/// as 0), acc += (w^2 + (w + p1)^2) + ((w + p2)^2 + (w + p3)^2), and the window moves on by
+/// p4: hi += p4 (kExact: as a TwoSum pair, so that only the steps' own rounding accumulates).
+/// One dependent add per four terms on each chain.
+template <bool kExact>
+ALLANITE_ALWAYS_INLINE void lane_run(const double* d, std::int64_t n, double& hi, double& lo, double& acc) noexcept {
+  for (std::int64_t j = 0; j < n; j += 4) {
+    const double w = kExact ? hi + lo : hi;
+    const double p1 = d[j], p2 = p1 + d[j + 1], p3 = p2 + d[j + 2], p4 = p3 + d[j + 3];
+    const double x1 = w + p1, x2 = w + p2, x3 = w + p3;
+    const double q1 = j + 1 < n ? x1 * x1 : 0.0, q2 = j + 2 < n ? x2 * x2 : 0.0, q3 = j + 3 < n ? x3 * x3 : 0.0;
+    acc += (w * w + q1) + (q2 + q3);
+    if constexpr (kExact) {
+      double s, e;
+      two_sum(hi, p4, s, e);
+      hi = s;
+      lo += e;
+    } else {
+      hi = w + p4;
+    }
   }
 }
 
-/// out[j * 4 + k] = in[k * n + j]: four lanes' rows of n terms interleaved (a transpose).
-ALLANITE_TARGET_CLONES static void interleave_lanes(const double* __restrict in, std::int64_t n,
-                                                    double* __restrict out) noexcept {
-  for (std::int64_t j = 0; j < n; ++j) {
-    out[j * 4] = in[j];
-    out[j * 4 + 1] = in[n + j];
-    out[j * 4 + 2] = in[2 * n + j];
-    out[j * 4 + 3] = in[3 * n + j];
+/// lane_run of eight lanes side by side, `steps` (a multiple of 4) steps each: lane k's steps
+/// are src[k ls + j] (kFromPhase false) or computed from the phase, src = x of lane 0's first
+/// term, unit row stride, every step readable (kFromPhase true). The same arithmetic as
+/// lane_run with the lanes in two vectors: four steps of each lane are loaded as a row and
+/// the rows transposed in registers. hi, lo, acc: eight lanes' state, updated.
+template <bool kFromPhase, bool kExact>
+ALLANITE_ALWAYS_INLINE void lane_groups(const double* src, std::int64_t m, std::int64_t ls, std::int64_t steps,
+                                        double* hi, double* lo, double* acc) noexcept {
+#if defined(__GNUC__) && !defined(__clang__)
+  typedef double v4d __attribute__((vector_size(32)));
+  typedef double v4u __attribute__((vector_size(32), aligned(8), may_alias));  // unaligned access
+  typedef long long v4i __attribute__((vector_size(32)));
+  const v4i lo2 = {0, 4, 2, 6}, hi2 = {1, 5, 3, 7}, lo4 = {0, 1, 4, 5}, hi4 = {2, 3, 6, 7};
+  const v4d three = {3.0, 3.0, 3.0, 3.0};
+#define ALLANITE_LOAD(p) (*reinterpret_cast<const v4u*>(p))
+  v4d h0 = ALLANITE_LOAD(hi), h1 = ALLANITE_LOAD(hi + 4), l0 = ALLANITE_LOAD(lo), l1 = ALLANITE_LOAD(lo + 4);
+  v4d a0 = ALLANITE_LOAD(acc), a1 = ALLANITE_LOAD(acc + 4);
+  const double* p = src;
+  for (std::int64_t s = 0; s < steps; s += 4, p += 4) {
+    // rows: four steps of one lane; columns after the transpose: one step of four lanes
+#define ALLANITE_TAP(k, t) ALLANITE_LOAD(p + (k) * ls + (t) * m)
+#define ALLANITE_ROW(k)                                                                             \
+  (kFromPhase ? (ALLANITE_TAP(k, 3) - ALLANITE_TAP(k, 0)) - three * (ALLANITE_TAP(k, 2) - ALLANITE_TAP(k, 1)) \
+              : ALLANITE_TAP(k, 0))
+    const v4d r0 = ALLANITE_ROW(0), r1 = ALLANITE_ROW(1), r2 = ALLANITE_ROW(2), r3 = ALLANITE_ROW(3);
+    const v4d r4 = ALLANITE_ROW(4), r5 = ALLANITE_ROW(5), r6 = ALLANITE_ROW(6), r7 = ALLANITE_ROW(7);
+#undef ALLANITE_ROW
+#undef ALLANITE_TAP
+    const v4d t0 = __builtin_shuffle(r0, r1, lo2), t1 = __builtin_shuffle(r0, r1, hi2);
+    const v4d t2 = __builtin_shuffle(r2, r3, lo2), t3 = __builtin_shuffle(r2, r3, hi2);
+    const v4d u0 = __builtin_shuffle(r4, r5, lo2), u1 = __builtin_shuffle(r4, r5, hi2);
+    const v4d u2 = __builtin_shuffle(r6, r7, lo2), u3 = __builtin_shuffle(r6, r7, hi2);
+    const v4d p1 = __builtin_shuffle(t0, t2, lo4), q1 = __builtin_shuffle(u0, u2, lo4);
+    const v4d p2 = p1 + __builtin_shuffle(t1, t3, lo4), q2 = q1 + __builtin_shuffle(u1, u3, lo4);
+    const v4d p3 = p2 + __builtin_shuffle(t0, t2, hi4), q3 = q2 + __builtin_shuffle(u0, u2, hi4);
+    const v4d p4 = p3 + __builtin_shuffle(t1, t3, hi4), q4 = q3 + __builtin_shuffle(u1, u3, hi4);
+    const v4d w0 = kExact ? h0 + l0 : h0, w1 = kExact ? h1 + l1 : h1;
+    const v4d x1 = w0 + p1, x2 = w0 + p2, x3 = w0 + p3;
+    const v4d y1 = w1 + q1, y2 = w1 + q2, y3 = w1 + q3;
+    a0 += (w0 * w0 + x1 * x1) + (x2 * x2 + x3 * x3);
+    a1 += (w1 * w1 + y1 * y1) + (y2 * y2 + y3 * y3);
+    if constexpr (kExact) {  // TwoSum, lane by lane
+      const v4d s0 = h0 + p4, s1 = h1 + q4;
+      const v4d b0 = s0 - h0, b1 = s1 - h1;
+      l0 += (h0 - (s0 - b0)) + (p4 - b0);
+      l1 += (h1 - (s1 - b1)) + (q4 - b1);
+      h0 = s0;
+      h1 = s1;
+    } else {
+      h0 = w0 + p4;
+      h1 = w1 + q4;
+    }
+  }
+#undef ALLANITE_LOAD
+  *reinterpret_cast<v4u*>(hi) = h0;
+  *reinterpret_cast<v4u*>(hi + 4) = h1;
+  *reinterpret_cast<v4u*>(lo) = l0;
+  *reinterpret_cast<v4u*>(lo + 4) = l1;
+  *reinterpret_cast<v4u*>(acc) = a0;
+  *reinterpret_cast<v4u*>(acc + 4) = a1;
+#else
+  std::vector<double> d(static_cast<std::size_t>(steps));
+  for (int k = 0; k < 8; ++k) {
+    const double* row = src + k * ls;
+    if constexpr (kFromPhase) {
+      for (std::int64_t j = 0; j < steps; ++j)
+        d[j] = window_step(row[j], row[j + m], row[j + 2 * m], row[j + 3 * m]);
+      row = d.data();
+    }
+    lane_run<kExact>(row, steps, hi[k], lo[k], acc[k]);
+  }
+#endif
+}
+
+ALLANITE_TARGET_CLONES static void lane_groups_phase(const double* x, std::int64_t m, std::int64_t ls,
+                                                     std::int64_t steps, double* hi, double* lo, double* acc) noexcept {
+  lane_groups<true, false>(x, m, ls, steps, hi, lo, acc);
+}
+ALLANITE_TARGET_CLONES static void lane_groups_steps(const double* d, std::int64_t ls, std::int64_t steps, double* hi,
+                                                     double* lo, double* acc) noexcept {
+  lane_groups<false, false>(d, 0, ls, steps, hi, lo, acc);
+}
+ALLANITE_TARGET_CLONES static void lane_groups_steps_exact(const double* d, std::int64_t ls, std::int64_t steps,
+                                                           double* hi, double* lo, double* acc) noexcept {
+  lane_groups<false, true>(d, 0, ls, steps, hi, lo, acc);
+}
+
+/// Add the modified AVAR's squares of `count` terms (from a block boundary, one channel: the
+/// phase x from the first term's row on, row stride rs) to total, block by block; a block is
+/// four lanes of kModLane terms, its sum (a_0 + a_1) + (a_2 + a_3) of the lanes' lane_run.
+/// Lane l starts from the exact window w0[l] (from the prefix sums) and moves on by steps
+/// rounded to O(eps) of the window and of the phase's lag-m differences; restarting every
+/// kModLane terms keeps that drift from growing with the record. `avail`: steps readable
+/// (the last term of the record has none). `buf`: 2 kSumBlock + 4 doubles.
+inline void add_modified_lanes(const double* x, std::int64_t rs, std::int64_t m, const double* w0,
+                               std::int64_t count, std::int64_t avail, NeumaierSum& total, double* buf) {
+  for (std::int64_t b = 0; b < count; b += 2 * kSumBlock) {
+    const std::int64_t len = std::min(2 * kSumBlock, count - b);
+    double hi[8], lo[8] = {}, acc[8] = {};
+    std::copy(w0 + b / kModLane, w0 + b / kModLane + (len + kModLane - 1) / kModLane, hi);
+    if (len == 2 * kSumBlock && rs == 1 && avail - b >= len) {  // two blocks, steps from the phase
+      lane_groups_phase(x + b, m, kModLane, kModLane, hi, lo, acc);
+    } else {
+      window_steps(x + b * rs, m, rs, std::min(len, avail - b), len + 4, buf);
+      if (len == 2 * kSumBlock) {
+        lane_groups_steps(buf, kModLane, kModLane, hi, lo, acc);
+      } else {
+        for (std::int64_t k = 0; k * kModLane < len; ++k)
+          lane_run<false>(buf + k * kModLane, std::min(kModLane, len - k * kModLane), hi[k], lo[k], acc[k]);
+      }
+    }
+    for (std::int64_t k = 0; k < 2 && k * kSumBlock < len; ++k)
+      total.add((acc[4 * k] + acc[4 * k + 1]) + (acc[4 * k + 2] + acc[4 * k + 3]));
   }
 }
 
 /// Modified AVAR sums of one factor beyond kTileMaxM (no other factor shares its rows). The
-/// terms are cut into four lanes of whole blocks; in each lane the window
-/// w_j = S[j+3m] - 3 S[j+2m] + 3 S[j+m] - S[j] starts from prefix cursors and moves on by the
-/// third difference of the phase, w_{j+1} = w_j + d3(j), kept as a TwoSum pair (a block's d3
-/// are computed lane by lane, vectorised, then interleaved so that the chains read vectors).
-/// The lanes are independent dependency chains run side by side; no prefix sums are stored.
-/// The lanes' block sums go to per-lane compensated totals, added to totals in lane order.
-ALLANITE_TARGET_CLONES ALLANITE_SLP_ONLY static void add_modified_single(const PhaseRef& phase, const PrefixPlan& plan,
-                                                      std::int64_t m, std::int64_t count, NeumaierSum* totals) {
-  constexpr int kLanes = 4;
+/// terms are cut into eight lanes of whole blocks; each lane's window starts from prefix
+/// cursors and moves on by the steps (lane_run, the window a TwoSum pair: at these factors
+/// the steps round to far below eps of the window, so the lanes need no restart). Steps are
+/// computed lane by lane into a buffer, kModLane at a time; the lanes' block sums go to
+/// per-lane compensated totals, added to totals in lane order. No prefix sums are stored.
+static void add_modified_single(const PhaseRef& phase, const PrefixPlan& plan, std::int64_t m,
+                                std::int64_t count, NeumaierSum* totals) {
+  constexpr int kLanes = 8;
   const Eigen::Index nc = phase.cols();
   const std::int64_t rs = phase.outerStride();
-  const std::int64_t chunk = kSumBlock;
-  const std::int64_t blocks = (count + chunk - 1) / chunk;
-  const std::int64_t lane_len = (blocks + kLanes - 1) / kLanes * chunk;  // whole blocks
+  const std::int64_t blocks = (count + kSumBlock - 1) / kSumBlock;
+  const std::int64_t lane_len = (blocks + kLanes - 1) / kLanes * kSumBlock;  // whole blocks
   std::int64_t first[kLanes], len[kLanes];
   for (int k = 0; k < kLanes; ++k) {
     first[k] = std::min(count, k * lane_len);
@@ -529,67 +653,47 @@ ALLANITE_TARGET_CLONES ALLANITE_SLP_ONLY static void add_modified_single(const P
   }
   // the window at each lane's first term, from the exact prefix sums
   std::vector<double> w0(static_cast<std::size_t>(kLanes * nc));
+  std::vector<double> buf(static_cast<std::size_t>(8 * nc));
   for (int k = 0; k < kLanes; ++k) {
     if (len[k] == 0) continue;
     PrefixCursor c0 = prefix_cursor(phase, plan, first[k]), c1 = prefix_cursor(phase, plan, first[k] + m),
                  c2 = prefix_cursor(phase, plan, first[k] + 2 * m), c3 = prefix_cursor(phase, plan, first[k] + 3 * m);
     PrefixCursor* cur[4] = {&c0, &c1, &c2, &c3};
-    std::vector<double> buf(static_cast<std::size_t>(8 * nc));
-    double* hi[4];
-    double* lo[4];
+    double* h[4];
+    double* l[4];
     for (int i = 0; i < 4; ++i) {
-      hi[i] = buf.data() + 2 * i * nc;
-      lo[i] = buf.data() + (2 * i + 1) * nc;
+      h[i] = buf.data() + 2 * i * nc;
+      l[i] = buf.data() + (2 * i + 1) * nc;
     }
-    fill_prefix<4>(cur, 1, hi, lo);
-    const SplitTaps t{{hi[0], hi[1], hi[2], hi[3]}, {lo[0], lo[1], lo[2], lo[3]}, nc};
+    fill_prefix<4>(cur, 1, h, l);
+    const SplitTaps t{{h[0], h[1], h[2], h[3]}, {l[0], l[1], l[2], l[3]}, nc};
     for (Eigen::Index c = 0; c < nc; ++c) w0[static_cast<std::size_t>(k * nc + c)] = tap_diff(t, c);
   }
-  static_assert(kLanes == 4, "interleave_lanes interleaves four lanes");
-  std::vector<double> d3(static_cast<std::size_t>(kLanes * chunk)), rows(d3.size());
+  std::vector<double> d(static_cast<std::size_t>(kLanes * kModLane + 4));
   for (Eigen::Index c = 0; c < nc; ++c) {
-    double hi[kLanes], lo[kLanes];
+    double hi[kLanes], lo[kLanes] = {}, acc[kLanes] = {};
     NeumaierSum lane_total[kLanes];
-    for (int k = 0; k < kLanes; ++k) {
-      hi[k] = w0[static_cast<std::size_t>(k * nc + c)];
-      lo[k] = 0.0;
-    }
+    for (int k = 0; k < kLanes; ++k) hi[k] = w0[static_cast<std::size_t>(k * nc + c)];
     const double* x = phase.data() + c;
-    for (std::int64_t start = 0; start < lane_len; start += chunk) {
+    for (std::int64_t start = 0; start < lane_len; start += kModLane) {
       std::int64_t n[kLanes];
+      bool full = true;
       for (int k = 0; k < kLanes; ++k) {
-        n[k] = std::max<std::int64_t>(0, std::min(chunk, len[k] - start));
-        lane_third_differences(x + (first[k] + start) * rs, m, rs, n[k], rows.data() + k * chunk);
+        n[k] = std::clamp<std::int64_t>(len[k] - start, 0, kModLane);
+        full = full && n[k] == kModLane;
+        const std::int64_t avail = std::min(n[k], count - 1 - (first[k] + start));
+        window_steps(x + (first[k] + start) * rs, m, rs, avail, kModLane, d.data() + k * kModLane);
       }
-      interleave_lanes(rows.data(), chunk, d3.data());  // term j of lane k at j * kLanes + k
-      double a[4][kLanes] = {};  // a[r][k]: lane k's partial sum r (the lanes one vector)
-      const std::int64_t common = *std::min_element(n, n + kLanes) / 4 * 4;
-      std::int64_t j = 0;
-      for (; j < common; j += 4) {  // the lanes' chains side by side, four terms each
-        for (int r = 0; r < 4; ++r) {
-          const double* v = d3.data() + (j + r) * kLanes;
-          double w[kLanes];
-          for (int k = 0; k < kLanes; ++k) w[k] = hi[k] + lo[k];
-          for (int k = 0; k < kLanes; ++k) a[r][k] += w[k] * w[k];
-          for (int k = 0; k < kLanes; ++k) {
-            const double sum = hi[k] + v[k];
-            const double bb = sum - hi[k];
-            lo[k] += (hi[k] - (sum - bb)) + (v[k] - bb);  // TwoSum error
-            hi[k] = sum;
-          }
-        }
+      if (full) {
+        lane_groups_steps_exact(d.data(), kModLane, kModLane, hi, lo, acc);
+      } else {
+        for (int k = 0; k < kLanes; ++k) lane_run<true>(d.data() + k * kModLane, n[k], hi[k], lo[k], acc[k]);
       }
-      for (int k = 0; k < kLanes; ++k)
-        for (std::int64_t i = j; i < n[k]; ++i) {
-          const double w = hi[k] + lo[k];
-          a[i & 3][k] += w * w;
-          double sum, e;
-          two_sum(hi[k], d3[static_cast<std::size_t>(i * kLanes + k)], sum, e);
-          hi[k] = sum;
-          lo[k] += e;
-        }
-      for (int k = 0; k < kLanes; ++k)
-        if (n[k] > 0) lane_total[k].add((a[0][k] + a[1][k]) + (a[2][k] + a[3][k]));
+      if ((start + kModLane) % kSumBlock == 0) {  // a block's end (lane_len: whole blocks)
+        for (int k = 0; k < kLanes; ++k)
+          if (len[k] > start / kSumBlock * kSumBlock) lane_total[k].add(acc[k]);
+        std::fill(acc, acc + kLanes, 0.0);
+      }
     }
     for (int k = 0; k < kLanes; ++k) totals[c].add(lane_total[k].value());
   }
@@ -662,11 +766,12 @@ inline void variance_group(const PhaseRef& phase, const PrefixPlan* plan, Varian
   // modified: the window holds S[k0 .. k0 + kTileTerms + 3 max(m)) of the current tile
   std::int64_t top_m = 0;
   for (const std::size_t i : idx) top_m = std::max(top_m, ms[i]);
-  // modified beyond kTileMaxM (a factor alone): four cursors instead, add_modified_single
+  // modified beyond kTileMaxM (a factor alone): eight lanes from cursors, add_modified_single
   const bool windowed = kind == VarianceKind::Modified && top_m <= kTileMaxM;
   if (kind == VarianceKind::Modified && !windowed) longest = 0;
   const std::int64_t window = windowed ? std::min(kTileTerms + 3 * top_m, M + 1) : 0;
   std::vector<double> win_hi(static_cast<std::size_t>(window * nc)), win_lo(win_hi.size());
+  std::vector<double> anchors(windowed ? kTileTerms / kModLane : 0), steps(windowed ? 2 * kSumBlock + 4 : 0);
   std::int64_t filled = 0;  // rows of the window holding S[k0 ...]
   std::optional<PrefixCursor> cursor;
   if (windowed) cursor.emplace(prefix_cursor(phase, *plan, 0));
@@ -693,11 +798,17 @@ inline void variance_group(const PhaseRef& phase, const PrefixPlan* plan, Varian
       NeumaierSum* tot = totals[a].data();
       switch (kind) {
         case VarianceKind::Modified: {
+          // every lane's first window from the prefix sums, the others by steps of the phase
           const double* h = win_hi.data();
           const double* l = win_lo.data();
           const std::int64_t s = m * nc;
-          add_diff_squares(SplitTaps{{h, h + s, h + 2 * s, h + 3 * s}, {l, l + s, l + 2 * s, l + 3 * s}, nc},
-                           count, nc, tot);
+          const SplitTaps t{{h, h + s, h + 2 * s, h + 3 * s}, {l, l + s, l + 2 * s, l + 3 * s}, nc};
+          const std::int64_t lanes = (count + kModLane - 1) / kModLane;
+          for (Eigen::Index c = 0; c < nc; ++c) {
+            for (std::int64_t q = 0; q < lanes; ++q)
+              anchors[static_cast<std::size_t>(q)] = tap_diff(t, q * kModLane * nc + c);
+            add_modified_lanes(x + k0 * rs + c, rs, m, anchors.data(), count, n[a] - 1 - k0, tot[c], steps.data());
+          }
           break;
         }
         case VarianceKind::Hadamard:
