@@ -406,12 +406,12 @@ inline PrefixPlan prefix_plan(const PhaseRef& phase) {
 /// Regenerates S[row], S[row+1], ... of every channel from the plan (see fill_prefix).
 struct PrefixCursor {
   PrefixCursor(const PhaseRef& phase, const PrefixPlan& plan, std::int64_t start)
-      : x(phase.data()), rs(phase.outerStride()), nc(phase.cols()), big(plan.big.data()),
+      : x(phase.data()), rs(phase.outerStride()), end(phase.rows()), nc(phase.cols()), big(plan.big.data()),
         sum(plan.sum.begin() + (start / kSumBlock) * nc, plan.sum.begin() + (start / kSumBlock + 1) * nc),
         comp(plan.comp.begin() + (start / kSumBlock) * nc, plan.comp.begin() + (start / kSumBlock + 1) * nc),
         row(start / kSumBlock * kSumBlock) {}
   const double* x;
-  std::int64_t rs;
+  std::int64_t rs, end;  // row stride and rows of the phase
   Eigen::Index nc;
   const double* big;
   std::vector<double> sum, comp;  // TwoSum state of S[row], per channel
@@ -419,7 +419,8 @@ struct PrefixCursor {
 };
 
 /// Advance K cursors together by `rows` rows (interleaved: K independent chains), writing
-/// the split S of the rows passed to hi[i], lo[i] (rows x nc, row-major) unless null.
+/// the split S of the rows passed to hi[i], lo[i] (rows x nc, row-major) unless null. S[M]
+/// (the row after the phase's last) can be written, no row beyond it.
 template <int K>
 inline void fill_prefix(PrefixCursor* const* cur, std::int64_t rows, double* const* hi, double* const* lo) {
   const Eigen::Index nc = cur[0]->nc;
@@ -434,6 +435,8 @@ inline void fill_prefix(PrefixCursor* const* cur, std::int64_t rows, double* con
       x[i] = cur[i]->x + cur[i]->row * cur[i]->rs + c;
     }
     const std::int64_t rs = cur[0]->rs;
+    bool at_end[K];  // the last row passed is S[M]: nothing to add after it
+    for (int i = 0; i < K; ++i) at_end[i] = cur[i]->row + rows > cur[i]->end;
     for (std::int64_t r = 0; r < rows; ++r) {
       for (int i = 0; i < K; ++i) {
         if (hi[i] != nullptr) {
@@ -441,8 +444,9 @@ inline void fill_prefix(PrefixCursor* const* cur, std::int64_t rows, double* con
           hi[i][r * nc + c] = h;
           lo[i][r * nc + c] = (sum[i] - h) + comp[i];  // sum - h is exact
         }
+        if (r + 1 == rows && at_end[i]) continue;
         double t, e;
-        two_sum(sum[i], x[i][r * rs], t, e);  // branch free: the only chain is sum += x
+        two_sum(sum[i], x[i][r * rs], t, e);  // the only chain is sum += x
         sum[i] = t;
         comp[i] += e;
       }
@@ -637,8 +641,9 @@ inline void add_modified_lanes(const double* x, std::int64_t rs, std::int64_t m,
 /// terms are cut into eight lanes of whole blocks; each lane's window starts from prefix
 /// cursors and moves on by the steps (lane_run, the window a TwoSum pair: at these factors
 /// the steps round to far below eps of the window, so the lanes need no restart). Steps are
-/// computed lane by lane into a buffer, kModLane at a time; the lanes' block sums go to
-/// per-lane compensated totals, added to totals in lane order. No prefix sums are stored.
+/// computed lane by lane into a buffer, a block at a time (long runs for the prefetchers);
+/// the lanes' block sums go to per-lane compensated totals, added to totals in lane order.
+/// No prefix sums are stored.
 static void add_modified_single(const PhaseRef& phase, const PrefixPlan& plan, std::int64_t m,
                                 std::int64_t count, NeumaierSum* totals) {
   constexpr int kLanes = 8;
@@ -669,31 +674,29 @@ static void add_modified_single(const PhaseRef& phase, const PrefixPlan& plan, s
     const SplitTaps t{{h[0], h[1], h[2], h[3]}, {l[0], l[1], l[2], l[3]}, nc};
     for (Eigen::Index c = 0; c < nc; ++c) w0[static_cast<std::size_t>(k * nc + c)] = tap_diff(t, c);
   }
-  std::vector<double> d(static_cast<std::size_t>(kLanes * kModLane + 4));
+  std::vector<double> d(static_cast<std::size_t>(kLanes * kSumBlock + 4));
   for (Eigen::Index c = 0; c < nc; ++c) {
     double hi[kLanes], lo[kLanes] = {}, acc[kLanes] = {};
     NeumaierSum lane_total[kLanes];
     for (int k = 0; k < kLanes; ++k) hi[k] = w0[static_cast<std::size_t>(k * nc + c)];
     const double* x = phase.data() + c;
-    for (std::int64_t start = 0; start < lane_len; start += kModLane) {
+    for (std::int64_t start = 0; start < lane_len; start += kSumBlock) {
       std::int64_t n[kLanes];
       bool full = true;
       for (int k = 0; k < kLanes; ++k) {
-        n[k] = std::clamp<std::int64_t>(len[k] - start, 0, kModLane);
-        full = full && n[k] == kModLane;
+        n[k] = std::clamp<std::int64_t>(len[k] - start, 0, kSumBlock);
+        full = full && n[k] == kSumBlock;
         const std::int64_t avail = std::min(n[k], count - 1 - (first[k] + start));
-        window_steps(x + (first[k] + start) * rs, m, rs, avail, kModLane, d.data() + k * kModLane);
+        window_steps(x + (first[k] + start) * rs, m, rs, avail, kSumBlock, d.data() + k * kSumBlock);
       }
       if (full) {
-        lane_groups_steps_exact(d.data(), kModLane, kModLane, hi, lo, acc);
+        lane_groups_steps_exact(d.data(), kSumBlock, kSumBlock, hi, lo, acc);
       } else {
-        for (int k = 0; k < kLanes; ++k) lane_run<true>(d.data() + k * kModLane, n[k], hi[k], lo[k], acc[k]);
+        for (int k = 0; k < kLanes; ++k) lane_run<true>(d.data() + k * kSumBlock, n[k], hi[k], lo[k], acc[k]);
       }
-      if ((start + kModLane) % kSumBlock == 0) {  // a block's end (lane_len: whole blocks)
-        for (int k = 0; k < kLanes; ++k)
-          if (len[k] > start / kSumBlock * kSumBlock) lane_total[k].add(acc[k]);
-        std::fill(acc, acc + kLanes, 0.0);
-      }
+      for (int k = 0; k < kLanes; ++k)
+        if (n[k] > 0) lane_total[k].add(acc[k]);
+      std::fill(acc, acc + kLanes, 0.0);
     }
     for (int k = 0; k < kLanes; ++k) totals[c].add(lane_total[k].value());
   }
@@ -744,6 +747,64 @@ inline std::int64_t tap_terms(VarianceKind kind, std::int64_t M, std::int64_t m)
   return kind == VarianceKind::Total ? M - 2 * m : n_terms(kind, M, m);
 }
 
+/// The prefix sums S[k0 .. k0 + span) that a tile of factors up to top_m reads where its
+/// lanes start, in a ring of whole blocks (span = kTileTerms + 3 top_m rounded up to blocks):
+/// a tile fills only the blocks it adds, each regenerated from its mark of the plan, four
+/// blocks side by side, so that S[r] depends on r alone (not on the tiles or threads).
+struct PrefixRing {
+  PrefixRing(const PhaseRef& ph, const PrefixPlan& pl, std::int64_t top_m)
+      : phase(ph), plan(pl), rows(ph.rows() + 1), nc(ph.cols()),
+        span(kTileTerms + (3 * top_m + kSumBlock - 1) / kSumBlock * kSumBlock),
+        hi(static_cast<std::size_t>(span * nc)), lo(hi.size()) {}
+
+  /// Make rows [k0, k0 + span) present (those below rows).
+  void cover(std::int64_t k0) {
+    const std::int64_t target = std::min(k0 + span, rows);
+    while (filled < target) {
+      if (filled + 4 * kSumBlock <= target) {  // four whole blocks side by side
+        PrefixCursor c0(phase, plan, filled), c1(phase, plan, filled + kSumBlock),
+            c2(phase, plan, filled + 2 * kSumBlock), c3(phase, plan, filled + 3 * kSumBlock);
+        PrefixCursor* cur[4] = {&c0, &c1, &c2, &c3};
+        double* h[4];
+        double* l[4];
+        for (int i = 0; i < 4; ++i) {
+          h[i] = slot(hi, filled + i * kSumBlock);
+          l[i] = slot(lo, filled + i * kSumBlock);
+        }
+        fill_prefix<4>(cur, kSumBlock, h, l);
+        filled += 4 * kSumBlock;
+      } else {
+        PrefixCursor c0(phase, plan, filled);
+        PrefixCursor* cur[1] = {&c0};
+        double* h[1] = {slot(hi, filled)};
+        double* l[1] = {slot(lo, filled)};
+        const std::int64_t n = std::min(kSumBlock, target - filled);
+        fill_prefix<1>(cur, n, h, l);
+        filled += n;
+      }
+    }
+  }
+
+  /// The exact window w(j) = S[j+3m] - 3 S[j+2m] + 3 S[j+m] - S[j] of channel c.
+  double window(std::int64_t j, std::int64_t m, Eigen::Index c) const {
+    const SplitTaps t{{at(hi, j), at(hi, j + m), at(hi, j + 2 * m), at(hi, j + 3 * m)},
+                      {at(lo, j), at(lo, j + m), at(lo, j + 2 * m), at(lo, j + 3 * m)},
+                      nc};
+    return tap_diff(t, c);
+  }
+
+ private:
+  double* slot(std::vector<double>& v, std::int64_t row) const { return v.data() + row % span * nc; }
+  const double* at(const std::vector<double>& v, std::int64_t row) const { return v.data() + row % span * nc; }
+  const PhaseRef& phase;
+  const PrefixPlan& plan;
+  std::int64_t rows;
+  Eigen::Index nc;
+  std::int64_t span;
+  std::vector<double> hi, lo;
+  std::int64_t filled = 0;  // rows [0, filled) have been generated
+};
+
 /// Variances of the factors ms[idx[...]] in one pass over the rows: tile by tile of
 /// kTileTerms terms, every factor adds the tile's terms to its own compensated sums (for a
 /// single factor that is one plain pass). `plan`: the prefix sums (modified only), regenerated
@@ -763,33 +824,17 @@ inline void variance_group(const PhaseRef& phase, const PrefixPlan* plan, Varian
     longest = std::max(longest, n[a]);
   }
   const bool strided = kind == VarianceKind::Standard || kind == VarianceKind::StandardHadamard;
-  // modified: the window holds S[k0 .. k0 + kTileTerms + 3 max(m)) of the current tile
   std::int64_t top_m = 0;
   for (const std::size_t i : idx) top_m = std::max(top_m, ms[i]);
   // modified beyond kTileMaxM (a factor alone): eight lanes from cursors, add_modified_single
   const bool windowed = kind == VarianceKind::Modified && top_m <= kTileMaxM;
   if (kind == VarianceKind::Modified && !windowed) longest = 0;
-  const std::int64_t window = windowed ? std::min(kTileTerms + 3 * top_m, M + 1) : 0;
-  std::vector<double> win_hi(static_cast<std::size_t>(window * nc)), win_lo(win_hi.size());
+  // modified: the prefix sums of the tile's rows, where its lanes start (add_modified_lanes)
+  std::optional<PrefixRing> ring;
+  if (windowed) ring.emplace(phase, *plan, top_m);
   std::vector<double> anchors(windowed ? kTileTerms / kModLane : 0), steps(windowed ? 2 * kSumBlock + 4 : 0);
-  std::int64_t filled = 0;  // rows of the window holding S[k0 ...]
-  std::optional<PrefixCursor> cursor;
-  if (windowed) cursor.emplace(prefix_cursor(phase, *plan, 0));
   for (std::int64_t k0 = 0; k0 < longest; k0 += kTileTerms) {
-    if (windowed) {
-      if (k0 > 0) {  // drop the previous tile's rows, keep the overlap
-        const std::int64_t keep = filled - kTileTerms;
-        std::copy(win_hi.begin() + kTileTerms * nc, win_hi.begin() + filled * nc, win_hi.begin());
-        std::copy(win_lo.begin() + kTileTerms * nc, win_lo.begin() + filled * nc, win_lo.begin());
-        filled = keep;
-      }
-      const std::int64_t want = std::min(window, M + 1 - k0);
-      PrefixCursor* one[1] = {&*cursor};
-      double* hi[1] = {win_hi.data() + filled * nc};
-      double* lo[1] = {win_lo.data() + filled * nc};
-      fill_prefix<1>(one, want - filled, hi, lo);
-      filled = want;
-    }
+    if (windowed) ring->cover(k0);
     for (std::size_t a = 0; a < idx.size(); ++a) {
       if (k0 >= n[a]) continue;
       const std::int64_t m = ms[idx[a]];
@@ -799,14 +844,10 @@ inline void variance_group(const PhaseRef& phase, const PrefixPlan* plan, Varian
       switch (kind) {
         case VarianceKind::Modified: {
           // every lane's first window from the prefix sums, the others by steps of the phase
-          const double* h = win_hi.data();
-          const double* l = win_lo.data();
-          const std::int64_t s = m * nc;
-          const SplitTaps t{{h, h + s, h + 2 * s, h + 3 * s}, {l, l + s, l + 2 * s, l + 3 * s}, nc};
           const std::int64_t lanes = (count + kModLane - 1) / kModLane;
           for (Eigen::Index c = 0; c < nc; ++c) {
             for (std::int64_t q = 0; q < lanes; ++q)
-              anchors[static_cast<std::size_t>(q)] = tap_diff(t, q * kModLane * nc + c);
+              anchors[static_cast<std::size_t>(q)] = ring->window(k0 + q * kModLane, m, c);
             add_modified_lanes(x + k0 * rs + c, rs, m, anchors.data(), count, n[a] - 1 - k0, tot[c], steps.data());
           }
           break;
