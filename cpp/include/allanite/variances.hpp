@@ -468,6 +468,9 @@ inline PrefixCursor prefix_cursor(const PhaseRef& phase, const PrefixPlan& plan,
   return cur;
 }
 
+/// Lanes side by side in the single-factor pass (add_modified_single): four or eight.
+constexpr int kModSingleLanes = 4;
+
 /// Terms per lane of the modified estimator's running window in the tiled pass (see
 /// add_modified_lanes): four lanes make a summation block.
 constexpr std::int64_t kModLane = kSumBlock / 4;
@@ -526,9 +529,10 @@ ALLANITE_ALWAYS_INLINE void lane_run(const double* d, std::int64_t n, double& hi
 /// term, unit row stride, every step readable (kFromPhase true). The same arithmetic as
 /// lane_run with the lanes in two vectors: four steps of each lane are loaded as a row and
 /// the rows transposed in registers. hi, lo, acc: eight lanes' state, updated.
-template <bool kFromPhase, bool kExact>
+template <bool kFromPhase, bool kExact, int V = 2>
 ALLANITE_ALWAYS_INLINE void lane_groups(const double* src, std::int64_t m, std::int64_t ls, std::int64_t steps,
                                         double* hi, double* lo, double* acc) noexcept {
+  static_assert(V == 1 || V == 2, "four or eight lanes");
 #if defined(__GNUC__) && !defined(__clang__)
   typedef double v4d __attribute__((vector_size(32)));
   typedef double v4u __attribute__((vector_size(32), aligned(8), may_alias));  // unaligned access
@@ -536,8 +540,13 @@ ALLANITE_ALWAYS_INLINE void lane_groups(const double* src, std::int64_t m, std::
   const v4i lo2 = {0, 4, 2, 6}, hi2 = {1, 5, 3, 7}, lo4 = {0, 1, 4, 5}, hi4 = {2, 3, 6, 7};
   const v4d three = {3.0, 3.0, 3.0, 3.0};
 #define ALLANITE_LOAD(p) (*reinterpret_cast<const v4u*>(p))
-  v4d h0 = ALLANITE_LOAD(hi), h1 = ALLANITE_LOAD(hi + 4), l0 = ALLANITE_LOAD(lo), l1 = ALLANITE_LOAD(lo + 4);
-  v4d a0 = ALLANITE_LOAD(acc), a1 = ALLANITE_LOAD(acc + 4);
+  v4d h0 = ALLANITE_LOAD(hi), l0 = ALLANITE_LOAD(lo), a0 = ALLANITE_LOAD(acc);
+  v4d h1 = h0, l1 = l0, a1 = a0;
+  if constexpr (V == 2) {
+    h1 = ALLANITE_LOAD(hi + 4);
+    l1 = ALLANITE_LOAD(lo + 4);
+    a1 = ALLANITE_LOAD(acc + 4);
+  }
   const double* p = src;
   for (std::int64_t s = 0; s < steps; s += 4, p += 4) {
     // rows: four steps of one lane; columns after the transpose: one step of four lanes
@@ -545,45 +554,46 @@ ALLANITE_ALWAYS_INLINE void lane_groups(const double* src, std::int64_t m, std::
 #define ALLANITE_ROW(k)                                                                             \
   (kFromPhase ? (ALLANITE_TAP(k, 3) - ALLANITE_TAP(k, 0)) - three * (ALLANITE_TAP(k, 2) - ALLANITE_TAP(k, 1)) \
               : ALLANITE_TAP(k, 0))
-    const v4d r0 = ALLANITE_ROW(0), r1 = ALLANITE_ROW(1), r2 = ALLANITE_ROW(2), r3 = ALLANITE_ROW(3);
-    const v4d r4 = ALLANITE_ROW(4), r5 = ALLANITE_ROW(5), r6 = ALLANITE_ROW(6), r7 = ALLANITE_ROW(7);
+    // lanes 4g .. 4g + 3 in one vector: window state h, l, squares a
+#define ALLANITE_LANES(g, h, l, a)                                                                  \
+  do {                                                                                              \
+    const v4d r0 = ALLANITE_ROW(4 * (g)), r1 = ALLANITE_ROW(4 * (g) + 1);                           \
+    const v4d r2 = ALLANITE_ROW(4 * (g) + 2), r3 = ALLANITE_ROW(4 * (g) + 3);                       \
+    const v4d t0 = __builtin_shuffle(r0, r1, lo2), t1 = __builtin_shuffle(r0, r1, hi2);             \
+    const v4d t2 = __builtin_shuffle(r2, r3, lo2), t3 = __builtin_shuffle(r2, r3, hi2);             \
+    const v4d p1 = __builtin_shuffle(t0, t2, lo4);                                                  \
+    const v4d p2 = p1 + __builtin_shuffle(t1, t3, lo4);                                             \
+    const v4d p3 = p2 + __builtin_shuffle(t0, t2, hi4);                                             \
+    const v4d p4 = p3 + __builtin_shuffle(t1, t3, hi4);                                             \
+    const v4d w = kExact ? h + l : h;                                                               \
+    const v4d x1 = w + p1, x2 = w + p2, x3 = w + p3;                                                \
+    a += (w * w + x1 * x1) + (x2 * x2 + x3 * x3);                                                   \
+    if constexpr (kExact) { /* TwoSum, lane by lane */                                              \
+      const v4d sum = h + p4, bb = sum - h;                                                         \
+      l += (h - (sum - bb)) + (p4 - bb);                                                            \
+      h = sum;                                                                                      \
+    } else {                                                                                        \
+      h = w + p4;                                                                                   \
+    }                                                                                               \
+  } while (false)
+    ALLANITE_LANES(0, h0, l0, a0);
+    if constexpr (V == 2) ALLANITE_LANES(1, h1, l1, a1);
+#undef ALLANITE_LANES
 #undef ALLANITE_ROW
 #undef ALLANITE_TAP
-    const v4d t0 = __builtin_shuffle(r0, r1, lo2), t1 = __builtin_shuffle(r0, r1, hi2);
-    const v4d t2 = __builtin_shuffle(r2, r3, lo2), t3 = __builtin_shuffle(r2, r3, hi2);
-    const v4d u0 = __builtin_shuffle(r4, r5, lo2), u1 = __builtin_shuffle(r4, r5, hi2);
-    const v4d u2 = __builtin_shuffle(r6, r7, lo2), u3 = __builtin_shuffle(r6, r7, hi2);
-    const v4d p1 = __builtin_shuffle(t0, t2, lo4), q1 = __builtin_shuffle(u0, u2, lo4);
-    const v4d p2 = p1 + __builtin_shuffle(t1, t3, lo4), q2 = q1 + __builtin_shuffle(u1, u3, lo4);
-    const v4d p3 = p2 + __builtin_shuffle(t0, t2, hi4), q3 = q2 + __builtin_shuffle(u0, u2, hi4);
-    const v4d p4 = p3 + __builtin_shuffle(t1, t3, hi4), q4 = q3 + __builtin_shuffle(u1, u3, hi4);
-    const v4d w0 = kExact ? h0 + l0 : h0, w1 = kExact ? h1 + l1 : h1;
-    const v4d x1 = w0 + p1, x2 = w0 + p2, x3 = w0 + p3;
-    const v4d y1 = w1 + q1, y2 = w1 + q2, y3 = w1 + q3;
-    a0 += (w0 * w0 + x1 * x1) + (x2 * x2 + x3 * x3);
-    a1 += (w1 * w1 + y1 * y1) + (y2 * y2 + y3 * y3);
-    if constexpr (kExact) {  // TwoSum, lane by lane
-      const v4d s0 = h0 + p4, s1 = h1 + q4;
-      const v4d b0 = s0 - h0, b1 = s1 - h1;
-      l0 += (h0 - (s0 - b0)) + (p4 - b0);
-      l1 += (h1 - (s1 - b1)) + (q4 - b1);
-      h0 = s0;
-      h1 = s1;
-    } else {
-      h0 = w0 + p4;
-      h1 = w1 + q4;
-    }
   }
 #undef ALLANITE_LOAD
   *reinterpret_cast<v4u*>(hi) = h0;
-  *reinterpret_cast<v4u*>(hi + 4) = h1;
   *reinterpret_cast<v4u*>(lo) = l0;
-  *reinterpret_cast<v4u*>(lo + 4) = l1;
   *reinterpret_cast<v4u*>(acc) = a0;
-  *reinterpret_cast<v4u*>(acc + 4) = a1;
+  if constexpr (V == 2) {
+    *reinterpret_cast<v4u*>(hi + 4) = h1;
+    *reinterpret_cast<v4u*>(lo + 4) = l1;
+    *reinterpret_cast<v4u*>(acc + 4) = a1;
+  }
 #else
   std::vector<double> d(static_cast<std::size_t>(steps));
-  for (int k = 0; k < 8; ++k) {
+  for (int k = 0; k < 4 * V; ++k) {
     const double* row = src + k * ls;
     if constexpr (kFromPhase) {
       for (std::int64_t j = 0; j < steps; ++j)
@@ -599,13 +609,18 @@ ALLANITE_TARGET_CLONES static void lane_groups_phase(const double* x, std::int64
                                                      std::int64_t steps, double* hi, double* lo, double* acc) noexcept {
   lane_groups<true, false>(x, m, ls, steps, hi, lo, acc);
 }
-ALLANITE_TARGET_CLONES static void lane_groups_steps(const double* d, std::int64_t ls, std::int64_t steps, double* hi,
-                                                     double* lo, double* acc) noexcept {
-  lane_groups<false, false>(d, 0, ls, steps, hi, lo, acc);
+ALLANITE_TARGET_CLONES static void lane_groups_phase_exact(const double* x, std::int64_t m, std::int64_t ls,
+                                                           std::int64_t steps, double* hi, double* lo,
+                                                           double* acc) noexcept {
+  lane_groups<true, true, kModSingleLanes / 4>(x, m, ls, steps, hi, lo, acc);
 }
 ALLANITE_TARGET_CLONES static void lane_groups_steps_exact(const double* d, std::int64_t ls, std::int64_t steps,
                                                            double* hi, double* lo, double* acc) noexcept {
-  lane_groups<false, true>(d, 0, ls, steps, hi, lo, acc);
+  lane_groups<false, true, kModSingleLanes / 4>(d, 0, ls, steps, hi, lo, acc);
+}
+ALLANITE_TARGET_CLONES static void lane_groups_steps(const double* d, std::int64_t ls, std::int64_t steps, double* hi,
+                                                     double* lo, double* acc) noexcept {
+  lane_groups<false, false>(d, 0, ls, steps, hi, lo, acc);
 }
 
 /// Add the modified AVAR's squares of `count` terms (from a block boundary, one channel: the
@@ -637,68 +652,79 @@ inline void add_modified_lanes(const double* x, std::int64_t rs, std::int64_t m,
   }
 }
 
+/// Most terms of a lane of the single-factor pass between starts from the exact prefix sums.
+constexpr std::int64_t kModSegment = 64 * kSumBlock;
+
 /// Modified AVAR sums of one factor beyond kTileMaxM (no other factor shares its rows). The
-/// terms are cut into eight lanes of whole blocks; each lane's window starts from prefix
-/// cursors and moves on by the steps (lane_run, the window a TwoSum pair: at these factors
-/// the steps round to far below eps of the window, so the lanes need no restart). Steps are
-/// computed lane by lane into a buffer, a block at a time (long runs for the prefetchers);
-/// the lanes' block sums go to per-lane compensated totals, added to totals in lane order.
-/// No prefix sums are stored.
+/// terms go in groups of eight neighbouring lanes of whole blocks, as long as the group allows
+/// up to kModSegment (so that the lanes' taps stay close enough to share the cache, as the
+/// overlapping kernel's do); each lane's window starts from four prefix cursors and moves on
+/// by the steps (lane_run, the window a TwoSum pair: at these factors a step rounds to far
+/// below eps of the window). The lanes advance a block at a time, steps straight from the
+/// phase or via a buffer; block sums go to totals lane by lane, in order. The lanes depend
+/// only on m and the record length. No prefix sums are stored.
 static void add_modified_single(const PhaseRef& phase, const PrefixPlan& plan, std::int64_t m,
                                 std::int64_t count, NeumaierSum* totals) {
-  constexpr int kLanes = 8;
+  constexpr int kLanes = kModSingleLanes;
+  constexpr std::int64_t kMaxBlocks = kModSegment / kSumBlock;
   const Eigen::Index nc = phase.cols();
+  const auto unc = static_cast<std::size_t>(nc);
   const std::int64_t rs = phase.outerStride();
-  const std::int64_t blocks = (count + kSumBlock - 1) / kSumBlock;
-  const std::int64_t lane_len = (blocks + kLanes - 1) / kLanes * kSumBlock;  // whole blocks
-  std::int64_t first[kLanes], len[kLanes];
-  for (int k = 0; k < kLanes; ++k) {
-    first[k] = std::min(count, k * lane_len);
-    len[k] = std::min(count, first[k] + lane_len) - first[k];
-  }
-  // the window at each lane's first term, from the exact prefix sums
-  std::vector<double> w0(static_cast<std::size_t>(kLanes * nc));
-  std::vector<double> buf(static_cast<std::size_t>(8 * nc));
-  for (int k = 0; k < kLanes; ++k) {
-    if (len[k] == 0) continue;
-    PrefixCursor c0 = prefix_cursor(phase, plan, first[k]), c1 = prefix_cursor(phase, plan, first[k] + m),
-                 c2 = prefix_cursor(phase, plan, first[k] + 2 * m), c3 = prefix_cursor(phase, plan, first[k] + 3 * m);
-    PrefixCursor* cur[4] = {&c0, &c1, &c2, &c3};
-    double* h[4];
-    double* l[4];
-    for (int i = 0; i < 4; ++i) {
-      h[i] = buf.data() + 2 * i * nc;
-      l[i] = buf.data() + (2 * i + 1) * nc;
-    }
-    fill_prefix<4>(cur, 1, h, l);
-    const SplitTaps t{{h[0], h[1], h[2], h[3]}, {l[0], l[1], l[2], l[3]}, nc};
-    for (Eigen::Index c = 0; c < nc; ++c) w0[static_cast<std::size_t>(k * nc + c)] = tap_diff(t, c);
-  }
-  std::vector<double> d(static_cast<std::size_t>(kLanes * kSumBlock + 4));
-  for (Eigen::Index c = 0; c < nc; ++c) {
-    double hi[kLanes], lo[kLanes] = {}, acc[kLanes] = {};
-    NeumaierSum lane_total[kLanes];
-    for (int k = 0; k < kLanes; ++k) hi[k] = w0[static_cast<std::size_t>(k * nc + c)];
-    const double* x = phase.data() + c;
-    for (std::int64_t start = 0; start < lane_len; start += kSumBlock) {
-      std::int64_t n[kLanes];
-      bool full = true;
-      for (int k = 0; k < kLanes; ++k) {
-        n[k] = std::clamp<std::int64_t>(len[k] - start, 0, kSumBlock);
-        full = full && n[k] == kSumBlock;
-        const std::int64_t avail = std::min(n[k], count - 1 - (first[k] + start));
-        window_steps(x + (first[k] + start) * rs, m, rs, avail, kSumBlock, d.data() + k * kSumBlock);
+  std::vector<double> w0(kLanes * unc), buf(8 * unc), d(static_cast<std::size_t>(kLanes * kSumBlock + 4));
+  std::vector<double> sums(static_cast<std::size_t>(kLanes * kMaxBlocks));
+  for (std::int64_t g0 = 0; g0 < count; ) {
+    const std::int64_t blocks = (count - g0 + kSumBlock - 1) / kSumBlock;
+    const std::int64_t lane_len = std::min(kMaxBlocks, (blocks + kLanes - 1) / kLanes) * kSumBlock;
+    std::int64_t first[kLanes], len[kLanes];
+    for (int k = 0; k < kLanes; ++k) {  // the window at each lane's first term, from the prefix sums
+      first[k] = std::min(count, g0 + k * lane_len);
+      len[k] = std::min(count, first[k] + lane_len) - first[k];
+      if (len[k] == 0) continue;
+      PrefixCursor c0 = prefix_cursor(phase, plan, first[k]), c1 = prefix_cursor(phase, plan, first[k] + m),
+                   c2 = prefix_cursor(phase, plan, first[k] + 2 * m), c3 = prefix_cursor(phase, plan, first[k] + 3 * m);
+      PrefixCursor* cur[4] = {&c0, &c1, &c2, &c3};
+      double* h[4];
+      double* l[4];
+      for (int i = 0; i < 4; ++i) {
+        h[i] = buf.data() + 2 * i * unc;
+        l[i] = buf.data() + (2 * i + 1) * unc;
       }
-      if (full) {
-        lane_groups_steps_exact(d.data(), kSumBlock, kSumBlock, hi, lo, acc);
-      } else {
-        for (int k = 0; k < kLanes; ++k) lane_run<true>(d.data() + k * kSumBlock, n[k], hi[k], lo[k], acc[k]);
+      fill_prefix<4>(cur, 1, h, l);
+      const SplitTaps t{{h[0], h[1], h[2], h[3]}, {l[0], l[1], l[2], l[3]}, nc};
+      for (Eigen::Index c = 0; c < nc; ++c) w0[static_cast<std::size_t>(k) * unc + c] = tap_diff(t, c);
+    }
+    for (Eigen::Index c = 0; c < nc; ++c) {
+      double hi[kLanes], lo[kLanes] = {}, acc[kLanes];
+      for (int k = 0; k < kLanes; ++k) hi[k] = w0[static_cast<std::size_t>(k) * unc + c];
+      const double* x = phase.data() + c;
+      for (std::int64_t start = 0; start < lane_len; start += kSumBlock) {
+        std::int64_t n[kLanes];
+        bool full = true;
+        for (int k = 0; k < kLanes; ++k) {
+          n[k] = std::clamp<std::int64_t>(len[k] - start, 0, kSumBlock);
+          full = full && n[k] == kSumBlock;
+        }
+        std::fill(acc, acc + kLanes, 0.0);
+        if (full && rs == 1 && first[kLanes - 1] + start + kSumBlock < count) {  // steps from the phase
+          lane_groups_phase_exact(x + first[0] + start, m, lane_len, kSumBlock, hi, lo, acc);
+        } else {
+          for (int k = 0; k < kLanes; ++k) {
+            const std::int64_t avail = std::min(n[k], count - 1 - (first[k] + start));
+            window_steps(x + (first[k] + start) * rs, m, rs, avail, kSumBlock, d.data() + k * kSumBlock);
+          }
+          if (full) {
+            lane_groups_steps_exact(d.data(), kSumBlock, kSumBlock, hi, lo, acc);
+          } else {
+            for (int k = 0; k < kLanes; ++k) lane_run<true>(d.data() + k * kSumBlock, n[k], hi[k], lo[k], acc[k]);
+          }
+        }
+        for (int k = 0; k < kLanes; ++k) sums[static_cast<std::size_t>(k * kMaxBlocks + start / kSumBlock)] = acc[k];
       }
       for (int k = 0; k < kLanes; ++k)
-        if (n[k] > 0) lane_total[k].add(acc[k]);
-      std::fill(acc, acc + kLanes, 0.0);
+        for (std::int64_t b = 0; b < len[k]; b += kSumBlock)
+          totals[c].add(sums[static_cast<std::size_t>(k * kMaxBlocks + b / kSumBlock)]);
     }
-    for (int k = 0; k < kLanes; ++k) totals[c].add(lane_total[k].value());
+    g0 += kLanes * lane_len;
   }
 }
 
