@@ -468,8 +468,10 @@ inline PrefixCursor prefix_cursor(const PhaseRef& phase, const PrefixPlan& plan,
   return cur;
 }
 
-/// Lanes side by side in the single-factor pass (add_modified_single): four or eight.
+/// Lanes side by side in the single-factor pass (add_modified_single) and in the tiled one
+/// (add_modified_lanes): four (one vector) or eight.
 constexpr int kModSingleLanes = 4;
+constexpr int kModTileLanes = 4;
 
 /// Terms per lane of the modified estimator's running window in the tiled pass (see
 /// add_modified_lanes): four lanes make a summation block.
@@ -607,7 +609,7 @@ ALLANITE_ALWAYS_INLINE void lane_groups(const double* src, std::int64_t m, std::
 
 ALLANITE_TARGET_CLONES static void lane_groups_phase(const double* x, std::int64_t m, std::int64_t ls,
                                                      std::int64_t steps, double* hi, double* lo, double* acc) noexcept {
-  lane_groups<true, false>(x, m, ls, steps, hi, lo, acc);
+  lane_groups<true, false, kModTileLanes / 4>(x, m, ls, steps, hi, lo, acc);
 }
 ALLANITE_TARGET_CLONES static void lane_groups_phase_exact(const double* x, std::int64_t m, std::int64_t ls,
                                                            std::int64_t steps, double* hi, double* lo,
@@ -620,7 +622,7 @@ ALLANITE_TARGET_CLONES static void lane_groups_steps_exact(const double* d, std:
 }
 ALLANITE_TARGET_CLONES static void lane_groups_steps(const double* d, std::int64_t ls, std::int64_t steps, double* hi,
                                                      double* lo, double* acc) noexcept {
-  lane_groups<false, false>(d, 0, ls, steps, hi, lo, acc);
+  lane_groups<false, false, kModTileLanes / 4>(d, 0, ls, steps, hi, lo, acc);
 }
 
 /// Add the modified AVAR's squares of `count` terms (from a block boundary, one channel: the
@@ -632,22 +634,23 @@ ALLANITE_TARGET_CLONES static void lane_groups_steps(const double* d, std::int64
 /// (the last term of the record has none). `buf`: 2 kSumBlock + 4 doubles.
 inline void add_modified_lanes(const double* x, std::int64_t rs, std::int64_t m, const double* w0,
                                std::int64_t count, std::int64_t avail, NeumaierSum& total, double* buf) {
-  for (std::int64_t b = 0; b < count; b += 2 * kSumBlock) {
-    const std::int64_t len = std::min(2 * kSumBlock, count - b);
-    double hi[8], lo[8] = {}, acc[8] = {};
+  constexpr std::int64_t kStride = kModTileLanes * kModLane;  // terms per call: whole blocks
+  for (std::int64_t b = 0; b < count; b += kStride) {
+    const std::int64_t len = std::min(kStride, count - b);
+    double hi[kModTileLanes], lo[kModTileLanes] = {}, acc[kModTileLanes] = {};
     std::copy(w0 + b / kModLane, w0 + b / kModLane + (len + kModLane - 1) / kModLane, hi);
-    if (len == 2 * kSumBlock && rs == 1 && avail - b >= len) {  // two blocks, steps from the phase
+    if (len == kStride && rs == 1 && avail - b >= len) {  // whole blocks, steps from the phase
       lane_groups_phase(x + b, m, kModLane, kModLane, hi, lo, acc);
     } else {
       window_steps(x + b * rs, m, rs, std::min(len, avail - b), len + 4, buf);
-      if (len == 2 * kSumBlock) {
+      if (len == kStride) {
         lane_groups_steps(buf, kModLane, kModLane, hi, lo, acc);
       } else {
         for (std::int64_t k = 0; k * kModLane < len; ++k)
           lane_run<false>(buf + k * kModLane, std::min(kModLane, len - k * kModLane), hi[k], lo[k], acc[k]);
       }
     }
-    for (std::int64_t k = 0; k < 2 && k * kSumBlock < len; ++k)
+    for (std::int64_t k = 0; 4 * k < kModTileLanes && k * kSumBlock < len; ++k)
       total.add((acc[4 * k] + acc[4 * k + 1]) + (acc[4 * k + 2] + acc[4 * k + 3]));
   }
 }
@@ -811,17 +814,25 @@ struct PrefixRing {
     }
   }
 
-  /// The exact window w(j) = S[j+3m] - 3 S[j+2m] + 3 S[j+m] - S[j] of channel c.
-  double window(std::int64_t j, std::int64_t m, Eigen::Index c) const {
-    const SplitTaps t{{at(hi, j), at(hi, j + m), at(hi, j + 2 * m), at(hi, j + 3 * m)},
-                      {at(lo, j), at(lo, j + m), at(lo, j + 2 * m), at(lo, j + 3 * m)},
-                      nc};
-    return tap_diff(t, c);
+  /// The exact windows w(j) = S[j+3m] - 3 S[j+2m] + 3 S[j+m] - S[j] of channel c at
+  /// j = k0, k0 + kModLane, ... (`lanes` of them) into out.
+  void windows(std::int64_t k0, std::int64_t m, Eigen::Index c, std::int64_t lanes, double* out) const {
+    std::int64_t slot[4];
+    for (int i = 0; i < 4; ++i) slot[i] = (k0 + i * m) % span;
+    for (std::int64_t q = 0; q < lanes; ++q) {
+      const SplitTaps t{{&hi[slot[0] * nc], &hi[slot[1] * nc], &hi[slot[2] * nc], &hi[slot[3] * nc]},
+                        {&lo[slot[0] * nc], &lo[slot[1] * nc], &lo[slot[2] * nc], &lo[slot[3] * nc]},
+                        nc};
+      out[q] = tap_diff(t, c);
+      for (int i = 0; i < 4; ++i) {
+        slot[i] += kModLane;
+        if (slot[i] >= span) slot[i] -= span;
+      }
+    }
   }
 
  private:
   double* slot(std::vector<double>& v, std::int64_t row) const { return v.data() + row % span * nc; }
-  const double* at(const std::vector<double>& v, std::int64_t row) const { return v.data() + row % span * nc; }
   const PhaseRef& phase;
   const PrefixPlan& plan;
   std::int64_t rows;
@@ -872,8 +883,7 @@ inline void variance_group(const PhaseRef& phase, const PrefixPlan* plan, Varian
           // every lane's first window from the prefix sums, the others by steps of the phase
           const std::int64_t lanes = (count + kModLane - 1) / kModLane;
           for (Eigen::Index c = 0; c < nc; ++c) {
-            for (std::int64_t q = 0; q < lanes; ++q)
-              anchors[static_cast<std::size_t>(q)] = ring->window(k0 + q * kModLane, m, c);
+            ring->windows(k0, m, c, lanes, anchors.data());
             add_modified_lanes(x + k0 * rs + c, rs, m, anchors.data(), count, n[a] - 1 - k0, tot[c], steps.data());
           }
           break;
