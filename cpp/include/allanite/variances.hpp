@@ -3,11 +3,12 @@
 // Every kernel works in "sample units": tau0 = 1, phase in rate * samples. The caller scales by
 // 1 / tau0^2 where the phase carries angle units. Each averaging factor m costs O(M) work and
 // one streaming pass over the phase rows (factors up to kTileMaxM share passes, tile by tile);
-// all channels are handled in the same pass. Every term is O(1): the modified AVAR reads the
-// prefix sums of the phase (its window of m second differences is a third difference of them,
-// detail::PrefixPlan), and the total variance is the overlapping AVAR's sum plus the
-// 2 (m - 1) end terms that read the reflected extension (detail::add_total_ends), so no
-// extended series is built.
+// all channels are handled in the same pass. Every term is O(1): the modified AVAR's window of
+// m second differences moves on by the third difference of the phase, w(j+1) = w(j) + d3(j),
+// in lanes started from the exact prefix sums of the phase (detail::add_modified_lanes,
+// detail::add_modified_single, detail::PrefixPlan), and the total variance is the overlapping
+// AVAR's sum plus the 2 (m - 1) end terms that read the reflected extension
+// (detail::add_total_ends), so no extended series is built.
 //
 // Definitions (x = phase, M rows, d2(k) = x[k+2m] - 2 x[k+m] + x[k]):
 //   overlapping AVAR   sum_{k=0}^{M-2m-1} d2(k)^2 / (2 m^2 (M-2m))
@@ -845,7 +846,7 @@ struct PrefixRing {
 /// Variances of the factors ms[idx[...]] in one pass over the rows: tile by tile of
 /// kTileTerms terms, every factor adds the tile's terms to its own compensated sums (for a
 /// single factor that is one plain pass). `plan`: the prefix sums (modified only), regenerated
-/// tile by tile into a window of kTileTerms + 3 max(m) rows.
+/// tile by tile into a PrefixRing where the lanes start.
 inline void variance_group(const PhaseRef& phase, const PrefixPlan* plan, VarianceKind kind,
                            const std::vector<std::int64_t>& ms, const std::vector<std::size_t>& idx,
                            RowMatrix& out) {
