@@ -536,7 +536,9 @@ template <bool kFromPhase, bool kExact, int V = 2>
 ALLANITE_ALWAYS_INLINE void lane_groups(const double* src, std::int64_t m, std::int64_t ls, std::int64_t steps,
                                         double* hi, double* lo, double* acc) noexcept {
   static_assert(V == 1 || V == 2, "four or eight lanes");
-#if defined(__GNUC__) && !defined(__clang__)
+// GCC vector extensions; elsewhere (or with ALLANITE_SCALAR_LANES defined, to check that the
+// two give the same bits) lane by lane through lane_run
+#if defined(__GNUC__) && !defined(__clang__) && !defined(ALLANITE_SCALAR_LANES)
   typedef double v4d __attribute__((vector_size(32)));
   typedef double v4u __attribute__((vector_size(32), aligned(8), may_alias));  // unaligned access
   typedef long long v4i __attribute__((vector_size(32)));
