@@ -779,6 +779,64 @@ inline std::int64_t tap_terms(VarianceKind kind, std::int64_t M, std::int64_t m)
   return kind == VarianceKind::Total ? M - 2 * m : n_terms(kind, M, m);
 }
 
+/// fill_prefix<4> of four whole blocks of one contiguous channel, x[i kSumBlock ...] from the
+/// states sum[i], comp[i], into h[i], l[i] (the same arithmetic, the four chains in a vector:
+/// four rows of each block are loaded and transposed in registers, and back for the stores).
+ALLANITE_TARGET_CLONES static void fill_blocks4(const double* x, double big, const double* sum, const double* comp,
+                                                double* const* h, double* const* l) noexcept {
+#if defined(__GNUC__) && !defined(__clang__) && !defined(ALLANITE_SCALAR_LANES)
+  typedef double v4d __attribute__((vector_size(32)));
+  typedef double v4u __attribute__((vector_size(32), aligned(8), may_alias));  // unaligned access
+  typedef long long v4i __attribute__((vector_size(32)));
+  const v4i lo2 = {0, 4, 2, 6}, hi2 = {1, 5, 3, 7}, lo4 = {0, 1, 4, 5}, hi4 = {2, 3, 6, 7};
+  const v4d b = {big, big, big, big};
+  v4d sv = *reinterpret_cast<const v4u*>(sum), cv = *reinterpret_cast<const v4u*>(comp);
+#define ALLANITE_TRANSPOSE(r0, r1, r2, r3, c)                                                    \
+  do {                                                                                           \
+    const v4d t0 = __builtin_shuffle(r0, r1, lo2), t1 = __builtin_shuffle(r0, r1, hi2);          \
+    const v4d t2 = __builtin_shuffle(r2, r3, lo2), t3 = __builtin_shuffle(r2, r3, hi2);          \
+    c[0] = __builtin_shuffle(t0, t2, lo4);                                                       \
+    c[1] = __builtin_shuffle(t1, t3, lo4);                                                       \
+    c[2] = __builtin_shuffle(t0, t2, hi4);                                                       \
+    c[3] = __builtin_shuffle(t1, t3, hi4);                                                       \
+  } while (false)
+  for (std::int64_t r = 0; r < kSumBlock; r += 4) {
+    v4d xr[4], hr[4], lr[4], hc[4], lc[4];
+    const double* p = x + r;
+    ALLANITE_TRANSPOSE(*reinterpret_cast<const v4u*>(p), *reinterpret_cast<const v4u*>(p + kSumBlock),
+                       *reinterpret_cast<const v4u*>(p + 2 * kSumBlock),
+                       *reinterpret_cast<const v4u*>(p + 3 * kSumBlock), xr);
+    for (int k = 0; k < 4; ++k) {  // row r + k of the four blocks
+      hr[k] = (sv + b) - b;
+      lr[k] = (sv - hr[k]) + cv;
+      const v4d t = sv + xr[k], bb = t - sv;
+      cv += (sv - (t - bb)) + (xr[k] - bb);  // TwoSum error
+      sv = t;
+    }
+    ALLANITE_TRANSPOSE(hr[0], hr[1], hr[2], hr[3], hc);
+    ALLANITE_TRANSPOSE(lr[0], lr[1], lr[2], lr[3], lc);
+    for (int i = 0; i < 4; ++i) {
+      *reinterpret_cast<v4u*>(h[i] + r) = hc[i];
+      *reinterpret_cast<v4u*>(l[i] + r) = lc[i];
+    }
+  }
+#undef ALLANITE_TRANSPOSE
+#else
+  for (int i = 0; i < 4; ++i) {
+    double sv = sum[i], cv = comp[i];
+    for (std::int64_t r = 0; r < kSumBlock; ++r) {
+      const double hv = (sv + big) - big;
+      h[i][r] = hv;
+      l[i][r] = (sv - hv) + cv;
+      double t, e;
+      two_sum(sv, x[i * kSumBlock + r], t, e);
+      sv = t;
+      cv += e;
+    }
+  }
+#endif
+}
+
 /// The prefix sums S[k0 .. k0 + span) that a tile of factors up to top_m reads where its
 /// lanes start, in a ring of whole blocks (span = kTileTerms + 3 top_m rounded up to blocks):
 /// a tile fills only the blocks it adds, each regenerated from its mark of the plan, four
@@ -803,7 +861,16 @@ struct PrefixRing {
           h[i] = slot(hi, filled + i * kSumBlock);
           l[i] = slot(lo, filled + i * kSumBlock);
         }
-        fill_prefix<4>(cur, kSumBlock, h, l);
+        if (nc == 1 && phase.outerStride() == 1 && filled + 4 * kSumBlock <= phase.rows()) {
+          double sum[4], comp[4];
+          for (int i = 0; i < 4; ++i) {
+            sum[i] = cur[i]->sum[0];
+            comp[i] = cur[i]->comp[0];
+          }
+          fill_blocks4(phase.data() + filled, plan.big[0], sum, comp, h, l);
+        } else {
+          fill_prefix<4>(cur, kSumBlock, h, l);
+        }
         filled += 4 * kSumBlock;
       } else {
         PrefixCursor c0(phase, plan, filled);
