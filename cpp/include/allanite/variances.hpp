@@ -316,17 +316,19 @@ struct PrefixPlan {
 /// segment s covers rows [s seg, (s + 1) seg) and starts from zero. Its local state at each
 /// kSumBlock rows goes to mark s seg / kSumBlock + b (entries `stride` apart, marks with
 /// row <= M), its end state to end_sum/end_comp, its largest |local sum| to top.
+/// (S of them from x on; plan_segments_half runs two and two, on two threads, with the same
+/// arithmetic per segment.)
 constexpr int kPlanSegments = 4;
-ALLANITE_TARGET_CLONES ALLANITE_SLP_ONLY static void plan_segments(const double* x, std::int64_t rs, std::int64_t M,
-                                                                   std::int64_t seg, double* sum_at, double* comp_at,
-                                                                   std::int64_t stride, double* end_sum,
-                                                                   double* end_comp, double* top_out) noexcept {
-  double sum[kPlanSegments] = {}, comp[kPlanSegments] = {}, top[kPlanSegments] = {};
+template <int S>
+ALLANITE_ALWAYS_INLINE void plan_segments_impl(const double* x, std::int64_t rs, std::int64_t M, std::int64_t seg,
+                                               double* sum_at, double* comp_at, std::int64_t stride,
+                                               double* end_sum, double* end_comp, double* top_out) noexcept {
+  double sum[S] = {}, comp[S] = {}, top[S] = {};
   const std::int64_t seg_blocks = seg / kSumBlock;
   // rows that every segment has (the last ones may be shorter): the four chains at once
-  const std::int64_t common = std::clamp<std::int64_t>(M - (kPlanSegments - 1) * seg, 0, seg);
+  const std::int64_t common = std::clamp<std::int64_t>(M - (S - 1) * seg, 0, seg);
   for (std::int64_t r0 = 0; r0 < seg; r0 += kSumBlock) {
-    for (int s = 0; s < kPlanSegments; ++s)
+    for (int s = 0; s < S; ++s)
       if (s * seg + r0 <= M) {
         sum_at[(s * seg_blocks + r0 / kSumBlock) * stride] = sum[s];
         comp_at[(s * seg_blocks + r0 / kSumBlock) * stride] = comp[s];
@@ -334,9 +336,9 @@ ALLANITE_TARGET_CLONES ALLANITE_SLP_ONLY static void plan_segments(const double*
     const std::int64_t r1 = std::min(seg, r0 + kSumBlock);
     const std::int64_t both = std::min(r1, std::max(r0, common));
     for (std::int64_t r = r0; r < both; ++r) {
-      double v[kPlanSegments];
-      for (int s = 0; s < kPlanSegments; ++s) v[s] = x[(s * seg + r) * rs];
-      for (int s = 0; s < kPlanSegments; ++s) {
+      double v[S];
+      for (int s = 0; s < S; ++s) v[s] = x[(s * seg + r) * rs];
+      for (int s = 0; s < S; ++s) {
         const double t = sum[s] + v[s];
         const double bb = t - sum[s];
         comp[s] += (sum[s] - (t - bb)) + (v[s] - bb);  // TwoSum error
@@ -344,7 +346,7 @@ ALLANITE_TARGET_CLONES ALLANITE_SLP_ONLY static void plan_segments(const double*
         top[s] = std::max(top[s], std::fabs(t));
       }
     }
-    for (int s = 0; s < kPlanSegments; ++s)
+    for (int s = 0; s < S; ++s)
       for (std::int64_t r = both; r < r1 && s * seg + r < M; ++r) {
         double t, e;
         two_sum(sum[s], x[(s * seg + r) * rs], t, e);
@@ -353,14 +355,28 @@ ALLANITE_TARGET_CLONES ALLANITE_SLP_ONLY static void plan_segments(const double*
         top[s] = std::max(top[s], std::fabs(t));
       }
   }
-  for (int s = 0; s < kPlanSegments; ++s) {
+  for (int s = 0; s < S; ++s) {
     end_sum[s] = sum[s];
     end_comp[s] = comp[s];
     top_out[s] = top[s];
   }
 }
 
-inline PrefixPlan prefix_plan(const PhaseRef& phase) {
+ALLANITE_TARGET_CLONES ALLANITE_SLP_ONLY static void plan_segments(const double* x, std::int64_t rs, std::int64_t M,
+                                                                   std::int64_t seg, double* sum_at, double* comp_at,
+                                                                   std::int64_t stride, double* end_sum,
+                                                                   double* end_comp, double* top_out) noexcept {
+  plan_segments_impl<kPlanSegments>(x, rs, M, seg, sum_at, comp_at, stride, end_sum, end_comp, top_out);
+}
+ALLANITE_TARGET_CLONES ALLANITE_SLP_ONLY static void plan_segments_half(const double* x, std::int64_t rs,
+                                                                        std::int64_t M, std::int64_t seg,
+                                                                        double* sum_at, double* comp_at,
+                                                                        std::int64_t stride, double* end_sum,
+                                                                        double* end_comp, double* top_out) noexcept {
+  plan_segments_impl<kPlanSegments / 2>(x, rs, M, seg, sum_at, comp_at, stride, end_sum, end_comp, top_out);
+}
+
+inline PrefixPlan prefix_plan(const PhaseRef& phase, int threads = 1) {
   const std::int64_t M = phase.rows();
   const Eigen::Index nc = phase.cols();
   const auto unc = static_cast<std::size_t>(nc);
@@ -376,8 +392,18 @@ inline PrefixPlan prefix_plan(const PhaseRef& phase) {
   for (Eigen::Index c = 0; c < nc; ++c) {
     const auto uc = static_cast<std::size_t>(c);
     double end_sum[kPlanSegments], end_comp[kPlanSegments], top[kPlanSegments];
-    plan_segments(phase.data() + c, phase.outerStride(), M, seg, p.sum.data() + uc, p.comp.data() + uc, nc,
-                  end_sum, end_comp, top);
+    const std::int64_t rs = phase.outerStride();
+    if (threads > 1 && M >= (std::int64_t{1} << 16)) {  // segments 0, 1 and 2, 3 on two threads (same bits)
+      parallel_for(2, 2, [&](std::size_t half) {
+        const std::int64_t s0 = static_cast<std::int64_t>(half) * (kPlanSegments / 2);
+        plan_segments_half(phase.data() + c + s0 * seg * rs, rs, M - s0 * seg, seg,
+                           p.sum.data() + uc + s0 * seg_blocks * nc, p.comp.data() + uc + s0 * seg_blocks * nc,
+                           nc, end_sum + s0, end_comp + s0, top + s0);
+      });
+    } else {
+      plan_segments(phase.data() + c, rs, M, seg, p.sum.data() + uc, p.comp.data() + uc, nc, end_sum, end_comp,
+                    top);
+    }
     // the state at a mark of segment s: its local state after the total of segments < s
     double off_sum = 0.0, off_comp = 0.0, bound = 0.0;
     const auto join = [&](double& sum, double& comp) {
@@ -1006,7 +1032,7 @@ inline RowMatrix variance(const PhaseRef& phase, const std::vector<std::int64_t>
   if (ms.empty()) return out;
   const int nthreads = resolve_threads(threads);
   detail::PrefixPlan plan;
-  if (kind == VarianceKind::Modified) plan = detail::prefix_plan(phase);
+  if (kind == VarianceKind::Modified) plan = detail::prefix_plan(phase, nthreads);
   // Cache blocking over taus: the overlapping-type estimators at small m read the same rows,
   // so they share passes (detail::variance_group); one group per thread, the other factors
   // are one task each. Longest tasks first keeps both cores busy to the end.
