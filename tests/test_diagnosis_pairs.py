@@ -170,3 +170,59 @@ def test_rescaled_log_gamma_with_a_larger_reference() -> None:
         rescaled_log_gamma(ens, "f", 0.5, reference=mean)
     with pytest.raises(ValueError, match="must count"):
         rescaled_log_gamma(ens, "f", 0.5, reference=mean, n_reference=n_s - 1)
+
+
+# --- the low-frequency kurtosis of a slow process (issue 14, the designed pairs) -------------
+
+
+def test_added_block_kurtosis_random_walk_is_platykurtic_white_is_not() -> None:
+    from allanite.diagnosis.time_view import added_block_kurtosis
+
+    fs, n, w, blocks = 100.0, 2**14, 16, (8, 64, 256)
+    n_rep = 32
+    _, k_rw, sd_rw = added_block_kurtosis(T["rrw"](K=0.03), fs, n, w, blocks, n_rep=n_rep)
+    _, k_w, sd_w = added_block_kurtosis(T["white"](N=0.05), fs, n, w, blocks, n_rep=n_rep)
+    # a random walk's path over one record: block means far from Gaussian (excess kurtosis
+    # below zero by many standard errors of the mean); white noise's block means: Gaussian
+    assert np.all(k_rw < -5.0 * sd_rw / np.sqrt(n_rep))
+    assert np.all(np.abs(k_w) < 4.0 * sd_w / np.sqrt(n_rep))
+
+
+def _designed_quantization_rrw() -> tuple[NoiseModel, np.ndarray]:
+    """The designed validation pair 'quantization + rrw' at 5x/5x the clear level (seed 1119)."""
+    fs, n, seed = 100.0, 2**16, 1000 + 17 * 7
+    base = base_model(fs)
+    x = np.asarray(base.simulate(n, fs=fs, seed=seed), dtype=np.float64).ravel()
+    terms = (T["quantization"](Q=0.0014435878021737906), T["rrw"](K=0.032402110528884046))
+    for term, s in zip(terms, (seed + 7, seed + 13), strict=True):
+        y = NoiseModel((term,), UNITS).simulate(n, fs=fs, seed=s, allow_aliasing=True)
+        x = x + np.asarray(y).ravel()
+    return base, x
+
+
+def test_slow_noise_explains_platykurtic_block_means(monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """A strong random walk makes the block means platykurtic; without the re-test with the
+    walk's own kurtosis only a telegraph process explains that and is named instead."""
+    import allanite.diagnosis.attribution as attribution
+
+    base, x = _designed_quantization_rrw()
+    kw = {"fs": 100.0, "units": "deg/s", "holdout": 0.5, "n_mc": 60, "seed": 1000 + 17 * 7 + 1}
+    d = diagnose(x, base, **kw)
+    # with no extra process the re-test is the time view's own one-sided test
+    lf = d.time.lf_kurtosis
+    zeros = np.zeros(len(lf["blocks"]))
+    assert d.time.lf_kurtosis_p_value((zeros, zeros, zeros)) == pytest.approx(
+        d.time.family_p["kurt_lf"]
+    )
+    assert d.time.family_p["kurt_lf"] < 1e-3  # the evidence is there
+    by_effect = {a.effect: a for a in d.explanation.effects}
+    assert by_effect.keys() & {"rrw", "rescale:rrw"}
+    assert "telegraph" not in by_effect
+    walk = by_effect.get("rrw") or by_effect["rescale:rrw"]
+    assert "kurt_lf" in walk.evidence["explained"]
+
+    monkeypatch.setattr(attribution, "_lf_kurtosis_p", lambda *a, **k: None)
+    d0 = diagnose(x, base, **kw)
+    named0 = {a.effect for a in d0.explanation.effects}
+    assert "telegraph" in named0
+    assert not named0 & {"rrw", "rescale:rrw"}

@@ -449,7 +449,8 @@ def time_view(
                 "real": np.asarray(real[name], dtype=np.float64),
                 "var": np.array([_block_moments(used, b)[0] for b in blocks]),
                 "ref": np.asarray(ens.ref[name], dtype=np.float64),
-                "sd": np.asarray(sd, dtype=np.float64),
+                # the real residual's spread (the null's, times the real record's scale)
+                "sd": np.asarray(sd * np.sqrt(ens.real_scale), dtype=np.float64),
             }
         zk = ens.residual(real, name) / np.where(sd > 0, sd, np.inf)
         if sign == 0:  # two-sided: bursts and outliers (+), clipping (-)
