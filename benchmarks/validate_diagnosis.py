@@ -721,6 +721,12 @@ def evaluate(case: Case, seed: int, n_mc: int) -> dict[str, Any]:
         named = {x.effect for x in d.explanation.effects} if d.explanation else set()
         row["both_named"] = bool(named & EQUIVALENT.get(a, {a}) and named & EQUIVALENT.get(b, {b}))
         row["explanation"] = sorted(named)
+        # a missing effect reported as a tie: among a named effect's alternatives
+        tied = {t for x in (d.explanation.effects if d.explanation else []) for t in x.alternatives}
+        row["alternatives"] = sorted(tied - named)
+        row["both_named_or_tied"] = bool(
+            (named | tied) & EQUIVALENT.get(a, {a}) and (named | tied) & EQUIVALENT.get(b, {b})
+        )
         assert effect is not None
         assert effect2 is not None
         row.update(pair_clear(case, real, (effect, effect2), seed))
@@ -975,11 +981,17 @@ def summarize(rows: list[dict[str, Any]]) -> dict[str, Any]:
             r["case"]: {"closed": r["closed"], "views": r["unexplained_views"]} for r in oov
         },
         "pair_both_named_rate": float(np.mean([r["both_named"] for r in pairs])) if pairs else None,
+        "pair_both_named_or_tied_rate": float(
+            np.mean([r.get("both_named_or_tied", r["both_named"]) for r in pairs])
+        )
+        if pairs
+        else None,
         "pair_cases": len(pairs),
         "pair_per_case": {
             r["case"]: {
                 "both_named": r["both_named"],
                 "explanation": r["explanation"],
+                "alternatives": r.get("alternatives", []),
                 "closed": r["closed"],
                 "clear": r.get("clear"),
                 "lambda": {k[7:]: round(v, 1) for k, v in r.items() if k.startswith("lambda_")},
@@ -1058,13 +1070,19 @@ def table(summary: dict[str, Any]) -> str:
         f"| two-effect cases, all (clear or not) | {fmt(summary.get('pair_both_named_rate'))} "
         f"({summary.get('pair_cases', 0)} cases, {summary.get('pair_clear_cases', 0)} clear) | | |"
     )
+    if summary.get("pair_both_named_or_tied_rate") is not None:
+        lines.append(
+            "| two-effect cases, both named or the missing one reported as a tie (among a named "
+            f"effect's alternatives) | {fmt(summary['pair_both_named_or_tied_rate'])} | | |"
+        )
     for name, (k, m) in summary.get("pair_per_type", {}).items():
         lines.append(f"| {name}: both named | {k} of {m} | | |")
     for name, v in summary.get("pair_per_case", {}).items():
         design = f", designed {v['design_lambda']}" if v.get("design_lambda") else ""
         lines.append(
             f"| {name} | both named={v['both_named']}, set {v['explanation']}, "
-            f"closed={v['closed']}, clear={v.get('clear')} (lambda {v.get('lambda')}{design}) "
+            + (f"tied {v['alternatives']}, " if v.get("alternatives") else "")
+            + f"closed={v['closed']}, clear={v.get('clear')} (lambda {v.get('lambda')}{design}) "
             "| | |"
         )
     for name, v in summary.get("bursts_cases", {}).items():

@@ -29,7 +29,8 @@ segment loses its mean). The tau view's penalised likelihood alone cannot tell l
 apart whose Allan variances nearly coincide over the flagged taus (a Gauss-Markov process next
 to more white noise and more flicker; a random walk and flicker at long taus); their spectra
 differ (a Lorentzian knee against a ``1/f`` line, ``1/f^2`` against ``1/f``), so the pair
-whose combined spectrum fits wins.
+whose combined spectrum fits wins; candidates whose combined score stays within the penalty of
+one parameter are reported as the chosen effect's ``alternatives`` (a tie the views leave).
 
 Backward check: an effect is dropped again when removing it (the others kept) raises ``T`` by
 less than the ``chi2_{1-alpha}(k)`` quantile and it is the only one to explain none of the
@@ -75,7 +76,10 @@ class Explanation:
     Attributes
     ----------
     effects : list of Attribution
-        The effects in selection order, each fitted on top of the previous ones.
+        The effects in selection order, each fitted on top of the previous ones; an effect's
+        ``alternatives`` are the candidates whose score plus spectral shape misfit on top of
+        the others lies within the penalty of one parameter of its own (the record does not
+        tell them apart in its slot).
     candidates : list of Candidate
         Their candidate definitions (same order).
     gap_before, gap_after : float
@@ -117,7 +121,12 @@ class Explanation:
         """JSON-ready dictionary."""
         return {
             "effects": [
-                {"effect": a.effect, "params": dict(a.params), "term": dict(a.term)}
+                {
+                    "effect": a.effect,
+                    "params": dict(a.params),
+                    "term": dict(a.term),
+                    "alternatives": list(a.alternatives),
+                }
                 for a in self.effects
             ],
             "gap_before": self.gap_before,
@@ -284,7 +293,22 @@ def explain(
             extra = bg + effect_psd(a, by_effect[a.effect], f, tm.dt)
             return a.score + frequency.shape_misfit(extra)
 
-        return sorted(kept, key=joint_score)
+        # the alternatives are re-judged on the joint score: a tie in the tau view that the
+        # spectrum breaks is no tie, and one the spectrum leaves is reported, not resolved
+        # blindly in favour of the simpler effect
+        scores = {a.effect: joint_score(a) for a in kept}
+        margin = float(stats.chi2.isf(alpha, 1))
+        return [
+            replace(
+                a,
+                alternatives=tuple(
+                    b.effect
+                    for b in kept
+                    if b is not a and abs(scores[b.effect] - scores[a.effect]) < margin
+                ),
+            )
+            for a in sorted(kept, key=lambda a: scores[a.effect])
+        ]
 
     while len(chosen) < MAX_EFFECTS:
         total = np.sum(extras, axis=0)
