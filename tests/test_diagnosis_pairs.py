@@ -226,3 +226,41 @@ def test_slow_noise_explains_platykurtic_block_means(monkeypatch) -> None:  # ty
     named0 = {a.effect for a in d0.explanation.effects}
     assert "telegraph" in named0
     assert not named0 & {"rrw", "rescale:rrw"}
+
+
+def test_ramp_welch_spectrum_is_its_own_and_scales_with_its_slope() -> None:
+    from allanite.diagnosis.joint import shape_welch_psd
+
+    dt, n, nperseg = 0.01, 2**15, 2048
+    p1 = shape_welch_psd(T["ramp"](R=0.01), n, dt, nperseg)
+    p2 = shape_welch_psd(T["ramp"](R=0.02), n, dt, nperseg)
+    assert p1.size == nperseg // 2
+    np.testing.assert_allclose(p2, 4.0 * p1, rtol=1e-9)
+    # a trend in every segment: its leakage falls off with frequency (1/f^2 and faster)
+    assert p1[0] > 10.0 * p1[4] > 100.0 * p1[40]
+
+
+def test_ramp_next_to_white_is_not_a_slow_telegraph(monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """The designed pair 'ramp + white' at 16x/2x the clear level (seed 1000 + 17 * 26): each
+    Welch segment keeps the ramp's slope, a 1/f^2 excess at the lowest bins. Without the
+    ramp's own Welch spectrum in the joint step, a telegraph process with the longest
+    correlation time (a drift) explains that excess and replaces the ramp."""
+    import allanite.diagnosis.joint as joint
+
+    fs, n, seed = 100.0, 2**16, 1000 + 17 * 26
+    base = base_model(fs)
+    x = np.asarray(base.simulate(n, fs=fs, seed=seed), dtype=np.float64).ravel()
+    terms = (T["ramp"](R=0.022224111096358436), T["white"](N=0.014394303739483087))
+    for term, s in zip(terms, (seed + 7, seed + 13), strict=True):
+        y = NoiseModel((term,), UNITS).simulate(n, fs=fs, seed=s, allow_aliasing=True)
+        x = x + np.asarray(y).ravel()
+    kw = {"fs": fs, "units": "deg/s", "holdout": 0.5, "n_mc": 60, "seed": seed + 1}
+    named = {a.effect for a in diagnose(x, base, **kw).explanation.effects}
+    assert "ramp" in named
+    assert named & {"white", "rescale:white"}
+    assert "telegraph" not in named
+
+    monkeypatch.setattr(joint, "WELCH_SHAPES", ())
+    named0 = {a.effect for a in diagnose(x, base, **kw).explanation.effects}
+    assert "telegraph" in named0
+    assert "ramp" not in named0
