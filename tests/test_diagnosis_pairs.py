@@ -188,16 +188,22 @@ def test_added_block_kurtosis_random_walk_is_platykurtic_white_is_not() -> None:
     assert np.all(np.abs(k_w) < 4.0 * sd_w / np.sqrt(n_rep))
 
 
-def _designed_quantization_rrw() -> tuple[NoiseModel, np.ndarray]:
-    """The designed validation pair 'quantization + rrw' at 5x/5x the clear level (seed 1119)."""
-    fs, n, seed = 100.0, 2**16, 1000 + 17 * 7
+def _pair_record(seed: int, terms: tuple[object, object]) -> tuple[NoiseModel, np.ndarray]:
+    """A two-effect record of benchmarks/validate_diagnosis.py: the base model (seed) plus
+    each effect simulated on its own (seeds ``seed + 7``, ``seed + 13``), 2^16 at 100 Hz."""
+    fs, n = 100.0, 2**16
     base = base_model(fs)
     x = np.asarray(base.simulate(n, fs=fs, seed=seed), dtype=np.float64).ravel()
-    terms = (T["quantization"](Q=0.0014435878021737906), T["rrw"](K=0.032402110528884046))
     for term, s in zip(terms, (seed + 7, seed + 13), strict=True):
         y = NoiseModel((term,), UNITS).simulate(n, fs=fs, seed=s, allow_aliasing=True)
         x = x + np.asarray(y).ravel()
     return base, x
+
+
+def _designed_quantization_rrw() -> tuple[NoiseModel, np.ndarray]:
+    """The designed validation pair 'quantization + rrw' at 5x/5x the clear level (seed 1119)."""
+    terms = (T["quantization"](Q=0.0014435878021737906), T["rrw"](K=0.032402110528884046))
+    return _pair_record(1000 + 17 * 7, terms)
 
 
 def test_slow_noise_explains_platykurtic_block_means(monkeypatch) -> None:  # type: ignore[no-untyped-def]
@@ -247,14 +253,10 @@ def test_ramp_next_to_white_is_not_a_slow_telegraph(monkeypatch) -> None:  # typ
     correlation time (a drift) explains that excess and replaces the ramp."""
     import allanite.diagnosis.joint as joint
 
-    fs, n, seed = 100.0, 2**16, 1000 + 17 * 26
-    base = base_model(fs)
-    x = np.asarray(base.simulate(n, fs=fs, seed=seed), dtype=np.float64).ravel()
+    seed = 1000 + 17 * 26
     terms = (T["ramp"](R=0.022224111096358436), T["white"](N=0.014394303739483087))
-    for term, s in zip(terms, (seed + 7, seed + 13), strict=True):
-        y = NoiseModel((term,), UNITS).simulate(n, fs=fs, seed=s, allow_aliasing=True)
-        x = x + np.asarray(y).ravel()
-    kw = {"fs": fs, "units": "deg/s", "holdout": 0.5, "n_mc": 60, "seed": seed + 1}
+    base, x = _pair_record(seed, terms)
+    kw = {"fs": 100.0, "units": "deg/s", "holdout": 0.5, "n_mc": 60, "seed": seed + 1}
     named = {a.effect for a in diagnose(x, base, **kw).explanation.effects}
     assert "ramp" in named
     assert named & {"white", "rescale:white"}
