@@ -186,6 +186,14 @@ def test_added_block_kurtosis_random_walk_is_platykurtic_white_is_not() -> None:
     # below zero by many standard errors of the mean); white noise's block means: Gaussian
     assert np.all(k_rw < -5.0 * sd_rw / np.sqrt(n_rep))
     assert np.all(np.abs(k_w) < 4.0 * sd_w / np.sqrt(n_rep))
+    # the cached unit-amplitude Monte Carlo, scaled, is the Monte Carlo of the term itself
+    from allanite.diagnosis.time_view import _block_kurtosis_mc
+
+    for term in (T["rrw"](K=0.07), T["markov"](sigma=0.3, tau_c=5.0)):
+        got = added_block_kurtosis(term, fs, n, w, blocks, n_rep=n_rep)
+        direct = _block_kurtosis_mc(term, fs, n, w, blocks, n_rep, 20261125)
+        for a, b in zip(got, direct, strict=True):
+            np.testing.assert_allclose(a, b, rtol=1e-9, atol=1e-12)
 
 
 def _pair_record(seed: int, terms: tuple[object, object]) -> tuple[NoiseModel, np.ndarray]:

@@ -178,8 +178,30 @@ def added_block_kurtosis(
     Monte Carlo over ``n_rep`` records of ``n`` samples of the term on its own (fixed seed),
     laid out like the time view's ``n_windows`` windows, per block size of ``blocks``: a
     random walk's or a slow Gauss-Markov process's block means over one record are
-    platykurtic (the path does not visit its range like a Gaussian sample).
+    platykurtic (the path does not visit its range like a Gaussian sample). The samples are
+    linear in the term's first (amplitude) parameter: the Monte Carlo runs once per shape at
+    unit amplitude (cached) and the variance is scaled.
     """
+    name = term.params[0].name
+    amplitude = float(term.values()[name])
+    unit = term.with_values(**{name: 1.0})
+    key = (repr(unit), fs, n, n_windows, tuple(blocks), n_rep, seed)
+    if key not in _BLOCK_CACHE:
+        if len(_BLOCK_CACHE) >= 256:
+            _BLOCK_CACHE.pop(next(iter(_BLOCK_CACHE)))
+        _BLOCK_CACHE[key] = _block_kurtosis_mc(unit, fs, n, n_windows, blocks, n_rep, seed)
+    var, k, sd = _BLOCK_CACHE[key]
+    return var * amplitude**2, k, sd
+
+
+_BLOCK_CACHE: dict[
+    tuple[Any, ...], tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]
+] = {}
+
+
+def _block_kurtosis_mc(
+    term: Any, fs: float, n: int, n_windows: int, blocks: tuple[int, ...], n_rep: int, seed: int
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     from allanite.model import NoiseModel
 
     x = NoiseModel((term,)).simulate(n, fs=fs, n_channels=n_rep, seed=seed, allow_aliasing=True)
