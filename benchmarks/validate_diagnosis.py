@@ -27,7 +27,10 @@ second), and scores the answer against the truth:
   has no held-out check, it lives at the start of the record).
 
 Run ``python benchmarks/validate_diagnosis.py [--quick]``; the table is printed and written to
-``benchmarks/results/validate_diagnosis[_quick].json`` and ``.md``.
+``benchmarks/results/validate_diagnosis[_quick].json`` and ``.md``. ``--pairs`` runs the
+two-effect cases on the designed grid (:func:`designed_pair_cases`: both effects clearly in the
+record next to each other, three sizes per pair type; :data:`EXCLUDED_PAIRS` and
+:func:`pair_mimicry` for the types left out), ``--legacy-pairs`` the first grid.
 """
 
 from __future__ import annotations
