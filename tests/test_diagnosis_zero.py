@@ -189,8 +189,13 @@ def test_white_drift_size_is_its_measured_ratio(white_gap):
         assert cand.view_size == pytest.approx(abs(ratio - 1.0))
         assert attr.negligible(cand, {"N": 0.01}, zero, tm) is small
         # the same measured size on any other candidate gets the same verdict (one rule)
-        other = Candidate("bursts", TERM_TYPES["white_bursts"], free=("N",),
-                          fixed={"duty": 0.2, "burst_s": 5.0}, view_size=abs(ratio - 1.0))  # fmt: skip
+        other = Candidate(
+            "bursts",
+            TERM_TYPES["white_bursts"],
+            free=("N",),
+            fixed={"duty": 0.2, "burst_s": 5.0},
+            view_size=abs(ratio - 1.0),
+        )
         assert attr.negligible(other, {"N": 0.01}, zero, tm) is small
     # without a measured size a zero tau size is negligible
     bare = Candidate("bursts", TERM_TYPES["white_bursts"], free=("N",),
