@@ -209,6 +209,8 @@ def diagnose(
     ev_p = _evidence(analysis)
     found = _attribute(run, analysis, ev_p, effects) if significant else _Found()
     after = _reanalysis(run, found.explanation)
+    if store is not None:
+        store.release()  # the null's replicate blocks served the re-analysis (or nothing)
     head = verdict(
         significant=significant,
         p_value=p,

@@ -147,6 +147,12 @@ class ReplicateStore:
         view.added = added
         return view
 
+    def release(self) -> None:
+        """Drop the kept blocks (the re-analysis is done, or there is none)."""
+        with self._lock:
+            self._blocks.clear()
+            self._used = 0
+
     @property
     def kept_bytes(self) -> int:
         """Bytes of replicate blocks kept."""
