@@ -180,13 +180,25 @@ def test_scaled_null_is_the_same_for_any_number_of_worker_threads(monkeypatch) -
 
     monkeypatch.setattr(sn.ReplicateStore, "adding", spy)
     out = []
+    steps: list[tuple[str, int, int]] = []
     # threads, and the memory kept for the re-analysis (none: every block simulated again)
     for workers, budget in ((1, sn.SHARED_BYTES), (3, sn.SHARED_BYTES), (2, 0)):
         monkeypatch.setattr(sn, "WORKERS", workers)
         monkeypatch.setattr(sn, "SHARED_BYTES", budget)
-        d = diagnose(x, model(), fs=1000.0, units="deg/s", n_mc=20, seed=3)
+        d = diagnose(
+            x, model(), fs=1000.0, units="deg/s", n_mc=20, seed=3,
+            progress=(lambda *step: steps.append(step)) if not out else None,
+        )  # fmt: skip
         out.append(json.dumps(d.to_dict(), sort_keys=True, default=str))
     assert d.significant, "the record has a gap, so the re-analysis ran too"
+    # every long phase reports, the replicate phases about ten times each
+    stages = [s for s, _, _ in steps]
+    for stage in ("null replicates", "features of the record", "fitting candidate effects",
+                  "re-analysis with the effects"):  # fmt: skip
+        assert stage in stages, stage
+    assert stages.count("null replicates") >= 10
+    assert stages.count("re-analysis with the effects") >= 10
+    assert ("re-analysis with the effects", 40, 40) in steps
     assert shared == [["white"]] * 3, "the re-analysis added the effect to the null's replicates"
     assert out[0] == out[1] == out[2]
 
