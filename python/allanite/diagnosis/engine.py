@@ -26,7 +26,7 @@ from allanite.diagnosis.level_shape import warmup_time_constant
 from allanite.diagnosis.noise_level import drift_shape
 from allanite.diagnosis.null import runs
 from allanite.diagnosis.result import Diagnosis, Holdout
-from allanite.diagnosis.scaled_null import ADDED_SEED, ReplicateStore
+from allanite.diagnosis.scaled_null import ADDED_SEED, ReplicateStore, uses_scaled_null
 from allanite.diagnosis.time_base import time_base_evidence, with_time_base
 from allanite.diagnosis.verdict import verdict
 from allanite.io.record import Record
@@ -198,7 +198,10 @@ def diagnose(
     source = make_source(sim, rate, x.size, sim_units=sim_units, sim_input=sim_input)
     common_units = check_units(units, source.units)
     x_fit, x_hold, hold_kind = _split(x, holdout, rate, input_kind)
-    store = ReplicateStore(source.model) if source.kind == "model" else None
+    # the long-record null keeps its replicate blocks for the re-analysis (shorter records and
+    # simulated records have a full-length replicate null, simulated afresh each time)
+    long_null = source.kind == "model" and uses_scaled_null(source.model, x_fit.size)
+    store = ReplicateStore(source.model) if long_null else None
     run = _Run(x_fit, rate, source, int(n_mc), seed, significance, progress, store)
     analysis = analyze(
         x_fit, source, n_mc=run.n_mc, seed=seed, alpha=significance, progress=progress,
