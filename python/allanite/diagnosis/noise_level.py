@@ -34,6 +34,7 @@ fitted to it; ``ratio = sqrt((a + b) / a)``.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -93,11 +94,13 @@ def _hf(view: TimeView) -> tuple[NDArray[np.float64], NDArray[np.float64]] | Non
 
 
 def _ramp_grid(
-    view: TimeView,
+    w: int, step: float
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
-    """Window means of every ramp with ends on the window boundaries: ``(P, W)``, starts, ends."""
-    w = view.t_s.size
-    edges = np.arange(w + 1) * view.window_s
+    """Window means ``(P, W)``, starts and ends of every ramp with ends on window boundaries.
+
+    ``w`` windows of ``step`` seconds.
+    """
+    edges = np.arange(w + 1) * step
     a, b = edges[:-1], edges[1:]
     starts, ends, shapes = [], [], []
     for i in range(w):
@@ -149,15 +152,25 @@ def _drift_fit(view: TimeView) -> tuple[float, float, float, float] | None:
     The ends are first searched on the window boundaries, then refined to
     :data:`SUBSTEPS` positions per window within one window of each (a step inside a
     window leaves that window at an intermediate level, which a long record measures
-    precisely: a boundary-only step would misfit it by many standard errors).
+    precisely: a boundary-only step would misfit it by many standard errors). The ranking
+    and the joint selection ask for it once per candidate fit: it is computed once per view.
     """
     hf = _hf(view)
     if hf is None:
         return None
     r, sd = hf
-    g, starts, ends = _ramp_grid(view)
+    return _drift_fit_of(r.tobytes(), sd.tobytes(), float(view.window_s))
+
+
+@lru_cache(maxsize=8)
+def _drift_fit_of(
+    r_bytes: bytes, sd_bytes: bytes, step: float
+) -> tuple[float, float, float, float]:
+    r = np.frombuffer(r_bytes, dtype=np.float64)
+    sd = np.frombuffer(sd_bytes, dtype=np.float64)
+    w = r.size
+    g, starts, ends = _ramp_grid(w, step)
     chi2, p, beta = _best_shape(r, sd, g)
-    w, step = view.t_s.size, view.window_s
     duration = w * step
     edges = np.arange(w + 1) * step
 
