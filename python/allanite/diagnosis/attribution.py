@@ -54,9 +54,11 @@ noise level. Exempt are the effects whose size another view measured: every para
 from the views (spikes: count and height), or a free parameter started from a view's
 measurement (``Candidate.measured``: the amplitude of a detected line, the level of a
 band-pass excess) that ends within ``MEASURED_FACTOR = 10`` of it; a weak line or rare spikes
-are real with a tau size of zero. ``white_drift`` keeps the record's mean noise level (tau size
-near zero): its size is the level ratio the time view measured, negligible within
-``LEVEL_NEGLIGIBLE`` (5 %) of one, as the headline words it.
+are real with a tau size of zero. An effect that leaves the tau view unchanged carries the size
+another view measured (``Candidate.view_size``, relative to the sensor's own level; e.g.
+``white_drift`` keeps the record's mean noise level, its size is ``|ratio - 1|`` of the level
+ratio the time view measured): it is negligible below ``LEVEL_NEGLIGIBLE`` (5 %), the level
+change the headline calls slight.
 """
 
 from __future__ import annotations
@@ -85,8 +87,8 @@ NEGLIGIBLE_SE = 1.0
 MEASURED_FACTOR = 10.0
 
 #: a noise level within this relative rms of the typical level is negligible in size (the
-#: Allan variance in those windows within about +-10 %): the headline's wording, and the size
-#: of a ``white_drift`` whose level ratio the time view measured
+#: Allan variance in those windows within about +-10 %): the headline's wording, and the
+#: threshold of a size another view measured (``Candidate.view_size``)
 LEVEL_NEGLIGIBLE = 0.05
 
 
@@ -280,10 +282,12 @@ def negligible(
     Returns
     -------
     bool
-        True when its tau size is below ``NEGLIGIBLE_SE`` and no other view measured its size.
+        True when its tau size is below ``NEGLIGIBLE_SE`` and no other view measured its size,
+        or when the size a view measured (``Candidate.view_size``) is below
+        ``LEVEL_NEGLIGIBLE``.
     """
-    if cand.effect == "white_drift":  # its size is the level ratio the time view measured
-        return bool(abs(cand.fixed["ratio"] - 1.0) < LEVEL_NEGLIGIBLE)
+    if cand.view_size is not None:  # sized by another view, not by the tau view
+        return bool(cand.view_size < LEVEL_NEGLIGIBLE)
     if not cand.free:  # every parameter measured by the frequency/time views
         return False
     for name in cand.measured:

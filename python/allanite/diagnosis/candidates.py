@@ -127,6 +127,11 @@ class Candidate:
         Free parameters whose ``start`` is another view's measurement of the effect's size
         (a detected line's amplitude, a band excess's level), not a mere starting guess: the
         size rule :func:`allanite.diagnosis.attribution.negligible` accepts them near it.
+    view_size : float or None
+        The effect's size as another view measured it, relative to the sensor's own level
+        (``white_drift``: ``|ratio - 1|``, the time view's level ratio), for an effect that
+        leaves the tau view unchanged; the size rule judges it on this number instead of
+        its tau size. None: the tau view sizes it.
     """
 
     effect: str
@@ -137,6 +142,7 @@ class Candidate:
     base: Term | None = None
     replaces: Term | None = None
     measured: tuple[str, ...] = ()
+    view_size: float | None = None
 
     @property
     def explains(self) -> frozenset[str]:
@@ -292,6 +298,7 @@ def candidate_library(
         fixed: dict[str, float] = {}
         start: dict[str, float] = {}
         measured: tuple[str, ...] = ()
+        view_size: float | None = None
         replaces: Term | None = None
         if effect == "sine" and lines:
             freq, amp = lines[0]
@@ -332,6 +339,8 @@ def candidate_library(
             replaces = whites[0]
             fixed.update(fixed_drift)
             start["N"] = float(replaces.values()["N"])
+            # it keeps the mean level (no tau size): its size is the measured level ratio
+            view_size = abs(fixed_drift["ratio"] - 1.0)
         names = tuple(p.name for p in cls.params)
         free = tuple(n for n in names if n not in fixed)
         out.append(
@@ -343,6 +352,7 @@ def candidate_library(
                 start=start,
                 replaces=replaces,
                 measured=measured,
+                view_size=view_size,
             )
         )
     for term in terms:
