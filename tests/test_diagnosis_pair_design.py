@@ -7,32 +7,19 @@ whose laws one another imitate in the tau and frequency views.
 
 from __future__ import annotations
 
-import importlib.util
-import sys
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
 
-
-def _validate_diagnosis_module() -> Any:
-    path = Path(__file__).resolve().parents[1] / "benchmarks" / "validate_diagnosis.py"
-    spec = importlib.util.spec_from_file_location("validate_diagnosis", path)
-    assert spec is not None
-    assert spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module  # dataclasses look their module up
-    spec.loader.exec_module(module)
-    return module
-
+import benchmark_module
 
 FS, N = 100.0, 2**16
 
 
 @pytest.fixture(scope="module")
 def vd() -> Any:
-    return _validate_diagnosis_module()
+    return benchmark_module.load("validate_diagnosis")
 
 
 @pytest.fixture(scope="module")

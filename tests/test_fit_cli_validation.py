@@ -9,9 +9,7 @@ customary coefficients, and a record without ``--units`` says so instead of assu
 
 from __future__ import annotations
 
-import importlib.util
 import json
-import sys
 from pathlib import Path
 from typing import Any
 
@@ -19,20 +17,10 @@ import numpy as np
 import pytest
 
 import allanite
+import benchmark_module
 from allanite.cli import main
 
 fit_module = pytest.importorskip("allanite.fit", reason="the fitter is not installed")
-
-
-def _validate_fit_module() -> Any:
-    path = Path(__file__).resolve().parents[1] / "benchmarks" / "validate_fit.py"
-    spec = importlib.util.spec_from_file_location("validate_fit", path)
-    assert spec is not None
-    assert spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module  # dataclasses look their module up
-    spec.loader.exec_module(module)
-    return module
 
 
 def _slice(vf: Any) -> list[tuple[Any, Any]]:
@@ -47,7 +35,7 @@ def _slice(vf: Any) -> list[tuple[Any, Any]]:
 
 @pytest.mark.slow
 def test_cli_slice_matches_api_and_scores(tmp_path: Path) -> None:
-    vf = _validate_fit_module()
+    vf = benchmark_module.load("validate_fit")
     pairs = _slice(vf)
     forms = {(f.fmt, f.layout, f.time_column) for _, f in pairs}
     assert {("npy", "single", False), ("csv", "six", True), ("npy", "six", False)} <= forms
@@ -71,7 +59,7 @@ def test_cli_slice_matches_api_and_scores(tmp_path: Path) -> None:
 
 def test_cli_records_are_written_in_the_users_units(tmp_path: Path) -> None:
     # rate records in their unit; an angle record in the angle unit its gyro has (deg for deg/h)
-    vf = _validate_fit_module()
+    vf = benchmark_module.load("validate_fit")
     case = vf.Case(0, ("N",), 20_000, 100.0, "octave", "rate", "deg/s", seed=5)
     form = vf.CliForm("npy", "single")
     x = np.asarray(vf.design(case).simulate(case.n, fs=case.fs, seed=case.seed)).ravel()
@@ -165,7 +153,7 @@ def test_cli_comparison_reports_a_wrong_unit(
 ) -> None:
     # the CLI-vs-API comparison is not vacuous: the record labelled deg/h instead of deg/s
     # (a 3600x error) is reported as a units and a coefficient mismatch
-    vf = _validate_fit_module()
+    vf = benchmark_module.load("validate_fit")
     case = vf.Case(0, ("N",), 20_000, 100.0, "octave", "rate", "deg/s", seed=5)
     write = vf.write_cli_record
 

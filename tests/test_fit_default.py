@@ -6,16 +6,15 @@ wrong model. The statistical checks use the fit's own intervals.
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import math
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 import allanite
+import benchmark_module
 from allanite.examples import example_model
 from allanite.fit import fit
 from allanite.fit.covariance import avar_covariance
@@ -292,23 +291,12 @@ def test_not_rejected_is_said_too(tmp_path, capsys):
     assert "p = " in text
 
 
-def _validate_fit_module():
-    path = Path(__file__).resolve().parents[1] / "benchmarks" / "validate_fit.py"
-    spec = importlib.util.spec_from_file_location("validate_fit", path)
-    assert spec is not None
-    assert spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module  # dataclasses look their module up
-    spec.loader.exec_module(module)
-    return module
-
-
 SLICE = (("Q", "N"), ("N", "K"), ("N", "B", "K"), ("N", "K", "R"), ("Q", "N", "B", "K", "R"))
 
 
 def test_grid_slice():
     # a fast slice of benchmarks/validate_fit.py's quick grid: one short record per subset
-    vf = _validate_fit_module()
+    vf = benchmark_module.load("validate_fit")
     chosen = {}
     for case in vf.grid(quick=True):
         if case.n == 100_000 and case.terms in SLICE and case.terms not in chosen:
@@ -328,7 +316,7 @@ def test_grid_slice():
 def test_grid_design_honours_the_spans():
     # issue 12: "magnitudes such that each term dominates over 0.5 to 3 decades", inside the
     # taus the fit uses; the design only (no simulation), every record of the full grid
-    vf = _validate_fit_module()
+    vf = benchmark_module.load("validate_fit")
     checked = 0
     for case in vf.grid(quick=False):
         if len(case.terms) == 1:
@@ -356,7 +344,7 @@ def test_rejected_fit_reports_the_terms_best_chi2():
     # the coefficients with the model discrepancy follow the whole curve and have chi2 73.9
     # (p = 6e-11) under the terms' covariance, which was reported before and overstated the
     # misfit by seven orders of magnitude
-    vf = _validate_fit_module()
+    vf = benchmark_module.load("validate_fit")
     (case,) = [c for c in vf.grid(quick=False, long=False, seed=112) if c.index == 91]
     x = vf.design(case).simulate(
         case.n, fs=case.fs, output=case.input, seed=case.seed, flicker_method=vf.FLICKER_METHOD
@@ -378,7 +366,7 @@ def test_a_term_significant_against_the_chosen_model_is_added():
     # angle): the ramp lowers the chi-square by 10.3 under the covariance of Q+N+B+K (above
     # the penalty 9) but raised log det C, and the score alone kept Q+N+B+K (p = 0.045); the
     # test of a left-out term against the chosen model's covariance adds it
-    vf = _validate_fit_module()
+    vf = benchmark_module.load("validate_fit")
     (case,) = [c for c in vf.grid(quick=False, long=False, legacy=True) if c.index == 90]
     row = vf.run_case(case)
     assert row["fitted_terms"] == ["Q", "N", "B", "K", "R"], row

@@ -182,6 +182,21 @@ class Candidate:
             extra = extra - self.replaces.avar(tau, dt)
         return extra
 
+    def extra_psd(self, values: dict[str, float], f: Any, dt: float) -> Any:
+        """One-sided PSD (sampled at ``dt``) this candidate adds to the simulated sensor.
+
+        A rescale adds ``(s^2 - 1)`` times its term's PSD, a replacement (``lowpass``) the
+        difference of the two terms' PSDs, any other effect its own
+        (:meth:`allanite.terms.Term.psd_sampled`, which raises ``NotImplementedError`` for a
+        term without a stationary PSD).
+        """
+        if self.base is not None:
+            return (values["scale"] ** 2 - 1.0) * self.base.psd_sampled(f, dt)
+        psd = self.term(values).psd_sampled(f, dt)
+        if self.replaces is not None:
+            psd = psd - self.replaces.psd_sampled(f, dt)
+        return psd
+
 
 def _model_terms(model: Any) -> list[Term]:
     terms = getattr(model, "terms", None)

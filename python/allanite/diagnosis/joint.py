@@ -300,11 +300,10 @@ def effect_psd(
 ) -> NDArray[np.float64]:
     """One-sided PSD (on ``f``) the fitted effect ``a`` adds to the simulated sensor.
 
-    A rescale adds ``(s^2 - 1)`` times its term's PSD, a replacement (``lowpass``) the
-    difference of the two terms' PSDs, any other effect its own sampled PSD
-    (:meth:`allanite.terms.Term.psd_sampled`). A ramp or a warm-up adds the Welch spectrum of
-    its own samples over the ``n`` fitted samples (:func:`shape_welch_psd`, ``f`` the frequency
-    view's bins); without ``n``, and for any other term without a PSD, none.
+    The candidate's :meth:`~allanite.diagnosis.candidates.Candidate.extra_psd`. A ramp or a
+    warm-up adds the Welch spectrum of its own samples over the ``n`` fitted samples
+    (:func:`shape_welch_psd`, ``f`` the frequency view's bins); without ``n``, and for any
+    other term without a PSD, none.
     """
     values = {k: a.params[k] for k in c.free}
     if c.effect in WELCH_SHAPES and n is not None and f.size > 1:
@@ -313,12 +312,7 @@ def effect_psd(
             return shape_welch_psd(c.term(values), n, dt, nperseg)
     try:
         with np.errstate(all="ignore"):
-            if c.base is not None:
-                out = (values["scale"] ** 2 - 1.0) * c.base.psd_sampled(f, dt)
-            else:
-                out = c.term(values).psd_sampled(f, dt)
-                if c.replaces is not None:
-                    out = out - c.replaces.psd_sampled(f, dt)
+            out = c.extra_psd(values, f, dt)
     except NotImplementedError:
         return np.zeros_like(f)
     out = np.asarray(out, dtype=np.float64)

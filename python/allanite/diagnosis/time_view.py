@@ -413,6 +413,44 @@ def _change_point(x: NDArray[np.float64], start: int, stop: int) -> int:
     return start + int(np.argmax(np.abs(cs[:-1]))) + 1
 
 
+def _kurtosis_checks(
+    x: NDArray[np.float64],
+    real: dict[str, NDArray[np.float64]],
+    ens: NullEnsemble,
+    plan: TimePlan,
+    fam_p: dict[str, float],
+) -> dict[str, Any]:
+    """The kurtosis statistics' p-values into ``fam_p``; return the block-means details.
+
+    ``kurt_hf`` two-sided (bursts and outliers +, clipping -), ``kurt_lf`` one-sided (a
+    two-level, telegraph amplitude distribution is platykurtic), each Bonferroni over its
+    block sizes. The returned ``kurt_lf`` details (blocks, real values, block variances,
+    reference and the real residual's spread) let a candidate re-test the block means.
+    """
+    length = plan.length
+    lf: dict[str, Any] = {}
+    for name, sign in (("kurt_hf", 0), ("kurt_lf", -1)):
+        sd = ens.null[name].std(axis=0, ddof=1)
+        if name == "kurt_lf":
+            blocks = kurtosis_blocks(plan)
+            used = x[: plan.n_windows * length].reshape(plan.n_windows, length)
+            lf = {
+                "blocks": blocks,
+                "real": np.asarray(real[name], dtype=np.float64),
+                "var": np.array([_block_moments(used, b)[0] for b in blocks]),
+                "ref": np.asarray(ens.ref[name], dtype=np.float64),
+                # the real residual's spread (the null's, times the real record's scale)
+                "sd": np.asarray(sd * np.sqrt(ens.real_scale), dtype=np.float64),
+            }
+        zk = ens.residual(real, name) / np.where(sd > 0, sd, np.inf)
+        if sign == 0:  # two-sided: bursts and outliers (+), clipping (-)
+            tail = 2.0 * stats.norm.sf(float(np.abs(zk).max()))
+        else:  # one-sided: a two-level (telegraph) amplitude distribution is platykurtic
+            tail = stats.norm.sf(float((sign * zk).max()))
+        fam_p[name] = float(min(1.0, zk.size * tail))  # Bonferroni over the block sizes
+    return lf
+
+
 def time_view(
     x: NDArray[np.float64],
     fs: float,
@@ -460,26 +498,7 @@ def time_view(
     spike_null = ens.null["spike"][:, 0]
     spike_r = float(ens.residual(real, "spike")[0])
     fam_p["spike"] = gumbel_sf(spike_r, spike_null)
-    lf: dict[str, Any] = {}
-    for name, sign in (("kurt_hf", 0), ("kurt_lf", -1)):
-        sd = ens.null[name].std(axis=0, ddof=1)
-        if name == "kurt_lf":
-            blocks = kurtosis_blocks(plan)
-            used = x[: plan.n_windows * length].reshape(plan.n_windows, length)
-            lf = {
-                "blocks": blocks,
-                "real": np.asarray(real[name], dtype=np.float64),
-                "var": np.array([_block_moments(used, b)[0] for b in blocks]),
-                "ref": np.asarray(ens.ref[name], dtype=np.float64),
-                # the real residual's spread (the null's, times the real record's scale)
-                "sd": np.asarray(sd * np.sqrt(ens.real_scale), dtype=np.float64),
-            }
-        zk = ens.residual(real, name) / np.where(sd > 0, sd, np.inf)
-        if sign == 0:  # two-sided: bursts and outliers (+), clipping (-)
-            tail = 2.0 * stats.norm.sf(float(np.abs(zk).max()))
-        else:  # one-sided: a two-level (telegraph) amplitude distribution is platykurtic
-            tail = stats.norm.sf(float((sign * zk).max()))
-        fam_p[name] = float(min(1.0, zk.size * tail))  # Bonferroni over the block sizes
+    lf = _kurtosis_checks(x, real, ens, plan, fam_p)
     # localisation
     segments: list[tuple[float, float]] = []
     change_points: list[float] = []

@@ -229,11 +229,7 @@ def _describe_drift(a: Attribution, units: str | None) -> str:
 def effect_psd(cand: Candidate, values: dict[str, float], f: Any, dt: float) -> Any:
     """One-sided PSD the effect adds to the simulated sensor, or None (non-stationary)."""
     try:
-        if cand.base is not None:
-            return (values["scale"] ** 2 - 1.0) * cand.base.psd_sampled(f, dt)
-        psd = cand.term(values).psd_sampled(f, dt)
-        if cand.replaces is not None:
-            psd = psd - cand.replaces.psd_sampled(f, dt)
+        psd = cand.extra_psd(values, f, dt)
     except (NotImplementedError, ValueError, ZeroDivisionError, OverflowError):
         return None
     psd = np.asarray(psd, dtype=np.float64)
