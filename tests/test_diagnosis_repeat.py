@@ -284,3 +284,49 @@ def test_without_a_second_band_one_resonance_is_named(two_resonances, monkeypatc
     monkeypatch.setattr(engine, "band_shapes", lambda *a: band_shapes(*a, n_max=1))
     d = diagnose(x, model, fs=FS, units="deg/s", holdout=0.5, n_mc=40, seed=22)
     assert [a.effect for a in d.explanation.effects].count("resonance") <= 1
+
+
+@pytest.mark.slow
+def test_real_base_resonance_next_to_the_gyros_own(shared_data, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """ADIS16405 z gyro: run 1's fitted model (white + rate random walk) as the simulation, run
+    2 with a 35-Hz resonance (Q 5) injected as the record (the validation's real-base case).
+    The gyro has a 20-Hz resonance of its own: both are named, each within the injected or the
+    control's half-power half-width. With one band per record (the previous rule) the
+    injected resonance is not named (the set was quantization + Gauss-Markov)."""
+    import allanite
+    import allanite.diagnosis.engine as engine
+
+    adis = shared_data / "imu" / "adis16405"
+
+    def load(run: int) -> np.ndarray:
+        with np.load(adis / f"run{run}.npz") as data:
+            return data["gyro_counts"][:, 2].astype(np.float64) * 0.05
+
+    fitted = allanite.fit(allanite.avar(load(1), fs=FS, taus="octave", units="deg/s"))
+    model = NoiseModel(fitted.model.terms, UNITS)
+    res = T["resonance"](N=0.197, frequency=35.0, damping=0.1)  # Allan variance peak 8x
+    n = 2**16
+    injected = NoiseModel((res,), UNITS).simulate(n, fs=FS, seed=1024, allow_aliasing=True)
+    x = load(2)[:n] + np.asarray(injected, dtype=np.float64).ravel()
+    kw = {"fs": FS, "units": "deg/s", "holdout": 0.5, "n_mc": 60, "seed": 1018}
+
+    def resonances(d) -> list[tuple[float, float]]:  # type: ignore[no-untyped-def]
+        """(frequency, damping) of the named resonances, lowest first."""
+        return sorted(
+            (a.params["frequency"], a.params["damping"])
+            for a in d.explanation.effects
+            if a.effect == "resonance"
+        )
+
+    def frequencies(d) -> list[float]:  # type: ignore[no-untyped-def]
+        return [f for f, _ in resonances(d)]
+
+    control = resonances(diagnose(load(2)[:n], model, **kw))
+    assert len(control) == 1  # the gyro's own
+    (f_own, zeta_own) = control[0]
+    own, injected_f = frequencies(diagnose(x, model, **kw))
+    assert abs(injected_f - res.frequency) <= res.damping * res.frequency
+    assert abs(own - f_own) <= zeta_own * f_own
+    monkeypatch.setattr(engine, "band_shapes", lambda *a: band_shapes(*a, n_max=1))
+    before = frequencies(diagnose(x, model, **kw))
+    assert all(abs(f - res.frequency) > res.damping * res.frequency for f in before)
