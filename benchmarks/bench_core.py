@@ -7,7 +7,7 @@ benchmarks/results/bench_core.json:
 * ``core_threads_1`` / ``core_threads_2``: the compiled part alone (``_core.phase`` +
   ``_core.variance``), 1 and 2 worker threads (best of ``--repeat``);
 * ``avar_end_to_end``: ``allanite.avar`` including noise identification and EDF;
-* ``reference``: :mod:`allanite.variance.oracle` (numpy, vectorised per tau);
+* ``oracle``: :mod:`allanite.variance.oracle` (numpy, vectorised per tau);
 * ``allantools``: ``allantools.oadev`` on the same frequency data and taus;
 
 and the largest relative difference of each result from the compiled one.
@@ -75,10 +75,10 @@ def main() -> None:
         phase = oracle.phase_from_record(y, "rate")
         return np.array([oracle.overlapping_variance(phase, int(k)) for k in m])
 
-    timings["reference"], v_ref = _best(numpy_oracle, 1)
+    timings["oracle"], v_ref = _best(numpy_oracle, 1)
     diffs = {
         "avar_end_to_end": float(np.max(np.abs(res.var / v1 - 1))),
-        "reference": float(np.max(np.abs(v_ref / v1 - 1))),
+        "oracle": float(np.max(np.abs(v_ref / v1 - 1))),
     }
     if not args.skip_allantools:
         import allantools
@@ -97,7 +97,7 @@ def main() -> None:
         "m_min": int(m[0]),
         "m_max": int(m[-1]),
         "seconds": timings,
-        "speedup_vs_reference_1_thread": timings["reference"] / timings["core_threads_1"],
+        "speedup_vs_oracle_1_thread": timings["oracle"] / timings["core_threads_1"],
         "max_relative_difference_from_core": diffs,
         "machine": {
             "python": platform.python_version(),

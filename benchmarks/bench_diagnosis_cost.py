@@ -63,6 +63,7 @@ def main_() -> None:
     parser.add_argument(
         "--gap", action="store_true", help="real record with white noise x1.5 (a gap to explain)"
     )
+    parser.add_argument("--note", default=None, help="a note stored with the rows")
     args = parser.parse_args()
     for n in args.n:
         run(n, args)
@@ -114,6 +115,8 @@ def run(n: int, args: argparse.Namespace) -> None:
         "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0,
         "load_avg_1min": [load_before, os.getloadavg()[0]],
     }
+    if args.note:
+        row["note"] = args.note
     print(json.dumps(row, indent=1), flush=True)
     old = json.loads(RESULTS.read_text()) if RESULTS.exists() else []
     RESULTS.parent.mkdir(parents=True, exist_ok=True)

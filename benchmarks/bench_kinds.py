@@ -9,7 +9,7 @@ Hadamard and total:
 * the compiled parts alone: ``phase`` (``_core.phase``), ``kernel`` (``_core.variance``)
   and ``identification`` (``identify_alpha`` on the same phase, lag-1 and B1/R(n) passes);
 * ``allantools``: ``oadev``/``mdev``/``ohdev``/``totdev`` on the same frequency data and taus;
-* ``reference``: the numpy oracle (:mod:`allanite.variance.oracle`, vectorised per tau; its modified
+* ``oracle``: the numpy oracle (:mod:`allanite.variance.oracle`, vectorised per tau; its modified
   variance is O(N m) per tau, so there only the taus with m <= 16 are timed, against the
   kernel on the same taus);
 
@@ -43,7 +43,7 @@ import numpy as np
 
 import allanite
 from allanite import _core
-from allanite.variance import oracle as reference
+from allanite.variance import oracle as numpy_oracle
 from allanite.variance.edf import identify_alpha
 from allanite.variance.taus import log_grid
 from bench_core import _best  # the benchmarks' one best-of-N timer (same folder)
@@ -131,16 +131,16 @@ def bench_kind(
         # and its ratio is taken against the kernel on the same taus
         sub = m <= ORACLE_MODIFIED_MAX_M if kind == "modified" else np.ones(m.size, bool)
         t_ref, v_ref = _warm_best(
-            lambda: np.asarray(reference.variance(y, m[sub], kind, input="rate")).reshape(-1),
+            lambda: np.asarray(numpy_oracle.variance(y, m[sub], kind, input="rate")).reshape(-1),
             repeat,
         )
         t_sub = t_kernel
         if not sub.all():
             t_sub, _ = _warm_best(lambda: _core.variance(phase, m[sub], kind, threads), repeat)
-        entry["seconds"]["reference"] = t_ref
-        entry["reference_taus"] = int(sub.sum())
-        entry["max_rel_diff"]["reference"] = float(np.max(np.abs(v_ref / var[sub, 0] - 1)))
-        entry["reference_over_kernel_same_taus"] = t_ref / t_sub
+        entry["seconds"]["oracle"] = t_ref
+        entry["oracle_taus"] = int(sub.sum())
+        entry["max_rel_diff"]["oracle"] = float(np.max(np.abs(v_ref / var[sub, 0] - 1)))
+        entry["oracle_over_kernel_same_taus"] = t_ref / t_sub
     return entry
 
 
@@ -178,8 +178,8 @@ def bench_size(n: int, points: int, repeat: int, threads: int, oracle: bool) -> 
             "identification_over_kernel": s["identification"] / s["kernel"],
             "kernel_over_memory_floor": s["kernel"] / entry["memory_floor_seconds"],
         }
-        if "reference" in s:
-            ratios["reference_over_kernel"] = entry["reference_over_kernel_same_taus"]
+        if "oracle" in s:
+            ratios["oracle_over_kernel"] = entry["oracle_over_kernel_same_taus"]
         entry["ratios"] = ratios
     return {
         "n_samples": n,
@@ -241,10 +241,10 @@ def markdown(records: list[dict[str, Any]]) -> str:
         ]
         for kind, e in rec["kinds"].items():
             s, r = e["seconds"], e["ratios"]
-            ref = f"{s['reference'] * 1e3:.0f}" if "reference" in s else "-"
-            vs_ref = f"{r['reference_over_kernel']:.1f}x" if "reference" in s else "-"
-            if "reference" in s and e["reference_taus"] < rec["n_taus"]:
-                ref += f" ({e['reference_taus']} taus)"
+            ref = f"{s['oracle'] * 1e3:.0f}" if "oracle" in s else "-"
+            vs_ref = f"{r['oracle_over_kernel']:.1f}x" if "oracle" in s else "-"
+            if "oracle" in s and e["oracle_taus"] < rec["n_taus"]:
+                ref += f" ({e['oracle_taus']} taus)"
             lines.append(
                 f"| {kind} | {s['kernel'] * 1e3:.1f} | {e['memory_floor_seconds'] * 1e3:.1f} | "
                 f"{s['identification'] * 1e3:.1f} | {s['end_to_end'] * 1e3:.1f} | "

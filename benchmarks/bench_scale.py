@@ -44,7 +44,7 @@ RESULTS = HERE / "results"
 FS = 100.0
 
 #: skip a method when N x channels exceeds this (it would take minutes or tens of GB)
-LIMITS = {"reference": 10**7, "allantools": 3 * 10**7, "allan_variance": 3 * 10**7}
+LIMITS = {"oracle": 10**7, "allantools": 3 * 10**7, "allan_variance": 3 * 10**7}
 
 
 def _rss_mb() -> float:
@@ -100,7 +100,7 @@ def worker(method: str, path: str, threads: int, repeats: int) -> dict[str, Any]
         out["floor_seconds"] = t_read * m.size
         out["prefix_mb"] = phase.nbytes / 1e6
         del phase
-    elif method == "reference":
+    elif method == "oracle":
         from allanite.variance import oracle
 
         seconds, v = _best(lambda: oracle.variance(x, m, "overlapping"), 1)
@@ -203,7 +203,7 @@ def run_suite(sizes: list[int], outofcore: bool, timeout: float) -> dict[str, An
                 path = _write_record(n, c, tmp)
                 repeats = 3 if n <= 10**7 else 1
                 plan: list[tuple[str, int]] = [("allanite", 1), ("allanite", 2)]
-                plan += [("reference", 1), ("allantools", 1), ("allan_variance", 1)]
+                plan += [("oracle", 1), ("allantools", 1), ("allan_variance", 1)]
                 for method, threads in plan:
                     if n * c > LIMITS.get(method, 10**12):
                         skipped.append(

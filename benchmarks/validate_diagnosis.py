@@ -27,7 +27,10 @@ second), and scores the answer against the truth:
   has no held-out check, it lives at the start of the record).
 
 Run ``python benchmarks/validate_diagnosis.py [--quick]``; the table is printed and written to
-``benchmarks/results/validate_diagnosis[_quick].json`` and ``.md``.
+``benchmarks/results/validate_diagnosis[_quick].json`` and ``.md``. ``--pairs`` runs the
+two-effect cases on the designed grid (:func:`designed_pair_cases`: both effects clearly in the
+record next to each other, three sizes per pair type; :data:`EXCLUDED_PAIRS` and
+:func:`pair_mimicry` for the types left out), ``--legacy-pairs`` the first grid.
 """
 
 from __future__ import annotations
@@ -264,7 +267,8 @@ def make_cases(
 
 
 #: two-effect cases: every pair that makes sense (stationary + stationary, level + stationary,
-#: line + stationary); both terms medium strength (AVAR peak 2x the base's)
+#: line + stationary, the issue-14 candidates + stationary); pairs whose laws coincide in the
+#: tau and frequency views are left out (see :func:`pair_mimicry` and docs/diagnosis.md)
 PAIRS = [
     ("white", "sine"),
     ("white", "markov"),
@@ -283,14 +287,29 @@ PAIRS = [
     ("drifting_line", "rrw"),
     ("bursts", "rrw"),
 ]
+#: pairs examined and left out of the grid: their two laws coincide (up to a scale) in the tau
+#: and the frequency view, :func:`pair_mimicry` gives the numbers
+EXCLUDED_PAIRS = [
+    ("step", "rrw"),
+    ("spikes", "white"),
+    ("bursts", "white"),
+    ("telegraph", "markov"),
+]
+#: the designed grid's sizes: each effect's expected tau-view noncentrality on top of the base
+#: and the other effect, in multiples of CLEAR_LAMBDA (first effect, second effect): the first
+#: one weak and the second strong, both medium, the first strong and the second weak
+DESIGN_LEVELS = ((2.0, 16.0), (5.0, 5.0), (16.0, 2.0))
+#: spikes are clear by their own view (amplitude >= 4 sample sigmas), not by the tau view: their
+#: amplitude per design level, in sample sigmas of the base's white noise
+SPIKE_SIGMAS = {2.0: 5.0, 5.0: 7.0, 16.0: 10.0}
+#: bias steps: mean interval as a fraction of the fitted half (a step in it with 98 %)
+STEP_INTERVAL = 0.25
 
 
-def pair_cases(fs: float, n: int, rho: float = 2.0, label: str = "medium") -> list[Case]:
-    """Two withheld effects at once (the base lacks both), each scaled to ``rho``."""
-    base = base_model(fs)
-    half = n // 2
-    duration = half / fs
-    shapes = {
+def pair_shapes(fs: float, n: int) -> dict[str, Any]:
+    """The two-effect cases' terms at a nominal size (their shape: the design scales them)."""
+    duration = n // 2 / fs
+    return {
         "white": T("white", N=0.05),
         "quantization": T("quantization", Q=0.5 / fs),
         "flicker": T("flicker", B=0.01),
@@ -305,19 +324,213 @@ def pair_cases(fs: float, n: int, rho: float = 2.0, label: str = "medium") -> li
         "drifting_line": T("drifting_line", amplitude=0.03, f_start=0.05 * fs,
                            f_end=0.08 * fs, duration=n / fs),
         "bursts": T("white_bursts", N=0.1, duty=0.1, burst_s=0.05 * duration),
+        "spikes": T("spikes", amplitude=7.0 * 0.05 * np.sqrt(fs), rate=0.02),
     }  # fmt: skip
+
+
+def legacy_pair_cases(fs: float, n: int, rho: float = 2.0, label: str = "medium") -> list[Case]:
+    """The first grid (``--legacy-pairs``): both withheld effects scaled to ``rho``.
+
+    Each effect's Allan variance peaks at ``rho`` times the base's (spikes at 7 sample
+    sigmas), whatever the other effect does to its visibility: many of these cases do not
+    show one of their effects (see :func:`designed_pair_cases`).
+    """
+    base = base_model(fs)
+    half = n // 2
+    shapes = pair_shapes(fs, n)
     out = []
     for a, b in PAIRS:
-        if a == "spikes":
-            ta = T("spikes", amplitude=7.0 * 0.05 * np.sqrt(fs), rate=0.02)
-        else:
-            ta = scaled(shapes[a], base, fs, half, rho)
+        ta = shapes["spikes"] if a == "spikes" else scaled(shapes[a], base, fs, half, rho)
         tb = scaled(shapes[b], base, fs, half, rho)
         out.append(
             Case(f"pair-{a}+{b}-{label}-fs{fs:g}", f"pair:{a}+{b}", label, fs, n, base, None,
                  ta, extra2=tb, effect2=b)
         )  # fmt: skip
     return out
+
+
+def effect_avar(term: Any, tau: np.ndarray, dt: float, half: int) -> np.ndarray:
+    """A term's expected Allan variance in the fitted half (a warm-up decays within it)."""
+    if term.type == "warmup":
+        term = term.with_values(duration=half * dt)
+    return np.asarray(term.avar(tau, dt), dtype=np.float64)
+
+
+def tau_noncentrality(extra: np.ndarray, floor: np.ndarray, cov_inv: np.ndarray) -> float:
+    """``r^T C^-1 r`` with ``r = log(1 + extra / floor)``: how far ``extra`` lifts the tau view."""
+    r = np.log(np.maximum(1.0 + extra / floor, 1e-12))
+    return float(r @ cov_inv @ r)
+
+
+def effect_clear(
+    name: str, term: Any, lam: float, fs: float, samples: np.ndarray | None = None
+) -> bool:
+    """The clear rule of an injected effect (the single-effect cases' rule, one place).
+
+    Clear when its tau-view noncentrality ``lam`` on top of everything else in the record
+    (the simulation and the other effect of a pair; the real run of a real-base case) reaches
+    ``CLEAR_LAMBDA``, or by its own view: a line of amplitude >= 0.05, spikes
+    of at least 4 sample sigmas of the base's white noise. A bias step or spikes only when
+    the realised ``samples`` (fitted half) have one (no check without ``samples``).
+    """
+    ok = lam >= CLEAR_LAMBDA
+    if name == "sine":
+        ok = ok or term.amplitude >= 0.05
+    if name == "spikes":
+        ok = ok or term.amplitude >= 4.0 * 0.05 * np.sqrt(fs)
+    if name in ("step", "spikes") and samples is not None and not np.any(np.diff(samples) != 0):
+        ok = False  # no step / spike in the fitted half
+    return bool(ok)
+
+
+def design_tau_model(fs: float, n: int, seed: int = 4242) -> Any:
+    """The tau view of a base-model record (its null covariance and simulation curve)."""
+    base = base_model(fs)
+    half = n // 2
+    x = base.simulate(half, fs=fs, seed=seed)
+    return tau_model_for(x, SimSource(fs=fs, model=base), n_mc=40, seed=seed + 1)
+
+
+def _with_gain(term: Any, gain: float) -> Any:
+    name = term.params[0].name
+    return term.with_values(**{name: float(term.values()[name] * np.sqrt(gain))})
+
+
+def design_pair(
+    a: str, b: str, fs: float, n: int, levels: tuple[float, float], tm: Any
+) -> tuple[Any, Any, dict[str, float]] | None:
+    """Sizes of ``a`` and ``b`` such that each one's expected tau-view noncentrality on top of
+    the base and the other effect is ``levels * CLEAR_LAMBDA``.
+
+    Both sizes are found by alternating bisections (each one's noncentrality grows with its
+    own size and falls with the other's); spikes keep the amplitude of
+    :data:`SPIKE_SIGMAS` (they are clear by their own view). Returns the two terms and their
+    expected noncentralities, or None when no sizes reach the targets (the two laws mask each
+    other: the larger one effect, the less the other shows).
+    """
+    half = n // 2
+    dt = 1.0 / fs
+    shapes = pair_shapes(fs, n)
+    if "step" in (a, b):
+        shapes["step"] = shapes["step"].with_values(interval=STEP_INTERVAL * half / fs)
+    terms = [shapes[a], shapes[b]]
+    names = (a, b)
+    fixed = [name == "spikes" for name in names]
+    for i in (0, 1):
+        if fixed[i]:
+            terms[i] = terms[i].with_values(amplitude=SPIKE_SIGMAS[levels[i]] * 0.05 * np.sqrt(fs))
+    unit = [effect_avar(t, tm.tau, dt, half) for t in terms]
+    targets = [lv * CLEAR_LAMBDA for lv in levels]
+    log_g = [0.0, 0.0]
+
+    def lam(i: int, lg: list[float]) -> float:
+        g = [1.0 if fixed[k] else 10.0 ** lg[k] for k in (0, 1)]
+        return tau_noncentrality(g[i] * unit[i], tm.sim_avar + g[1 - i] * unit[1 - i], tm.cov_inv)
+
+    for _ in range(60):
+        before = list(log_g)
+        for i in (0, 1):
+            if fixed[i]:
+                continue
+            lo, hi = -12.0, 12.0
+            for _ in range(60):
+                mid = 0.5 * (lo + hi)
+                trial = list(log_g)
+                trial[i] = mid
+                lo, hi = (mid, hi) if lam(i, trial) < targets[i] else (lo, mid)
+            log_g[i] = 0.5 * (lo + hi)
+        if max(abs(x - y) for x, y in zip(log_g, before, strict=True)) < 1e-4:
+            break
+    got = [lam(i, log_g) for i in (0, 1)]
+    if any(abs(np.log(got[i] / targets[i])) > 0.05 for i in (0, 1) if not fixed[i]):
+        return None
+    if any(abs(x) >= 11.9 for x in log_g):
+        return None
+    out = [t if fixed[i] else _with_gain(t, 10.0 ** log_g[i]) for i, t in enumerate(terms)]
+    return out[0], out[1], {a: got[0], b: got[1]}
+
+
+def designed_pair_cases(
+    fs: float, n: int, tm: Any = None, pairs: list[tuple[str, str]] | None = None
+) -> list[Case]:
+    """Two withheld effects at once, each one clearly in the record next to the other.
+
+    Every pair type of ``pairs`` (default :data:`PAIRS`) at the sizes of :data:`DESIGN_LEVELS`
+    (:func:`design_pair`): weak + strong, medium + medium, strong + weak, where weak means an
+    expected tau-view noncentrality of twice the clear level on top of the base and the other
+    effect. Each case is scored (the realised clearness is reported next to it).
+    """
+    tm = design_tau_model(fs, n) if tm is None else tm
+    base = base_model(fs)
+    out = []
+    for a, b in PAIRS if pairs is None else pairs:
+        index = (PAIRS + EXCLUDED_PAIRS).index((a, b)) * len(DESIGN_LEVELS)
+        for j, levels in enumerate(DESIGN_LEVELS):
+            got = design_pair(a, b, fs, n, levels, tm)
+            if got is None:
+                raise RuntimeError(f"no sizes make both {a} and {b} clear at {levels}")
+            ta, tb, lams = got
+            label = f"L{levels[0]:g}-{levels[1]:g}"
+            out.append(
+                Case(f"pair-{a}+{b}-{label}-fs{fs:g}", f"pair:{a}+{b}", label, fs, n, base,
+                     None, ta, extra2=tb, effect2=b,
+                     truth={"lambda_design": {k: round(v, 1) for k, v in lams.items()},
+                            "index": index + j})
+            )  # fmt: skip
+    return out
+
+
+def pair_mimicry(
+    a: str, b: str, fs: float, n: int, tm: Any, level: float = 5.0
+) -> dict[str, float | None]:
+    """How well effect ``b`` imitates effect ``a`` next to the base: the numbers behind
+    :data:`EXCLUDED_PAIRS`.
+
+    ``a`` at the size whose tau-view noncentrality is ``level * CLEAR_LAMBDA``; ``b`` at the
+    size (and, for a Gauss-Markov process, the correlation time) that comes closest. ``tau``:
+    the smallest noncentrality ``d^T C^-1 d`` of the difference of their tau-view signatures
+    ``d = log(1 + A_a / S) - log(1 + A_b / S)`` (chance level about the number of taus, 12;
+    ``level * CLEAR_LAMBDA`` when ``b`` explains none of it). ``psd_db``: the largest
+    difference (dB) of the spectra ``S + P_a`` and ``S + P_b`` between ``1 / T`` (``T`` the
+    fitted half) and ``fs / 2`` at the same sizes (None with a warm-up, ramp or step: no
+    spectrum).
+    """
+    half = n // 2
+    dt = 1.0 / fs
+    shapes = pair_shapes(fs, n)
+    ta = design_pair_single(shapes[a], tm, half, level)
+    ra = np.log1p(effect_avar(ta, tm.tau, dt, half) / tm.sim_avar)
+    tcs = np.geomspace(0.1, 10.0, 41) if b == "markov" else [None]
+    best: tuple[float, Any] = (np.inf, None)
+    for tc in tcs:
+        tb0 = shapes[b] if tc is None else shapes[b].with_values(tau_c=float(tc))
+        ub = effect_avar(tb0, tm.tau, dt, half)
+        for lg in np.linspace(-6.0, 6.0, 481):
+            d = ra - np.log1p(10.0**lg * ub / tm.sim_avar)
+            q = float(d @ tm.cov_inv @ d)
+            if q < best[0]:
+                best = (q, _with_gain(tb0, 10.0**lg))
+    out: dict[str, float | None] = {"tau": best[0], "psd_db": None}
+    if not {a, b} & {"warmup", "ramp", "step"}:
+        f = np.geomspace(fs / half, 0.5 * fs, 200)
+        s = np.asarray(base_model(fs).psd_sampled(f, dt), dtype=np.float64)
+        pa = s + np.asarray(ta.psd_sampled(f, dt), dtype=np.float64)
+        pb = s + np.asarray(best[1].psd_sampled(f, dt), dtype=np.float64)
+        out["psd_db"] = float(np.max(np.abs(10.0 * np.log10(pa / pb))))
+    return out
+
+
+def design_pair_single(term: Any, tm: Any, half: int, level: float) -> Any:
+    """``term`` sized so that its tau-view noncentrality next to the base is ``level *
+    CLEAR_LAMBDA``."""
+    dt = float(tm.dt)
+    unit = effect_avar(term, tm.tau, dt, half)
+    lo, hi = -12.0, 12.0
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        big = tau_noncentrality(10.0**mid * unit, tm.sim_avar, tm.cov_inv) >= level * CLEAR_LAMBDA
+        lo, hi = (lo, mid) if big else (mid, hi)
+    return _with_gain(term, 10.0 ** (0.5 * (lo + hi)))
 
 
 #: the real-base injections: name -> (Term type, shape parameters); the Gauss-Markov
@@ -489,32 +702,6 @@ def overlaps(a: list[list[float]], b: list[list[float]]) -> bool:
     return any(x0 <= y1 and y0 <= x1 for x0, x1 in a for y0, y1 in b)
 
 
-def on_top_lambda(tm: Any, effect_avar: np.ndarray, background_avar: np.ndarray) -> float:
-    """Tau-view noncentrality of an effect on top of everything else in the record.
-
-    ``r^T C^-1 r`` with ``r = log(1 + A_effect / A_background)``, ``A_effect`` the Allan variance
-    of the effect's own samples in the fitted half, ``A_background`` that of the rest of the
-    record (the simulation, plus the other effect of a pair; the real run of a real-base case)
-    and ``C`` the null covariance. The one rule of every suite: clear at ``CLEAR_LAMBDA``.
-    """
-    r = np.log(np.maximum(1.0 + effect_avar / background_avar, 1e-12))
-    return float(r @ tm.cov_inv @ r)
-
-
-def effect_clear(name: str, term: Any, samples: np.ndarray, half: int, lam: float,
-                 fs: float) -> bool:  # fmt: skip
-    """Whether an effect is clearly in the record: ``lam >= CLEAR_LAMBDA``, or a line / spikes
-    far above the noise; never a bias step or spikes that did not fall into the fitted half."""
-    ok = lam >= CLEAR_LAMBDA
-    if name == "sine":
-        ok = ok or term.amplitude >= 0.05
-    if name == "spikes":
-        ok = ok or term.amplitude >= 4.0 * 0.05 * np.sqrt(fs)
-    if name in ("step", "spikes") and not np.any(np.diff(samples[:half]) != 0):
-        ok = False  # no step / spike in the fitted half
-    return bool(ok)
-
-
 def pair_clear(case: Case, real: np.ndarray, effects: tuple[Any, Any], seed: int) -> dict[str, Any]:
     """How clear each effect of a pair is on top of the simulation plus the other one.
 
@@ -534,16 +721,16 @@ def pair_clear(case: Case, real: np.ndarray, effects: tuple[Any, Any], seed: int
     out: dict[str, Any] = {}
     clear = []
     for i in (0, 1):
-        lam = on_top_lambda(tm, avars[i], tm.sim_avar + avars[1 - i])
+        lam = tau_noncentrality(avars[i], tm.sim_avar + avars[1 - i], tm.cov_inv)
         out[f"lambda_{names[i]}"] = lam
-        clear.append(effect_clear(names[i], terms[i], effects[i], half, lam, case.fs))
+        clear.append(effect_clear(names[i], terms[i], lam, case.fs, effects[i][:half]))
     out["clear"] = bool(all(clear))
     return out
 
 
 def real_clear(case: Case, real: np.ndarray, effect: np.ndarray, seed: int) -> dict[str, Any]:
     """How clear a real-base injection is on top of the real run (the pairs' rule,
-    :func:`on_top_lambda` and :func:`effect_clear`, with the run as the background)."""
+    :func:`tau_noncentrality` and :func:`effect_clear`, with the run as the background)."""
     half = case.n // 2
     source = SimSource(fs=case.fs, model=case.base)
     tm = tau_model_for(real[:half], source, n_mc=40, seed=seed + 3)
@@ -552,8 +739,8 @@ def real_clear(case: Case, real: np.ndarray, effect: np.ndarray, seed: int) -> d
     a_eff = allanite.avar(effect[:half], fs=case.fs, taus=taus).var
     a_run = allanite.avar(run, fs=case.fs, taus=taus).var
     name = REAL_EFFECT.get(str(case.effect2), str(case.effect2))
-    lam = on_top_lambda(tm, a_eff, a_run)
-    return {"lambda": lam, "clear": effect_clear(name, case.extra, effect, half, lam, case.fs)}
+    lam = tau_noncentrality(a_eff, a_run, tm.cov_inv)
+    return {"lambda": lam, "clear": effect_clear(name, case.extra, lam, case.fs, effect[:half])}
 
 
 def evaluate(case: Case, seed: int, n_mc: int) -> dict[str, Any]:
@@ -580,9 +767,17 @@ def evaluate(case: Case, seed: int, n_mc: int) -> dict[str, Any]:
         named = {x.effect for x in d.explanation.effects} if d.explanation else set()
         row["both_named"] = bool(named & EQUIVALENT.get(a, {a}) and named & EQUIVALENT.get(b, {b}))
         row["explanation"] = sorted(named)
+        # a missing effect reported as a tie: among a named effect's alternatives
+        tied = {t for x in (d.explanation.effects if d.explanation else []) for t in x.alternatives}
+        row["alternatives"] = sorted(tied - named)
+        row["both_named_or_tied"] = bool(
+            (named | tied) & EQUIVALENT.get(a, {a}) and (named | tied) & EQUIVALENT.get(b, {b})
+        )
         assert effect is not None
         assert effect2 is not None
         row.update(pair_clear(case, real, (effect, effect2), seed))
+        row["design_lambda"] = case.truth.get("lambda_design")
+        row["sizes"] = {a: case.extra.values(), b: case.extra2.values()}
         return row
     if str(case.effect).startswith("real"):
         named = {x.effect for x in d.explanation.effects} if d.explanation else set()
@@ -849,16 +1044,30 @@ def summarize(rows: list[dict[str, Any]]) -> dict[str, Any]:
             r["case"]: {"closed": r["closed"], "views": r["unexplained_views"]} for r in oov
         },
         "pair_both_named_rate": float(np.mean([r["both_named"] for r in pairs])) if pairs else None,
+        "pair_both_named_or_tied_rate": float(
+            np.mean([r.get("both_named_or_tied", r["both_named"]) for r in pairs])
+        )
+        if pairs
+        else None,
         "pair_cases": len(pairs),
         "pair_per_case": {
             r["case"]: {
                 "both_named": r["both_named"],
                 "explanation": r["explanation"],
+                "alternatives": r.get("alternatives", []),
                 "closed": r["closed"],
                 "clear": r.get("clear"),
                 "lambda": {k[7:]: round(v, 1) for k, v in r.items() if k.startswith("lambda_")},
+                "design_lambda": r.get("design_lambda"),
             }
             for r in pairs
+        },
+        "pair_per_type": {
+            t: [
+                int(sum(r["both_named"] for r in pairs if r["effect"] == t)),
+                int(sum(r["effect"] == t for r in pairs)),
+            ]
+            for t in dict.fromkeys(r["effect"] for r in pairs)
         },
         "closed_rate_correct_clear": float(np.mean([r["closed"] for r in good])) if good else None,
     }
@@ -925,10 +1134,20 @@ def table(summary: dict[str, Any]) -> str:
         f"| two-effect cases, all (clear or not) | {fmt(summary.get('pair_both_named_rate'))} "
         f"({summary.get('pair_cases', 0)} cases, {summary.get('pair_clear_cases', 0)} clear) | | |"
     )
+    if summary.get("pair_both_named_or_tied_rate") is not None:
+        lines.append(
+            "| two-effect cases, both named or the missing one reported as a tie (among a named "
+            f"effect's alternatives) | {fmt(summary['pair_both_named_or_tied_rate'])} | | |"
+        )
+    for name, (k, m) in summary.get("pair_per_type", {}).items():
+        lines.append(f"| {name}: both named | {k} of {m} | | |")
     for name, v in summary.get("pair_per_case", {}).items():
+        design = f", designed {v['design_lambda']}" if v.get("design_lambda") else ""
         lines.append(
             f"| {name} | both named={v['both_named']}, set {v['explanation']}, "
-            f"closed={v['closed']}, clear={v.get('clear')} (lambda {v.get('lambda')}) | | |"
+            + (f"tied {v['alternatives']}, " if v.get("alternatives") else "")
+            + f"closed={v['closed']}, clear={v.get('clear')} (lambda {v.get('lambda')}{design}) "
+            "| | |"
         )
     for name, v in summary.get("bursts_cases", {}).items():
         lines.append(
@@ -1220,7 +1439,24 @@ def main() -> None:
     parser.add_argument(
         "--pairs",
         action="store_true",
-        help="two-effect and out-of-vocabulary cases only (fs from --configs, default 100)",
+        help="two-effect cases on the designed grid (each effect clearly in the record next to "
+        "the other, three sizes per pair type) and out-of-vocabulary cases (fs from --configs, "
+        "default 100)",
+    )
+    parser.add_argument(
+        "--legacy-pairs",
+        action="store_true",
+        help="like --pairs on the first grid: both effects at --strengths (default medium,strong)",
+    )
+    parser.add_argument(
+        "--pair-types",
+        help="with --pairs: comma-separated pair types only, e.g. white+markov,spikes+rrw (the "
+        "excluded types too: " + ",".join("+".join(p) for p in EXCLUDED_PAIRS) + ")",
+    )
+    parser.add_argument(
+        "--no-oov",
+        action="store_true",
+        help="with --pairs: the two-effect cases only",
     )
     parser.add_argument(
         "--real",
@@ -1285,15 +1521,23 @@ def main() -> None:
         args.strengths.split(",") if args.strengths else None,
         args.nulls,
     )
-    if args.pairs:
+    if args.pairs or args.legacy_pairs:
         names = args.configs.split(",") if args.configs else ["100"]
         labels = args.strengths.split(",") if args.strengths else ["medium", "strong"]
-        cases = [
-            c
-            for name in names
-            for label in labels
-            for c in pair_cases(*CONFIGS[name], rho=STRENGTHS[label], label=label)
-        ]
+        if args.legacy_pairs:
+            cases = [
+                c
+                for name in names
+                for label in labels
+                for c in legacy_pair_cases(*CONFIGS[name], rho=STRENGTHS[label], label=label)
+            ]
+        else:
+            chosen = args.pair_types.split(",") if args.pair_types else None
+            pairs = [p for p in PAIRS + EXCLUDED_PAIRS if chosen is None or "+".join(p) in chosen]
+            pairs = pairs if chosen else PAIRS
+            cases = [c for name in names for c in designed_pair_cases(*CONFIGS[name], pairs=pairs)]
+        if args.pair_types and args.legacy_pairs:
+            cases = [c for c in cases if str(c.effect)[5:] in args.pair_types.split(",")]
         cases += [c for c in make_cases(True, names, ["none"], 0) if c.transform is not None]
         cases += [
             Case(f"oov-{name}-fs{CONFIGS[c][0]:g}", f"oov:{name}", "oov", *CONFIGS[c],
@@ -1301,6 +1545,8 @@ def main() -> None:
             for c in names
             for name in EXTRA_OOV
         ]  # fmt: skip
+        if args.no_oov:
+            cases = [c for c in cases if str(c.effect).startswith("pair:")]
         if args.real_only:
             cases = []
         if args.real:
@@ -1312,19 +1558,23 @@ def main() -> None:
     rows = []
     t0 = time.perf_counter()
     for i, case in enumerate(cases):
-        row = evaluate(case, args.seed + 17 * i, n_mc)
+        # a designed pair keeps its seed when --pair-types picks a subset
+        row = evaluate(case, args.seed + 17 * case.truth.get("index", i), n_mc)
         rows.append(row)
         nan = float("nan")
         print(
             f"[{i + 1}/{len(cases)}] {case.name:<34} sig={row['significant']!s:<5} "
             f"p={row['p_value']:.2g} top1={row['top1']} lambda={row.get('lambda', nan):.3g} "
-            f"shrink={row.get('shrinkage', nan):.2f} hold={row.get('holdout_shrinkage', nan):.2f}",
+            f"shrink={row.get('shrinkage', nan):.2f} hold={row.get('holdout_shrinkage', nan):.2f}"
+            + (
+                f" both={row['both_named']} set={row['explanation']}" if "both_named" in row else ""
+            ),
             flush=True,
         )
         if "effects" in row:  # real-base cases: the set, to follow a long run
             print(f"    clear={row.get('clear')} set {_fmt_effects(row['effects'])}", flush=True)
     RESULTS.mkdir(parents=True, exist_ok=True)
-    kind = "_pairs" if args.pairs else ("_quick" if args.quick else "")
+    kind = "_pairs" if args.pairs or args.legacy_pairs else ("_quick" if args.quick else "")
     stem = RESULTS / ("validate_diagnosis" + kind + args.tag)
     # the rows first: a long run is not lost to a failure of the summary
     stem.with_suffix(".json").write_text(json.dumps({"cases": rows}, indent=1, default=float))

@@ -114,3 +114,112 @@ def test_noise_step_is_named_at_its_time():
     assert p["t_start"] <= t_step <= p["t_end"]
     assert p["t_end"] - p["t_start"] <= 2 * window + 1e-9
     assert p["ratio"] > 1.5
+
+
+# --- long records (the long-record null, issue 14): the level profile in the null
+
+
+def _step_model(n: int, ratio: float, *extra) -> NoiseModel:  # type: ignore[no-untyped-def]
+    duration = n / FS
+    t_step = 0.4 * duration
+    drift = WhiteDrift(N=0.05, ratio=ratio, t_start=t_step, t_end=t_step, duration=duration)
+    return NoiseModel((drift, *extra), UNITS)
+
+
+def test_tau_null_of_a_stepping_level_matches_monte_carlo():
+    """The AVAR covariance of a level that steps (x3 at 0.4 T): white noise of the record-mean
+    level whose own block is scaled by mean(v^2) (v the profile). Per-tau spread of the log
+    AVAR against 400 simulated records; the plain white-noise covariance is ~20 % too narrow,
+    the covariance without the term (non-stationary, left out) is empty (NaN draws)."""
+    from allanite.diagnosis.tau_view import gaussian_tau_null, octave_factors, tau_features
+
+    n, reps = 2**16, 400
+    truth = _step_model(n, 3.0)
+    m = octave_factors(n)
+    x = np.asarray(truth.simulate(n, fs=FS, n_channels=reps, seed=5)).reshape(n, -1)
+    mc = np.array([tau_features(np.ascontiguousarray(x[:, j]), FS, m) for j in range(reps)])
+    ref, _, draws = gaussian_tau_null(truth, m, FS, n, n_draw=4000, seed=1)
+    sd_mc, sd_null = mc.std(axis=0, ddof=1), draws.std(axis=0, ddof=1)
+    # relative sd of a standard deviation from R values ~ 1 / sqrt(2 (R - 1)); 4 sd of both
+    tol = 4.0 * np.sqrt(1.0 / (2 * (reps - 1)) + 1.0 / (2 * (draws.shape[0] - 1)))
+    short = slice(0, 8)  # taus up to 128 samples: many degrees of freedom, Gaussian spreads
+    np.testing.assert_array_less(np.abs(sd_mc[short] / sd_null[short] - 1.0), tol)
+    # the mean log AVAR is the white noise of the record-mean level (4 standard errors)
+    np.testing.assert_array_less(np.abs(mc.mean(axis=0) - ref), 4.0 * sd_mc / np.sqrt(reps))
+    plain = NoiseModel((White(N=0.05),), UNITS)
+    _, _, draws_w = gaussian_tau_null(plain, m, FS, n, n_draw=4000, seed=1)
+    assert np.all(sd_mc[short] / draws_w.std(axis=0, ddof=1)[short] - 1.0 > tol)
+
+
+def test_tau_null_of_a_long_record_with_only_a_stepping_level_is_finite():
+    """The re-analysis of a 2^21-sample record whose white noise steps x3 (the combined model
+    is the white_drift alone) used to draw NaN: its covariance had no term at all."""
+    from allanite.diagnosis.tau_view import gaussian_tau_null, octave_factors
+
+    n = 2**21
+    ref, avar, draws = gaussian_tau_null(
+        _step_model(n, 3.0), octave_factors(n), FS, n, n_draw=2000, seed=1
+    )
+    assert np.all(np.isfinite(ref))
+    assert np.all(np.isfinite(draws))
+    assert np.all(draws.std(axis=0) > 0)
+    np.testing.assert_allclose(avar, 0.05**2 * FS / octave_factors(n))
+
+
+def test_short_replicates_hold_the_whole_record_profile():
+    """A short replicate of a long record stands for the whole record: its level profile is
+    the record's compressed onto its time axis; stationary terms are left as they are."""
+    from allanite.diagnosis.scaled_null import SHORT_LENGTH, short_model
+
+    n = 2**21
+    truth = _step_model(n, 3.0, RateRandomWalk(K=1e-4))
+    short = short_model(truth, n)
+    factor = SHORT_LENGTH / n
+    t = np.linspace(0.0, n / FS, 1001)
+    np.testing.assert_allclose(
+        short.terms[0].variance_scale(t * factor), truth.terms[0].variance_scale(t)
+    )
+    assert short.terms[0].N == truth.terms[0].N
+    assert short.terms[1] is truth.terms[1]
+    plain = NoiseModel((White(N=0.05), RateRandomWalk(K=1e-4)), UNITS)
+    assert short_model(plain, n) is plain
+
+
+@pytest.mark.slow
+def test_long_record_whose_only_gap_is_a_level_step_is_closed():
+    """2^19 samples (the long-record null), white noise stepping x2 at 0.4 T: the step is
+    named and the re-analysis with it closes every view (the short replicates used to hold
+    only the start of the profile: band, kurt_hf and hf stayed open)."""
+    n = 2**19
+    x = np.asarray(_step_model(n, 2.0, RateRandomWalk(K=1e-4)).simulate(n, fs=FS, seed=11))
+    d = diagnose(x.ravel(), MODEL, fs=FS, units="deg/s", n_mc=100, seed=1)
+    assert d.best is not None
+    assert d.best.effect == "white_drift"
+    # ratio from 32 windows of L = 16384 samples (as in the short-record test above): 4 sd
+    tol = 4 * 0.5 * np.sqrt(3.0 / 16384) * np.sqrt(4.0 / 32) * 2.0
+    assert abs(d.best.params["ratio"] - 2.0) < tol
+    assert d.best.params["t_start"] <= 0.4 * n / FS <= d.best.params["t_end"]
+    assert d.closed, d.headline
+
+
+@pytest.mark.slow
+def test_null_of_a_long_stepping_level_keeps_its_false_alarm_rate(monkeypatch):
+    """Records simulated from a model with a level step (2^19 samples) judged against its own
+    long-record null: false alarms at alpha = 0.05 stay within the binomial law (20 records:
+    P(5 or more) = 0.003). Short replicates holding only the start of the profile rejected
+    every record."""
+    from allanite.diagnosis import analysis
+    from allanite.diagnosis.inputs import make_source
+
+    n, records = 2**19, 20
+    truth = _step_model(n, 2.0, RateRandomWalk(K=1e-4))
+    source = make_source(truth, FS, n, sim_units="deg/s")
+    ens = analysis.ensemble(source, analysis.Plan.for_length(n, FS), 100, seed=7)
+    monkeypatch.setattr(analysis, "ensemble", lambda *args, **kwargs: ens)
+    x = np.asarray(truth.simulate(n, fs=FS, n_channels=records, seed=123)).reshape(n, -1)
+    p = [
+        analysis.analyze(np.ascontiguousarray(x[:, j]), source, n_mc=100, seed=7, alpha=0.05)
+        for j in range(records)
+    ]
+    rejected = sum(a.p_value < 0.05 for a in p)
+    assert rejected <= 4, [(a.tau.p_value, a.frequency.p_value, a.time.p_value) for a in p]

@@ -171,10 +171,67 @@ def test_scaled_null_is_the_same_for_any_number_of_worker_threads(monkeypatch) -
     n = 2 * FULL_REPLICATES_MAX
     real = model().without("white").plus(TERM_TYPES["white"](N=0.06))
     x = np.asarray(real.simulate(n, fs=1000.0, seed=1), dtype=np.float64).ravel()
+    shared = []
+    adding = sn.ReplicateStore.adding
+
+    def spy(self, added):  # type: ignore[no-untyped-def]
+        shared.append([t.type for t in added.terms])
+        return adding(self, added)
+
+    monkeypatch.setattr(sn.ReplicateStore, "adding", spy)
     out = []
-    for workers in (1, 3):
+    steps: list[tuple[str, int, int]] = []
+    # threads, and the memory kept for the re-analysis (none: every block simulated again)
+    for workers, budget in ((1, sn.SHARED_BYTES), (3, sn.SHARED_BYTES), (2, 0)):
         monkeypatch.setattr(sn, "WORKERS", workers)
-        d = diagnose(x, model(), fs=1000.0, units="deg/s", n_mc=20, seed=3)
+        monkeypatch.setattr(sn, "SHARED_BYTES", budget)
+        d = diagnose(
+            x, model(), fs=1000.0, units="deg/s", n_mc=20, seed=3,
+            progress=(lambda *step: steps.append(step)) if not out else None,
+        )  # fmt: skip
         out.append(json.dumps(d.to_dict(), sort_keys=True, default=str))
     assert d.significant, "the record has a gap, so the re-analysis ran too"
-    assert out[0] == out[1]
+    # every long phase reports, the replicate phases about ten times each
+    stages = [s for s, _, _ in steps]
+    for stage in ("null replicates", "features of the record", "fitting candidate effects",
+                  "re-analysis with the effects"):  # fmt: skip
+        assert stage in stages, stage
+    assert stages.count("null replicates") >= 10
+    assert stages.count("re-analysis with the effects") >= 10
+    assert ("re-analysis with the effects", 40, 40) in steps
+    assert shared == [["white"]] * 3, "the re-analysis added the effect to the null's replicates"
+    assert out[0] == out[1] == out[2]
+
+
+def test_shared_replicates_with_added_effects_are_replicates_of_the_augmented_model() -> None:
+    """The re-analysis adds the effects' own streams to the null's replicate blocks: each block
+    is the kept block plus one of the effects (seeded ``ADDED_SEED`` on), and in law a
+    replicate of the model with the effects (N 0.05 -> hypot(0.05, 0.04)): the mean square of
+    its first differences agrees with fresh replicates of that model within their error."""
+    from allanite.diagnosis.inputs import simulate_model
+    from allanite.diagnosis.scaled_null import ADDED_SEED, ReplicateStore
+
+    n, fs, k, seed = 2**15, 1000.0, 16, 5
+    base = model()
+    added = NoiseModel((TERM_TYPES["white"](N=0.04),), UNITS)
+    combined = base.without("white").plus(TERM_TYPES["white"](N=float(np.hypot(0.05, 0.04))))
+    store = ReplicateStore(base)
+    kept = store.simulator(lambda m: m)(n, fs, seed, k)
+    assert store.kept_bytes == kept.nbytes
+    block = store.adding(added).simulator(lambda m: m)(n, fs, seed, k)
+    np.testing.assert_array_equal(
+        block, kept + simulate_model(added, n, fs, seed + ADDED_SEED, n_channels=k)
+    )
+    assert store.kept_bytes == kept.nbytes, "the re-analysis keeps nothing of its own"
+    fresh = simulate_model(combined, n, fs, 99, n_channels=k)
+    d2 = [np.mean(np.diff(b, axis=0) ** 2, axis=0) for b in (block, fresh, kept)]
+    # k channels of n - 1 differences: the mean square has relative sd ~ sqrt(3 / (k n))
+    se = np.sqrt(3.0 / (k * n)) * d2[1].mean()
+    assert abs(d2[0].mean() - d2[1].mean()) < 4 * np.sqrt(2.0) * se
+    assert abs(d2[2].mean() - d2[1].mean()) > 20 * se  # the base alone lacks the effect
+    # a budget of 0 keeps nothing, and the blocks are the same
+    none = ReplicateStore(base, budget=0)
+    np.testing.assert_array_equal(none.adding(added).simulator(lambda m: m)(n, fs, seed, k), block)
+    assert none.kept_bytes == 0
+    with pytest.raises(ValueError, match="budget"):
+        ReplicateStore(base, budget=-1)

@@ -173,13 +173,31 @@ def test_dropped_angle_samples_at_rest_are_not_closed():
 
 
 def test_white_drift_size_is_its_measured_ratio(white_gap):
-    """white_drift keeps the mean level (tau size ~0): its size is the time view's ratio."""
+    """white_drift keeps the mean level (tau size ~0): its size is the time view's ratio,
+    carried by the candidate (``view_size``) and judged by the one rule, not by its name."""
+    from allanite.diagnosis.noise_level import DriftShape
     from allanite.terms import TERM_TYPES
 
     tm = white_gap.tau_model
     zero = np.zeros_like(tm.sim_avar)
+    model = NoiseModel((White(N=0.01),), {"rate": "deg/s", "time": "s"})
     for ratio, small in ((0.978, True), (1.02, True), (1.5, False), (0.6, False)):
-        cand = Candidate("white_drift", TERM_TYPES["white_drift"], free=("N",),
-                         fixed={"ratio": ratio, "t_start": 10.0, "t_end": 100.0,
-                                "duration": 163.84}, start={"N": 0.01})  # fmt: skip
+        drift = DriftShape(ratio=ratio, t_start=10.0, t_end=100.0, chi2=30.0, n_windows=32)
+        cands, _ = candidate_library({"hf": True}, duration=163.84, model=model,
+                                     effects=["white_drift"], drift=drift)  # fmt: skip
+        (cand,) = cands
+        assert cand.view_size == pytest.approx(abs(ratio - 1.0))
         assert attr.negligible(cand, {"N": 0.01}, zero, tm) is small
+        # the same measured size on any other candidate gets the same verdict (one rule)
+        other = Candidate(
+            "bursts",
+            TERM_TYPES["white_bursts"],
+            free=("N",),
+            fixed={"duty": 0.2, "burst_s": 5.0},
+            view_size=abs(ratio - 1.0),
+        )
+        assert attr.negligible(other, {"N": 0.01}, zero, tm) is small
+    # without a measured size a zero tau size is negligible
+    bare = Candidate("bursts", TERM_TYPES["white_bursts"], free=("N",),
+                     fixed={"duty": 0.2, "burst_s": 5.0})  # fmt: skip
+    assert attr.negligible(bare, {"N": 0.01}, zero, tm)

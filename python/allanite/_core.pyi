@@ -30,8 +30,9 @@ def variance(
 
     ``kind``: overlapping, standard, modified, hadamard, standard_hadamard, total.
     ``threads`` = 0 uses every core; results are bit-identical for any thread count. Every
-    kind costs O(rows) per factor: modified from the prefix sums of the phase, total as the
-    overlapping sum plus its reflected end terms (no extended series is built).
+    kind costs O(rows) per factor: modified as a running window moved on by third differences
+    of the phase, restarted from its exact prefix sums, total as the overlapping sum plus its
+    reflected end terms (no extended series is built).
     """
 
 def lag1_acf(

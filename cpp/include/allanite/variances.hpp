@@ -3,11 +3,12 @@
 // Every kernel works in "sample units": tau0 = 1, phase in rate * samples. The caller scales by
 // 1 / tau0^2 where the phase carries angle units. Each averaging factor m costs O(M) work and
 // one streaming pass over the phase rows (factors up to kTileMaxM share passes, tile by tile);
-// all channels are handled in the same pass. Every term is O(1): the modified AVAR reads the
-// prefix sums of the phase (its window of m second differences is a third difference of them,
-// detail::PrefixPlan), and the total variance is the overlapping AVAR's sum plus the
-// 2 (m - 1) end terms that read the reflected extension (detail::add_total_ends), so no
-// extended series is built.
+// all channels are handled in the same pass. Every term is O(1): the modified AVAR's window of
+// m second differences moves on by the third difference of the phase, w(j+1) = w(j) + d3(j),
+// in lanes started from the exact prefix sums of the phase (detail::add_modified_lanes,
+// detail::add_modified_single, detail::PrefixPlan), and the total variance is the overlapping
+// AVAR's sum plus the 2 (m - 1) end terms that read the reflected extension
+// (detail::add_total_ends), so no extended series is built.
 //
 // Definitions (x = phase, M rows, d2(k) = x[k+2m] - 2 x[k+m] + x[k]):
 //   overlapping AVAR   sum_{k=0}^{M-2m-1} d2(k)^2 / (2 m^2 (M-2m))
@@ -26,6 +27,7 @@
 #include <cmath>
 #include <optional>
 #include <cstdint>
+#include <cstring>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -141,9 +143,9 @@ struct Taps {
   std::int64_t step;  // elements between consecutive terms (row stride x term stride)
 };
 
-/// Taps of the modified estimator: the third difference at lag m of the prefix sums
-/// S = H + L of the phase (see PrefixPlan), term j of channel c at h[i][j * step + c] and
-/// l[i][j * step + c].
+/// Taps of the modified estimator's exact window: the third difference at lag m of the prefix
+/// sums S = H + L of the phase (see PrefixPlan), term j of channel c at h[i][j * step + c] and
+/// l[i][j * step + c] (read where a lane starts, see add_modified_lanes).
 struct SplitTaps {
   const double* h[4];
   const double* l[4];
@@ -151,13 +153,9 @@ struct SplitTaps {
 };
 
 /// Partial sums per block of an estimator's squares: eight (two AVX2 vectors, so that the adds
-/// of two chains overlap instead of each waiting on the last) for the plain differences; four
-/// for the modified estimator's split taps, whose eight loads per term leave no registers
-/// for more.
+/// of two chains overlap instead of each waiting on the last).
 template <class TapsT>
 constexpr int kPartials = 8;
-template <>
-constexpr int kPartials<SplitTaps> = 4;
 
 template <int Order>
 ALLANITE_ALWAYS_INLINE double tap_diff(const Taps<Order>& t, std::int64_t i) noexcept {
@@ -180,14 +178,6 @@ template <int Order>
 ALLANITE_ALWAYS_INLINE Taps<Order> advanced(const Taps<Order>& t, std::int64_t k) noexcept {
   Taps<Order> out = t;
   for (int i = 0; i <= Order; ++i) out.p[i] = t.p[i] + k;
-  return out;
-}
-ALLANITE_ALWAYS_INLINE SplitTaps advanced(const SplitTaps& t, std::int64_t k) noexcept {
-  SplitTaps out = t;
-  for (int i = 0; i < 4; ++i) {
-    out.h[i] = t.h[i] + k;
-    out.l[i] = t.l[i] + k;
-  }
   return out;
 }
 
@@ -218,10 +208,6 @@ ALLANITE_TARGET_CLONES static void add_diff_squares_1ch(const Taps<2>& t, std::i
   add_diff_squares_1ch_impl(t, count, total);
 }
 ALLANITE_TARGET_CLONES static void add_diff_squares_1ch(const Taps<3>& t, std::int64_t count,
-                                                        NeumaierSum& total) {
-  add_diff_squares_1ch_impl(t, count, total);
-}
-ALLANITE_TARGET_CLONES static void add_diff_squares_1ch(const SplitTaps& t, std::int64_t count,
                                                         NeumaierSum& total) {
   add_diff_squares_1ch_impl(t, count, total);
 }
@@ -277,10 +263,6 @@ ALLANITE_TARGET_CLONES static void add_diff_squares_3ch(const Taps<3>& t, std::i
                                                         NeumaierSum* totals) {
   add_diff_squares_nc_impl<3>(t, count, totals);
 }
-ALLANITE_TARGET_CLONES static void add_diff_squares_3ch(const SplitTaps& t, std::int64_t count,
-                                                        NeumaierSum* totals) {
-  add_diff_squares_nc_impl<3>(t, count, totals);
-}
 
 /// Add the squared differences of `count` terms to totals[0..nc).
 template <class TapsT>
@@ -321,17 +303,19 @@ struct PrefixPlan {
 /// segment s covers rows [s seg, (s + 1) seg) and starts from zero. Its local state at each
 /// kSumBlock rows goes to mark s seg / kSumBlock + b (entries `stride` apart, marks with
 /// row <= M), its end state to end_sum/end_comp, its largest |local sum| to top.
+/// (S of them from x on; plan_segments_half runs two and two, on two threads, with the same
+/// arithmetic per segment.)
 constexpr int kPlanSegments = 4;
-ALLANITE_TARGET_CLONES ALLANITE_SLP_ONLY static void plan_segments(const double* x, std::int64_t rs, std::int64_t M,
-                                                                   std::int64_t seg, double* sum_at, double* comp_at,
-                                                                   std::int64_t stride, double* end_sum,
-                                                                   double* end_comp, double* top_out) noexcept {
-  double sum[kPlanSegments] = {}, comp[kPlanSegments] = {}, top[kPlanSegments] = {};
+template <int S>
+ALLANITE_ALWAYS_INLINE void plan_segments_impl(const double* x, std::int64_t rs, std::int64_t M, std::int64_t seg,
+                                               double* sum_at, double* comp_at, std::int64_t stride,
+                                               double* end_sum, double* end_comp, double* top_out) noexcept {
+  double sum[S] = {}, comp[S] = {}, top[S] = {};
   const std::int64_t seg_blocks = seg / kSumBlock;
   // rows that every segment has (the last ones may be shorter): the four chains at once
-  const std::int64_t common = std::clamp<std::int64_t>(M - (kPlanSegments - 1) * seg, 0, seg);
+  const std::int64_t common = std::clamp<std::int64_t>(M - (S - 1) * seg, 0, seg);
   for (std::int64_t r0 = 0; r0 < seg; r0 += kSumBlock) {
-    for (int s = 0; s < kPlanSegments; ++s)
+    for (int s = 0; s < S; ++s)
       if (s * seg + r0 <= M) {
         sum_at[(s * seg_blocks + r0 / kSumBlock) * stride] = sum[s];
         comp_at[(s * seg_blocks + r0 / kSumBlock) * stride] = comp[s];
@@ -339,9 +323,9 @@ ALLANITE_TARGET_CLONES ALLANITE_SLP_ONLY static void plan_segments(const double*
     const std::int64_t r1 = std::min(seg, r0 + kSumBlock);
     const std::int64_t both = std::min(r1, std::max(r0, common));
     for (std::int64_t r = r0; r < both; ++r) {
-      double v[kPlanSegments];
-      for (int s = 0; s < kPlanSegments; ++s) v[s] = x[(s * seg + r) * rs];
-      for (int s = 0; s < kPlanSegments; ++s) {
+      double v[S];
+      for (int s = 0; s < S; ++s) v[s] = x[(s * seg + r) * rs];
+      for (int s = 0; s < S; ++s) {
         const double t = sum[s] + v[s];
         const double bb = t - sum[s];
         comp[s] += (sum[s] - (t - bb)) + (v[s] - bb);  // TwoSum error
@@ -349,7 +333,7 @@ ALLANITE_TARGET_CLONES ALLANITE_SLP_ONLY static void plan_segments(const double*
         top[s] = std::max(top[s], std::fabs(t));
       }
     }
-    for (int s = 0; s < kPlanSegments; ++s)
+    for (int s = 0; s < S; ++s)
       for (std::int64_t r = both; r < r1 && s * seg + r < M; ++r) {
         double t, e;
         two_sum(sum[s], x[(s * seg + r) * rs], t, e);
@@ -358,14 +342,28 @@ ALLANITE_TARGET_CLONES ALLANITE_SLP_ONLY static void plan_segments(const double*
         top[s] = std::max(top[s], std::fabs(t));
       }
   }
-  for (int s = 0; s < kPlanSegments; ++s) {
+  for (int s = 0; s < S; ++s) {
     end_sum[s] = sum[s];
     end_comp[s] = comp[s];
     top_out[s] = top[s];
   }
 }
 
-inline PrefixPlan prefix_plan(const PhaseRef& phase) {
+ALLANITE_TARGET_CLONES ALLANITE_SLP_ONLY static void plan_segments(const double* x, std::int64_t rs, std::int64_t M,
+                                                                   std::int64_t seg, double* sum_at, double* comp_at,
+                                                                   std::int64_t stride, double* end_sum,
+                                                                   double* end_comp, double* top_out) noexcept {
+  plan_segments_impl<kPlanSegments>(x, rs, M, seg, sum_at, comp_at, stride, end_sum, end_comp, top_out);
+}
+ALLANITE_TARGET_CLONES ALLANITE_SLP_ONLY static void plan_segments_half(const double* x, std::int64_t rs,
+                                                                        std::int64_t M, std::int64_t seg,
+                                                                        double* sum_at, double* comp_at,
+                                                                        std::int64_t stride, double* end_sum,
+                                                                        double* end_comp, double* top_out) noexcept {
+  plan_segments_impl<kPlanSegments / 2>(x, rs, M, seg, sum_at, comp_at, stride, end_sum, end_comp, top_out);
+}
+
+inline PrefixPlan prefix_plan(const PhaseRef& phase, int threads = 1) {
   const std::int64_t M = phase.rows();
   const Eigen::Index nc = phase.cols();
   const auto unc = static_cast<std::size_t>(nc);
@@ -381,8 +379,18 @@ inline PrefixPlan prefix_plan(const PhaseRef& phase) {
   for (Eigen::Index c = 0; c < nc; ++c) {
     const auto uc = static_cast<std::size_t>(c);
     double end_sum[kPlanSegments], end_comp[kPlanSegments], top[kPlanSegments];
-    plan_segments(phase.data() + c, phase.outerStride(), M, seg, p.sum.data() + uc, p.comp.data() + uc, nc,
-                  end_sum, end_comp, top);
+    const std::int64_t rs = phase.outerStride();
+    if (threads > 1 && M >= (std::int64_t{1} << 16)) {  // segments 0, 1 and 2, 3 on two threads (same bits)
+      parallel_for(2, 2, [&](std::size_t half) {
+        const std::int64_t s0 = static_cast<std::int64_t>(half) * (kPlanSegments / 2);
+        plan_segments_half(phase.data() + c + s0 * seg * rs, rs, M - s0 * seg, seg,
+                           p.sum.data() + uc + s0 * seg_blocks * nc, p.comp.data() + uc + s0 * seg_blocks * nc,
+                           nc, end_sum + s0, end_comp + s0, top + s0);
+      });
+    } else {
+      plan_segments(phase.data() + c, rs, M, seg, p.sum.data() + uc, p.comp.data() + uc, nc, end_sum, end_comp,
+                    top);
+    }
     // the state at a mark of segment s: its local state after the total of segments < s
     double off_sum = 0.0, off_comp = 0.0, bound = 0.0;
     const auto join = [&](double& sum, double& comp) {
@@ -412,12 +420,12 @@ inline PrefixPlan prefix_plan(const PhaseRef& phase) {
 /// Regenerates S[row], S[row+1], ... of every channel from the plan (see fill_prefix).
 struct PrefixCursor {
   PrefixCursor(const PhaseRef& phase, const PrefixPlan& plan, std::int64_t start)
-      : x(phase.data()), rs(phase.outerStride()), nc(phase.cols()), big(plan.big.data()),
+      : x(phase.data()), rs(phase.outerStride()), end(phase.rows()), nc(phase.cols()), big(plan.big.data()),
         sum(plan.sum.begin() + (start / kSumBlock) * nc, plan.sum.begin() + (start / kSumBlock + 1) * nc),
         comp(plan.comp.begin() + (start / kSumBlock) * nc, plan.comp.begin() + (start / kSumBlock + 1) * nc),
         row(start / kSumBlock * kSumBlock) {}
   const double* x;
-  std::int64_t rs;
+  std::int64_t rs, end;  // row stride and rows of the phase
   Eigen::Index nc;
   const double* big;
   std::vector<double> sum, comp;  // TwoSum state of S[row], per channel
@@ -425,7 +433,8 @@ struct PrefixCursor {
 };
 
 /// Advance K cursors together by `rows` rows (interleaved: K independent chains), writing
-/// the split S of the rows passed to hi[i], lo[i] (rows x nc, row-major) unless null.
+/// the split S of the rows passed to hi[i], lo[i] (rows x nc, row-major) unless null. S[M]
+/// (the row after the phase's last) can be written, no row beyond it.
 template <int K>
 inline void fill_prefix(PrefixCursor* const* cur, std::int64_t rows, double* const* hi, double* const* lo) {
   const Eigen::Index nc = cur[0]->nc;
@@ -440,6 +449,8 @@ inline void fill_prefix(PrefixCursor* const* cur, std::int64_t rows, double* con
       x[i] = cur[i]->x + cur[i]->row * cur[i]->rs + c;
     }
     const std::int64_t rs = cur[0]->rs;
+    bool at_end[K];  // the last row passed is S[M]: nothing to add after it
+    for (int i = 0; i < K; ++i) at_end[i] = cur[i]->row + rows > cur[i]->end;
     for (std::int64_t r = 0; r < rows; ++r) {
       for (int i = 0; i < K; ++i) {
         if (hi[i] != nullptr) {
@@ -447,8 +458,9 @@ inline void fill_prefix(PrefixCursor* const* cur, std::int64_t rows, double* con
           hi[i][r * nc + c] = h;
           lo[i][r * nc + c] = (sum[i] - h) + comp[i];  // sum - h is exact
         }
+        if (r + 1 == rows && at_end[i]) continue;
         double t, e;
-        two_sum(sum[i], x[i][r * rs], t, e);  // branch free: the only chain is sum += x
+        two_sum(sum[i], x[i][r * rs], t, e);  // the only chain is sum += x
         sum[i] = t;
         comp[i] += e;
       }
@@ -470,115 +482,268 @@ inline PrefixCursor prefix_cursor(const PhaseRef& phase, const PrefixPlan& plan,
   return cur;
 }
 
-/// out[j] = d3(j), the third difference at lag m of one channel of the phase from row b on
-/// (row stride rs), for j < n. Loops of their own (this one and interleave_lanes), so that they
-/// vectorise; the lanes' chains that read them are SLP only.
-ALLANITE_TARGET_CLONES static void lane_third_differences(const double* b, std::int64_t m, std::int64_t rs,
-                                                          std::int64_t n, double* out) noexcept {
-  const Taps<3> t{{b, b + m * rs, b + 2 * m * rs, b + 3 * m * rs}, rs};
+/// Lanes side by side in the single-factor pass (add_modified_single) and in the tiled one
+/// (add_modified_lanes): four (one vector) or eight.
+constexpr int kModSingleLanes = 4;
+constexpr int kModTileLanes = 4;
+
+/// Terms per lane of the modified estimator's running window in the tiled pass (see
+/// add_modified_lanes): four lanes make a summation block.
+constexpr std::int64_t kModLane = kSumBlock / 4;
+
+/// The step of the modified estimator's window, w(j+1) - w(j) = d3(j), the third difference at
+/// lag m of the phase, written differences first: x3 - x0 and x2 - x1 round relative to the
+/// differences (exactly, by Sterbenz, where the phase is far from zero), not to |x|.
+ALLANITE_ALWAYS_INLINE double window_step(double x0, double x1, double x2, double x3) noexcept {
+  return (x3 - x0) - 3.0 * (x2 - x1);
+}
+
+/// out[j] = window_step of term j (one channel of the phase from row b on, row stride rs) for
+/// j < avail, 0 for avail <= j < n (the step after the last term would read past the phase).
+ALLANITE_TARGET_CLONES static void window_steps(const double* b, std::int64_t m, std::int64_t rs, std::int64_t avail,
+                                                std::int64_t n, double* out) noexcept {
+  const double* b1 = b + m * rs;
+  const double* b2 = b + 2 * m * rs;
+  const double* b3 = b + 3 * m * rs;
   if (rs == 1) {
-    for (std::int64_t j = 0; j < n; ++j) out[j] = tap_diff(t, j);
+    for (std::int64_t j = 0; j < avail; ++j) out[j] = window_step(b[j], b1[j], b2[j], b3[j]);
   } else {
-    for (std::int64_t j = 0; j < n; ++j) out[j] = tap_diff(t, j * rs);
+    for (std::int64_t j = 0; j < avail; ++j) out[j] = window_step(b[j * rs], b1[j * rs], b2[j * rs], b3[j * rs]);
+  }
+  for (std::int64_t j = std::max<std::int64_t>(avail, 0); j < n; ++j) out[j] = 0.0;
+}
+
+/// The running window of one lane of the modified estimator: `n` terms from the window
+/// hi + lo, moved on by the steps d[0 .. n) (readable up to n rounded up to 4), squares added
+/// to acc. The arithmetic, in groups of four steps from the lane's start (shared bit for bit by
+/// lane_groups): with w = hi + lo (kExact) or hi, p1 = d0, p2 = p1 + d1, p3 = p2 + d2,
+/// p4 = p3 + d3, the windows of the group are w, w + p1, w + p2, w + p3 (missing terms count
+/// as 0), acc += (w^2 + (w + p1)^2) + ((w + p2)^2 + (w + p3)^2), and the window moves on by
+/// p4: hi += p4 (kExact: as a TwoSum pair, so that only the steps' own rounding accumulates).
+/// One dependent add per four terms on each chain.
+template <bool kExact>
+ALLANITE_ALWAYS_INLINE void lane_run(const double* d, std::int64_t n, double& hi, double& lo, double& acc) noexcept {
+  for (std::int64_t j = 0; j < n; j += 4) {
+    const double w = kExact ? hi + lo : hi;
+    const double p1 = d[j], p2 = p1 + d[j + 1], p3 = p2 + d[j + 2], p4 = p3 + d[j + 3];
+    const double x1 = w + p1, x2 = w + p2, x3 = w + p3;
+    const double q1 = j + 1 < n ? x1 * x1 : 0.0, q2 = j + 2 < n ? x2 * x2 : 0.0, q3 = j + 3 < n ? x3 * x3 : 0.0;
+    acc += (w * w + q1) + (q2 + q3);
+    if constexpr (kExact) {
+      double s, e;
+      two_sum(hi, p4, s, e);
+      hi = s;
+      lo += e;
+    } else {
+      hi = w + p4;
+    }
   }
 }
 
-/// out[j * 4 + k] = in[k * n + j]: four lanes' rows of n terms interleaved (a transpose).
-ALLANITE_TARGET_CLONES static void interleave_lanes(const double* __restrict in, std::int64_t n,
-                                                    double* __restrict out) noexcept {
-  for (std::int64_t j = 0; j < n; ++j) {
-    out[j * 4] = in[j];
-    out[j * 4 + 1] = in[n + j];
-    out[j * 4 + 2] = in[2 * n + j];
-    out[j * 4 + 3] = in[3 * n + j];
+/// lane_run of eight lanes side by side, `steps` (a multiple of 4) steps each: lane k's steps
+/// are src[k ls + j] (kFromPhase false) or computed from the phase, src = x of lane 0's first
+/// term, unit row stride, every step readable (kFromPhase true). The same arithmetic as
+/// lane_run with the lanes in two vectors: four steps of each lane are loaded as a row and
+/// the rows transposed in registers. hi, lo, acc: eight lanes' state, updated.
+template <bool kFromPhase, bool kExact, int V = 2>
+ALLANITE_ALWAYS_INLINE void lane_groups(const double* src, std::int64_t m, std::int64_t ls, std::int64_t steps,
+                                        double* hi, double* lo, double* acc) noexcept {
+  static_assert(V == 1 || V == 2, "four or eight lanes");
+// GCC vector extensions; elsewhere (or with ALLANITE_SCALAR_LANES defined, to check that the
+// two give the same bits) lane by lane through lane_run
+#if defined(__GNUC__) && !defined(__clang__) && !defined(ALLANITE_SCALAR_LANES)
+  typedef double v4d __attribute__((vector_size(32)));
+  typedef double v4u __attribute__((vector_size(32), aligned(8), may_alias));  // unaligned access
+  typedef long long v4i __attribute__((vector_size(32)));
+  const v4i lo2 = {0, 4, 2, 6}, hi2 = {1, 5, 3, 7}, lo4 = {0, 1, 4, 5}, hi4 = {2, 3, 6, 7};
+  const v4d three = {3.0, 3.0, 3.0, 3.0};
+#define ALLANITE_LOAD(p) (*reinterpret_cast<const v4u*>(p))
+  v4d h0 = ALLANITE_LOAD(hi), l0 = ALLANITE_LOAD(lo), a0 = ALLANITE_LOAD(acc);
+  v4d h1 = h0, l1 = l0, a1 = a0;
+  if constexpr (V == 2) {
+    h1 = ALLANITE_LOAD(hi + 4);
+    l1 = ALLANITE_LOAD(lo + 4);
+    a1 = ALLANITE_LOAD(acc + 4);
+  }
+  const double* p = src;
+  for (std::int64_t s = 0; s < steps; s += 4, p += 4) {
+    // rows: four steps of one lane; columns after the transpose: one step of four lanes
+#define ALLANITE_TAP(k, t) ALLANITE_LOAD(p + (k) * ls + (t) * m)
+#define ALLANITE_ROW(k)                                                                             \
+  (kFromPhase ? (ALLANITE_TAP(k, 3) - ALLANITE_TAP(k, 0)) - three * (ALLANITE_TAP(k, 2) - ALLANITE_TAP(k, 1)) \
+              : ALLANITE_TAP(k, 0))
+    // lanes 4g .. 4g + 3 in one vector: window state h, l, squares a
+#define ALLANITE_LANES(g, h, l, a)                                                                  \
+  do {                                                                                              \
+    const v4d r0 = ALLANITE_ROW(4 * (g)), r1 = ALLANITE_ROW(4 * (g) + 1);                           \
+    const v4d r2 = ALLANITE_ROW(4 * (g) + 2), r3 = ALLANITE_ROW(4 * (g) + 3);                       \
+    const v4d t0 = __builtin_shuffle(r0, r1, lo2), t1 = __builtin_shuffle(r0, r1, hi2);             \
+    const v4d t2 = __builtin_shuffle(r2, r3, lo2), t3 = __builtin_shuffle(r2, r3, hi2);             \
+    const v4d p1 = __builtin_shuffle(t0, t2, lo4);                                                  \
+    const v4d p2 = p1 + __builtin_shuffle(t1, t3, lo4);                                             \
+    const v4d p3 = p2 + __builtin_shuffle(t0, t2, hi4);                                             \
+    const v4d p4 = p3 + __builtin_shuffle(t1, t3, hi4);                                             \
+    const v4d w = kExact ? h + l : h;                                                               \
+    const v4d x1 = w + p1, x2 = w + p2, x3 = w + p3;                                                \
+    a += (w * w + x1 * x1) + (x2 * x2 + x3 * x3);                                                   \
+    if constexpr (kExact) { /* TwoSum, lane by lane */                                              \
+      const v4d sum = h + p4, bb = sum - h;                                                         \
+      l += (h - (sum - bb)) + (p4 - bb);                                                            \
+      h = sum;                                                                                      \
+    } else {                                                                                        \
+      h = w + p4;                                                                                   \
+    }                                                                                               \
+  } while (false)
+    ALLANITE_LANES(0, h0, l0, a0);
+    if constexpr (V == 2) ALLANITE_LANES(1, h1, l1, a1);
+#undef ALLANITE_LANES
+#undef ALLANITE_ROW
+#undef ALLANITE_TAP
+  }
+#undef ALLANITE_LOAD
+  *reinterpret_cast<v4u*>(hi) = h0;
+  *reinterpret_cast<v4u*>(lo) = l0;
+  *reinterpret_cast<v4u*>(acc) = a0;
+  if constexpr (V == 2) {
+    *reinterpret_cast<v4u*>(hi + 4) = h1;
+    *reinterpret_cast<v4u*>(lo + 4) = l1;
+    *reinterpret_cast<v4u*>(acc + 4) = a1;
+  }
+#else
+  std::vector<double> d(static_cast<std::size_t>(steps));
+  for (int k = 0; k < 4 * V; ++k) {
+    const double* row = src + k * ls;
+    if constexpr (kFromPhase) {
+      for (std::int64_t j = 0; j < steps; ++j)
+        d[j] = window_step(row[j], row[j + m], row[j + 2 * m], row[j + 3 * m]);
+      row = d.data();
+    }
+    lane_run<kExact>(row, steps, hi[k], lo[k], acc[k]);
+  }
+#endif
+}
+
+ALLANITE_TARGET_CLONES static void lane_groups_phase(const double* x, std::int64_t m, std::int64_t ls,
+                                                     std::int64_t steps, double* hi, double* lo, double* acc) noexcept {
+  lane_groups<true, false, kModTileLanes / 4>(x, m, ls, steps, hi, lo, acc);
+}
+ALLANITE_TARGET_CLONES static void lane_groups_phase_exact(const double* x, std::int64_t m, std::int64_t ls,
+                                                           std::int64_t steps, double* hi, double* lo,
+                                                           double* acc) noexcept {
+  lane_groups<true, true, kModSingleLanes / 4>(x, m, ls, steps, hi, lo, acc);
+}
+ALLANITE_TARGET_CLONES static void lane_groups_steps_exact(const double* d, std::int64_t ls, std::int64_t steps,
+                                                           double* hi, double* lo, double* acc) noexcept {
+  lane_groups<false, true, kModSingleLanes / 4>(d, 0, ls, steps, hi, lo, acc);
+}
+ALLANITE_TARGET_CLONES static void lane_groups_steps(const double* d, std::int64_t ls, std::int64_t steps, double* hi,
+                                                     double* lo, double* acc) noexcept {
+  lane_groups<false, false, kModTileLanes / 4>(d, 0, ls, steps, hi, lo, acc);
+}
+
+/// Add the modified AVAR's squares of `count` terms (from a block boundary, one channel: the
+/// phase x from the first term's row on, row stride rs) to total, block by block; a block is
+/// four lanes of kModLane terms, its sum (a_0 + a_1) + (a_2 + a_3) of the lanes' lane_run.
+/// Lane l starts from the exact window w0[l] (from the prefix sums) and moves on by steps
+/// rounded to O(eps) of the window and of the phase's lag-m differences; restarting every
+/// kModLane terms keeps that drift from growing with the record. `avail`: steps readable
+/// (the last term of the record has none). `buf`: 2 kSumBlock + 4 doubles.
+inline void add_modified_lanes(const double* x, std::int64_t rs, std::int64_t m, const double* w0,
+                               std::int64_t count, std::int64_t avail, NeumaierSum& total, double* buf) {
+  constexpr std::int64_t kStride = kModTileLanes * kModLane;  // terms per call: whole blocks
+  for (std::int64_t b = 0; b < count; b += kStride) {
+    const std::int64_t len = std::min(kStride, count - b);
+    double hi[kModTileLanes], lo[kModTileLanes] = {}, acc[kModTileLanes] = {};
+    std::copy(w0 + b / kModLane, w0 + b / kModLane + (len + kModLane - 1) / kModLane, hi);
+    if (len == kStride && rs == 1 && avail - b >= len) {  // whole blocks, steps from the phase
+      lane_groups_phase(x + b, m, kModLane, kModLane, hi, lo, acc);
+    } else {
+      window_steps(x + b * rs, m, rs, std::min(len, avail - b), len + 4, buf);
+      if (len == kStride) {
+        lane_groups_steps(buf, kModLane, kModLane, hi, lo, acc);
+      } else {
+        for (std::int64_t k = 0; k * kModLane < len; ++k)
+          lane_run<false>(buf + k * kModLane, std::min(kModLane, len - k * kModLane), hi[k], lo[k], acc[k]);
+      }
+    }
+    for (std::int64_t k = 0; 4 * k < kModTileLanes && k * kSumBlock < len; ++k)
+      total.add((acc[4 * k] + acc[4 * k + 1]) + (acc[4 * k + 2] + acc[4 * k + 3]));
   }
 }
+
+/// Most terms of a lane of the single-factor pass between starts from the exact prefix sums.
+constexpr std::int64_t kModSegment = 64 * kSumBlock;
 
 /// Modified AVAR sums of one factor beyond kTileMaxM (no other factor shares its rows). The
-/// terms are cut into four lanes of whole blocks; in each lane the window
-/// w_j = S[j+3m] - 3 S[j+2m] + 3 S[j+m] - S[j] starts from prefix cursors and moves on by the
-/// third difference of the phase, w_{j+1} = w_j + d3(j), kept as a TwoSum pair (a block's d3
-/// are computed lane by lane, vectorised, then interleaved so that the chains read vectors).
-/// The lanes are independent dependency chains run side by side; no prefix sums are stored.
-/// The lanes' block sums go to per-lane compensated totals, added to totals in lane order.
-ALLANITE_TARGET_CLONES ALLANITE_SLP_ONLY static void add_modified_single(const PhaseRef& phase, const PrefixPlan& plan,
-                                                      std::int64_t m, std::int64_t count, NeumaierSum* totals) {
-  constexpr int kLanes = 4;
+/// terms go in groups of eight neighbouring lanes of whole blocks, as long as the group allows
+/// up to kModSegment (so that the lanes' taps stay close enough to share the cache, as the
+/// overlapping kernel's do); each lane's window starts from four prefix cursors and moves on
+/// by the steps (lane_run, the window a TwoSum pair: at these factors a step rounds to far
+/// below eps of the window). The lanes advance a block at a time, steps straight from the
+/// phase or via a buffer; block sums go to totals lane by lane, in order. The lanes depend
+/// only on m and the record length. No prefix sums are stored.
+static void add_modified_single(const PhaseRef& phase, const PrefixPlan& plan, std::int64_t m,
+                                std::int64_t count, NeumaierSum* totals) {
+  constexpr int kLanes = kModSingleLanes;
+  constexpr std::int64_t kMaxBlocks = kModSegment / kSumBlock;
   const Eigen::Index nc = phase.cols();
+  const auto unc = static_cast<std::size_t>(nc);
   const std::int64_t rs = phase.outerStride();
-  const std::int64_t chunk = kSumBlock;
-  const std::int64_t blocks = (count + chunk - 1) / chunk;
-  const std::int64_t lane_len = (blocks + kLanes - 1) / kLanes * chunk;  // whole blocks
-  std::int64_t first[kLanes], len[kLanes];
-  for (int k = 0; k < kLanes; ++k) {
-    first[k] = std::min(count, k * lane_len);
-    len[k] = std::min(count, first[k] + lane_len) - first[k];
-  }
-  // the window at each lane's first term, from the exact prefix sums
-  std::vector<double> w0(static_cast<std::size_t>(kLanes * nc));
-  for (int k = 0; k < kLanes; ++k) {
-    if (len[k] == 0) continue;
-    PrefixCursor c0 = prefix_cursor(phase, plan, first[k]), c1 = prefix_cursor(phase, plan, first[k] + m),
-                 c2 = prefix_cursor(phase, plan, first[k] + 2 * m), c3 = prefix_cursor(phase, plan, first[k] + 3 * m);
-    PrefixCursor* cur[4] = {&c0, &c1, &c2, &c3};
-    std::vector<double> buf(static_cast<std::size_t>(8 * nc));
-    double* hi[4];
-    double* lo[4];
-    for (int i = 0; i < 4; ++i) {
-      hi[i] = buf.data() + 2 * i * nc;
-      lo[i] = buf.data() + (2 * i + 1) * nc;
-    }
-    fill_prefix<4>(cur, 1, hi, lo);
-    const SplitTaps t{{hi[0], hi[1], hi[2], hi[3]}, {lo[0], lo[1], lo[2], lo[3]}, nc};
-    for (Eigen::Index c = 0; c < nc; ++c) w0[static_cast<std::size_t>(k * nc + c)] = tap_diff(t, c);
-  }
-  static_assert(kLanes == 4, "interleave_lanes interleaves four lanes");
-  std::vector<double> d3(static_cast<std::size_t>(kLanes * chunk)), rows(d3.size());
-  for (Eigen::Index c = 0; c < nc; ++c) {
-    double hi[kLanes], lo[kLanes];
-    NeumaierSum lane_total[kLanes];
-    for (int k = 0; k < kLanes; ++k) {
-      hi[k] = w0[static_cast<std::size_t>(k * nc + c)];
-      lo[k] = 0.0;
-    }
-    const double* x = phase.data() + c;
-    for (std::int64_t start = 0; start < lane_len; start += chunk) {
-      std::int64_t n[kLanes];
-      for (int k = 0; k < kLanes; ++k) {
-        n[k] = std::max<std::int64_t>(0, std::min(chunk, len[k] - start));
-        lane_third_differences(x + (first[k] + start) * rs, m, rs, n[k], rows.data() + k * chunk);
+  std::vector<double> w0(kLanes * unc), buf(8 * unc), d(static_cast<std::size_t>(kLanes * kSumBlock + 4));
+  std::vector<double> sums(static_cast<std::size_t>(kLanes * kMaxBlocks));
+  for (std::int64_t g0 = 0; g0 < count; ) {
+    const std::int64_t blocks = (count - g0 + kSumBlock - 1) / kSumBlock;
+    const std::int64_t lane_len = std::min(kMaxBlocks, (blocks + kLanes - 1) / kLanes) * kSumBlock;
+    std::int64_t first[kLanes], len[kLanes];
+    for (int k = 0; k < kLanes; ++k) {  // the window at each lane's first term, from the prefix sums
+      first[k] = std::min(count, g0 + k * lane_len);
+      len[k] = std::min(count, first[k] + lane_len) - first[k];
+      if (len[k] == 0) continue;
+      PrefixCursor c0 = prefix_cursor(phase, plan, first[k]), c1 = prefix_cursor(phase, plan, first[k] + m),
+                   c2 = prefix_cursor(phase, plan, first[k] + 2 * m), c3 = prefix_cursor(phase, plan, first[k] + 3 * m);
+      PrefixCursor* cur[4] = {&c0, &c1, &c2, &c3};
+      double* h[4];
+      double* l[4];
+      for (int i = 0; i < 4; ++i) {
+        h[i] = buf.data() + 2 * i * unc;
+        l[i] = buf.data() + (2 * i + 1) * unc;
       }
-      interleave_lanes(rows.data(), chunk, d3.data());  // term j of lane k at j * kLanes + k
-      double a[4][kLanes] = {};  // a[r][k]: lane k's partial sum r (the lanes one vector)
-      const std::int64_t common = *std::min_element(n, n + kLanes) / 4 * 4;
-      std::int64_t j = 0;
-      for (; j < common; j += 4) {  // the lanes' chains side by side, four terms each
-        for (int r = 0; r < 4; ++r) {
-          const double* v = d3.data() + (j + r) * kLanes;
-          double w[kLanes];
-          for (int k = 0; k < kLanes; ++k) w[k] = hi[k] + lo[k];
-          for (int k = 0; k < kLanes; ++k) a[r][k] += w[k] * w[k];
+      fill_prefix<4>(cur, 1, h, l);
+      const SplitTaps t{{h[0], h[1], h[2], h[3]}, {l[0], l[1], l[2], l[3]}, nc};
+      for (Eigen::Index c = 0; c < nc; ++c) w0[static_cast<std::size_t>(k) * unc + c] = tap_diff(t, c);
+    }
+    for (Eigen::Index c = 0; c < nc; ++c) {
+      double hi[kLanes], lo[kLanes] = {}, acc[kLanes];
+      for (int k = 0; k < kLanes; ++k) hi[k] = w0[static_cast<std::size_t>(k) * unc + c];
+      const double* x = phase.data() + c;
+      for (std::int64_t start = 0; start < lane_len; start += kSumBlock) {
+        std::int64_t n[kLanes];
+        bool full = true;
+        for (int k = 0; k < kLanes; ++k) {
+          n[k] = std::clamp<std::int64_t>(len[k] - start, 0, kSumBlock);
+          full = full && n[k] == kSumBlock;
+        }
+        std::fill(acc, acc + kLanes, 0.0);
+        if (full && rs == 1 && first[kLanes - 1] + start + kSumBlock < count) {  // steps from the phase
+          lane_groups_phase_exact(x + first[0] + start, m, lane_len, kSumBlock, hi, lo, acc);
+        } else {
           for (int k = 0; k < kLanes; ++k) {
-            const double sum = hi[k] + v[k];
-            const double bb = sum - hi[k];
-            lo[k] += (hi[k] - (sum - bb)) + (v[k] - bb);  // TwoSum error
-            hi[k] = sum;
+            const std::int64_t avail = std::min(n[k], count - 1 - (first[k] + start));
+            window_steps(x + (first[k] + start) * rs, m, rs, avail, kSumBlock, d.data() + k * kSumBlock);
+          }
+          if (full) {
+            lane_groups_steps_exact(d.data(), kSumBlock, kSumBlock, hi, lo, acc);
+          } else {
+            for (int k = 0; k < kLanes; ++k) lane_run<true>(d.data() + k * kSumBlock, n[k], hi[k], lo[k], acc[k]);
           }
         }
+        for (int k = 0; k < kLanes; ++k) sums[static_cast<std::size_t>(k * kMaxBlocks + start / kSumBlock)] = acc[k];
       }
       for (int k = 0; k < kLanes; ++k)
-        for (std::int64_t i = j; i < n[k]; ++i) {
-          const double w = hi[k] + lo[k];
-          a[i & 3][k] += w * w;
-          double sum, e;
-          two_sum(hi[k], d3[static_cast<std::size_t>(i * kLanes + k)], sum, e);
-          hi[k] = sum;
-          lo[k] += e;
-        }
-      for (int k = 0; k < kLanes; ++k)
-        if (n[k] > 0) lane_total[k].add((a[0][k] + a[1][k]) + (a[2][k] + a[3][k]));
+        for (std::int64_t b = 0; b < len[k]; b += kSumBlock)
+          totals[c].add(sums[static_cast<std::size_t>(k * kMaxBlocks + b / kSumBlock)]);
     }
-    for (int k = 0; k < kLanes; ++k) totals[c].add(lane_total[k].value());
+    g0 += kLanes * lane_len;
   }
 }
 
@@ -627,10 +792,143 @@ inline std::int64_t tap_terms(VarianceKind kind, std::int64_t M, std::int64_t m)
   return kind == VarianceKind::Total ? M - 2 * m : n_terms(kind, M, m);
 }
 
+/// fill_prefix<4> of four whole blocks of one contiguous channel, x[i kSumBlock ...] from the
+/// states sum[i], comp[i], into h[i], l[i] (the same arithmetic, the four chains in a vector:
+/// four rows of each block are loaded and transposed in registers, and back for the stores).
+ALLANITE_TARGET_CLONES static void fill_blocks4(const double* x, double big, const double* sum, const double* comp,
+                                                double* const* h, double* const* l) noexcept {
+#if defined(__GNUC__) && !defined(__clang__) && !defined(ALLANITE_SCALAR_LANES)
+  typedef double v4d __attribute__((vector_size(32)));
+  typedef double v4u __attribute__((vector_size(32), aligned(8), may_alias));  // unaligned access
+  typedef long long v4i __attribute__((vector_size(32)));
+  const v4i lo2 = {0, 4, 2, 6}, hi2 = {1, 5, 3, 7}, lo4 = {0, 1, 4, 5}, hi4 = {2, 3, 6, 7};
+  const v4d b = {big, big, big, big};
+  v4d sv = *reinterpret_cast<const v4u*>(sum), cv = *reinterpret_cast<const v4u*>(comp);
+#define ALLANITE_TRANSPOSE(r0, r1, r2, r3, c)                                                    \
+  do {                                                                                           \
+    const v4d t0 = __builtin_shuffle(r0, r1, lo2), t1 = __builtin_shuffle(r0, r1, hi2);          \
+    const v4d t2 = __builtin_shuffle(r2, r3, lo2), t3 = __builtin_shuffle(r2, r3, hi2);          \
+    c[0] = __builtin_shuffle(t0, t2, lo4);                                                       \
+    c[1] = __builtin_shuffle(t1, t3, lo4);                                                       \
+    c[2] = __builtin_shuffle(t0, t2, hi4);                                                       \
+    c[3] = __builtin_shuffle(t1, t3, hi4);                                                       \
+  } while (false)
+  for (std::int64_t r = 0; r < kSumBlock; r += 4) {
+    v4d xr[4], hr[4], lr[4], hc[4], lc[4];
+    const double* p = x + r;
+    ALLANITE_TRANSPOSE(*reinterpret_cast<const v4u*>(p), *reinterpret_cast<const v4u*>(p + kSumBlock),
+                       *reinterpret_cast<const v4u*>(p + 2 * kSumBlock),
+                       *reinterpret_cast<const v4u*>(p + 3 * kSumBlock), xr);
+    for (int k = 0; k < 4; ++k) {  // row r + k of the four blocks
+      hr[k] = (sv + b) - b;
+      lr[k] = (sv - hr[k]) + cv;
+      const v4d t = sv + xr[k], bb = t - sv;
+      cv += (sv - (t - bb)) + (xr[k] - bb);  // TwoSum error
+      sv = t;
+    }
+    ALLANITE_TRANSPOSE(hr[0], hr[1], hr[2], hr[3], hc);
+    ALLANITE_TRANSPOSE(lr[0], lr[1], lr[2], lr[3], lc);
+    for (int i = 0; i < 4; ++i) {
+      *reinterpret_cast<v4u*>(h[i] + r) = hc[i];
+      *reinterpret_cast<v4u*>(l[i] + r) = lc[i];
+    }
+  }
+#undef ALLANITE_TRANSPOSE
+#else
+  for (int i = 0; i < 4; ++i) {
+    double sv = sum[i], cv = comp[i];
+    for (std::int64_t r = 0; r < kSumBlock; ++r) {
+      const double hv = (sv + big) - big;
+      h[i][r] = hv;
+      l[i][r] = (sv - hv) + cv;
+      double t, e;
+      two_sum(sv, x[i * kSumBlock + r], t, e);
+      sv = t;
+      cv += e;
+    }
+  }
+#endif
+}
+
+/// The prefix sums S[k0 .. k0 + span) that a tile of factors up to top_m reads where its
+/// lanes start, in a ring of whole blocks (span = kTileTerms + 3 top_m rounded up to blocks):
+/// a tile fills only the blocks it adds, each regenerated from its mark of the plan, four
+/// blocks side by side, so that S[r] depends on r alone (not on the tiles or threads).
+struct PrefixRing {
+  PrefixRing(const PhaseRef& ph, const PrefixPlan& pl, std::int64_t top_m)
+      : phase(ph), plan(pl), rows(ph.rows() + 1), nc(ph.cols()),
+        span(kTileTerms + (3 * top_m + kSumBlock - 1) / kSumBlock * kSumBlock),
+        hi(static_cast<std::size_t>(span * nc)), lo(hi.size()) {}
+
+  /// Make rows [k0, k0 + span) present (those below rows).
+  void cover(std::int64_t k0) {
+    const std::int64_t target = std::min(k0 + span, rows);
+    while (filled < target) {
+      if (filled + 4 * kSumBlock <= target) {  // four whole blocks side by side
+        PrefixCursor c0(phase, plan, filled), c1(phase, plan, filled + kSumBlock),
+            c2(phase, plan, filled + 2 * kSumBlock), c3(phase, plan, filled + 3 * kSumBlock);
+        PrefixCursor* cur[4] = {&c0, &c1, &c2, &c3};
+        double* h[4];
+        double* l[4];
+        for (int i = 0; i < 4; ++i) {
+          h[i] = slot(hi, filled + i * kSumBlock);
+          l[i] = slot(lo, filled + i * kSumBlock);
+        }
+        if (nc == 1 && phase.outerStride() == 1 && filled + 4 * kSumBlock <= phase.rows()) {
+          double sum[4], comp[4];
+          for (int i = 0; i < 4; ++i) {
+            sum[i] = cur[i]->sum[0];
+            comp[i] = cur[i]->comp[0];
+          }
+          fill_blocks4(phase.data() + filled, plan.big[0], sum, comp, h, l);
+        } else {
+          fill_prefix<4>(cur, kSumBlock, h, l);
+        }
+        filled += 4 * kSumBlock;
+      } else {
+        PrefixCursor c0(phase, plan, filled);
+        PrefixCursor* cur[1] = {&c0};
+        double* h[1] = {slot(hi, filled)};
+        double* l[1] = {slot(lo, filled)};
+        const std::int64_t n = std::min(kSumBlock, target - filled);
+        fill_prefix<1>(cur, n, h, l);
+        filled += n;
+      }
+    }
+  }
+
+  /// The exact windows w(j) = S[j+3m] - 3 S[j+2m] + 3 S[j+m] - S[j] of channel c at
+  /// j = k0, k0 + kModLane, ... (`lanes` of them) into out.
+  void windows(std::int64_t k0, std::int64_t m, Eigen::Index c, std::int64_t lanes, double* out) const {
+    std::int64_t slot[4];
+    for (int i = 0; i < 4; ++i) slot[i] = (k0 + i * m) % span;
+    for (std::int64_t q = 0; q < lanes; ++q) {
+      const SplitTaps t{{&hi[slot[0] * nc], &hi[slot[1] * nc], &hi[slot[2] * nc], &hi[slot[3] * nc]},
+                        {&lo[slot[0] * nc], &lo[slot[1] * nc], &lo[slot[2] * nc], &lo[slot[3] * nc]},
+                        nc};
+      out[q] = tap_diff(t, c);
+      for (int i = 0; i < 4; ++i) {
+        slot[i] += kModLane;
+        if (slot[i] >= span) slot[i] -= span;
+      }
+    }
+  }
+
+ private:
+  double* slot(std::vector<double>& v, std::int64_t row) const { return v.data() + row % span * nc; }
+  const PhaseRef& phase;
+  const PrefixPlan& plan;
+  std::int64_t rows;
+  Eigen::Index nc;
+  std::int64_t span;
+  std::vector<double> hi, lo;
+  std::int64_t filled = 0;  // rows [0, filled) have been generated
+};
+
 /// Variances of the factors ms[idx[...]] in one pass over the rows: tile by tile of
 /// kTileTerms terms, every factor adds the tile's terms to its own compensated sums (for a
 /// single factor that is one plain pass). `plan`: the prefix sums (modified only), regenerated
-/// tile by tile into a window of kTileTerms + 3 max(m) rows.
+/// tile by tile into a PrefixRing where the lanes start.
 inline void variance_group(const PhaseRef& phase, const PrefixPlan* plan, VarianceKind kind,
                            const std::vector<std::int64_t>& ms, const std::vector<std::size_t>& idx,
                            RowMatrix& out) {
@@ -646,32 +944,17 @@ inline void variance_group(const PhaseRef& phase, const PrefixPlan* plan, Varian
     longest = std::max(longest, n[a]);
   }
   const bool strided = kind == VarianceKind::Standard || kind == VarianceKind::StandardHadamard;
-  // modified: the window holds S[k0 .. k0 + kTileTerms + 3 max(m)) of the current tile
   std::int64_t top_m = 0;
   for (const std::size_t i : idx) top_m = std::max(top_m, ms[i]);
-  // modified beyond kTileMaxM (a factor alone): four cursors instead, add_modified_single
+  // modified beyond kTileMaxM (a factor alone): eight lanes from cursors, add_modified_single
   const bool windowed = kind == VarianceKind::Modified && top_m <= kTileMaxM;
   if (kind == VarianceKind::Modified && !windowed) longest = 0;
-  const std::int64_t window = windowed ? std::min(kTileTerms + 3 * top_m, M + 1) : 0;
-  std::vector<double> win_hi(static_cast<std::size_t>(window * nc)), win_lo(win_hi.size());
-  std::int64_t filled = 0;  // rows of the window holding S[k0 ...]
-  std::optional<PrefixCursor> cursor;
-  if (windowed) cursor.emplace(prefix_cursor(phase, *plan, 0));
+  // modified: the prefix sums of the tile's rows, where its lanes start (add_modified_lanes)
+  std::optional<PrefixRing> ring;
+  if (windowed) ring.emplace(phase, *plan, top_m);
+  std::vector<double> anchors(windowed ? kTileTerms / kModLane : 0), steps(windowed ? 2 * kSumBlock + 4 : 0);
   for (std::int64_t k0 = 0; k0 < longest; k0 += kTileTerms) {
-    if (windowed) {
-      if (k0 > 0) {  // drop the previous tile's rows, keep the overlap
-        const std::int64_t keep = filled - kTileTerms;
-        std::copy(win_hi.begin() + kTileTerms * nc, win_hi.begin() + filled * nc, win_hi.begin());
-        std::copy(win_lo.begin() + kTileTerms * nc, win_lo.begin() + filled * nc, win_lo.begin());
-        filled = keep;
-      }
-      const std::int64_t want = std::min(window, M + 1 - k0);
-      PrefixCursor* one[1] = {&*cursor};
-      double* hi[1] = {win_hi.data() + filled * nc};
-      double* lo[1] = {win_lo.data() + filled * nc};
-      fill_prefix<1>(one, want - filled, hi, lo);
-      filled = want;
-    }
+    if (windowed) ring->cover(k0);
     for (std::size_t a = 0; a < idx.size(); ++a) {
       if (k0 >= n[a]) continue;
       const std::int64_t m = ms[idx[a]];
@@ -680,11 +963,12 @@ inline void variance_group(const PhaseRef& phase, const PrefixPlan* plan, Varian
       NeumaierSum* tot = totals[a].data();
       switch (kind) {
         case VarianceKind::Modified: {
-          const double* h = win_hi.data();
-          const double* l = win_lo.data();
-          const std::int64_t s = m * nc;
-          add_diff_squares(SplitTaps{{h, h + s, h + 2 * s, h + 3 * s}, {l, l + s, l + 2 * s, l + 3 * s}, nc},
-                           count, nc, tot);
+          // every lane's first window from the prefix sums, the others by steps of the phase
+          const std::int64_t lanes = (count + kModLane - 1) / kModLane;
+          for (Eigen::Index c = 0; c < nc; ++c) {
+            ring->windows(k0, m, c, lanes, anchors.data());
+            add_modified_lanes(x + k0 * rs + c, rs, m, anchors.data(), count, n[a] - 1 - k0, tot[c], steps.data());
+          }
           break;
         }
         case VarianceKind::Hadamard:
@@ -735,7 +1019,7 @@ inline RowMatrix variance(const PhaseRef& phase, const std::vector<std::int64_t>
   if (ms.empty()) return out;
   const int nthreads = resolve_threads(threads);
   detail::PrefixPlan plan;
-  if (kind == VarianceKind::Modified) plan = detail::prefix_plan(phase);
+  if (kind == VarianceKind::Modified) plan = detail::prefix_plan(phase, nthreads);
   // Cache blocking over taus: the overlapping-type estimators at small m read the same rows,
   // so they share passes (detail::variance_group); one group per thread. Beyond kTileMaxM the
   // overlapping, Hadamard and total factors go in groups of kWideGroup neighbours (their first

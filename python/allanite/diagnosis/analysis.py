@@ -23,7 +23,7 @@ from allanite.diagnosis.frequency_view import (
 )
 from allanite.diagnosis.inputs import SimSource
 from allanite.diagnosis.null import NullEnsemble
-from allanite.diagnosis.scaled_null import scaled_ensemble, uses_scaled_null
+from allanite.diagnosis.scaled_null import ReplicateStore, scaled_ensemble, uses_scaled_null
 from allanite.diagnosis.tau_view import (
     TauModel,
     TauView,
@@ -107,16 +107,18 @@ def ensemble(
     seed: int,
     progress: Progress | None = None,
     stage: str = "null replicates",
+    store: ReplicateStore | None = None,
 ) -> NullEnsemble:
     """Null ensemble of ``n_mc`` replicates (``2 n_mc`` for a simulated record).
 
     A long record against a model gets the null of short and decimated replicates and the
-    exact tau covariance instead (:mod:`allanite.diagnosis.scaled_null`).
+    exact tau covariance instead (:mod:`allanite.diagnosis.scaled_null`); ``store`` keeps
+    or shares their blocks (:class:`~allanite.diagnosis.scaled_null.ReplicateStore`).
     """
     if source.kind == "model" and uses_scaled_null(source.model, plan.n):
         return scaled_ensemble(
             source.model, plan.n, plan.fs, plan.m, plan.nperseg, plan.time, n_mc, seed,
-            progress, stage,
+            progress, stage, store,
         )  # fmt: skip
     if source.kind == "model":
         reps = _features_of(source.replicates(plan.n, n_mc, seed), plan, n_mc, progress, stage)
@@ -136,10 +138,15 @@ def analyze(
     alpha: float,
     progress: Progress | None = None,
     stage: str = "null replicates",
+    store: ReplicateStore | None = None,
 ) -> Analysis:
-    """Run the three views on the rate record ``x`` (``progress`` reports the replicates)."""
+    """Run the three views on the rate record ``x`` (``progress`` reports the replicates).
+
+    ``store`` (long records against a model) keeps the null's replicate blocks, or supplies
+    them with added effects (see :func:`ensemble`).
+    """
     plan = Plan.for_length(x.size, source.fs)
-    ens = ensemble(source, plan, n_mc, seed, progress, stage)
+    ens = ensemble(source, plan, n_mc, seed, progress, stage, store)
     if progress is not None:
         progress("features of the record", 0, 1)
     real = record_features(x, plan)

@@ -30,8 +30,12 @@ effect wins a tie) plus the evidence the candidate leaves unexplained (Fisher's 
 scale); a bias step, a warm-up and a ramp also pay the excess misfit of their shape on the
 window means (:mod:`allanite.diagnosis.level_shape`); a slow stationary candidate explains
 level evidence when the jump/level test, with its own slow noise added to the null spreads,
-is no longer significant. ``consistent_after`` is true when the p-value of ``T_after`` (null
-law with ``k`` fewer degrees of freedom) exceeds ``alpha``. Effects whose scores differ by
+is no longer significant, and the low-frequency kurtosis evidence (platykurtic block means:
+a random walk's or a slow Gauss-Markov process's path over one record) when the kurtosis the
+candidate's own process predicts for the block means is consistent with the record's
+(:meth:`~allanite.diagnosis.time_view.TimeView.lf_kurtosis_p_value`). ``consistent_after``
+is true when the p-value of ``T_after`` (null law with ``k`` fewer degrees of freedom)
+exceeds ``alpha``. Effects whose scores differ by
 less than the penalty of one parameter are listed as each other's ``alternatives``. The gap
 is ``G = max(0, T - T0)`` and the shrinkage ``1 - G_after / G_before`` (0 when the tau view
 shows no gap to shrink).
@@ -50,9 +54,11 @@ noise level. Exempt are the effects whose size another view measured: every para
 from the views (spikes: count and height), or a free parameter started from a view's
 measurement (``Candidate.measured``: the amplitude of a detected line, the level of a
 band-pass excess) that ends within ``MEASURED_FACTOR = 10`` of it; a weak line or rare spikes
-are real with a tau size of zero. ``white_drift`` keeps the record's mean noise level (tau size
-near zero): its size is the level ratio the time view measured, negligible within
-``LEVEL_NEGLIGIBLE`` (5 %) of one, as the headline words it.
+are real with a tau size of zero. An effect that leaves the tau view unchanged carries the size
+another view measured (``Candidate.view_size``, relative to the sensor's own level; e.g.
+``white_drift`` keeps the record's mean noise level, its size is ``|ratio - 1|`` of the level
+ratio the time view measured): it is negligible below ``LEVEL_NEGLIGIBLE`` (5 %), the level
+change the headline calls slight.
 """
 
 from __future__ import annotations
@@ -67,7 +73,7 @@ from scipy import optimize, stats
 from allanite.diagnosis.candidates import Candidate
 from allanite.diagnosis.level_shape import level_misfit
 from allanite.diagnosis.tau_view import TauModel
-from allanite.diagnosis.time_view import TimeView, added_level_variance
+from allanite.diagnosis.time_view import TimeView, added_block_kurtosis, added_level_variance
 
 __all__ = ["LEVEL_NEGLIGIBLE", "Attribution", "fit_candidate", "negligible", "rank", "tau_size"]
 
@@ -81,8 +87,8 @@ NEGLIGIBLE_SE = 1.0
 MEASURED_FACTOR = 10.0
 
 #: a noise level within this relative rms of the typical level is negligible in size (the
-#: Allan variance in those windows within about +-10 %): the headline's wording, and the size
-#: of a ``white_drift`` whose level ratio the time view measured
+#: Allan variance in those windows within about +-10 %): the headline's wording, and the
+#: threshold of a size another view measured (``Candidate.view_size``)
 LEVEL_NEGLIGIBLE = 0.05
 
 
@@ -276,10 +282,12 @@ def negligible(
     Returns
     -------
     bool
-        True when its tau size is below ``NEGLIGIBLE_SE`` and no other view measured its size.
+        True when its tau size is below ``NEGLIGIBLE_SE`` and no other view measured its size,
+        or when the size a view measured (``Candidate.view_size``) is below
+        ``LEVEL_NEGLIGIBLE``.
     """
-    if cand.effect == "white_drift":  # its size is the level ratio the time view measured
-        return bool(abs(cand.fixed["ratio"] - 1.0) < LEVEL_NEGLIGIBLE)
+    if cand.view_size is not None:  # sized by another view, not by the tau view
+        return bool(cand.view_size < LEVEL_NEGLIGIBLE)
     if not cand.free:  # every parameter measured by the frequency/time views
         return False
     for name in cand.measured:
@@ -318,6 +326,30 @@ def _fisher_sigma(cand: Candidate, tm: TauModel, logp: NDArray[np.float64]) -> N
     fisher = jac.T @ tm.cov_inv @ jac
     cov = np.linalg.pinv(fisher)
     return np.sqrt(np.maximum(np.diag(cov), 0.0))
+
+
+#: the kurt_lf re-test simulates the candidate over the fitted record: up to this many samples
+LF_KURTOSIS_MAX_SAMPLES = 2**18
+
+
+def _lf_kurtosis_p(
+    cand: Candidate, values: dict[str, float], time_view: TimeView, dt: float, duration: float
+) -> float | None:
+    """p-value of the time view's low-frequency kurtosis with the candidate's process added.
+
+    None when the candidate adds no process of its own, the record is longer than
+    :data:`LF_KURTOSIS_MAX_SAMPLES` or the time view has no block detail.
+    """
+    added = cand.added_term(values)
+    lf = time_view.lf_kurtosis
+    n_fit = round(duration / dt)
+    if added is None or not lf or n_fit > LF_KURTOSIS_MAX_SAMPLES:
+        return None
+    n_windows = time_view.level.size
+    if n_fit < 2 * n_windows:
+        return None
+    moments = added_block_kurtosis(added, 1.0 / dt, n_fit, n_windows, tuple(lf["blocks"]))
+    return time_view.lf_kurtosis_p_value(moments)
 
 
 def fit_candidate(
@@ -377,6 +409,11 @@ def fit_candidate(
                 if significant.get(e, False) and p >= alpha / n_ev and e not in explained:
                     explained.append(e)
             explained.sort()
+    # slow stationary noise makes block means platykurtic too: re-test kurt_lf with it
+    if time_view is not None and significant.get("kurt_lf", False) and "kurt_lf" not in explained:
+        p_lf = _lf_kurtosis_p(cand, _values(cand, logp), time_view, tm.dt, duration)
+        if p_lf is not None and p_lf >= alpha / max(len(evidence_p), 1):
+            explained = sorted([*explained, "kurt_lf"])
     if lr_p >= alpha and not explained:
         return None
     unexplained = sorted(e for e, s in significant.items() if s and e not in explained)

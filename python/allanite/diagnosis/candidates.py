@@ -149,6 +149,11 @@ class Candidate:
         Parameters (fixed and starting values) of further processes of this kind that the
         other views located (a second band-pass excess: a second resonance), see
         :meth:`repeats`.
+    view_size : float or None
+        The effect's size as another view measured it, relative to the sensor's own level
+        (``white_drift``: ``|ratio - 1|``, the time view's level ratio), for an effect that
+        leaves the tau view unchanged; the size rule judges it on this number instead of
+        its tau size. None: the tau view sizes it.
     """
 
     effect: str
@@ -159,6 +164,7 @@ class Candidate:
     base: Term | None = None
     replaces: Term | None = None
     measured: tuple[str, ...] = ()
+    view_size: float | None = None
     others: tuple[dict[str, float], ...] = ()
 
     @property
@@ -360,6 +366,7 @@ def candidate_library(
         fixed: dict[str, float] = {}
         start: dict[str, float] = {}
         measured: tuple[str, ...] = ()
+        view_size: float | None = None
         replaces: Term | None = None
         others: tuple[dict[str, float], ...] = ()
         if effect == "sine" and lines:
@@ -403,6 +410,8 @@ def candidate_library(
             replaces = whites[0]
             fixed.update(fixed_drift)
             start["N"] = float(replaces.values()["N"])
+            # it keeps the mean level (no tau size): its size is the measured level ratio
+            view_size = abs(fixed_drift["ratio"] - 1.0)
         names = tuple(p.name for p in cls.params)
         free = tuple(n for n in names if n not in fixed)
         out.append(
@@ -415,6 +424,7 @@ def candidate_library(
                 replaces=replaces,
                 measured=measured,
                 others=others,
+                view_size=view_size,
             )
         )
     for term in terms:

@@ -26,6 +26,7 @@ from allanite.diagnosis.level_shape import warmup_time_constant
 from allanite.diagnosis.noise_level import drift_shape
 from allanite.diagnosis.null import runs
 from allanite.diagnosis.result import Diagnosis, Holdout
+from allanite.diagnosis.scaled_null import ADDED_SEED, ReplicateStore, uses_scaled_null
 from allanite.diagnosis.time_base import time_base_evidence, with_time_base
 from allanite.diagnosis.verdict import verdict
 from allanite.io.record import Record
@@ -197,15 +198,22 @@ def diagnose(
     source = make_source(sim, rate, x.size, sim_units=sim_units, sim_input=sim_input)
     common_units = check_units(units, source.units)
     x_fit, x_hold, hold_kind = _split(x, holdout, rate, input_kind)
-    run = _Run(x_fit, rate, source, int(n_mc), seed, significance, progress)
+    # the long-record null keeps its replicate blocks for the re-analysis (shorter records and
+    # simulated records have a full-length replicate null, simulated afresh each time)
+    long_null = source.kind == "model" and uses_scaled_null(source.model, x_fit.size)
+    store = ReplicateStore(source.model) if long_null else None
+    run = _Run(x_fit, rate, source, int(n_mc), seed, significance, progress, store)
     analysis = analyze(
-        x_fit, source, n_mc=run.n_mc, seed=seed, alpha=significance, progress=progress
-    )
+        x_fit, source, n_mc=run.n_mc, seed=seed, alpha=significance, progress=progress,
+        store=store,
+    )  # fmt: skip
     p = analysis.p_value
     significant = bool(p < significance)
     ev_p = _evidence(analysis)
     found = _attribute(run, analysis, ev_p, effects) if significant else _Found()
     after = _reanalysis(run, found.explanation)
+    if store is not None:
+        store.release()  # the null's replicate blocks served the re-analysis (or nothing)
     head = verdict(
         significant=significant,
         p_value=p,
@@ -272,6 +280,7 @@ class _Run:
     seed: int
     significance: float
     progress: Progress | None
+    store: ReplicateStore | None = None
 
     @property
     def duration(self) -> float:
@@ -335,7 +344,10 @@ def _reanalysis(run: _Run, explanation: Explanation | None) -> Analysis | None:
 
     The frequency and time views' statistics (bursts, kurtosis, band levels) depend on the
     whole noise, so only a null of the augmented model says whether they are consistent
-    after the effects.
+    after the effects. When every effect adds a process of its own (not a rescale down, not a
+    replacement of the model's white noise), the null's replicates are reused with the
+    effects' streams added (:class:`~allanite.diagnosis.scaled_null.ReplicateStore`);
+    otherwise the augmented model is simulated afresh.
     """
     if explanation is None or run.source.model is None:
         return None
@@ -343,14 +355,22 @@ def _reanalysis(run: _Run, explanation: Explanation | None) -> Analysis | None:
     combined = replace(
         model, terms=tuple(term_from_dict(t) for t in combined_terms(explanation, model))
     )
+    added = [
+        c.added_term(a.params)
+        for a, c in zip(explanation.effects, explanation.candidates, strict=True)
+    ]
+    store = None
+    if run.store is not None and all(t is not None for t in added):
+        store = run.store.adding(replace(model, terms=tuple(added)))
     return analyze(
         run.x_fit,
         SimSource(fs=run.fs, model=combined, units=run.source.units),
         n_mc=run.n_mc,
-        seed=run.seed + 2_000_003,
+        seed=run.seed if store is not None else run.seed + ADDED_SEED,
         alpha=run.significance,
         progress=run.progress,
         stage="re-analysis with the effects",
+        store=store,
     )
 
 

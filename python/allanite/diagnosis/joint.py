@@ -24,12 +24,15 @@ Spectral shape: in both steps the candidates on top of the set are ordered by th
 score *plus* the misfit of the spectrum's shape with the set and the candidate added
 (:meth:`~allanite.diagnosis.frequency_view.FrequencyView.shape_misfit`, ``F = sum_b z_b^2``
 over the broadband bands, ``chi2`` with one degree of freedom per band when the set is right;
-each effect contributes its exact sampled PSD, a ramp or warm-up none, since every Welch
-segment loses its mean). The tau view's penalised likelihood alone cannot tell look-alikes
+each effect contributes its exact sampled PSD, a ramp or warm-up the Welch spectrum of its own
+samples: every Welch segment loses its mean but keeps its slope, whose leakage is a ``1/f^2``
+excess in the lowest bins that a slow-noise look-alike would otherwise explain). The tau
+view's penalised likelihood alone cannot tell look-alikes
 apart whose Allan variances nearly coincide over the flagged taus (a Gauss-Markov process next
 to more white noise and more flicker; a random walk and flicker at long taus); their spectra
 differ (a Lorentzian knee against a ``1/f`` line, ``1/f^2`` against ``1/f``), so the pair
-whose combined spectrum fits wins.
+whose combined spectrum fits wins; candidates whose combined score stays within the penalty of
+one parameter are reported as the chosen effect's ``alternatives`` (a tie the views leave).
 
 Backward check: an effect is dropped again when removing it (the others kept) raises ``T`` by
 less than the ``chi2_{1-alpha}(k)`` quantile and it is the only one to explain none of the
@@ -75,7 +78,10 @@ class Explanation:
     Attributes
     ----------
     effects : list of Attribution
-        The effects in selection order, each fitted on top of the previous ones.
+        The effects in selection order, each fitted on top of the previous ones; an effect's
+        ``alternatives`` are the candidates whose score plus spectral shape misfit on top of
+        the others lies within the penalty of one parameter of its own (the record does not
+        tell them apart in its slot).
     candidates : list of Candidate
         Their candidate definitions (same order).
     gap_before, gap_after : float
@@ -117,7 +123,12 @@ class Explanation:
         """JSON-ready dictionary."""
         return {
             "effects": [
-                {"effect": a.effect, "params": dict(a.params), "term": dict(a.term)}
+                {
+                    "effect": a.effect,
+                    "params": dict(a.params),
+                    "term": dict(a.term),
+                    "alternatives": list(a.alternatives),
+                }
                 for a in self.effects
             ],
             "gap_before": self.gap_before,
@@ -287,17 +298,42 @@ def _two_processes(
     return best
 
 
+#: deterministic level shapes whose Welch spectrum is their own samples' (see effect_psd)
+WELCH_SHAPES = ("ramp", "warmup")
+
+
+def shape_welch_psd(term: Any, n: int, dt: float, nperseg: int) -> NDArray[np.float64]:
+    """Welch PSD (the frequency view's estimate, bins above DC) of a deterministic shape.
+
+    Each Welch segment loses its mean, not its slope: a ramp leaves a linear trend of the
+    same size in every segment, whose leakage is a ``1/f^2`` excess at the lowest bins; a
+    warm-up leaves its decay in the first segments. The shape is independent of the noise, so
+    it adds its own Welch spectrum (cross terms average out).
+    """
+    from allanite.diagnosis.frequency_view import frequency_features
+    from allanite.model import NoiseModel
+
+    x = NoiseModel((term,)).simulate(n, fs=1.0 / dt, seed=0)
+    x = np.asarray(x, dtype=np.float64).ravel()
+    return np.exp(frequency_features(x, 1.0 / dt, nperseg)["log_psd"])
+
+
 def effect_psd(
-    a: Attribution, c: Candidate, f: NDArray[np.float64], dt: float
+    a: Attribution, c: Candidate, f: NDArray[np.float64], dt: float, n: int | None = None
 ) -> NDArray[np.float64]:
     """One-sided PSD (on ``f``) the fitted effect ``a`` adds to the simulated sensor.
 
     A rescale adds ``(s^2 - 1)`` times its term's PSD, a replacement (``lowpass``) the
     difference of the two terms' PSDs, any other effect its own sampled PSD
-    (:meth:`allanite.terms.Term.psd_sampled`). A term without a PSD (a ramp, a warm-up) adds
-    none: each Welch segment loses its mean, and with it almost all of a slow level shape.
+    (:meth:`allanite.terms.Term.psd_sampled`). A ramp or a warm-up adds the Welch spectrum of
+    its own samples over the ``n`` fitted samples (:func:`shape_welch_psd`, ``f`` the frequency
+    view's bins); without ``n``, and for any other term without a PSD, none.
     """
     values = {k: a.params[k] for k in c.free}
+    if c.effect in WELCH_SHAPES and n is not None and f.size > 1:
+        nperseg = round(1.0 / (dt * float(f[1] - f[0])))
+        if nperseg // 2 == f.size and n >= nperseg:
+            return shape_welch_psd(c.term(values), n, dt, nperseg)
     try:
         with np.errstate(all="ignore"):
             if c.base is not None:
@@ -386,6 +422,7 @@ def explain(
     by_effect = {c.effect: c for c in candidates}
     cache: dict[str, NDArray[np.float64]] = {}
     worse = float(stats.chi2.isf(alpha, 1))
+    n_fit = round(duration / tm.dt)
 
     def on_top(
         on: list[Attribution],
@@ -439,13 +476,33 @@ def explain(
         f = frequency.f
         bg = np.zeros_like(f)
         for a, c in zip(on, on_c, strict=True):
-            bg = bg + effect_psd(a, c, f, tm.dt)
+            bg = bg + effect_psd(a, c, f, tm.dt, n_fit)
 
         def joint_score(group: tuple[float, list[Attribution]]) -> float:
-            extra = bg + sum(effect_psd(a, _candidate_of(a, by_effect), f, tm.dt) for a in group[1])
+            extra = bg + sum(
+                effect_psd(a, _candidate_of(a, by_effect), f, tm.dt, n_fit) for a in group[1]
+            )
             return group[0] + frequency.shape_misfit(extra)
 
-        return [g for _, g in sorted(groups, key=joint_score)]
+        scored = sorted(((joint_score(g), g[1]) for g in groups), key=lambda s: s[0])
+        # the alternatives of a single effect are re-judged on the joint score: a tie in the
+        # tau view that the spectrum breaks is no tie, and one the spectrum leaves is
+        # reported, not resolved blindly in favour of the simpler effect
+        ones = [(s, g[0]) for s, g in scored if len(g) == 1]
+        margin = float(stats.chi2.isf(alpha, 1))
+        return [
+            [
+                replace(
+                    g[0],
+                    alternatives=tuple(
+                        b.effect for t, b in ones if b is not g[0] and abs(t - s) < margin
+                    ),
+                )
+            ]
+            if len(g) == 1
+            else g
+            for s, g in scored
+        ]
 
     # the opening: the best single effect, or two processes of a repeatable kind fitted as a
     # unit when they fit better (a single resonance at one of two bands leaves the other's
@@ -453,7 +510,7 @@ def explain(
     opening = on_top(
         [], [], tm, {e: bool(s) for e, s in significant.items()}, MAX_EFFECTS, singles=[best]
     )[0]
-    chosen = list(opening)
+    chosen = [best] if len(opening) == 1 else list(opening)  # best keeps its alternatives
     chosen_c = [_candidate_of(a, by_effect) for a in chosen]
     extras = [_own_extra(a, c, tm) for a, c in zip(chosen, chosen_c, strict=True)]
     explained = set().union(*(set(a.evidence.get("explained", [])) for a in chosen))

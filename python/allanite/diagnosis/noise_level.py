@@ -9,7 +9,8 @@ describe such a change:
   level to another between ``t_start`` and ``t_end`` (a step when they coincide):
   ``r_w = c + log(1 + beta g_w)`` with ``g_w`` the window mean of
   :func:`allanite.terms.white_drift.ramp_fraction`; ``t_start``, ``t_end`` on the window
-  boundaries and ``beta`` on a log grid, ``c`` by weighted least squares;
+  boundaries, then refined to a sixteenth of a window, and ``beta`` on a log grid, then
+  refined between its neighbours, ``c`` by weighted least squares;
 * ``bursts`` (:class:`allanite.terms.WhiteBursts`): raised in the windows the time view flags
   (``z_w`` above its threshold), each at its own level (a burst may cover a window partly),
   the quiet windows at one common level ``c``.
@@ -33,6 +34,7 @@ fitted to it; ``ratio = sqrt((a + b) / a)``.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -48,6 +50,8 @@ __all__ = ["DriftShape", "drift_shape", "noise_misfit"]
 BETA_GRID = np.concatenate([np.geomspace(1.0 / 64.0, 0.95, 40), np.geomspace(1.05, 64.0, 48)]) - 1
 #: the drift has this many fitted numbers on the windows (offset, beta, t_start, t_end)
 DRIFT_PARAMS = 4
+#: positions per window at which the ends of the change are refined
+SUBSTEPS = 16
 
 
 @dataclass(frozen=True)
@@ -90,11 +94,13 @@ def _hf(view: TimeView) -> tuple[NDArray[np.float64], NDArray[np.float64]] | Non
 
 
 def _ramp_grid(
-    view: TimeView,
+    w: int, step: float
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
-    """Window means of every ramp with ends on the window boundaries: ``(P, W)``, starts, ends."""
-    w = view.t_s.size
-    edges = np.arange(w + 1) * view.window_s
+    """Window means ``(P, W)``, starts and ends of every ramp with ends on window boundaries.
+
+    ``w`` windows of ``step`` seconds.
+    """
+    edges = np.arange(w + 1) * step
     a, b = edges[:-1], edges[1:]
     starts, ends, shapes = [], [], []
     for i in range(w):
@@ -108,21 +114,79 @@ def _ramp_grid(
     return np.array(shapes), np.array(starts), np.array(ends)
 
 
+def _shape_chi2(
+    r: NDArray[np.float64], sd: NDArray[np.float64], g: NDArray[np.float64], betas: Any
+) -> NDArray[np.float64]:
+    """``chi2[p, k]`` of shape ``g[p]`` (window means, ``(P, W)``) with ``beta = betas[k]``."""
+    wgt = 1.0 / sd**2
+    # pred[p, k, w] = log(1 + beta_k g_pw); the offset c is the weighted mean of r - pred
+    pred = np.log1p(np.asarray(betas)[None, :, None] * g[:, None, :])
+    resid = r[None, None, :] - pred
+    c = (resid * wgt).sum(axis=2) / wgt.sum()
+    return np.asarray((((resid - c[:, :, None]) / sd) ** 2).sum(axis=2))
+
+
+def _best_shape(
+    r: NDArray[np.float64], sd: NDArray[np.float64], g: NDArray[np.float64]
+) -> tuple[float, int, float]:
+    """``(chi2, shape index, beta)`` of the best of the window-mean shapes ``g (P, W)``.
+
+    ``beta`` on :data:`BETA_GRID` (9 % steps of the variance ratio), then refined to
+    :data:`SUBSTEPS` steps between the neighbours of the best (a long record measures a
+    window's level to about 1 %).
+    """
+    chi2 = _shape_chi2(r, sd, g, BETA_GRID)
+    p, k = np.unravel_index(int(np.argmin(chi2)), chi2.shape)
+    lo, hi = BETA_GRID[max(k - 1, 0)], BETA_GRID[min(k + 1, BETA_GRID.size - 1)]
+    fine = np.geomspace(1.0 + lo, 1.0 + hi, 2 * SUBSTEPS + 1) - 1.0
+    chi2_f = _shape_chi2(r, sd, g, fine)
+    q, j = np.unravel_index(int(np.argmin(chi2_f)), chi2_f.shape)
+    if chi2_f[q, j] < chi2[p, k]:
+        return float(chi2_f[q, j]), int(q), float(fine[j])
+    return float(chi2[p, k]), int(p), float(BETA_GRID[k])
+
+
 def _drift_fit(view: TimeView) -> tuple[float, float, float, float] | None:
-    """``(chi2, beta, t_start, t_end)`` of the best drift shape on the hf residuals."""
+    """``(chi2, beta, t_start, t_end)`` of the best drift shape on the hf residuals.
+
+    The ends are first searched on the window boundaries, then refined to
+    :data:`SUBSTEPS` positions per window within one window of each (a step inside a
+    window leaves that window at an intermediate level, which a long record measures
+    precisely: a boundary-only step would misfit it by many standard errors). The ranking
+    and the joint selection ask for it once per candidate fit: it is computed once per view.
+    """
     hf = _hf(view)
     if hf is None:
         return None
     r, sd = hf
-    wgt = 1.0 / sd**2
-    g, starts, ends = _ramp_grid(view)
-    # pred[p, k, w] = log(1 + beta_k g_pw); the offset c is the weighted mean of r - pred
-    pred = np.log1p(BETA_GRID[None, :, None] * g[:, None, :])
-    resid = r[None, None, :] - pred
-    c = (resid * wgt).sum(axis=2) / wgt.sum()
-    chi2 = (((resid - c[:, :, None]) / sd) ** 2).sum(axis=2)
-    p, k = np.unravel_index(int(np.argmin(chi2)), chi2.shape)
-    return float(chi2[p, k]), float(BETA_GRID[k]), float(starts[p]), float(ends[p])
+    return _drift_fit_of(r.tobytes(), sd.tobytes(), float(view.window_s))
+
+
+@lru_cache(maxsize=8)
+def _drift_fit_of(
+    r_bytes: bytes, sd_bytes: bytes, step: float
+) -> tuple[float, float, float, float]:
+    r = np.frombuffer(r_bytes, dtype=np.float64)
+    sd = np.frombuffer(sd_bytes, dtype=np.float64)
+    w = r.size
+    g, starts, ends = _ramp_grid(w, step)
+    chi2, p, beta = _best_shape(r, sd, g)
+    duration = w * step
+    edges = np.arange(w + 1) * step
+
+    def near(t: float) -> NDArray[np.float64]:
+        lo, hi = max(0.0, t - step), min(duration, t + step)
+        return np.asarray(np.unique(np.round(np.arange(lo, hi + 1e-9 * step, step / SUBSTEPS), 9)))
+
+    pairs = [
+        (a, b) for a in near(starts[p]) for b in near(ends[p]) if b >= a and b > 0 and a < duration
+    ]
+    if pairs:
+        fine = np.array([ramp_window_mean(edges[:-1], edges[1:], a, b) for a, b in pairs])
+        chi2_f, q, beta_f = _best_shape(r, sd, fine)
+        if chi2_f < chi2:
+            return chi2_f, beta_f, float(pairs[q][0]), float(pairs[q][1])
+    return chi2, beta, float(starts[p]), float(ends[p])
 
 
 def _burst_fit(view: TimeView, raised: NDArray[np.bool_]) -> tuple[float, int, int] | None:

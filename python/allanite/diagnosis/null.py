@@ -30,6 +30,7 @@ scale ``beta`` the location moves by ``beta ln(N / N_s)`` (max-stability, :func:
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -42,6 +43,7 @@ __all__ = [
     "gumbel_isf",
     "gumbel_scale",
     "gumbel_sf",
+    "level_profiled",
     "max_shift",
     "rescaled",
     "rescaled_log_gamma",
@@ -49,6 +51,17 @@ __all__ = [
 ]
 
 Features = dict[str, NDArray[np.float64]]
+
+
+def level_profiled(term: Any) -> bool:
+    """Whether ``term``'s noise level follows a profile over the record.
+
+    A non-stationary term with a ``variance_scale(t)`` (its variance over time relative to the
+    record mean, :class:`allanite.terms.WhiteDrift`): second-order stationary but for that
+    profile, with its time parameters on the record's timeline. The null treats it apart
+    (its AVAR covariance, its short replicates, the reference of its window levels).
+    """
+    return not getattr(term, "stationary", True) and hasattr(term, "variance_scale")
 
 
 @dataclass(frozen=True)

@@ -32,15 +32,33 @@ than :data:`FULL_REPLICATES_MAX` samples, each view gets a null whose cost does 
   lowers ``D`` until it is resolved, and spikes (whose block-mean contribution is ``D`` times
   larger at the coarse rate) keep ``D = 1``.
 
+A term whose noise level follows a profile over the record (a ``variance_scale(t)``:
+:class:`allanite.terms.WhiteDrift`) is simulated in the short replicates with its profile
+compressed onto their time axis (every time parameter, all on the record's timeline, times
+``N_short / N``; :func:`short_model`): window ``w`` of a short replicate then holds the level of
+window ``w`` of the record, and the replicate's spectrum, kurtosis and spikes are those of the
+whole record's level mixture. The decimated replicates span the real duration and need no
+change.
+
 A model with a warm-up (a transient at the start, which a short replicate would show over a
 far larger share of its length) keeps the full-length replicate null.
+
+The re-analysis after effects are added (:func:`allanite.diagnosis.engine.diagnose`) needs the
+null of the model *with* the effects. An added effect is a process independent of the
+sensor's, so a replicate of the augmented model is a replicate of the model plus one of the
+effects: a :class:`ReplicateStore` keeps the null's replicate blocks (up to
+:data:`SHARED_BYTES`) and the re-analysis adds the effects' own streams to them, simulating
+only those (:meth:`ReplicateStore.adding`). A block not kept is simulated again from its seed,
+so the result is the same whatever the budget and the number of threads.
 """
 
 from __future__ import annotations
 
 import os
+import threading
 from collections.abc import Callable, Iterator
 from concurrent.futures import ThreadPoolExecutor
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -49,16 +67,25 @@ from numpy.typing import NDArray
 from allanite.diagnosis.decimation import decimation
 from allanite.diagnosis.frequency_view import frequency_features
 from allanite.diagnosis.inputs import simulate_model
-from allanite.diagnosis.null import NullEnsemble, max_shift, rescaled, rescaled_log_gamma
+from allanite.diagnosis.null import (
+    NullEnsemble,
+    level_profiled,
+    max_shift,
+    rescaled,
+    rescaled_log_gamma,
+)
 from allanite.diagnosis.tau_view import gaussian_tau_null
 from allanite.diagnosis.time_view import TimePlan, kurtosis_blocks, time_features, time_plan
 
 __all__ = [
     "FULL_REPLICATES_MAX",
     "REFERENCE_SHARE",
+    "SHARED_BYTES",
     "SHORT_LENGTH",
+    "ReplicateStore",
     "reference_replicates",
     "scaled_ensemble",
+    "short_model",
     "uses_scaled_null",
 ]
 
@@ -73,8 +100,124 @@ START_TERMS = ("warmup",)
 #: threads simulating replicate batches (the results do not depend on it)
 WORKERS = min(4, os.cpu_count() or 1)
 
+#: memory the null's replicate blocks may keep for the re-analysis (bytes)
+SHARED_BYTES = 2**30
+#: seed offset of the added effects' streams in a re-analysis
+ADDED_SEED = 2_000_003
+
 Features = dict[str, NDArray[np.float64]]
 Progress = Callable[[str, int, int], None]
+#: ``simulate(n, fs, seed, k)``: ``k`` replicates of ``n`` samples as an ``(n, k)`` array
+Simulate = Callable[[int, float, int, int], NDArray[np.float64]]
+
+
+class ReplicateStore:
+    """The null's replicate blocks of ``model``, kept for a re-analysis that adds effects.
+
+    ``ReplicateStore(model)`` is given to the null (:func:`scaled_ensemble`), which keeps the
+    blocks it simulates while they fit in ``budget`` bytes. ``store.adding(added)`` is the
+    source of the re-analysis: each block is the kept (or, beyond the budget, re-simulated)
+    block of ``model`` with the same seed plus a block of ``added`` (a NoiseModel of the
+    effects' independent processes, seeded ``ADDED_SEED`` further on), i.e. a replicate of
+    the model with the effects.
+
+    Parameters
+    ----------
+    model : NoiseModel
+        The simulated sensor of the null.
+    budget : int, optional
+        Bytes of replicate blocks kept (default :data:`SHARED_BYTES`; 0 keeps none).
+    """
+
+    def __init__(self, model: Any, budget: int | None = None) -> None:
+        budget = SHARED_BYTES if budget is None else budget
+        if budget < 0:
+            raise ValueError(f"budget must be >= 0 bytes, got {budget}")
+        self.model = model
+        self.added: Any = None
+        self.budget = int(budget)
+        self._blocks: dict[tuple[Any, ...], NDArray[np.float64]] = {}
+        self._used = 0
+        self._lock = threading.Lock()
+
+    def adding(self, added: Any) -> ReplicateStore:
+        """The same blocks with the independent streams of ``added`` on top (re-analysis)."""
+        view = ReplicateStore.__new__(ReplicateStore)
+        view.__dict__.update(self.__dict__)
+        view.added = added
+        return view
+
+    def release(self) -> None:
+        """Drop the kept blocks (the re-analysis is done, or there is none)."""
+        with self._lock:
+            self._blocks.clear()
+            self._used = 0
+
+    @property
+    def kept_bytes(self) -> int:
+        """Bytes of replicate blocks kept."""
+        return self._used
+
+    def _block(self, model: Any, n: int, fs: float, seed: int, k: int) -> NDArray[np.float64]:
+        key = (repr(model.terms), n, float(fs), seed, k)
+        with self._lock:
+            hit = self._blocks.get(key)
+        if hit is not None:
+            return hit
+        block = simulate_model(model, n, fs, seed, n_channels=k)
+        if self.added is None:  # only the null's own blocks are kept
+            with self._lock:
+                if self._used + block.nbytes <= self.budget:
+                    self._blocks[key] = block
+                    self._used += block.nbytes
+        return block
+
+    def simulator(self, transform: Callable[[Any], Any]) -> Simulate:
+        """Replicate blocks of ``transform(model)`` (plus ``transform(added)``, if any)."""
+        base = transform(self.model)
+        extra = transform(self.added) if self.added is not None else None
+
+        def simulate(n: int, fs: float, seed: int, k: int) -> NDArray[np.float64]:
+            block = self._block(base, n, fs, seed, k)
+            if extra is None:
+                return block
+            more = simulate_model(extra, n, fs, seed + ADDED_SEED, n_channels=k)
+            return np.asarray(block + more, dtype=np.float64)
+
+        return simulate
+
+
+def _simulator(
+    model: Any, store: ReplicateStore | None, transform: Callable[[Any], Any]
+) -> Simulate:
+    """Replicate blocks of ``transform(model)``, through ``store`` when there is one."""
+    if store is not None:
+        return store.simulator(transform)
+    target = transform(model)
+
+    def simulate(n: int, fs: float, seed: int, k: int) -> NDArray[np.float64]:
+        return simulate_model(target, n, fs, seed, n_channels=k)
+
+    return simulate
+
+
+def short_model(model: Any, n: int) -> Any:
+    """``model`` for the short replicates of an ``n``-sample record (see the module docstring).
+
+    Terms with a level profile over the record (non-stationary, with ``variance_scale``) get
+    their time parameters times ``SHORT_LENGTH / n``; the model is returned unchanged when
+    it has none.
+    """
+    factor = SHORT_LENGTH / n
+    terms = []
+    for t in model.terms:
+        if level_profiled(t):
+            times = {p.name: factor * float(getattr(t, p.name)) for p in t.params if p.time == 1}
+            t = t.with_values(**times)
+        terms.append(t)
+    if all(a is b for a, b in zip(terms, model.terms, strict=True)):
+        return model
+    return replace(model, terms=tuple(terms))
 
 
 def uses_scaled_null(model: Any, n: int) -> bool:
@@ -85,7 +228,7 @@ def uses_scaled_null(model: Any, n: int) -> bool:
 
 
 def _replicates(
-    model: Any,
+    simulate: Simulate,
     n: int,
     fs: float,
     count: int,
@@ -110,7 +253,7 @@ def _replicates(
 
     def run(start: int) -> list[Features]:
         k = min(batch, count - start)
-        block = simulate_model(model, n, fs, seed + start, n_channels=k)
+        block = simulate(n, fs, seed + start, k)
         return [features(np.ascontiguousarray(block[:, j])) for j in range(k)]
 
     done_count = 0
@@ -146,7 +289,7 @@ def reference_replicates(n: int, nperseg: int, n_mc: int) -> int:
 
 
 def _welch_reference(
-    model: Any,
+    simulate: Simulate,
     fs: float,
     nperseg: int,
     count: int,
@@ -161,7 +304,7 @@ def _welch_reference(
         return frequency_features(x, fs, nperseg)
 
     for feats in _replicates(
-        model, SHORT_LENGTH, fs, count, seed, welch, progress, stage + " (spectrum reference)",
+        simulate, SHORT_LENGTH, fs, count, seed, welch, progress, stage + " (spectrum reference)",
         0, count,
     ):  # fmt: skip
         for k, v in feats.items():  # in replicate order: the same sums for any thread count
@@ -180,11 +323,15 @@ def scaled_ensemble(
     seed: int,
     progress: Progress | None = None,
     stage: str = "null replicates",
+    store: ReplicateStore | None = None,
 ) -> NullEnsemble:
     """The null of a record of ``n`` samples from short and decimated replicates of ``model``.
 
     Same feature names and meaning as the full-length replicate null (see the module
     docstring); ``exact_tau`` is set, the tau residuals being draws from a known law.
+    ``store`` keeps the replicate blocks (the null of ``store.model == model``) or supplies
+    them with the effects added (``store.adding(added)``: ``model`` is then the model with the
+    effects, whose exact law gives the tau view's null and the decimation).
     """
     n_s = SHORT_LENGTH
     plan_s = time_plan(n_s)
@@ -204,13 +351,15 @@ def scaled_ensemble(
         return time_features(x, plan_d, kurt_blocks=coarse_blocks, sample_scale=False)
 
     total = 2 * n_mc
+    sim_s = _simulator(model, store, lambda m: short_model(m, n))
+    sim_d = _simulator(model, store, lambda m: m)
     ens_s = NullEnsemble.from_model(
-        list(_replicates(model, n_s, fs, n_mc, seed, short, progress, stage, 0, total))
+        list(_replicates(sim_s, n_s, fs, n_mc, seed, short, progress, stage, 0, total))
     )
     ens_d = NullEnsemble.from_model(
         list(
             _replicates(
-                model, n_d, fs / d, n_mc, seed + 7_919, coarse, progress, stage, n_mc, total
+                sim_d, n_d, fs / d, n_mc, seed + 7_919, coarse, progress, stage, n_mc, total
             )
         )
     )
@@ -220,7 +369,7 @@ def scaled_ensemble(
     segs = ((n_s - nperseg) // step + 1) / ((n - nperseg) // step + 1)
     n_ref = reference_replicates(n, nperseg, n_mc)
     more = (
-        _welch_reference(model, fs, nperseg, n_ref - n_mc, seed + 3_000_017, progress, stage)
+        _welch_reference(sim_s, fs, nperseg, n_ref - n_mc, seed + 3_000_017, progress, stage)
         if n_ref > n_mc
         else {}
     )
@@ -232,8 +381,11 @@ def scaled_ensemble(
             )
         else:
             ref[name], null[name] = rescaled_log_gamma(ens_s, name, segs)
+    # the windows share one expected level, unless a term's level follows a profile: then
+    # each window keeps its own reference (the short replicates hold the compressed profile)
+    steady = not any(level_profiled(t) for t in model.terms)
     ref["hf"], null["hf"] = rescaled(
-        ens_s, "hf", (plan_s.length - 1) / (plan.length - 1), log_mean=True, pool=True
+        ens_s, "hf", (plan_s.length - 1) / (plan.length - 1), log_mean=True, pool=steady
     )
     ref["kurt_hf"], null["kurt_hf"] = rescaled(
         ens_s, "kurt_hf", (n_s - 1) / (n - 1), log_mean=False

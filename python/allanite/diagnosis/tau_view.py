@@ -44,16 +44,26 @@ differences", 35th PTTI (2003): the correlation between AVAR estimates at differ
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any, ClassVar, cast
 
 import numpy as np
 from numpy.typing import NDArray
 from scipy import special, stats
 
 from allanite import _core
-from allanite.diagnosis.null import NullEnsemble, chi2_like_sf, gumbel_isf, runs
+from allanite.diagnosis.null import NullEnsemble, chi2_like_sf, gumbel_isf, level_profiled, runs
 
-__all__ = ["TauModel", "TauView", "gaussian_tau_null", "octave_factors", "tau_features"]
+if TYPE_CHECKING:
+    from allanite.terms import Term
+
+__all__ = [
+    "TauModel",
+    "TauView",
+    "gaussian_tau_null",
+    "octave_factors",
+    "tau_covariance",
+    "tau_features",
+]
 
 #: shrinkage of the Monte Carlo covariance toward its diagonal (stabilises the inverse)
 COV_SHRINK = 0.05
@@ -107,14 +117,12 @@ def gaussian_tau_null(
     null : numpy.ndarray
         ``(n_draw, len(m))`` null residuals of the log AVAR (draw minus its mean).
     """
-    from allanite.fit.covariance import avar_covariance
-
     dt = 1.0 / fs
     tau = np.asarray(m, dtype=np.float64) * dt
     mu = np.asarray(model.avar(tau, dt), dtype=np.float64)
     if np.any(mu <= 0):
         raise ValueError("the model's Allan variance is not positive at every tau; add noise terms")
-    cov = np.array(avar_covariance(model, m, dt, n), dtype=np.float64)
+    cov = tau_covariance(model, m, dt, n)
     cov[np.diag_indices_from(cov)] += np.asarray(model.avar_excess_variance(tau, dt, n))
     var = np.maximum(np.diag(cov), 1e-300)
     corr = cov / np.sqrt(np.outer(var, var))
@@ -133,6 +141,50 @@ def gaussian_tau_null(
         mu,
         np.asarray(draws - mean_log, dtype=np.float64),
     )
+
+
+@dataclass(frozen=True)
+class _RecordMeanSpectrum:
+    """A term whose level follows a profile, seen through its record-mean spectrum."""
+
+    term: Any
+    stationary: ClassVar[bool] = True
+
+    def psd_sampled(self, f: Any, dt: float) -> Any:
+        return self.term.psd_sampled(f, dt)
+
+
+def _profile_moment(term: Any, n: int, dt: float) -> float:
+    """Record mean of the squared level profile ``(N(t)^2 / N^2)^2`` (1 for a steady level)."""
+    k = min(n, 2**16)  # the profile is piecewise linear: 2^16 midpoints resolve it
+    t = (np.arange(k) + 0.5) * (n * dt / k)
+    v = np.asarray(term.variance_scale(t), dtype=np.float64)
+    return float(np.mean(v * v) / np.mean(v) ** 2)
+
+
+def tau_covariance(model: Any, m: NDArray[np.int64], dt: float, n: int) -> NDArray[np.float64]:
+    r"""Covariance of the overlapping AVAR estimates at factors ``m`` under ``model``.
+
+    The Gaussian (Whittle) covariance :func:`allanite.fit.covariance.avar_covariance` of the
+    stationary terms, and of every term whose level follows a profile over the record (a
+    ``variance_scale(t)``, mean 1: :class:`allanite.terms.WhiteDrift`), which that function
+    leaves out as non-stationary although it dominates the short taus. Such a term enters
+    with its record-mean spectrum; each squared difference of the estimate carries the local
+    variance, so the term's own block is scaled by :math:`\overline{v^2}/\bar v^2` (``v``
+    the profile; its products with the other terms by :math:`\bar v = 1`). Exact for a
+    profile that is slow against ``tau``; a model without such a term gets
+    ``avar_covariance`` unchanged.
+    """
+    from allanite.fit.covariance import CovarianceBasis
+
+    profiled = [level_profiled(t) for t in model.terms]
+    terms = [_RecordMeanSpectrum(t) if p else t for t, p in zip(model.terms, profiled, strict=True)]
+    basis = CovarianceBasis(cast("list[Term]", terms), m, dt, n)
+    cov = basis(np.ones(len(terms)))
+    for a, p in enumerate(profiled):
+        if p:
+            cov = cov + (_profile_moment(model.terms[a], n, dt) - 1.0) * basis.basis[a, a]
+    return np.array(cov, dtype=np.float64)
 
 
 def _shrunk_inverse(null: NDArray[np.float64]) -> NDArray[np.float64]:

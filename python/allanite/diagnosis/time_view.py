@@ -153,9 +153,71 @@ def kurtosis_blocks(plan: TimePlan) -> tuple[int, ...]:
 
 
 def _block_kurtosis(used: NDArray[np.float64], b: int) -> float:
+    return _block_moments(used, b)[1]
+
+
+def _block_moments(used: NDArray[np.float64], b: int) -> tuple[float, float]:
+    """Variance and excess kurtosis of the means of ``b``-sample blocks (windows in rows)."""
     nb = used.shape[1] // b
-    blocks = used[:, : nb * b].reshape(used.shape[0], nb, b).mean(axis=2)
-    return _kurtosis(blocks.ravel())
+    blocks = used[:, : nb * b].reshape(used.shape[0], nb, b).mean(axis=2).ravel()
+    return float(np.var(blocks)), _kurtosis(blocks)
+
+
+def added_block_kurtosis(
+    term: Any,
+    fs: float,
+    n: int,
+    n_windows: int,
+    blocks: tuple[int, ...],
+    *,
+    n_rep: int = 32,
+    seed: int = 20261125,
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """Block-mean variance, mean and spread of the excess kurtosis of ``term`` alone.
+
+    Monte Carlo over ``n_rep`` records of ``n`` samples of the term on its own (fixed seed),
+    laid out like the time view's ``n_windows`` windows, per block size of ``blocks``: a
+    random walk's or a slow Gauss-Markov process's block means over one record are
+    platykurtic (the path does not visit its range like a Gaussian sample). The samples are
+    linear in the term's first (amplitude) parameter: the Monte Carlo runs once per shape at
+    unit amplitude (cached) and the variance is scaled.
+    """
+    name = term.params[0].name
+    amplitude = float(term.values()[name])
+    unit = term.with_values(**{name: 1.0})
+    key = (repr(unit), fs, n, n_windows, tuple(blocks), n_rep, seed)
+    if key not in _BLOCK_CACHE:
+        if len(_BLOCK_CACHE) >= 256:
+            _BLOCK_CACHE.pop(next(iter(_BLOCK_CACHE)))
+        _BLOCK_CACHE[key] = _block_kurtosis_mc(unit, fs, n, n_windows, blocks, n_rep, seed)
+    var, k, sd = _BLOCK_CACHE[key]
+    return var * amplitude**2, k, sd
+
+
+_BLOCK_CACHE: dict[
+    tuple[Any, ...], tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]
+] = {}
+
+
+def _block_kurtosis_mc(
+    term: Any, fs: float, n: int, n_windows: int, blocks: tuple[int, ...], n_rep: int, seed: int
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    from allanite.model import NoiseModel
+
+    x = NoiseModel((term,)).simulate(n, fs=fs, n_channels=n_rep, seed=seed, allow_aliasing=True)
+    length = n // n_windows
+    moments = np.array(
+        [
+            [
+                _block_moments(x[: n_windows * length, i].reshape(n_windows, length), b)
+                for b in blocks
+            ]
+            for i in range(n_rep)
+        ]
+    )  # (rep, block, [var, kurt])
+    var = moments[:, :, 0].mean(axis=0)
+    kurt = moments[:, :, 1]
+    return var, kurt.mean(axis=0), kurt.std(axis=0, ddof=1)
 
 
 @dataclass(frozen=True)
@@ -180,6 +242,11 @@ class TimeView:
     kurtosis : dict
         Excess kurtosis (``hf``: first differences, ``hf_samples``: the samples minus their
         running mean, ``lf``: block means) of the real record and of the simulated sensor.
+    lf_kurtosis : dict
+        The low-frequency kurtosis per block size (``blocks``, samples): the real record's
+        excess kurtosis of its block means (``real``) and their variance (``var``), the
+        simulated sensor's (``ref``) and its null spread (``sd``), for
+        :meth:`lf_kurtosis_p_value`.
     spike_times_s, spike_amplitudes : list of float
         Detected spikes (time and signed height above the local median).
     change_points_s : list of float
@@ -203,6 +270,7 @@ class TimeView:
     residual: dict[str, NDArray[np.float64]] = field(default_factory=dict, repr=False)
     spread: dict[str, NDArray[np.float64]] = field(default_factory=dict, repr=False)
     null_max: dict[str, NDArray[np.float64]] = field(default_factory=dict, repr=False)
+    lf_kurtosis: dict[str, Any] = field(default_factory=dict, repr=False)
 
     def level_p_values(
         self, extra_avar_window: float, extra_level_var: NDArray[np.float64] | None = None
@@ -235,6 +303,34 @@ class TimeView:
             float(np.abs(self.residual["level"] / new_l).max()), self.null_max["level"]
         )
         return out
+
+    def lf_kurtosis_p_value(
+        self, added: tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]
+    ) -> float | None:
+        r"""p-value of the platykurtic block means if the sensor had an extra slow process.
+
+        ``added`` is the process's own block-mean variance ``v_c``, mean excess kurtosis
+        ``k_c`` and its spread (:func:`added_block_kurtosis`). Independent parts add their
+        cumulants: with the simulated sensor's share ``v_s = max(v - v_c, 0)`` of the real
+        block-mean variance ``v``, the expected excess kurtosis is
+
+        .. math:: k = \frac{k_s v_s^2 + k_c v_c^2}{(v_s + v_c)^2}
+
+        with the spread combined alike; the one-sided test of :func:`time_view`
+        (Bonferroni over the block sizes) on ``(k_real - k) / spread``. None without the
+        detail.
+        """
+        lf = self.lf_kurtosis
+        if not lf:
+            return None
+        v_c, k_c, sd_c = (np.asarray(a, dtype=np.float64) for a in added)
+        v_s = np.maximum(lf["var"] - v_c, 0.0)
+        total = np.maximum(v_s + v_c, 1e-300)
+        w_s, w_c = (v_s / total) ** 2, (v_c / total) ** 2
+        k = w_s * lf["ref"] + w_c * k_c
+        sd = np.sqrt((w_s * lf["sd"]) ** 2 + (w_c * sd_c) ** 2)
+        z = (lf["real"] - k) / np.where(sd > 0, sd, np.inf)
+        return float(min(1.0, z.size * stats.norm.sf(float((-z).max()))))
 
     @property
     def p_value(self) -> float:
@@ -364,8 +460,20 @@ def time_view(
     spike_null = ens.null["spike"][:, 0]
     spike_r = float(ens.residual(real, "spike")[0])
     fam_p["spike"] = gumbel_sf(spike_r, spike_null)
+    lf: dict[str, Any] = {}
     for name, sign in (("kurt_hf", 0), ("kurt_lf", -1)):
         sd = ens.null[name].std(axis=0, ddof=1)
+        if name == "kurt_lf":
+            blocks = kurtosis_blocks(plan)
+            used = x[: plan.n_windows * length].reshape(plan.n_windows, length)
+            lf = {
+                "blocks": blocks,
+                "real": np.asarray(real[name], dtype=np.float64),
+                "var": np.array([_block_moments(used, b)[0] for b in blocks]),
+                "ref": np.asarray(ens.ref[name], dtype=np.float64),
+                # the real residual's spread (the null's, times the real record's scale)
+                "sd": np.asarray(sd * np.sqrt(ens.real_scale), dtype=np.float64),
+            }
         zk = ens.residual(real, name) / np.where(sd > 0, sd, np.inf)
         if sign == 0:  # two-sided: bursts and outliers (+), clipping (-)
             tail = 2.0 * stats.norm.sf(float(np.abs(zk).max()))
@@ -415,4 +523,5 @@ def time_view(
         residual=residual,
         spread=spread,
         null_max=null_max,
+        lf_kurtosis=lf,
     )

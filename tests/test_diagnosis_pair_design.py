@@ -1,0 +1,85 @@
+"""The designed two-effect grid of benchmarks/validate_diagnosis.py (issue 14).
+
+The design only (no diagnosis): each effect of every designed pair is clearly in the record
+next to the other by the validation's own clear rule, and the pair types left out are the ones
+whose laws one another imitate in the tau and frequency views.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import sys
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+
+def _validate_diagnosis_module() -> Any:
+    path = Path(__file__).resolve().parents[1] / "benchmarks" / "validate_diagnosis.py"
+    spec = importlib.util.spec_from_file_location("validate_diagnosis", path)
+    assert spec is not None
+    assert spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module  # dataclasses look their module up
+    spec.loader.exec_module(module)
+    return module
+
+
+FS, N = 100.0, 2**16
+
+
+@pytest.fixture(scope="module")
+def vd() -> Any:
+    return _validate_diagnosis_module()
+
+
+@pytest.fixture(scope="module")
+def tm(vd: Any) -> Any:
+    return vd.design_tau_model(FS, N)
+
+
+def test_every_designed_pair_shows_both_effects(vd: Any, tm: Any) -> None:
+    cases = vd.designed_pair_cases(FS, N, tm)
+    assert len(cases) == len(vd.PAIRS) * len(vd.DESIGN_LEVELS)
+    dt, half = 1.0 / FS, N // 2
+    for case in cases:
+        a, b = str(case.effect)[5:].split("+")
+        levels = tuple(float(x) for x in case.strength[1:].split("-"))
+        terms = (case.extra, case.extra2)
+        avars = [vd.effect_avar(t, tm.tau, dt, half) for t in terms]
+        for i, name in enumerate((a, b)):
+            lam = vd.tau_noncentrality(avars[i], tm.sim_avar + avars[1 - i], tm.cov_inv)
+            assert vd.effect_clear(name, terms[i], lam, FS), (case.name, name, lam)
+            if name == "spikes":  # clear by the time view: 5 to 10 sample sigmas
+                sigmas = terms[i].amplitude / (0.05 * np.sqrt(FS))
+                assert sigmas == pytest.approx(vd.SPIKE_SIGMAS[levels[i]])
+            else:  # the designed noncentrality, next to the other effect at its size
+                assert lam == pytest.approx(levels[i] * vd.CLEAR_LAMBDA, rel=0.05), case.name
+                assert case.truth["lambda_design"][name] == pytest.approx(lam, rel=1e-2)
+
+
+def test_the_first_grid_hid_effects_the_design_shows(vd: Any, tm: Any) -> None:
+    # the legacy grid (--legacy-pairs) at medium strength: the step next to white noise and
+    # the ramp next to a Gauss-Markov process are below the clear level in expectation
+    dt, half = 1.0 / FS, N // 2
+    legacy = {str(c.effect): c for c in vd.legacy_pair_cases(FS, N)}
+    assert len(legacy) == len(vd.PAIRS)
+    for pair in ("pair:ramp+markov", "pair:telegraph+white"):
+        case = legacy[pair]
+        avars = [vd.effect_avar(t, tm.tau, dt, half) for t in (case.extra, case.extra2)]
+        lam = vd.tau_noncentrality(avars[0], tm.sim_avar + avars[1], tm.cov_inv)
+        assert lam < vd.CLEAR_LAMBDA, (pair, lam)
+
+
+def test_excluded_pairs_imitate_each_other(vd: Any, tm: Any) -> None:
+    # chance level of the tau-view noncentrality: about the number of taus (12)
+    chance = float(tm.tau.size)
+    for a, b in vd.EXCLUDED_PAIRS:
+        m = vd.pair_mimicry(a, b, FS, N, tm)
+        assert m["tau"] < 0.1 * chance, (a, b, m)
+        assert m["psd_db"] is None or m["psd_db"] < 0.5, (a, b, m)
+    for a, b in vd.PAIRS:  # the grid's: the one cannot stand in for the other
+        m = vd.pair_mimicry(a, b, FS, N, tm)
+        assert m["tau"] > 2.0 * chance, (a, b, m)
