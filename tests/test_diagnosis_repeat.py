@@ -1,8 +1,9 @@
 """Joint attribution of two processes of one kind, and correlation times at the fit's bound.
 
-A Gauss-Markov process with a distinct correlation time next to one the set already has is
-a second effect (issue 14, real-base cases); a Gauss-Markov or telegraph process whose
-correlation time runs into the fit's upper bound (four times the record) is a drift.
+A Gauss-Markov process with a distinct correlation time, or a resonance whose band does not
+overlap, next to one the set already has is a second effect (issue 14, real-base cases); a
+Gauss-Markov or telegraph process whose correlation time runs into the fit's upper bound (four
+times the record) is a drift.
 Fixed seeds; tolerances from the fits' own Fisher uncertainties.
 """
 
@@ -13,7 +14,8 @@ import pytest
 
 from allanite.diagnosis import diagnose
 from allanite.diagnosis.attribution import Attribution, _bounds, _degenerate, rank
-from allanite.diagnosis.candidates import candidate_library
+from allanite.diagnosis.band_shape import BandShape, band_shapes
+from allanite.diagnosis.candidates import Candidate, candidate_library
 from allanite.diagnosis.holdout import tau_model_for
 from allanite.diagnosis.inputs import SimSource
 from allanite.diagnosis.joint import DISTINCT_FACTOR, _distinct, _same_slot, share_key
@@ -192,3 +194,139 @@ def test_real_base_gauss_markov_next_to_the_runs_own_wander(shared_data, monkeyp
     monkeypatch.setattr(joint, "_two_processes", lambda *args, **kwargs: None)
     before = processes(diagnose(x, model, **kw))
     assert all(abs(np.log(a.params["tau_c"] / gm.tau_c)) > np.log(3.0) for a in before)
+
+
+# --- two resonances (a repeatable kind whose frequency the frequency view fixes) -------------
+
+
+def _resonance_candidate(others: tuple[dict[str, float], ...] = ()) -> Candidate:
+    band = [BandShape("resonance", (9.0, 11.0), {"N": 0.1, "frequency": 10.0, "damping": 0.05})]
+    band += [BandShape("resonance", (0.0, 1.0), p) for p in others]
+    cands, _ = candidate_library({}, duration=100.0, band=band)
+    return next(c for c in cands if c.effect == "resonance")
+
+
+def test_two_resonances_are_distinct_when_their_bands_do_not_overlap() -> None:
+    c = _resonance_candidate()
+    p = {"N": 0.1, "frequency": 10.0, "damping": 0.05}  # half-power band 9.5 .. 10.5 Hz
+    assert c.distinct(p, {"N": 0.1, "frequency": 11.2, "damping": 0.05})  # 1.2 Hz > 0.5 + 0.56
+    assert not c.distinct(p, {"N": 0.1, "frequency": 10.9, "damping": 0.05})  # 0.9 < 0.5 + 0.545
+    assert not c.distinct(p, {"N": 0.1, "frequency": 20.0, "damping": 0.7})  # a broad one over it
+    assert c.repeat_key == "frequency"
+    with pytest.raises(ValueError, match="not a repeatable kind"):
+        _markov_candidates()["white"].distinct({}, {})
+
+
+def test_a_second_band_is_a_further_resonance_of_the_candidate() -> None:
+    second = {"N": 0.2, "frequency": 30.0, "damping": 0.1}
+    c = _resonance_candidate((second,))
+    assert c.free == ("N",)
+    assert c.fixed == {"frequency": 10.0, "damping": 0.05}
+    (r,) = c.repeats()
+    assert r.fixed == {"frequency": 30.0, "damping": 0.1}
+    assert r.start == {"N": 0.2}
+    assert r.others == ()
+    assert not _same_slot(r, [c])  # next to the first, once
+    assert _same_slot(r, [c, c])
+    assert _resonance_candidate().repeats() == []
+
+
+@pytest.fixture(scope="module")
+def two_resonances() -> tuple[NoiseModel, tuple[object, object], object, object]:
+    """White-noise model; real = model + resonances at 12 Hz (Q 10) and 31 Hz (Q 6)."""
+    n = 2**15
+    model = NoiseModel((T["white"](N=0.05),), UNITS)
+    low = T["resonance"](N=0.4, frequency=12.0, damping=0.05)
+    high = T["resonance"](N=0.3, frequency=31.0, damping=0.08)
+    x = np.asarray(model.plus(low, high).simulate(n, fs=FS, seed=21), dtype=np.float64).ravel()
+    d = diagnose(x, model, fs=FS, units="deg/s", holdout=0.5, n_mc=40, seed=22)
+    return model, (low, high), d, x
+
+
+def test_two_resonances_are_both_found_and_named(two_resonances) -> None:  # type: ignore[no-untyped-def]
+    _, truth, d, x = two_resonances
+    bands = sorted(band_shapes(x[: x.size // 2], FS, d.frequency), key=lambda b: b.band_hz[0])
+    assert [b.kind for b in bands] == ["resonance", "resonance"]
+    res = sorted(
+        (a for a in d.explanation.effects if a.effect == "resonance"),
+        key=lambda a: a.params["frequency"],
+    )
+    assert len(res) == 2, [(a.effect, a.params) for a in d.explanation.effects]
+    for a, true in zip(res, truth, strict=True):
+        # the frequency within the true resonance's own half-power half-width
+        assert abs(a.params["frequency"] - true.frequency) <= true.damping * true.frequency
+    assert {"resonance", "resonance_2"} <= set(d.explanation.share)
+
+
+def test_the_two_resonance_model_pastes_and_simulates(two_resonances) -> None:  # type: ignore[no-untyped-def]
+    model, _, d, _ = two_resonances
+    terms = d.explanation.terms
+    assert [t["type"] for t in terms].count("resonance") == 2
+    combined = NoiseModel.from_dict({**model.to_dict(), "terms": terms})
+    x = np.asarray(combined.simulate(4096, fs=FS, seed=5), dtype=np.float64).ravel()
+    assert np.all(np.isfinite(x))
+    # both resonances are in the model: its Allan variance is the rest's plus theirs
+    tau = np.array([0.01, 0.05, 0.1, 1.0])
+    rest = NoiseModel.from_dict(
+        {**model.to_dict(), "terms": [t for t in terms if t["type"] != "resonance"]}
+    )
+    added = sum(term_from_dict(t).avar(tau, 1 / FS) for t in terms if t["type"] == "resonance")
+    np.testing.assert_allclose(combined.avar(tau, 1 / FS), rest.avar(tau, 1 / FS) + added)
+
+
+def test_without_a_second_band_one_resonance_is_named(two_resonances, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """The control: with one band-pass excess per record (the previous rule) the set holds
+    one resonance only."""
+    import allanite.diagnosis.engine as engine
+
+    _, _, _, x = two_resonances
+    model = two_resonances[0]
+    monkeypatch.setattr(engine, "band_shapes", lambda *a: band_shapes(*a, n_max=1))
+    d = diagnose(x, model, fs=FS, units="deg/s", holdout=0.5, n_mc=40, seed=22)
+    assert [a.effect for a in d.explanation.effects].count("resonance") <= 1
+
+
+@pytest.mark.slow
+def test_real_base_resonance_next_to_the_gyros_own(shared_data, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """ADIS16405 z gyro: run 1's fitted model (white + rate random walk) as the simulation, run
+    2 with a 35-Hz resonance (Q 5) injected as the record (the validation's real-base case).
+    The gyro has a 20-Hz resonance of its own: both are named, each within the injected or the
+    control's half-power half-width. With one band per record (the previous rule) the
+    injected resonance is not named (the set was quantization + Gauss-Markov)."""
+    import allanite
+    import allanite.diagnosis.engine as engine
+
+    adis = shared_data / "imu" / "adis16405"
+
+    def load(run: int) -> np.ndarray:
+        with np.load(adis / f"run{run}.npz") as data:
+            return data["gyro_counts"][:, 2].astype(np.float64) * 0.05
+
+    fitted = allanite.fit(allanite.avar(load(1), fs=FS, taus="octave", units="deg/s"))
+    model = NoiseModel(fitted.model.terms, UNITS)
+    res = T["resonance"](N=0.197, frequency=35.0, damping=0.1)  # Allan variance peak 8x
+    n = 2**16
+    injected = NoiseModel((res,), UNITS).simulate(n, fs=FS, seed=1024, allow_aliasing=True)
+    x = load(2)[:n] + np.asarray(injected, dtype=np.float64).ravel()
+    kw = {"fs": FS, "units": "deg/s", "holdout": 0.5, "n_mc": 60, "seed": 1018}
+
+    def resonances(d) -> list[tuple[float, float]]:  # type: ignore[no-untyped-def]
+        """(frequency, damping) of the named resonances, lowest first."""
+        return sorted(
+            (a.params["frequency"], a.params["damping"])
+            for a in d.explanation.effects
+            if a.effect == "resonance"
+        )
+
+    def frequencies(d) -> list[float]:  # type: ignore[no-untyped-def]
+        return [f for f, _ in resonances(d)]
+
+    control = resonances(diagnose(load(2)[:n], model, **kw))
+    assert len(control) == 1  # the gyro's own
+    (f_own, zeta_own) = control[0]
+    own, injected_f = frequencies(diagnose(x, model, **kw))
+    assert abs(injected_f - res.frequency) <= res.damping * res.frequency
+    assert abs(own - f_own) <= zeta_own * f_own
+    monkeypatch.setattr(engine, "band_shapes", lambda *a: band_shapes(*a, n_max=1))
+    before = frequencies(diagnose(x, model, **kw))
+    assert all(abs(f - res.frequency) > res.damping * res.frequency for f in before)

@@ -21,11 +21,16 @@ not. Two effects make such a shape, and the time view tells them apart:
 
 The candidates then fit only their amplitude on the tau view, like the sinusoid of a
 detected line.
+
+A record can hold two resonances (a gyro's own and one of its mount): :func:`band_shapes`
+looks for a further resonance among the significant bands outside the first's band (its
+half-power band widened by its width on each side), against the simulated sensor *plus* the
+resonances found so far, under the same shape and F test; at most :data:`MAX_BANDS`.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -34,7 +39,8 @@ from scipy import ndimage, optimize, signal, stats
 from allanite.diagnosis.frequency_view import FrequencyView
 from allanite.terms import Resonance
 
-__all__ = ["MIN_BINS", "N_SEGMENTS", "PEAK_ALPHA", "BandShape", "band_shape"]
+__all__ = ["MAX_BANDS", "MIN_BINS", "N_SEGMENTS", "PEAK_ALPHA", "BandShape", "band_shape",
+           "band_shapes"]  # fmt: skip
 
 #: spectrogram segments of the drifting-line test
 N_SEGMENTS = 16
@@ -42,6 +48,8 @@ N_SEGMENTS = 16
 MIN_BINS = 3.0
 #: level of the F test of a resonance peak against a flat excess on the log PSD
 PEAK_ALPHA = 1e-3
+#: at most this many band-pass excesses (resonances) per record
+MAX_BANDS = 2
 
 
 @dataclass(frozen=True)
@@ -158,6 +166,33 @@ def _fit_resonance(
     return {"N": float(n), "frequency": float(freq), "damping": float(zeta)}
 
 
+def band_shapes(
+    x: NDArray[np.float64], fs: float, fv: FrequencyView, n_max: int = MAX_BANDS
+) -> list[BandShape]:
+    """The band-pass shaped excesses of a record, strongest first (see the module docstring).
+
+    After a resonance, the next is sought outside its band against the simulated sensor plus
+    it; a drifting line ends the search (one per record).
+    """
+    out: list[BandShape] = []
+    cur = fv
+    skip = np.zeros(fv.f.size, dtype=bool)
+    while len(out) < n_max:
+        found = _band_shape(x, fs, cur, skip)
+        if found is None or (out and found.kind != "resonance"):
+            break
+        out.append(found)
+        if found.kind != "resonance":
+            break
+        lo, hi = found.band_hz
+        width = hi - lo
+        skip |= (fv.f >= lo - width) & (fv.f <= hi + width)
+        with np.errstate(all="ignore"):
+            psd = Resonance(**found.params).psd_sampled(fv.f, 1.0 / fs)
+        cur = replace(cur, sim_psd=cur.sim_psd + np.where(np.isfinite(psd), psd, 0.0))
+    return out
+
+
 def band_shape(x: NDArray[np.float64], fs: float, fv: FrequencyView) -> BandShape | None:
     """The band-pass shaped excess of a record, if its frequency view shows one.
 
@@ -170,6 +205,13 @@ def band_shape(x: NDArray[np.float64], fs: float, fv: FrequencyView) -> BandShap
     fv : FrequencyView
         Its frequency view against the simulated sensor.
     """
+    return _band_shape(x, fs, fv, None)
+
+
+def _band_shape(
+    x: NDArray[np.float64], fs: float, fv: FrequencyView, skip: NDArray[np.bool_] | None
+) -> BandShape | None:
+    """The strongest band-pass shaped excess outside the bins ``skip``."""
     if fv.band_z.size == 0:
         return None
     up = np.flatnonzero(fv.band_z > fv.band_threshold)
@@ -182,6 +224,8 @@ def band_shape(x: NDArray[np.float64], fs: float, fv: FrequencyView) -> BandShap
     in_band = np.zeros(f.size, dtype=bool)
     for i in up:
         in_band |= (f >= fv.band_edges_hz[i]) & (f < fv.band_edges_hz[i + 1])
+    if skip is not None:
+        in_band &= ~skip
     if not np.any(in_band & (exc > 0)):
         return None
     k = int(np.flatnonzero(in_band)[np.argmax(exc[in_band])])

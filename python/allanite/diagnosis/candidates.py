@@ -27,8 +27,15 @@ white_drift    hf, kurtosis of differences, spike statistic    hf, and a drift/s
                or stepping over the record)                    (replaces the white term)
 =============  ==============================================  ==========================
 
-The last two come from :func:`allanite.diagnosis.band_shape.band_shape` (frequency view and
+The last two come from :func:`allanite.diagnosis.band_shape.band_shapes` (frequency view and
 spectrogram); their shape parameters are fixed there and only the level is fitted.
+
+**Repeatable kinds** (:data:`REPEATABLE`): a set may hold two processes of a Gauss-Markov or
+resonance kind when they are distinct (:meth:`Candidate.distinct`): correlation times more
+than :data:`DISTINCT_FACTOR` apart, or resonances whose half-power bands do not overlap
+(``|f_1 - f_2| > zeta_1 f_1 + zeta_2 f_2``). A resonance's shape is fixed by its band excess,
+so a second one exists only where the frequency view shows a second band-pass excess
+(:attr:`Candidate.others`, :meth:`Candidate.repeats`).
 
 An effect whose signature is absent is not proposed (a telegraph without a non-Gaussian
 amplitude distribution is a Gauss-Markov process; the simpler term is the answer).
@@ -36,7 +43,7 @@ amplitude distribution is a Gauss-Markov process; the simpler term is the answer
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -44,8 +51,10 @@ import numpy as np
 from allanite.terms import TERM_TYPES, Term
 
 __all__ = [
+    "DISTINCT_FACTOR",
     "EFFECTS",
     "EXPLAINS",
+    "REPEATABLE",
     "SIGNATURE",
     "Candidate",
     "candidate_library",
@@ -102,6 +111,15 @@ SIGNATURE: dict[str, frozenset[str]] = {
 }
 
 
+#: kinds of which a set may hold a second process, and the parameter that locates one
+REPEATABLE: dict[str, str] = {"markov": "tau_c", "resonance": "frequency"}
+
+#: a second Gauss-Markov process must have a correlation time more than this factor away from
+#: every process of that kind in the set (model or effects): closer, the two are one process
+#: of larger variance (the existing one rescaled)
+DISTINCT_FACTOR = 4.0
+
+
 @dataclass(frozen=True)
 class Candidate:
     """One candidate effect to fit on top of the simulated sensor.
@@ -127,6 +145,10 @@ class Candidate:
         Free parameters whose ``start`` is another view's measurement of the effect's size
         (a detected line's amplitude, a band excess's level), not a mere starting guess: the
         size rule :func:`allanite.diagnosis.attribution.negligible` accepts them near it.
+    others : tuple of dict
+        Parameters (fixed and starting values) of further processes of this kind that the
+        other views located (a second band-pass excess: a second resonance), see
+        :meth:`repeats`.
     view_size : float or None
         The effect's size as another view measured it, relative to the sensor's own level
         (``white_drift``: ``|ratio - 1|``, the time view's level ratio), for an effect that
@@ -143,6 +165,50 @@ class Candidate:
     replaces: Term | None = None
     measured: tuple[str, ...] = ()
     view_size: float | None = None
+    others: tuple[dict[str, float], ...] = ()
+
+    @property
+    def repeat_key(self) -> str | None:
+        """The parameter that locates a process of a :data:`REPEATABLE` kind (None: not one).
+
+        A rescale of a model term is that term, never a second process.
+        """
+        return REPEATABLE.get(self.effect) if self.base is None else None
+
+    def repeats(self) -> list[Candidate]:
+        """The candidate of each further process of this kind located by the other views."""
+        return [
+            replace(
+                self,
+                fixed={k: v for k, v in p.items() if k not in self.free},
+                start={k: v for k, v in p.items() if k in self.free},
+                others=(),
+            )
+            for p in self.others
+        ]
+
+    def distinct(self, p: dict[str, float], q: dict[str, float]) -> bool:
+        """Whether processes of this kind with parameters ``p`` and ``q`` are two processes.
+
+        Gauss-Markov: correlation times more than :data:`DISTINCT_FACTOR` apart. Resonance:
+        half-power bands that do not overlap, ``|f_p - f_q| > zeta_p f_p + zeta_q f_q``.
+        Closer, they are one process of another size (the set refits it instead).
+
+        Raises
+        ------
+        ValueError
+            When the kind is not :data:`REPEATABLE` (any two processes of it are one slot).
+        """
+        key = REPEATABLE.get(self.effect)
+        if key is None:
+            raise ValueError(f"{self.effect!r} is not a repeatable kind; use one of {REPEATABLE}")
+        a, b = p.get(key), q.get(key)
+        if a is None or b is None or not (a > 0 and b > 0):
+            return False
+        if self.effect == "resonance":
+            half = p.get("damping", 0.0) * a + q.get("damping", 0.0) * b
+            return bool(abs(a - b) > half)
+        return not 1.0 / DISTINCT_FACTOR <= a / b <= DISTINCT_FACTOR
 
     @property
     def explains(self) -> frozenset[str]:
@@ -285,10 +351,11 @@ def candidate_library(
         fitted, like the single free parameter of a bias step).
     effects : list of str, optional
         Restrict the library to these effects (``rescale`` selects every rescale).
-    band : BandShape, optional
-        A band-pass shaped excess of the frequency view
-        (:func:`allanite.diagnosis.band_shape.band_shape`): ``resonance`` or
-        ``drifting_line`` is proposed with its shape fixed and its level free.
+    band : BandShape or list of BandShape, optional
+        Band-pass shaped excesses of the frequency view, strongest first
+        (:func:`allanite.diagnosis.band_shape.band_shapes`): ``resonance`` or
+        ``drifting_line`` is proposed with the first's shape fixed and its level free; further
+        resonances become the candidate's :attr:`~Candidate.others`.
     drift : DriftShape, optional
         A drift or step of the white-noise level found on the time view's windows
         (:func:`allanite.diagnosis.noise_level.drift_shape`): ``white_drift`` replaces the
@@ -296,6 +363,7 @@ def candidate_library(
         level ``N`` free.
     """
     wanted = effects if effects is not None else list(EFFECTS)
+    bands = [] if band is None else list(band) if isinstance(band, (list, tuple)) else [band]
     terms = _model_terms(model)
     whites = [t for t in terms if t.type == "white"]
     out: list[Candidate] = []
@@ -315,6 +383,7 @@ def candidate_library(
         measured: tuple[str, ...] = ()
         view_size: float | None = None
         replaces: Term | None = None
+        others: tuple[dict[str, float], ...] = ()
         if effect == "sine" and lines:
             freq, amp = lines[0]
             fixed["frequency"] = freq
@@ -336,12 +405,14 @@ def candidate_library(
             # the time view locates the bursts: their share of the time and mean length
             fixed["duty"], fixed["burst_s"] = bursts
         elif effect in ("resonance", "drifting_line"):
-            if band is None or band.kind != effect:
+            if not bands or bands[0].kind != effect:
                 continue
             level = "N" if effect == "resonance" else "amplitude"
-            fixed.update({k: v for k, v in band.params.items() if k != level})
-            start[level] = band.params[level]
+            fixed.update({k: v for k, v in bands[0].params.items() if k != level})
+            start[level] = bands[0].params[level]
             measured = (level,)
+            if effect == "resonance":
+                others = tuple(dict(b.params) for b in bands[1:] if b.kind == effect)
             if effect == "drifting_line":
                 fixed["duration"] = duration
         elif effect == "lowpass":
@@ -367,6 +438,7 @@ def candidate_library(
                 start=start,
                 replaces=replaces,
                 measured=measured,
+                others=others,
                 view_size=view_size,
             )
         )

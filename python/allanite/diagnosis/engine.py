@@ -11,7 +11,7 @@ from numpy.typing import ArrayLike, NDArray
 from allanite._deprecation import keyword_only_fs, renamed
 from allanite.diagnosis.analysis import Analysis, Progress, analyze
 from allanite.diagnosis.attribution import Attribution, rank
-from allanite.diagnosis.band_shape import band_shape
+from allanite.diagnosis.band_shape import band_shapes
 from allanite.diagnosis.candidates import candidate_library, check_effects
 from allanite.diagnosis.holdout import holdout_check, holdout_set, tau_model_for
 from allanite.diagnosis.inputs import (
@@ -319,7 +319,7 @@ def _attribute(
         spikes=spikes,
         effects=effects,
         bursts=_bursts(analysis.time),
-        band=band_shape(run.x_fit, run.fs, analysis.frequency),
+        band=band_shapes(run.x_fit, run.fs, analysis.frequency),
         drift=drift_shape(run.x_fit, run.fs, analysis.time, run.source.model),
     )
     # the same calibrated test ranks single effects and selects the joint set

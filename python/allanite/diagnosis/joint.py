@@ -52,7 +52,7 @@ from numpy.typing import NDArray
 from scipy import stats
 
 from allanite.diagnosis.attribution import EVIDENCE_CAP, Attribution, fit_candidate, rank
-from allanite.diagnosis.candidates import Candidate
+from allanite.diagnosis.candidates import DISTINCT_FACTOR, Candidate
 from allanite.diagnosis.frequency_view import FrequencyView
 from allanite.diagnosis.tau_view import TauModel
 from allanite.diagnosis.time_view import TimeView, added_level_variance
@@ -207,6 +207,29 @@ def _own_extra(a: Attribution, c: Candidate, tm: TauModel) -> NDArray[np.float64
     return np.asarray(extra, dtype=np.float64)
 
 
+def _pair_starts(
+    c: Candidate, single: Attribution | None, tm_bg: TauModel
+) -> list[tuple[Candidate, Candidate]]:
+    """Start pairs (first, second) for two processes of the repeatable kind ``c``.
+
+    A kind whose locating parameter is fitted (a Gauss-Markov ``tau_c``): the first started
+    :data:`DISTINCT_FACTOR` squared below and above the single fit's value (the tau grid's
+    middle without one), the second from the candidate's own start. A kind whose locating
+    parameter the other views fix (a resonance's frequency): the candidate and each further
+    process those views located (:meth:`~allanite.diagnosis.candidates.Candidate.repeats`).
+    """
+    key = c.repeat_key
+    if key is None:
+        return []
+    if key not in c.free:
+        return [(c, r) for r in c.repeats()]
+    ref = single.params[key] if single is not None else float(np.sqrt(tm_bg.tau[0] * tm_bg.tau[-1]))
+    return [
+        (replace(c, start={**c.start, key: t0}), c)
+        for t0 in (ref / DISTINCT_FACTOR**2, ref * DISTINCT_FACTOR**2)
+    ]
+
+
 def _two_processes(
     c: Candidate,
     tm_bg: TauModel,
@@ -216,49 +239,49 @@ def _two_processes(
 ) -> tuple[float, list[Attribution]] | None:
     """Two processes of the repeatable kind ``c`` fitted together on top of the set.
 
-    A single process of the kind fits a compromise between two with distinct correlation
-    times (e.g. the 0.015-s wander of a MEMS gyro and a 2-s Gauss-Markov process read as one
-    of 0.5 s, or as flicker), so the pair is fitted as a unit: the first process started
-    :data:`DISTINCT_FACTOR` squared below and above the single fit's correlation time (the
-    tau grid's middle without one), the second on top of it (all starts), the first refitted
-    on top of the second. The pair is kept under the same rule as one effect (likelihood
-    ratio ``Delta T > chi2_{1-alpha}(k)`` with ``k`` both processes' parameters, or evidence
-    explained; not worse than ``chi2_{1-alpha}(1)``) and scored by the same penalised
-    criterion, ``T_after + k chi2_{1-alpha}(1) + `` the evidence both leave unexplained.
+    A single process of the kind fits a compromise between two distinct ones (e.g. the
+    0.015-s wander of a MEMS gyro and a 2-s Gauss-Markov process read as one of 0.5 s, or as
+    flicker; a gyro's own 20-Hz resonance next to an injected 35-Hz one read as quantization),
+    so the pair is fitted as a unit from the starts of :func:`_pair_starts`: the first
+    process, the second on top of it, the first refitted on top of the second. The pair is
+    kept under the same rule as one effect (likelihood ratio ``Delta T > chi2_{1-alpha}(k)``
+    with ``k`` both processes' parameters, or evidence explained; not worse than
+    ``chi2_{1-alpha}(1)``) and scored by the same penalised criterion, ``T_after + k
+    chi2_{1-alpha}(1) + `` the evidence both leave unexplained.
 
     Returns
     -------
     (score, [first, second]) or None
         None when no distinct pair passes.
     """
-    key = REPEATABLE[c.effect]
+    key = c.repeat_key
     alpha = float(fit_kw["alpha"])
     evidence_p: dict[str, float] = fit_kw["evidence_p"]
     left: dict[str, bool] = fit_kw["significant"]
     per_param = float(stats.chi2.isf(alpha, 1))
-    ref = single.params[key] if single is not None else float(np.sqrt(tm_bg.tau[0] * tm_bg.tau[-1]))
     best: tuple[float, list[Attribution]] | None = None
     t_before = tm_bg.statistic()
-    for t0 in (ref / DISTINCT_FACTOR**2, ref * DISTINCT_FACTOR**2):
-        first = fit_candidate(replace(c, start={**c.start, key: t0}), tm_bg, **fit_kw)
+    for c1, c2 in _pair_starts(c, single, tm_bg):
+        first = fit_candidate(c1, tm_bg, **fit_kw)
         if first is None:
             continue
-        e1 = _own_extra(first, c, tm_bg)
-        second = fit_candidate(c, with_background(tm_bg, e1), **fit_kw)
-        if second is None or not _distinct(second, c, [first], [c]):
+        e1 = _own_extra(first, c1, tm_bg)
+        second = fit_candidate(c2, with_background(tm_bg, e1), **fit_kw)
+        if second is None or not _distinct(second, c2, [first], [c1]):
             continue
-        e2 = _own_extra(second, c, tm_bg)
+        e2 = _own_extra(second, c2, tm_bg)
+        refit = (key,) if key in c1.free else c1.free
         again = fit_candidate(
-            replace(c, start={**c.start, key: first.params[key]}),
+            replace(c1, start={**c1.start, **{k: first.params[k] for k in refit}}),
             with_background(tm_bg, e2),
             **fit_kw,
         )
-        if again is not None and _distinct(again, c, [second], [c]):
-            e_again = _own_extra(again, c, tm_bg)
+        if again is not None and _distinct(again, c1, [second], [c2]):
+            e_again = _own_extra(again, c1, tm_bg)
             if tm_bg.statistic(e_again + e2) < tm_bg.statistic(e1 + e2):
                 first, e1 = again, e_again
         t_after = tm_bg.statistic(e1 + e2)
-        k = 2 * len(c.free)
+        k = len(c1.free) + len(c2.free)
         explained = set(first.evidence.get("explained", [])) | set(
             second.evidence.get("explained", [])
         )
@@ -319,25 +342,17 @@ def effect_psd(
     return np.where(np.isfinite(out), out, 0.0)
 
 
-#: effects of which a set may hold a second process, when its correlation time is distinct
-REPEATABLE: dict[str, str] = {"markov": "tau_c"}
-
-#: a second process of a repeatable kind must have a correlation time more than this factor
-#: away from every process of that kind in the set (model or effects): closer, the two are
-#: one process of larger variance (the existing one rescaled)
-DISTINCT_FACTOR = 4.0
-
-
 def _same_slot(c: Candidate, chosen: list[Candidate]) -> bool:
     """Whether ``c`` changes a model term already changed or adds a type already chosen.
 
     Adding white noise after rescaling it (or rescaling it twice) is the same effect. A
-    process of a :data:`REPEATABLE` kind (a Gauss-Markov process) may be added once more next
-    to one already in the set (added or rescaled): two such processes with distinct
-    correlation times are two effects; :func:`_distinct` then checks the fitted one.
+    process of a :data:`~allanite.diagnosis.candidates.REPEATABLE` kind (a Gauss-Markov
+    process, a resonance) may be added once more next to one already in the set (added or
+    rescaled): two distinct such processes are two effects; :func:`_distinct` then checks
+    the fitted one.
     """
     for d in chosen:
-        repeat = c.effect in REPEATABLE and c.base is None and d.term_cls is c.term_cls
+        repeat = c.repeat_key is not None and d.term_cls is c.term_cls
         if repeat and sum(e.effect == c.effect for e in chosen) < 2:
             continue
         if c.effect == d.effect or c.term_cls is d.term_cls:  # white and rescale:white alike
@@ -351,24 +366,34 @@ def _same_slot(c: Candidate, chosen: list[Candidate]) -> bool:
 def _distinct(a: Attribution, c: Candidate, on: list[Attribution], on_c: list[Candidate]) -> bool:
     """Whether a fitted repeatable effect ``a`` is a process distinct from those of the set.
 
-    Its correlation time must lie more than :data:`DISTINCT_FACTOR` away from that of every
-    process of its kind already in the set (an added one, or the model's term a rescale
-    scales); otherwise it is that process with more variance, which the set describes by
+    It must be distinct (:meth:`~allanite.diagnosis.candidates.Candidate.distinct`: correlation
+    times more than :data:`DISTINCT_FACTOR` apart, resonance bands that do not overlap) from
+    every process of its kind already in the set (an added one, or the model's term a rescale
+    scales); otherwise it is that process with another size, which the set describes by
     refitting it (exchange pass), not by a second one.
     """
-    key = REPEATABLE.get(c.effect)
-    if key is None or c.base is not None:
+    if c.repeat_key is None:
         return True
     for b, d in zip(on, on_c, strict=True):
         if d.term_cls is not c.term_cls:
             continue
-        other = b.params.get(key) if d.base is None else d.base.values().get(key)
-        if other is None or not other > 0:
-            return False
-        ratio = a.params[key] / other
-        if 1.0 / DISTINCT_FACTOR <= ratio <= DISTINCT_FACTOR:
+        other = b.params if d.base is None else d.base.values()
+        if not c.distinct(a.params, other):
             return False
     return True
+
+
+def _candidate_of(a: Attribution, by_effect: dict[str, Candidate]) -> Candidate:
+    """The candidate ``a`` was fitted from: its effect's, or the further process it is.
+
+    A second resonance is its effect's candidate with another band's shape fixed
+    (:meth:`~allanite.diagnosis.candidates.Candidate.repeats`).
+    """
+    c = by_effect[a.effect]
+    for r in c.repeats():
+        if all(a.params.get(k) == v for k, v in r.fixed.items()) and r.fixed != c.fixed:
+            return r
+    return c
 
 
 def explain(
@@ -389,11 +414,6 @@ def explain(
     are ordered by score plus the spectral shape misfit of the set with them.
     """
     by_effect = {c.effect: c for c in candidates}
-    chosen = [best]
-    chosen_c = [by_effect[best.effect]]
-    extras = [_own_extra(best, chosen_c[0], tm)]
-    explained = set(best.evidence.get("explained", []))
-    gaps = [tm.gap(), tm.gap(extras[0])]
     cache: dict[str, NDArray[np.float64]] = {}
     worse = float(stats.chi2.isf(alpha, 1))
     n_fit = round(duration / tm.dt)
@@ -404,14 +424,16 @@ def explain(
         tm_bg: TauModel,
         left: dict[str, bool],
         room: int = 1,
+        singles: list[Attribution] | None = None,
     ) -> list[list[Attribution]]:
         """The candidates of another slot, ranked on top of the effects ``on``.
 
         Each entry is a group of effects to add: one effect, or (with ``room`` for two) two
-        processes of a :data:`REPEATABLE` kind fitted together (:func:`_two_processes`), which
+        processes of a repeatable kind fitted together (:func:`_two_processes`), which
         forward selection of one effect at a time never reaches when a single process of that
         kind fits a compromise between them. An effect that explains time/frequency evidence
         but makes the tau view significantly worse is not an explanation of this record.
+        ``singles`` (the opening step): the single effects already ranked, not refitted.
         """
         fit_kw: dict[str, Any] = {
             "alpha": alpha,
@@ -420,16 +442,24 @@ def explain(
             "time_view": with_level_background(time_view, on, on_c, tm, duration, cache),
             "duration": duration,
         }
-        kept = rank([c for c in candidates if not _same_slot(c, on_c)], tm_bg, **fit_kw)
-        kept = [
-            a
-            for a in kept
-            if a.evidence["tau"]["delta_T"] > -worse and _distinct(a, by_effect[a.effect], on, on_c)
-        ]
+        if singles is not None:
+            kept = singles
+        else:
+            # next to one process of a repeatable kind: the further processes the views located
+            pool = [c for c in candidates if not _same_slot(c, on_c)]
+            pool += [
+                r for c in pool if any(d.effect == c.effect for d in on_c) for r in c.repeats()
+            ]
+            kept = [
+                a
+                for a in rank(pool, tm_bg, **fit_kw)
+                if a.evidence["tau"]["delta_T"] > -worse
+                and _distinct(a, _candidate_of(a, by_effect), on, on_c)
+            ]
         groups: list[tuple[float, list[Attribution]]] = [(a.score, [a]) for a in kept]
         if room >= 2:
             for c in candidates:
-                if c.effect not in REPEATABLE or any(d.term_cls is c.term_cls for d in on_c):
+                if c.repeat_key is None or any(d.term_cls is c.term_cls for d in on_c):
                     continue
                 single = next((a for a in kept if a.effect == c.effect), None)
                 pair = _two_processes(c, tm_bg, fit_kw, single, worse)
@@ -443,21 +473,23 @@ def explain(
             bg = bg + effect_psd(a, c, f, tm.dt, n_fit)
 
         def joint_score(group: tuple[float, list[Attribution]]) -> float:
-            extra = bg + sum(effect_psd(a, by_effect[a.effect], f, tm.dt, n_fit) for a in group[1])
+            extra = bg + sum(
+                effect_psd(a, _candidate_of(a, by_effect), f, tm.dt, n_fit) for a in group[1]
+            )
             return group[0] + frequency.shape_misfit(extra)
 
         scored = sorted(((joint_score(g), g[1]) for g in groups), key=lambda s: s[0])
         # the alternatives of a single effect are re-judged on the joint score: a tie in the
         # tau view that the spectrum breaks is no tie, and one the spectrum leaves is
         # reported, not resolved blindly in favour of the simpler effect
-        singles = [(s, g[0]) for s, g in scored if len(g) == 1]
+        ones = [(s, g[0]) for s, g in scored if len(g) == 1]
         margin = float(stats.chi2.isf(alpha, 1))
         return [
             [
                 replace(
                     g[0],
                     alternatives=tuple(
-                        b.effect for t, b in singles if b is not g[0] and abs(t - s) < margin
+                        b.effect for t, b in ones if b is not g[0] and abs(t - s) < margin
                     ),
                 )
             ]
@@ -466,6 +498,17 @@ def explain(
             for s, g in scored
         ]
 
+    # the opening: the best single effect, or two processes of a repeatable kind fitted as a
+    # unit when they fit better (a single resonance at one of two bands leaves the other's
+    # excess in the tau view, and a look-alike wins the single ranking)
+    opening = on_top(
+        [], [], tm, {e: bool(s) for e, s in significant.items()}, MAX_EFFECTS, singles=[best]
+    )[0]
+    chosen = [best] if len(opening) == 1 else list(opening)  # best keeps its alternatives
+    chosen_c = [_candidate_of(a, by_effect) for a in chosen]
+    extras = [_own_extra(a, c, tm) for a, c in zip(chosen, chosen_c, strict=True)]
+    explained = set().union(*(set(a.evidence.get("explained", [])) for a in chosen))
+    gaps = [tm.gap()] + [tm.gap(np.sum(extras[: j + 1], axis=0)) for j in range(len(extras))]
     while len(chosen) < MAX_EFFECTS:
         total = np.sum(extras, axis=0)
         k_total = sum(len(c.free) for c in chosen_c)
@@ -478,8 +521,8 @@ def explain(
             break
         for nxt in groups[0]:
             chosen.append(nxt)
-            chosen_c.append(by_effect[nxt.effect])
-            extras.append(_own_extra(nxt, by_effect[nxt.effect], tm))
+            chosen_c.append(_candidate_of(nxt, by_effect))
+            extras.append(_own_extra(nxt, _candidate_of(nxt, by_effect), tm))
             explained |= set(nxt.evidence.get("explained", []))
             gaps.append(tm.gap(np.sum(extras, axis=0)))
     # exchange: each effect refitted against every candidate on top of the others
@@ -498,9 +541,9 @@ def explain(
             kept = [g[0] for g in on_top(others_a, others_c, tm_bg, left) if len(g) == 1]
             # the same term added or rescaled (white, rescale:white) is the same effect: only
             # the spectral misfit's rounding could tell them apart, so the incumbent stays
-            if not kept or by_effect[kept[0].effect].term_cls is chosen_c[i].term_cls:
+            if not kept or _candidate_of(kept[0], by_effect).term_cls is chosen_c[i].term_cls:
                 continue
-            chosen[i], chosen_c[i] = kept[0], by_effect[kept[0].effect]
+            chosen[i], chosen_c[i] = kept[0], _candidate_of(kept[0], by_effect)
             extras[i] = _own_extra(kept[0], chosen_c[i], tm)
             swapped = True
         if not swapped:
