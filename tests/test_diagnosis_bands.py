@@ -173,6 +173,24 @@ def test_band_shape_finds_a_drifting_line():
     assert shape.params["f_end"] == pytest.approx(8.0, abs=0.2)
 
 
+def test_band_shape_finds_a_resonance_next_to_a_rate_random_walk():
+    # the random walk's excess at the lowest frequencies is the spectrum's largest and has no
+    # half-power edge below it: it used to hide the resonance (band_shape returned None)
+    real = BASE.plus(Resonance(N=0.047, frequency=20.0, damping=0.1))
+    x = np.asarray(real.plus(RateRandomWalk(K=0.032)).simulate(N, fs=FS, seed=14), dtype=float)
+    a = analyze(x, SimSource(fs=FS, model=BASE), n_mc=30, seed=2, alpha=0.05)
+    fv = a.frequency
+    up = np.flatnonzero(fv.band_z > fv.band_threshold)
+    assert fv.band_edges_hz[up[0] + 1] < 1.0  # a significant band of the random walk
+    assert fv.band_edges_hz[up[-1]] < 20.0 < fv.band_edges_hz[up[-1] + 1]  # the resonance's
+    exc = fv.real_psd - fv.sim_psd
+    assert fv.f[int(np.argmax(exc))] < 1.0  # the random walk's excess is the larger
+    shape = band_shape(x, FS, fv)
+    assert shape is not None
+    assert shape.kind == "resonance"
+    assert shape.params["frequency"] == pytest.approx(20.0, rel=0.05)
+
+
 def test_band_shape_none_on_null_and_on_bursts():
     x = np.asarray(BASE.simulate(N, fs=FS, seed=13), dtype=float)
     assert _view(x) is None

@@ -179,12 +179,26 @@ def band_shape(x: NDArray[np.float64], fs: float, fv: FrequencyView) -> BandShap
     # a running median over 1/128 of the spectrum: Welch bins scatter by ~1/sqrt(nu) each
     size = max(5, f.size // 128)
     exc = ndimage.median_filter(fv.real_psd - fv.sim_psd, size=size, mode="nearest")
-    in_band = np.zeros(f.size, dtype=bool)
-    for i in up:
-        in_band |= (f >= fv.band_edges_hz[i]) & (f < fv.band_edges_hz[i + 1])
-    if not np.any(in_band & (exc > 0)):
-        return None
-    k = int(np.flatnonzero(in_band)[np.argmax(exc[in_band])])
+    # each run of adjacent significant bands on its own, the largest excess first: a
+    # monotone excess elsewhere (rate random walk at the lowest frequencies) must not hide a
+    # band-pass shape (it used to, as the spectrum's overall peak without half-power edges)
+    peaks = []
+    for run in np.split(up, np.flatnonzero(np.diff(up) > 1) + 1):
+        in_band = (f >= fv.band_edges_hz[run[0]]) & (f < fv.band_edges_hz[run[-1] + 1])
+        if np.any(in_band & (exc > 0)):
+            peaks.append(int(np.flatnonzero(in_band)[np.argmax(exc[in_band])]))
+    for k in sorted(peaks, key=lambda i: -exc[i]):
+        shape = _shape_at(x, fs, fv, exc, k)
+        if shape is not None:
+            return shape
+    return None
+
+
+def _shape_at(
+    x: NDArray[np.float64], fs: float, fv: FrequencyView, exc: NDArray[np.float64], k: int
+) -> BandShape | None:
+    """The band-pass shape around the excess peak at bin ``k``, if it has one."""
+    f = fv.f
     edges = _half_power(exc, k)
     if edges is None:
         return None
