@@ -350,10 +350,49 @@ def legacy_pair_cases(fs: float, n: int, rho: float = 2.0, label: str = "medium"
 
 
 def effect_avar(term: Any, tau: np.ndarray, dt: float, half: int) -> np.ndarray:
-    """A term's expected Allan variance in the fitted half (a warm-up decays within it)."""
+    """A term's expected Allan variance in the fitted half.
+
+    A warm-up decays within it; a drifting line sweeps only the first half of its band in it
+    (its law over the whole record averages the whole band: 0.65-1.26 times the fitted
+    half's at the pair cases' taus).
+    """
     if term.type == "warmup":
         term = term.with_values(duration=half * dt)
+    if term.type == "drifting_line" and term.duration > half * dt:
+        f_mid = term.f_start + (term.f_end - term.f_start) * half * dt / term.duration
+        term = term.with_values(f_end=f_mid, duration=half * dt)
     return np.asarray(term.avar(tau, dt), dtype=np.float64)
+
+
+def effect_seed(seed: int, which: int) -> int:
+    """The simulation seed of a case's first (``which`` 0) or second (1) effect."""
+    return seed + (7, 13)[which]
+
+
+def pair_seed(seed0: int, index: int) -> int:
+    """A designed pair case's seed (kept when ``--pair-types`` picks a subset)."""
+    return seed0 + 17 * index
+
+
+def realised_share(term: Any, fs: float, n: int, seed: int) -> float:
+    """How much of its expected power a non-stationary effect puts into the fitted half.
+
+    Bursts (``white_bursts``) come as a two-state Markov process whose mean burst spans
+    several time-view windows, so the fitted half holds only about two of them: the share of
+    it spent in bursts scatters around ``duty`` by ``sqrt(2 (1 - d)^2 burst_s / (d T))``
+    (0.9 of itself for the pair cases), and a record can hold a tenth of the expected burst
+    power. The burst mask does not depend on ``N``: this is the realised share over ``duty``
+    for the effect's own seed (1 for any other term).
+    """
+    if term.type != "white_bursts":
+        return 1.0
+    x = NoiseModel((term,), UNITS).simulate(n, fs=fs, seed=seed, allow_aliasing=True)
+    share = float(np.mean(x[: n // 2] != 0.0)) / term.duty
+    if share == 0.0:
+        raise ValueError(
+            f"no burst falls into the fitted half for seed {seed}: pick another --seed"
+        )
+    return share
 
 
 def tau_noncentrality(extra: np.ndarray, floor: np.ndarray, cov_inv: np.ndarray) -> float:
@@ -397,14 +436,22 @@ def _with_gain(term: Any, gain: float) -> Any:
 
 
 def design_pair(
-    a: str, b: str, fs: float, n: int, levels: tuple[float, float], tm: Any
+    a: str,
+    b: str,
+    fs: float,
+    n: int,
+    levels: tuple[float, float],
+    tm: Any,
+    shares: tuple[float, float] = (1.0, 1.0),
 ) -> tuple[Any, Any, dict[str, float]] | None:
     """Sizes of ``a`` and ``b`` such that each one's expected tau-view noncentrality on top of
     the base and the other effect is ``levels * CLEAR_LAMBDA``.
 
     Both sizes are found by alternating bisections (each one's noncentrality grows with its
     own size and falls with the other's); spikes keep the amplitude of
-    :data:`SPIKE_SIGMAS` (they are clear by their own view). Returns the two terms and their
+    :data:`SPIKE_SIGMAS` (they are clear by their own view). ``shares``: the realised share of
+    each effect's expected power in the fitted half (:func:`realised_share`; bursts). Returns
+    the two terms and their
     expected noncentralities, or None when no sizes reach the targets (the two laws mask each
     other: the larger one effect, the less the other shows).
     """
@@ -419,7 +466,7 @@ def design_pair(
     for i in (0, 1):
         if fixed[i]:
             terms[i] = terms[i].with_values(amplitude=SPIKE_SIGMAS[levels[i]] * 0.05 * np.sqrt(fs))
-    unit = [effect_avar(t, tm.tau, dt, half) for t in terms]
+    unit = [shares[i] * effect_avar(t, tm.tau, dt, half) for i, t in enumerate(terms)]
     targets = [lv * CLEAR_LAMBDA for lv in levels]
     log_g = [0.0, 0.0]
 
@@ -451,22 +498,34 @@ def design_pair(
 
 
 def designed_pair_cases(
-    fs: float, n: int, tm: Any = None, pairs: list[tuple[str, str]] | None = None
+    fs: float,
+    n: int,
+    tm: Any = None,
+    pairs: list[tuple[str, str]] | None = None,
+    seed0: int = 1000,
 ) -> list[Case]:
     """Two withheld effects at once, each one clearly in the record next to the other.
 
     Every pair type of ``pairs`` (default :data:`PAIRS`) at the sizes of :data:`DESIGN_LEVELS`
     (:func:`design_pair`): weak + strong, medium + medium, strong + weak, where weak means an
     expected tau-view noncentrality of twice the clear level on top of the base and the other
-    effect. Each case is scored (the realised clearness is reported next to it).
+    effect. Bursts are sized on the share of the fitted half they occupy in the case's own
+    record (seed ``pair_seed(seed0, index)``, :func:`realised_share`). Each case is scored
+    (the realised clearness is reported next to it).
     """
     tm = design_tau_model(fs, n) if tm is None else tm
     base = base_model(fs)
+    shapes = pair_shapes(fs, n)
     out = []
     for a, b in PAIRS if pairs is None else pairs:
         index = (PAIRS + EXCLUDED_PAIRS).index((a, b)) * len(DESIGN_LEVELS)
         for j, levels in enumerate(DESIGN_LEVELS):
-            got = design_pair(a, b, fs, n, levels, tm)
+            seed = pair_seed(seed0, index + j)
+            shares = (
+                realised_share(shapes[a], fs, n, effect_seed(seed, 0)),
+                realised_share(shapes[b], fs, n, effect_seed(seed, 1)),
+            )
+            got = design_pair(a, b, fs, n, levels, tm, shares)
             if got is None:
                 raise RuntimeError(f"no sizes make both {a} and {b} clear at {levels}")
             ta, tb, lams = got
@@ -475,7 +534,7 @@ def designed_pair_cases(
                 Case(f"pair-{a}+{b}-{label}-fs{fs:g}", f"pair:{a}+{b}", label, fs, n, base,
                      None, ta, extra2=tb, effect2=b,
                      truth={"lambda_design": {k: round(v, 1) for k, v in lams.items()},
-                            "index": index + j})
+                            "index": index + j, "shares": {a: shares[0], b: shares[1]}})
             )  # fmt: skip
     return out
 
@@ -657,12 +716,12 @@ def simulate_case(case: Case, seed: int) -> tuple[np.ndarray, np.ndarray | None,
     effect = effect2 = None
     if case.extra is not None:
         effect = NoiseModel((case.extra,), UNITS).simulate(
-            case.n, fs=case.fs, seed=seed + 7, allow_aliasing=True
+            case.n, fs=case.fs, seed=effect_seed(seed, 0), allow_aliasing=True
         )
         real = real + effect
     if case.extra2 is not None:
         effect2 = NoiseModel((case.extra2,), UNITS).simulate(
-            case.n, fs=case.fs, seed=seed + 13, allow_aliasing=True
+            case.n, fs=case.fs, seed=effect_seed(seed, 1), allow_aliasing=True
         )
         real = real + effect2
     if case.transform is not None:
@@ -1535,7 +1594,11 @@ def main() -> None:
             chosen = args.pair_types.split(",") if args.pair_types else None
             pairs = [p for p in PAIRS + EXCLUDED_PAIRS if chosen is None or "+".join(p) in chosen]
             pairs = pairs if chosen else PAIRS
-            cases = [c for name in names for c in designed_pair_cases(*CONFIGS[name], pairs=pairs)]
+            cases = [
+                c
+                for name in names
+                for c in designed_pair_cases(*CONFIGS[name], pairs=pairs, seed0=args.seed)
+            ]
         if args.pair_types and args.legacy_pairs:
             cases = [c for c in cases if str(c.effect)[5:] in args.pair_types.split(",")]
         cases += [c for c in make_cases(True, names, ["none"], 0) if c.transform is not None]
@@ -1559,7 +1622,7 @@ def main() -> None:
     t0 = time.perf_counter()
     for i, case in enumerate(cases):
         # a designed pair keeps its seed when --pair-types picks a subset
-        row = evaluate(case, args.seed + 17 * case.truth.get("index", i), n_mc)
+        row = evaluate(case, pair_seed(args.seed, case.truth.get("index", i)), n_mc)
         rows.append(row)
         nan = float("nan")
         print(

@@ -173,6 +173,51 @@ def test_band_shape_finds_a_drifting_line():
     assert shape.params["f_end"] == pytest.approx(8.0, abs=0.2)
 
 
+def test_band_shape_finds_a_resonance_next_to_a_rate_random_walk():
+    # the random walk's excess at the lowest frequencies is the spectrum's largest and has no
+    # half-power edge below it: it used to hide the resonance (band_shape returned None)
+    real = BASE.plus(Resonance(N=0.047, frequency=20.0, damping=0.1))
+    x = np.asarray(real.plus(RateRandomWalk(K=0.032)).simulate(N, fs=FS, seed=14), dtype=float)
+    a = analyze(x, SimSource(fs=FS, model=BASE), n_mc=30, seed=2, alpha=0.05)
+    fv = a.frequency
+    up = np.flatnonzero(fv.band_z > fv.band_threshold)
+    assert fv.band_edges_hz[up[0] + 1] < 1.0  # a significant band of the random walk
+    assert fv.band_edges_hz[up[-1]] < 20.0 < fv.band_edges_hz[up[-1] + 1]  # the resonance's
+    exc = fv.real_psd - fv.sim_psd
+    assert fv.f[int(np.argmax(exc))] < 1.0  # the random walk's excess is the larger
+    shape = band_shape(x, FS, fv)
+    assert shape is not None
+    assert shape.kind == "resonance"
+    assert shape.params["frequency"] == pytest.approx(20.0, rel=0.05)
+
+
+def test_drifting_line_ridge_survives_noise_peaks_in_a_few_segments():
+    # a weak line loses a few of the 16 spectrogram segments to a stronger peak elsewhere in
+    # the band; the plain least-squares line's R^2 dropped below 0.8 there (returned None)
+    from allanite.diagnosis.band_shape import N_SEGMENTS, _ridge
+
+    rng = np.random.default_rng(15)
+    t = np.arange(N) / FS
+    f0, f1 = 5.0, 6.5
+    phase = 2 * np.pi * (f0 * t + 0.5 * (f1 - f0) * t**2 / t[-1])
+    x = 0.5 * rng.standard_normal(N) + 0.3 * np.sin(phase)
+    seg = N // N_SEGMENTS
+    for i, f in ((5, 7.0), (11, 4.3), (13, 7.2)):  # three segments with another, stronger peak
+        x[i * seg : (i + 1) * seg] += 1.0 * np.sin(2 * np.pi * f * t[i * seg : (i + 1) * seg])
+    ridge = _ridge(x, FS, (4.93, 6.59))
+    assert ridge is not None
+    # spectrogram bins are FS / seg = 0.05 Hz wide
+    assert ridge[0] == pytest.approx(f0, abs=0.1)
+    assert ridge[1] == pytest.approx(f1, abs=0.1)
+    # a resonance's peaks scatter over its band without a line through them
+    res = NoiseModel((Resonance(N=0.3, frequency=5.7, damping=0.1),), UNITS).simulate(
+        N, fs=FS, seed=16
+    )
+    assert (
+        _ridge(np.asarray(res, dtype=float) + 0.5 * rng.standard_normal(N), FS, (5.1, 6.3)) is None
+    )
+
+
 def test_band_shape_none_on_null_and_on_bursts():
     x = np.asarray(BASE.simulate(N, fs=FS, seed=13), dtype=float)
     assert _view(x) is None
