@@ -289,7 +289,7 @@ inline void add_diff_squares(const TapsT& t, std::int64_t count, Eigen::Index nc
 /// sum + comp) and handed to the kernel split per channel as S = H + L: H is sum rounded to a
 /// multiple of a power of two q with |H| <= 2^48 q, so every third difference of H is exact,
 /// and L = (sum - H) + comp carries the rest to O(eps |L|); no cancellation of the large S.
-/// Nothing of size M is stored: the plan keeps the state every kSumBlock rows (one pass, four
+/// Nothing of size M is stored: the plan keeps the state every kSumBlock rows (one pass, eight
 /// segments of whole blocks summed side by side from zero, then joined to the running total
 /// with TwoSum), and a cursor regenerates S from the mark below its start row, so every S a
 /// factor reads depends only on the factor, never on the threads.
@@ -299,13 +299,14 @@ struct PrefixPlan {
   std::vector<double> big;        // per channel: (v + big) - big rounds v to a multiple of q
 };
 
-/// TwoSum states of kPlanSegments segments of one channel's rows side by side (one vector):
+/// TwoSum states of kPlanSegments segments of one channel's rows side by side (two vectors;
+/// unit row stride: four rows of four segments loaded and transposed in registers):
 /// segment s covers rows [s seg, (s + 1) seg) and starts from zero. Its local state at each
 /// kSumBlock rows goes to mark s seg / kSumBlock + b (entries `stride` apart, marks with
 /// row <= M), its end state to end_sum/end_comp, its largest |local sum| to top.
-/// (S of them from x on; plan_segments_half runs two and two, on two threads, with the same
+/// (S of them from x on; plan_segments_half runs four and four, on two threads, with the same
 /// arithmetic per segment.)
-constexpr int kPlanSegments = 4;
+constexpr int kPlanSegments = 8;
 template <int S>
 ALLANITE_ALWAYS_INLINE void plan_segments_impl(const double* x, std::int64_t rs, std::int64_t M, std::int64_t seg,
                                                double* sum_at, double* comp_at, std::int64_t stride,
@@ -322,7 +323,44 @@ ALLANITE_ALWAYS_INLINE void plan_segments_impl(const double* x, std::int64_t rs,
       }
     const std::int64_t r1 = std::min(seg, r0 + kSumBlock);
     const std::int64_t both = std::min(r1, std::max(r0, common));
-    for (std::int64_t r = r0; r < both; ++r) {
+    std::int64_t done = r0;  // rows of every segment summed
+#if defined(__GNUC__) && !defined(__clang__) && !defined(ALLANITE_SCALAR_LANES)
+    if constexpr (S % 4 == 0) {  // four segments in a vector, four rows of each transposed in registers
+      if (rs == 1 && both - r0 >= 4) {
+        typedef double v4d __attribute__((vector_size(32)));
+        typedef double v4u __attribute__((vector_size(32), aligned(8), may_alias));  // unaligned access
+        typedef long long v4i __attribute__((vector_size(32)));
+        const v4i lo2 = {0, 4, 2, 6}, hi2 = {1, 5, 3, 7}, lo4 = {0, 1, 4, 5}, hi4 = {2, 3, 6, 7};
+        const v4i no_sign = {~(1LL << 63), ~(1LL << 63), ~(1LL << 63), ~(1LL << 63)};
+        done = r0 + (both - r0) / 4 * 4;
+        for (int g = 0; g < S; g += 4) {
+          v4d sv = *reinterpret_cast<const v4u*>(sum + g), cv = *reinterpret_cast<const v4u*>(comp + g);
+          v4d tv = *reinterpret_cast<const v4u*>(top + g);
+          const double* p0 = x + g * seg;
+          for (std::int64_t q = r0; q < done; q += 4) {
+            const v4d a0 = *reinterpret_cast<const v4u*>(p0 + q), a1 = *reinterpret_cast<const v4u*>(p0 + seg + q);
+            const v4d a2 = *reinterpret_cast<const v4u*>(p0 + 2 * seg + q);
+            const v4d a3 = *reinterpret_cast<const v4u*>(p0 + 3 * seg + q);
+            const v4d t0 = __builtin_shuffle(a0, a1, lo2), t1 = __builtin_shuffle(a0, a1, hi2);
+            const v4d t2 = __builtin_shuffle(a2, a3, lo2), t3 = __builtin_shuffle(a2, a3, hi2);
+            const v4d xr[4] = {__builtin_shuffle(t0, t2, lo4), __builtin_shuffle(t1, t3, lo4),
+                               __builtin_shuffle(t0, t2, hi4), __builtin_shuffle(t1, t3, hi4)};
+            for (int k = 0; k < 4; ++k) {  // the scalar loop's arithmetic, segment by segment
+              const v4d t = sv + xr[k], bb = t - sv;
+              cv += (sv - (t - bb)) + (xr[k] - bb);
+              sv = t;
+              const v4d at = reinterpret_cast<v4d>(reinterpret_cast<v4i>(t) & no_sign);
+              tv = tv < at ? at : tv;
+            }
+          }
+          *reinterpret_cast<v4u*>(sum + g) = sv;
+          *reinterpret_cast<v4u*>(comp + g) = cv;
+          *reinterpret_cast<v4u*>(top + g) = tv;
+        }
+      }
+    }
+#endif
+    for (std::int64_t r = done; r < both; ++r) {
       double v[S];
       for (int s = 0; s < S; ++s) v[s] = x[(s * seg + r) * rs];
       for (int s = 0; s < S; ++s) {
@@ -380,7 +418,7 @@ inline PrefixPlan prefix_plan(const PhaseRef& phase, int threads = 1) {
     const auto uc = static_cast<std::size_t>(c);
     double end_sum[kPlanSegments], end_comp[kPlanSegments], top[kPlanSegments];
     const std::int64_t rs = phase.outerStride();
-    if (threads > 1 && M >= (std::int64_t{1} << 16)) {  // segments 0, 1 and 2, 3 on two threads (same bits)
+    if (threads > 1 && M >= (std::int64_t{1} << 16)) {  // segments 0-3 and 4-7 on two threads (same bits)
       parallel_for(2, 2, [&](std::size_t half) {
         const std::int64_t s0 = static_cast<std::int64_t>(half) * (kPlanSegments / 2);
         plan_segments_half(phase.data() + c + s0 * seg * rs, rs, M - s0 * seg, seg,
