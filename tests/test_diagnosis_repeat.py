@@ -9,9 +9,12 @@ Fixed seeds; tolerances from the fits' own Fisher uncertainties.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 import pytest
 
+import benchmark_module
 from allanite.diagnosis import diagnose
 from allanite.diagnosis.attribution import Attribution, _bounds, _degenerate, rank
 from allanite.diagnosis.band_shape import BandShape, band_shapes
@@ -157,6 +160,15 @@ def test_a_ramp_is_not_read_as_a_process_at_the_bound(monkeypatch) -> None:  # t
     assert set(at_bound(rank(cands, tm, **test))) == {"markov", "telegraph"}
 
 
+def _adis_base(axis: int) -> tuple[NoiseModel, Callable[[int], np.ndarray]]:
+    """Run 1's fitted model of an ADIS16405 gyro axis and a loader of its runs (deg/s), as the
+    validation's real-base cases build them (``benchmarks/diagnosis_adis16405.py``; the
+    tests request ``shared_data``, which skips or fails when the data are absent)."""
+    adis = benchmark_module.load("diagnosis_adis16405")
+    model, _ = adis.fit_model(adis.load(1, axis))
+    return NoiseModel(model.terms, UNITS), lambda run: adis.load(run, axis)
+
+
 @pytest.mark.slow
 def test_real_base_gauss_markov_next_to_the_runs_own_wander(shared_data, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     """ADIS16405 x gyro: run 1's fitted model as the simulation, run 3 with a 2-s Gauss-Markov
@@ -164,17 +176,9 @@ def test_real_base_gauss_markov_next_to_the_runs_own_wander(shared_data, monkeyp
     short-correlation wander (0.013-0.019 s), so one Gauss-Markov process fits a compromise
     and loses to flicker; fitted as a pair, both processes are named. Without the pair step
     (the previous selection) the injected process is not named."""
-    import allanite
     import allanite.diagnosis.joint as joint
 
-    adis = shared_data / "imu" / "adis16405"
-
-    def load(run: int) -> np.ndarray:
-        with np.load(adis / f"run{run}.npz") as data:
-            return data["gyro_counts"][:, 0].astype(np.float64) * 0.05
-
-    fitted = allanite.fit(allanite.avar(load(1), fs=FS, taus="octave", units="deg/s"))
-    model = NoiseModel(fitted.model.terms, UNITS)
+    model, load = _adis_base(axis=0)
     gm = T["markov"](sigma=0.0721, tau_c=2.0)  # Allan variance peak 8x the model's
     n = 2**16
     injected = NoiseModel((gm,), UNITS).simulate(n, fs=FS, seed=1092, allow_aliasing=True)
@@ -293,17 +297,9 @@ def test_real_base_resonance_next_to_the_gyros_own(shared_data, monkeypatch) -> 
     The gyro has a 20-Hz resonance of its own: both are named, each within the injected or the
     control's half-power half-width. With one band per record (the previous rule) the
     injected resonance is not named (the set was quantization + Gauss-Markov)."""
-    import allanite
     import allanite.diagnosis.engine as engine
 
-    adis = shared_data / "imu" / "adis16405"
-
-    def load(run: int) -> np.ndarray:
-        with np.load(adis / f"run{run}.npz") as data:
-            return data["gyro_counts"][:, 2].astype(np.float64) * 0.05
-
-    fitted = allanite.fit(allanite.avar(load(1), fs=FS, taus="octave", units="deg/s"))
-    model = NoiseModel(fitted.model.terms, UNITS)
+    model, load = _adis_base(axis=2)
     res = T["resonance"](N=0.197, frequency=35.0, damping=0.1)  # Allan variance peak 8x
     n = 2**16
     injected = NoiseModel((res,), UNITS).simulate(n, fs=FS, seed=1024, allow_aliasing=True)

@@ -10,6 +10,8 @@ it drops them and only them.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pytest
 
@@ -55,28 +57,23 @@ def _candidates() -> dict[str, Candidate]:
     return {c.effect: c for c in cands}
 
 
+def _fit_kw(an: Analysis) -> dict[str, Any]:
+    """The keywords the engine gives both ``fit_candidate`` and ``rank``."""
+    return {
+        "alpha": ALPHA,
+        "evidence_p": EVIDENCE_P,
+        "significant": SIGNIFICANT,
+        "time_view": an.time,
+        "duration": N_SAMPLES / FS,
+    }
+
+
 def _fit(effect: str, an: Analysis) -> attr.Attribution | None:
-    return attr.fit_candidate(
-        _candidates()[effect],
-        an.tau_model,
-        alpha=ALPHA,
-        evidence_p=EVIDENCE_P,
-        significant=SIGNIFICANT,
-        time_view=an.time,
-        duration=N_SAMPLES / FS,
-    )
+    return attr.fit_candidate(_candidates()[effect], an.tau_model, **_fit_kw(an))
 
 
 def _rank(an: Analysis) -> list[attr.Attribution]:
-    return attr.rank(
-        list(_candidates().values()),
-        an.tau_model,
-        alpha=ALPHA,
-        evidence_p=EVIDENCE_P,
-        significant=SIGNIFICANT,
-        time_view=an.time,
-        duration=N_SAMPLES / FS,
-    )
+    return attr.rank(list(_candidates().values()), an.tau_model, **_fit_kw(an))
 
 
 def _size(a: attr.Attribution, an: Analysis) -> float:
