@@ -10,6 +10,9 @@
 // AVAR's sum plus the 2 (m - 1) end terms that read the reflected extension
 // (detail::add_total_ends), so no extended series is built.
 //
+// One channel's Hadamard factors run four side by side in a tile, the loads of their common
+// first tap shared (detail::add_hadamard_side_by_side); every factor keeps its own sums.
+//
 // Definitions (x = phase, M rows, d2(k) = x[k+2m] - 2 x[k+m] + x[k]):
 //   overlapping AVAR   sum_{k=0}^{M-2m-1} d2(k)^2 / (2 m^2 (M-2m))
 //   standard AVAR      same over k = 0, m, 2m, ...; n = floor((M-1)/m) - 1 terms
@@ -131,8 +134,17 @@ void add_squares(std::int64_t count, Eigen::Index nc, Fn&& value, NeumaierSum* t
 /// Second difference (x2 - 2 x1) + x0 and third difference ((x3 - 3 x2) + 3 x1) - x0: the
 /// one place where the arithmetic of the Allan and Hadamard terms is written down.
 ALLANITE_ALWAYS_INLINE double diff2(double x0, double x1, double x2) noexcept { return (x2 - 2.0 * x1) + x0; }
+/// diff3 into `out`, for doubles (three = 3.0) or lane by lane for four terms in Pack4s
+/// (three = {3, 3, 3, 3}; a Pack4 is not returned by value, see simd.hpp).
+template <class V>
+ALLANITE_ALWAYS_INLINE void diff3_into(V& out, const V& x0, const V& x1, const V& x2, const V& x3,
+                                       const V& three) noexcept {
+  out = ((x3 - three * x2) + three * x1) - x0;
+}
 ALLANITE_ALWAYS_INLINE double diff3(double x0, double x1, double x2, double x3) noexcept {
-  return ((x3 - 3.0 * x2) + 3.0 * x1) - x0;
+  double out;
+  diff3_into(out, x0, x1, x2, x3, 3.0);
+  return out;
 }
 
 /// Taps of a difference estimator: term j of channel c reads p[i][j * step + c] for tap i
@@ -289,9 +301,9 @@ ALLANITE_ALWAYS_INLINE void add_hadamard_side_by_side_impl(const double* x0, con
         std::memcpy(&w1, p[f][0] + j + 4, sizeof w1);
         std::memcpy(&w2, p[f][1] + j + 4, sizeof w2);
         std::memcpy(&w3, p[f][2] + j + 4, sizeof w3);
-        // diff3 lane by lane: ((x3 - 3 x2) + 3 x1) - x0
-        const Pack4 u = ((u3 - three * u2) + three * u1) - u0;
-        const Pack4 w = ((w3 - three * w2) + three * w1) - w0;
+        Pack4 u, w;
+        diff3_into(u, u0, u1, u2, u3, three);
+        diff3_into(w, w0, w1, w2, w3, three);
         lo[f] += u * u;
         hi[f] += w * w;
       }
