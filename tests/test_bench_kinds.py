@@ -65,8 +65,19 @@ def test_ratio_summary_rejects_unpaired_series() -> None:
         bench_kinds.ratio_summary(np.ones(3), np.ones(4))
 
 
-def _record(best_of: float, median: float) -> dict:
-    """A one-kind record with the fields goals() and markdown() read."""
+def _summary(median: float, best_of: float) -> dict:
+    return {
+        "pairs": 15.0,
+        "median": median,
+        "q25": median - 0.5,
+        "q75": median + 0.5,
+        "best_of": best_of,
+    }
+
+
+def _record(best_of: float, median: float, kind: str = "hadamard", per_tau: float = 1.1) -> dict:
+    """A one-kind record with the fields goals() and markdown() read: the best-of ratios on
+    one side of each bound, the paired medians (``median``, ``per_tau``, 0.6) on the other."""
     seconds = {
         "kernel": 0.006,
         "identification": 0.0015,
@@ -87,18 +98,14 @@ def _record(best_of: float, median: float) -> dict:
         "copy_bandwidth_GBps": 80.0,
         "load_average_1min": {"before": 1.0, "after": 1.0},
         "kinds": {
-            "hadamard": {
+            kind: {
                 "seconds": seconds,
                 "paired": {
                     "end_to_end_median_seconds": 0.0095,
                     "allantools_median_seconds": 0.0095 * median,
-                    "allantools_over_end_to_end": {
-                        "pairs": 15.0,
-                        "median": median,
-                        "q25": median - 0.5,
-                        "q75": median + 0.5,
-                        "best_of": best_of,
-                    },
+                    "allantools_over_end_to_end": _summary(median, best_of),
+                    "kernel_over_overlapping": _summary(per_tau, 3.0 - per_tau),
+                    "identification_over_kernel": _summary(0.6, 0.4),
                 },
                 "bit_identical_1_vs_all_threads": True,
                 "memory_floor_seconds": 0.0047,
@@ -106,8 +113,10 @@ def _record(best_of: float, median: float) -> dict:
                     "allantools_over_end_to_end": best_of,
                     "allantools_over_end_to_end_median": median,
                     "allantools_over_given_alpha": 12.0,
-                    "kernel_per_tau_over_overlapping": 1.1,
-                    "identification_over_kernel": 0.25,
+                    "kernel_per_tau_over_overlapping": 3.0 - per_tau,
+                    "kernel_per_tau_over_overlapping_median": per_tau,
+                    "identification_over_kernel": 0.4,
+                    "identification_over_kernel_median": 0.6,
                     "kernel_over_memory_floor": 1.3,
                 },
             }
@@ -122,9 +131,23 @@ def test_goal_against_allantools_uses_the_median(best_of: float, median: float, 
     assert (value, bound, ok) == (median, 10.0, met)
 
 
+@pytest.mark.parametrize(("per_tau", "met"), [(2.2, False), (1.8, True)])
+def test_per_tau_and_identification_goals_use_the_medians(per_tau: float, met: bool) -> None:
+    goals = bench_kinds.goals(_record(10.5, 10.5, kind="modified", per_tau=per_tau))
+    assert [g[0] for g in goals] == [
+        "modified: allantools / allanite (identified), median",
+        "modified: kernel per tau / overlapping, median",
+        "modified: identification / kernel, median",
+    ]
+    # best-of ratios 3 - per_tau and 0.4 would give the opposite verdicts
+    assert goals[1][1:] == (per_tau, 2.0, met)
+    assert goals[2][1:] == (0.6, 0.5, False)
+
+
 def test_markdown_reports_median_with_spread_next_to_best_of() -> None:
     text = bench_kinds.markdown([_record(10.5, 9.5)])
     assert "15 alternating pairs" in text
     row = next(line for line in text.splitlines() if line.startswith("| hadamard |"))
     assert "| 9.5x [9.0-10.0] | 10.5x |" in row
+    assert "| 1.10 [0.60-1.60] | 0.60 [0.10-1.10] |" in row
     assert "| 9.50 | 10 | NO |" in text
