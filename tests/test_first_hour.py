@@ -589,3 +589,121 @@ def test_model_convert_takes_one_sensor(tmp_path: Path, capsys: pytest.CaptureFi
     assert white.values()["N"] == pytest.approx(0.002)
     assert main(["model", "convert", str(out), str(tmp_path / "x.yaml"), "--sensor", "gyro"]) == 2
     assert "it holds an accel model: choose it with --sensor accel" in capsys.readouterr().err
+
+
+def _header_csv(path: Path, unit: str = "deg/h") -> None:
+    """A 3 h-like navigation-gyro log with a header stating units: ``time[s],gz[deg/h]``."""
+    t = np.arange(20_000) / FS
+    # white noise N = 0.18 deg/h*sqrt(s) = 0.003 deg/sqrt(h)
+    rate = 0.18 * np.sqrt(FS) * np.random.default_rng(3).standard_normal(t.size)
+    np.savetxt(path, np.column_stack([t, rate]), delimiter=",", header=f"time[s],gz[{unit}]",
+               comments="", fmt="%.10g")  # fmt: skip
+
+
+def test_a_column_is_named_without_the_unit_its_header_states(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Regression: with a header ``time[s],gz[deg/h]`` (the form allanite simulate writes),
+    ``--time-column time`` and ``--channels gz`` were refused: "no time column named 'time'"."""
+    path = tmp_path / "fog.csv"
+    _header_csv(path)
+    assert main(["fit", str(path), "--time-column", "time", "--channels", "gz"]) == 0
+    printed = capsys.readouterr().out
+    assert "channel gz[deg/h] (gyro, deg/h):" in printed
+    n = float(printed.split("N = ")[1].split(" deg/sqrt(h)")[0])
+    assert abs(n / 0.003 - 1) < 0.04  # 20000 samples: s.e. of N about 0.7 %
+    # the full name still works, and a name that is no column is still refused
+    assert main(["analyze", str(path), "--time-column", "time[s]", "--summary"]) == 0
+    capsys.readouterr()
+    assert main(["analyze", str(path), "--time-column", "time", "--channels", "gy"]) == 2
+    assert "no column named 'gy'; available: time[s], gz[deg/h]" in _one_line_error(
+        capsys, "analyze"
+    )
+
+
+def test_units_given_against_the_header_are_warned(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Regression: a header stating deg/h read with --units deg/s gave N 3600 times too large
+    (10.8 deg/sqrt(h), inside the plausible range) without a word about the header."""
+    path = tmp_path / "fog.csv"
+    _header_csv(path)
+    argv = ["fit", str(path), "--time-column", "time[s]"]
+    assert main([*argv, "--units", "deg/s"]) == 0
+    out, err = capsys.readouterr()
+    assert "(gyro, deg/s)" in out  # --units wins
+    assert "allanite fit: warning: --units differs from the unit the header states (gz[deg/h] " \
+        "read as deg/s)" in err  # fmt: skip
+    assert main([*argv, "--units", "dph", "--json"]) == 0  # the same unit spelled otherwise
+    out, err = capsys.readouterr()
+    assert "header states" not in err
+    # one unit per channel: the same check, and the JSON keeps it
+    six = tmp_path / "six.csv"
+    t = np.arange(5000) / FS
+    np.savetxt(six, np.column_stack([t, RNG.standard_normal((5000, 2))]), delimiter=",",
+               header="t,gz[deg/s],az[m/s^2]", comments="")  # fmt: skip
+    assert main(["fit", str(six), "--time-column", "t", "--units", "deg/h,m/s^2", "--json"]) == 0
+    out, err = capsys.readouterr()
+    assert "(gz[deg/s] read as deg/h)" in err
+    assert "az[m/s^2] read" not in err
+    import json
+
+    assert any("gz[deg/s] read as deg/h" in w for w in json.loads(out)["record"]["warnings"])
+
+
+def test_a_template_without_an_entry_gets_it(tmp_path: Path) -> None:
+    """Regression: diagnose --write-corrected into a PX4 plugin block allanite had written for
+    a gyro model failed after the whole diagnosis: "the template has no
+    <accelerometerNoiseDensity> element" (the plugin takes defaults for absent entries)."""
+    from allanite.formats import read_config, write_config
+
+    model = NoiseModel([White(2e-4)], units={"rate": "rad/s", "time": "s"})
+    model.save(tmp_path / "g.json")
+    write_config(read_config(tmp_path / "g.json"), tmp_path / "px4.sdf", format="px4-plugin")
+    template_path = tmp_path / "px4.sdf"
+    assert "accelerometer" not in template_path.read_text()
+    config = read_config(tmp_path / "px4.sdf")  # accel: the plugin's defaults
+    corrected = config.with_model("gyro", NoiseModel([White(3e-4)], units=model.units))
+    write_config(corrected, tmp_path / "out.sdf", format="px4-plugin", template=template_path)
+    text = (tmp_path / "out.sdf").read_text()
+    assert "  <accelerometerNoiseDensity>0.004</accelerometerNoiseDensity>\n" in text
+    assert text.index("<accelerometerTurnOnBiasSigma>") < text.index("</plugin>")
+    back = read_config(tmp_path / "out.sdf")
+    assert back.notes == ()  # every entry is in the file now
+    assert back.model("gyro").terms_of_type("white")[0].values()["N"] == pytest.approx(3e-4)
+    assert back.model("accel") == config.model("accel")
+    (tmp_path / "b.sdf").write_text("<sdf/>\n")
+    with pytest.raises(ValueError, match="no IMU plugin block"):
+        write_config(
+            corrected, tmp_path / "x.sdf", format="px4-plugin", template=tmp_path / "b.sdf"
+        )
+
+
+def test_a_template_keeps_the_other_sensors_entries_and_notes(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Regression: converting an accelerometer model into a Kalibr file holding the gyro's
+    warned "has no gyro noise entries" (it had) and deleted the gyro's projection note."""
+    from allanite.terms import Flicker
+
+    gyro = NoiseModel([White(1.7e-4), Flicker(4.7e-5)], units={"rate": "rad/s", "time": "s"})
+    accel = NoiseModel([White(2e-3), Flicker(6e-4)], units={"rate": "m/s^2", "time": "s"})
+    gyro.save(tmp_path / "g.json")
+    accel.save(tmp_path / "a.json")
+    out = tmp_path / "imu.yaml"
+    assert main(["model", "convert", str(tmp_path / "g.json"), str(out), "--rate", "400"]) == 0
+    assert "has no accel noise entries" in capsys.readouterr().err  # a new file: true
+    both = tmp_path / "both.yaml"
+    argv = ["model", "convert", str(tmp_path / "a.json"), str(both), "--template", str(out)]
+    assert main(argv) == 0
+    err = capsys.readouterr().err
+    assert "noise entries" not in err
+    text = both.read_text()
+    assert "# projected: gyro: flicker" in text
+    assert "# projected: accel: flicker" in text
+    assert text.count("# projected: ") == 2
+    # writing the accelerometer again replaces its own note only
+    assert main([*argv[:3], str(tmp_path / "again.yaml"), "--template", str(both)]) == 0
+    again = (tmp_path / "again.yaml").read_text()
+    assert again.count("# projected: accel:") == 1
+    assert again.count("# projected: gyro:") == 1

@@ -18,7 +18,7 @@ import numpy as np
 from allanite.cli.progress import progress_bars
 from allanite.confidence import DEFAULT_LEVEL
 from allanite.io.options import ReadOptions
-from allanite.io.readers import FORMATS, read_record
+from allanite.io.readers import FORMATS, header_unit_conflict, read_record
 from allanite.io.record import INPUT_KINDS, Record
 from allanite.io.timebase import GAP_POLICIES
 from allanite.plausibility import (
@@ -230,7 +230,9 @@ def read_sensors(path: str | None, args: argparse.Namespace) -> list[Record]:
     units = unit_list(getattr(args, "units", None))
     if len(units) <= 1:
         record = read_from_args(path, args)
-        stated = stated_units(record) if not units else None
+        if units:
+            return [_against_header(record, [units[0]] * record.n_channels, args)]
+        stated = stated_units(record)
         if stated is None:
             return [record]
         return _split_by_unit(record, stated, args)
@@ -241,7 +243,20 @@ def read_sensors(path: str | None, args: argparse.Namespace) -> list[Record]:
             f"--units gives {len(units)} units for {n} channels ({', '.join(record.channels)}); "
             "give one unit, one per channel or one per equal group of consecutive channels"
         )
-    return _split_by_unit(record, [units[c // (n // len(units))] for c in range(n)], args)
+    per_channel = [units[c // (n // len(units))] for c in range(n)]
+    return _split_by_unit(_against_header(record, per_channel, args), per_channel, args)
+
+
+def _against_header(record: Record, per_channel: list[str], args: argparse.Namespace) -> Record:
+    """Print (and keep in the record's warnings) units given against the header's."""
+    note = header_unit_conflict(record.channels, per_channel)
+    if note is None:
+        return record
+    command = getattr(args, "command", None) or "allanite"
+    print(f"allanite {command}: warning: {note}", file=sys.stderr)
+    if note in record.warnings:  # the reader noted it already (one unit for every channel)
+        return record
+    return dataclasses.replace(record, warnings=(*record.warnings, note))
 
 
 def stated_units(record: Record) -> list[str] | None:

@@ -9,6 +9,7 @@ a policy, see :mod:`allanite.io.timebase`), a scale factor from counts to units,
 
 from __future__ import annotations
 
+import math
 import os
 import re
 import zipfile
@@ -110,6 +111,16 @@ def _as_list(columns: Column | Sequence[Column] | None) -> list[Column] | None:
     return out
 
 
+#: a column name stating its unit, ``gz[deg/s]``: the name and the unit
+_HEADER_UNIT = re.compile(r"^(.*\S)\s*\[([^\[\]]+)\]$")
+
+
+def _bare_name(name: str) -> str:
+    """A column name without the unit in brackets a header may state (``gz[deg/s]`` -> ``gz``)."""
+    match = _HEADER_UNIT.match(name)
+    return name.strip() if match is None else match.group(1)
+
+
 def _resolve(names: tuple[str, ...], key: Column, source: str, what: str) -> int:
     if isinstance(key, (int, np.integer)) and not isinstance(key, bool):
         i = int(key)
@@ -129,6 +140,9 @@ def _resolve(names: tuple[str, ...], key: Column, source: str, what: str) -> int
     if isinstance(key, str):
         if key in names:
             return names.index(key)
+        bare = [i for i, name in enumerate(names) if _bare_name(name) == key.strip()]
+        if len(bare) == 1:  # ``gz`` for a header ``gz[deg/s]`` (as allanite simulate writes)
+            return bare[0]
         if key.lstrip("-").isdigit():
             return _resolve(names, int(key), source, what)
         raise InputError(f"no {what} named {key!r}; available: {', '.join(names)}", path=source)
@@ -277,7 +291,7 @@ def make_record(
             scale=scale,
             warnings=_time_channels(channels, samples) if fs is not None else (),
         )
-        return _header_units(record) if units is None and scale is None else record
+        return _with_header(record, scale)
     if not np.isfinite(time_scale) or time_scale <= 0:
         raise ValueError(f"time_scale must be a positive number of seconds, got {time_scale!r}")
     t = np.asarray(arr[:, t_index], dtype=np.float64) * time_scale
@@ -296,10 +310,72 @@ def make_record(
         timing=base.timing,
         scale=scale,
     )
-    return _header_units(record) if units is None and scale is None else record
+    return _with_header(record, scale)
 
 
-_HEADER_UNIT = re.compile(r"^(.*\S)\s*\[([^\[\]]+)\]$")
+def _with_header(record: Record, scale: float | None) -> Record:
+    """The record with what its header states: units when none were given, else a check."""
+    if record.units is not None:
+        return _units_against_header(record)
+    return _header_units(record) if scale is None else record
+
+
+def _stated_units(channels: tuple[str, ...]) -> list[str] | None:
+    """The unit each channel's header name states (``gz[deg/s]``), or None unless all do."""
+    from allanite.units import parse_unit
+
+    found = []
+    for name in channels:
+        match = _HEADER_UNIT.match(name)
+        if match is None:
+            return None
+        try:
+            parse_unit(match.group(2))
+        except ValueError:
+            return None
+        found.append(match.group(2).strip())
+    return found
+
+
+def header_unit_conflict(channels: Sequence[str], units: Sequence[str]) -> str | None:
+    """The note for units given against the ones a header states, or None when they agree.
+
+    ``--units`` wins (it may correct a wrong header), but a header ``gz[deg/h]`` read with
+    ``--units deg/s`` changes every coefficient by 3600, so the record says so. ``units``
+    has one unit per channel; channels whose names state no unit are not compared.
+    """
+    from allanite.units import parse_unit
+
+    def same(a: str, b: str) -> bool:
+        try:
+            ua, ub = parse_unit(a), parse_unit(b)
+        except ValueError:
+            return True  # an unreadable header unit states nothing
+        return ua.same_dimension(ub) and math.isclose(ua.scale, ub.scale, rel_tol=1e-12)
+
+    differ = []
+    for name, unit in zip(channels, units, strict=True):
+        match = _HEADER_UNIT.match(name)
+        if match is not None and not same(match.group(2).strip(), unit):
+            differ.append(f"{name} read as {unit}")
+    if not differ:
+        return None
+    return (
+        f"--units differs from the unit the header states ({', '.join(differ)}): the given "
+        "unit is used; leave --units out to use the header's, or check the file"
+    )
+
+
+def _units_against_header(record: Record) -> Record:
+    """A record read with a unit its header contradicts: the note added to its warnings."""
+    import dataclasses
+
+    if record.units is None:
+        return record
+    note = header_unit_conflict(record.channels, [record.units] * record.n_channels)
+    if note is None:
+        return record
+    return dataclasses.replace(record, warnings=(*record.warnings, note))
 
 
 def _header_units(record: Record) -> Record:
@@ -311,18 +387,9 @@ def _header_units(record: Record) -> Record:
     """
     import dataclasses
 
-    from allanite.units import parse_unit
-
-    found = []
-    for name in record.channels:
-        match = _HEADER_UNIT.match(name)
-        if match is None:
-            return record
-        try:
-            parse_unit(match.group(2))
-        except ValueError:
-            return record
-        found.append(match.group(2).strip())
+    found = _stated_units(record.channels)
+    if found is None:
+        return record
     stated = ", ".join(dict.fromkeys(found))
     try:
         for unit in set(found):
