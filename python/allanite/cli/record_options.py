@@ -18,7 +18,7 @@ import numpy as np
 from allanite.cli.progress import progress_bars
 from allanite.confidence import DEFAULT_LEVEL
 from allanite.io.options import ReadOptions
-from allanite.io.readers import FORMATS, header_unit_conflict, read_record
+from allanite.io.readers import FORMATS, read_record, stated_unit_conflict
 from allanite.io.record import INPUT_KINDS, Record
 from allanite.io.timebase import GAP_POLICIES
 from allanite.plausibility import (
@@ -210,7 +210,7 @@ def read_from_args(path: str | None, args: argparse.Namespace) -> Record:
         )
     record = _read(path, args)
     rate_unit(record)  # the unit must suit the input kind
-    return record
+    return _against_file(record, units * record.n_channels, args) if units else record
 
 
 def read_sensors(path: str | None, args: argparse.Namespace) -> list[Record]:
@@ -230,9 +230,7 @@ def read_sensors(path: str | None, args: argparse.Namespace) -> list[Record]:
     units = unit_list(getattr(args, "units", None))
     if len(units) <= 1:
         record = read_from_args(path, args)
-        if units:
-            return [_against_header(record, [units[0]] * record.n_channels, args)]
-        stated = stated_units(record)
+        stated = stated_units(record) if not units else None
         if stated is None:
             return [record]
         return _split_by_unit(record, stated, args)
@@ -244,12 +242,12 @@ def read_sensors(path: str | None, args: argparse.Namespace) -> list[Record]:
             "give one unit, one per channel or one per equal group of consecutive channels"
         )
     per_channel = [units[c // (n // len(units))] for c in range(n)]
-    return _split_by_unit(_against_header(record, per_channel, args), per_channel, args)
+    return _split_by_unit(_against_file(record, per_channel, args), per_channel, args)
 
 
-def _against_header(record: Record, per_channel: list[str], args: argparse.Namespace) -> Record:
-    """Print (and keep in the record's warnings) units given against the header's."""
-    note = header_unit_conflict(record.channels, per_channel)
+def _against_file(record: Record, per_channel: list[str], args: argparse.Namespace) -> Record:
+    """Print (and keep in the record's warnings) units given against the file's."""
+    note = stated_unit_conflict(record, per_channel)
     if note is None:
         return record
     command = getattr(args, "command", None) or "allanite"

@@ -316,7 +316,7 @@ def make_record(
 def _with_header(record: Record, scale: float | None) -> Record:
     """The record with what its header states: units when none were given, else a check."""
     if record.units is not None:
-        return _units_against_header(record)
+        return _units_against_file(record)
     return _header_units(record) if scale is None else record
 
 
@@ -337,12 +337,14 @@ def _stated_units(channels: tuple[str, ...]) -> list[str] | None:
     return found
 
 
-def header_unit_conflict(channels: Sequence[str], units: Sequence[str]) -> str | None:
-    """The note for units given against the ones a header states, or None when they agree.
+def stated_unit_conflict(record: Record, units: Sequence[str]) -> str | None:
+    """The note for units given against the ones the file states, or None when they agree.
 
-    ``--units`` wins (it may correct a wrong header), but a header ``gz[deg/h]`` read with
-    ``--units deg/s`` changes every coefficient by 3600, so the record says so. ``units``
-    has one unit per channel; channels whose names state no unit are not compared.
+    A file states units in a header (``gz[deg/h]``) or by its message definition (a ROS
+    ``sensor_msgs/Imu`` or PX4 ``sensor_combined``: rad/s and m/s^2, ``meta["channel_units"]``).
+    ``--units`` wins (it may correct a wrong header), but ``gz[deg/h]`` read with ``--units
+    deg/s`` changes every coefficient by 3600, so the record says so. ``units`` has one unit
+    per channel; channels whose file states no unit are not compared.
     """
     from allanite.units import parse_unit
 
@@ -350,29 +352,34 @@ def header_unit_conflict(channels: Sequence[str], units: Sequence[str]) -> str |
         try:
             ua, ub = parse_unit(a), parse_unit(b)
         except ValueError:
-            return True  # an unreadable header unit states nothing
+            return True  # an unreadable stated unit states nothing
         return ua.same_dimension(ub) and math.isclose(ua.scale, ub.scale, rel_tol=1e-12)
 
+    meta = record.meta if isinstance(record.meta, dict) else {}
+    found = meta.get("channel_units")
+    per: dict[str, Any] = found if isinstance(found, dict) else {}
     differ = []
-    for name, unit in zip(channels, units, strict=True):
+    for name, unit in zip(record.channels, units, strict=True):
         match = _HEADER_UNIT.match(name)
-        if match is not None and not same(match.group(2).strip(), unit):
-            differ.append(f"{name} read as {unit}")
+        stated = per.get(name) or (match.group(2).strip() if match is not None else None)
+        if stated is not None and not same(stated, unit):
+            shown = name if match is not None else f"{name} in {stated}"
+            differ.append(f"{shown} read as {unit}")
     if not differ:
         return None
     return (
-        f"--units differs from the unit the header states ({', '.join(differ)}): the given "
-        "unit is used; leave --units out to use the header's, or check the file"
+        f"--units differs from the unit the file states ({', '.join(differ)}): the given "
+        "unit is used; leave --units out to use the file's, or check the file"
     )
 
 
-def _units_against_header(record: Record) -> Record:
-    """A record read with a unit its header contradicts: the note added to its warnings."""
+def _units_against_file(record: Record) -> Record:
+    """A record read with a unit its file contradicts: the note added to its warnings."""
     import dataclasses
 
     if record.units is None:
         return record
-    note = header_unit_conflict(record.channels, [record.units] * record.n_channels)
+    note = stated_unit_conflict(record, [record.units] * record.n_channels)
     if note is None:
         return record
     return dataclasses.replace(record, warnings=(*record.warnings, note))
@@ -741,4 +748,4 @@ def _read_robot_log(path: Path, fmt: str, topic: str | None, options: dict[str, 
     changes: dict[str, Any] = {"warnings": (*warnings, *record.warnings), "meta": meta}
     if options.get("units") is None and len(units) == 1:
         changes["units"] = units.pop()
-    return dataclasses.replace(record, **changes)
+    return _units_against_file(dataclasses.replace(record, **changes))
