@@ -217,7 +217,16 @@ def test_a_config_without_the_sensor_names_the_other_one(
     np.save(real, RNG.standard_normal(4000) * 0.01)
     argv = ["diagnose", str(real), "--fs", "100", "--units", "rad/s", "--sim-model", str(config)]
     assert main(argv) == 2
-    assert "choose it with --sim-sensor accel" in _one_line_error(capsys, "diagnose")
+    line = _one_line_error(capsys, "diagnose")
+    assert line.endswith("choose it with --sim-sensor accel")  # the CLI's spelling only
+    # a file that is no simulator config: the option that names the format, once
+    (tmp_path / "log.csv").write_text("t,gz\n0,1\n")
+    argv[-1] = str(tmp_path / "log.csv")
+    assert main(argv) == 2
+    line = _one_line_error(capsys, "diagnose")
+    assert "cannot tell which simulator config this is; give it with --sim-format NAME " \
+        "(model convert: --from NAME or --to NAME), NAME one of allanite, " in line  # fmt: skip
+    assert "CLI:" not in line
 
 
 def test_a_filter_bandwidth_above_nyquist_is_stated(

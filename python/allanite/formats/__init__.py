@@ -116,8 +116,9 @@ def detect_format(path: str | Path, text: str | None = None) -> str:
         if suffix in SUFFIX_DEFAULTS:
             return SUFFIX_DEFAULTS[suffix]
     raise ValueError(
-        f"{path}: cannot tell which simulator config this is; give the format "
-        f"(CLI: --sim-format / --from / --to NAME), one of {', '.join(FORMATS)}"
+        f"{path}: cannot tell which simulator config this is; give it with format=NAME "
+        f"(CLI: --sim-format NAME; model convert: --from NAME or --to NAME), NAME one of "
+        f"{', '.join(FORMATS)}"
     )
 
 

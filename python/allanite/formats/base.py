@@ -85,7 +85,7 @@ class ImuConfig:
             other = "accel" if sensor == "gyro" else "gyro"
             hint = (
                 f"; it holds {'an' if other == 'accel' else 'a'} {other} model: choose it with "
-                f"{option} {other} (library: config.model({other!r}))"
+                f"sensor={other!r} (CLI: {option} {other})"
                 if getattr(self, other) is not None
                 else ""
             )
