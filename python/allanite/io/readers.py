@@ -306,11 +306,46 @@ def make_record(
         channels=channels,
         source=source,
         segments=base.segments,
-        warnings=base.warnings,
+        warnings=(*base.warnings, *_time_scale_note(col_names[t_index], t, time_scale, base.fs)),
         timing=base.timing,
         scale=scale,
     )
     return _with_header(record, scale)
+
+
+#: a time column named for its unit: ``t_ms``, ``time[us]``, ``stamp (ns)``, ``timestamp_usec``
+_TIME_UNIT_NAME = re.compile(r"(?:^|[_\s\-\[(])(ms|msec|us|usec|µs|ns|nsec)[\])]?$", re.IGNORECASE)
+_TIME_UNIT_SCALE = {"ms": 1e-3, "msec": 1e-3, "us": 1e-6, "usec": 1e-6, "µs": 1e-6}
+_TIME_UNIT_SCALE |= {"ns": 1e-9, "nsec": 1e-9}
+
+
+def _time_scale_note(
+    name: str, t: NDArray[np.float64], time_scale: float, fs: float | None
+) -> tuple[str, ...]:
+    """A note when time stamps read as seconds look like milli-, micro- or nanoseconds.
+
+    Either the column's name says so (``t_ms``, ``time[us]``) or the first stamp is beyond
+    1e11 s (year 5000): a Unix time in ms (~1.7e12), us (~1.7e15) or ns (~1.7e18). Read as
+    seconds, fs comes out 1e3-1e9 times too low and every coefficient wrong, yet plausible.
+    """
+    if time_scale != 1.0 or t.size == 0:
+        return ()
+    named = _TIME_UNIT_NAME.search(name.strip())
+    if named is not None:
+        scale = _TIME_UNIT_SCALE[named.group(1).lower()]
+        why = f"its name says {named.group(1)}"
+    elif abs(float(t[0])) >= 1e11:
+        first = abs(float(t[0]))
+        scale = 1e-3 if first < 1e14 else 1e-6 if first < 1e17 else 1e-9
+        why = f"the first stamp {float(t[0]):.4g} is no time in seconds (year 5000 is 1e11 s)"
+    else:
+        return ()
+    unit = {1e-3: "milliseconds", 1e-6: "microseconds", 1e-9: "nanoseconds"}[scale]
+    rate = f" (fs = {fs:.4g} Hz)" if fs else ""
+    return (
+        f"time column {name!r} is read in seconds{rate}, but {why}: if the stamps are "
+        f"{unit}, give --time-scale {scale:g} (time_scale={scale:g})",
+    )
 
 
 def _with_header(record: Record, scale: float | None) -> Record:
