@@ -812,3 +812,23 @@ def test_a_missing_ulog_topic_lists_the_ones_there(
     assert line.endswith(
         "no IMU topic sensor_gyro (instance 0) in the log; found sensor_combined:0"
     )
+
+
+def test_report_without_o_names_its_file(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Regression: ``allanite report fog.csv`` printed the whole usage text: -o was required."""
+    data = tmp_path / "data"
+    data.mkdir()
+    path = data / "fog.csv"
+    _header_csv(path)
+    monkeypatch.chdir(tmp_path)
+    assert main(["report", str(path), "--time-column", "time", "--no-fit"]) == 0
+    assert capsys.readouterr().out.strip().endswith("wrote fog.html")
+    assert "<html" in (tmp_path / "fog.html").read_text()[:200].lower()
+    assert not (data / "fog.html").exists()  # in the current directory, not beside the data
+    # several records go into one report: its name is asked for, nothing is written
+    assert main(["report", str(path), str(path), "--time-column", "time", "--no-fit"]) == 2
+    assert "2 records go into one report: name it with -o FILE.html" in _one_line_error(
+        capsys, "report"
+    )
