@@ -710,6 +710,10 @@ def test_a_template_keeps_the_other_sensors_entries_and_notes(
     text = both.read_text()
     assert "# projected: gyro: flicker" in text
     assert "# projected: accel: flicker" in text
+    # the template's update_rate (400 Hz) is the rate of the projection: 10 samples = 0.025 s
+    assert "evaluated at 100 Hz" not in text
+    accel_note = next(ln for ln in text.splitlines() if ln.startswith("# projected: accel:"))
+    assert "over 0.025-3.6e+03 s" in accel_note
     assert text.count("# projected: ") == 2
     # writing the accelerometer again replaces its own note only
     assert main([*argv[:3], str(tmp_path / "again.yaml"), "--template", str(both)]) == 0

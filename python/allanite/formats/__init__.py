@@ -136,6 +136,15 @@ def read_config(
     return config
 
 
+def _template_rate(module: ModuleType, text: str) -> float | None:
+    """The IMU rate a template states (``update_rate``, ``<update_rate>``...), or None."""
+    try:
+        rate: float | None = module.read(text).rate
+    except ValueError:  # a template the reader cannot take as a whole states no rate we use
+        return None
+    return rate
+
+
 def write_config(
     config: ImuConfig,
     path: str | Path,
@@ -164,9 +173,10 @@ def write_config(
                 format = config.source_format  # e.g. .yaml -> .yaml keeps the format
             else:
                 format = detect_format(path)
-    written: Written = format_module(format).write(
-        config, rate=rate, template=template_text, tau_range=tau_range
-    )
+    module = format_module(format)
+    if rate is None and config.rate is None and template_text is not None:
+        rate = _template_rate(module, template_text)
+    written: Written = module.write(config, rate=rate, template=template_text, tau_range=tau_range)
     with atomic_output(path) as tmp:
         Path(tmp).write_text(written.text, encoding="utf-8")
     return written
