@@ -10,6 +10,7 @@ from typing import Any
 
 from allanite.cli.record_options import (
     add_record_arguments,
+    print_reader_notes,
     rate_unit,
     read_from_args,
     warn_implausible,
@@ -211,6 +212,7 @@ def run(args: argparse.Namespace) -> int:
     from allanite.diagnosis import diagnose
 
     record = read_from_args(args.real, args)
+    print_reader_notes([record], args)
     real, part = _one_channel(record, "real")
     warnings = warn_implausible(part, args).warnings[len(part.warnings) :]
     fs = part.require_fs()
