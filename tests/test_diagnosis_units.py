@@ -130,3 +130,27 @@ def test_without_a_rate_unit_the_record_units_are_kept():
     own = param_unit(None, 1, 0.5)
     assert own == "rate*s^0.5"
     assert shown_param("N", 2.0, own, None) == (2.0, own)
+
+
+def test_corrected_config_note_uses_the_same_units():
+    """``--write-corrected`` says what it folded in with the CLI's text: N of a deg/s model and
+    of a rad/s model (the same white noise) both in deg/sqrt(h)."""
+    from types import SimpleNamespace
+
+    from allanite.formats.corrected import corrected_model
+
+    def white(n: float) -> SimpleNamespace:
+        return SimpleNamespace(
+            effect="white",
+            term={"type": "white", "N": n},
+            params={"N": n},
+            params_sigma={},
+            gap_before=100.0,
+            gap_after=1.0,
+            shrinkage=0.99,
+        )
+
+    for model, n in ((MODEL, 0.016), (MODEL.in_units("rad/s"), 0.016 * np.pi / 180.0)):
+        diagnosis = SimpleNamespace(significant=True, attribution=[white(n)], explanation=None)
+        _, what = corrected_model(model, diagnosis)
+        assert what.startswith("folded in white (N = 0.96 deg/sqrt(h)); gap 100 -> 1"), what
