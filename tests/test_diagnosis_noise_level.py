@@ -271,3 +271,26 @@ def test_spike_raise_accounts_for_real_spikes_window_levels():
     assert np.abs((flat - c) / s).max() < tv.thresholds["hf"]  # their raise explains it
     assert d.best is not None
     assert d.best.effect == "spikes"
+
+
+@pytest.mark.slow
+def test_level_step_at_an_unchanged_rms_level_is_named_in_the_headline():
+    """2^21 samples, x3 step at 0.4 T, seed 11: the record's rms level is the model's, so
+    white_drift shrinks no tau gap (shrinkage below SHRINKAGE_NEGLIGIBLE) but explains the
+    time view's level change. It used to read as spikes (scores 52.9 vs 58.9), and then, with
+    the spikes' level rule alone, as "a gap that no candidate effect explains"; the headline
+    names the level change."""
+    from allanite.diagnosis.verdict import SHRINKAGE_NEGLIGIBLE
+
+    n = 2**21
+    x = np.asarray(_step_model(n, 3.0, RateRandomWalk(K=1e-4)).simulate(n, fs=FS, seed=11))
+    d = diagnose(x.ravel(), MODEL, fs=FS, units="deg/s", n_mc=60, seed=1)
+    assert d.best is not None
+    assert d.best.effect == "white_drift"
+    assert d.best.shrinkage < SHRINKAGE_NEGLIGIBLE
+    assert d.explanation is not None
+    assert "hf" in d.explanation.explained
+    assert d.headline.startswith("the real sensor's white-noise level changes over the record")
+    # ratio from 32 windows of L = 65536 samples: 4 sd (as in the tests above)
+    tol = 4 * 0.5 * np.sqrt(3.0 / 65536) * np.sqrt(4.0 / 32) * 3.0
+    assert abs(d.best.params["ratio"] - 3.0) < tol

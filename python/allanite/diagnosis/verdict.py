@@ -84,8 +84,8 @@ EVIDENCE_TEXT = {
 #: variance of a short-tau Allan variance estimate by the factor ``1 + kappa / 2`` (Gaussian
 #: reference), i.e. by less than 10 %, so the Gaussian intervals stay within 5 %
 KURTOSIS_NEGLIGIBLE = 0.2
-#: an explanation whose effects shrink the tau gap by less than this is not named in the
-#: headline of a gap it leaves open (they explain nothing)
+#: an explanation whose effects shrink the tau gap by less than this and explain no evidence
+#: of the other views is not named in the headline of a gap it leaves open
 SHRINKAGE_NEGLIGIBLE = 0.01
 _NEGLIGIBLE = ": significant on this long record, but negligible in size"
 
@@ -492,8 +492,12 @@ def verdict(
         explanation is not None
         and not closed
         and all(a.shrinkage < SHRINKAGE_NEGLIGIBLE for a in explanation.effects)
+        and not explanation.explained
     ):
-        explanation = None  # effects that shrink nothing are not named as "missing"
+        # effects that shrink nothing and explain no evidence are not named as "missing" (a
+        # level change at an unchanged rms level shrinks no tau gap, but explains the time
+        # view's)
+        explanation = None
     if explanation is not None:
         fs = 1.0 / tau_model.dt
         effect = "; and ".join(describe_effect(a, units, fs) for a in explanation.effects)
