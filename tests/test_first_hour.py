@@ -376,7 +376,7 @@ def test_write_corrected_folds_in_the_joint_explanation() -> None:
         ("white", {"N": 1e-4}),
         ("rrw", {"K": 5e-6}),
     ]
-    assert what.startswith("folded in the joint explanation: rescale:white (scale=0.5); ")
+    assert what.startswith("folded in the joint explanation: rescale:white (x0.5); ")
     assert what.endswith("gap 100 -> 0.5 (shrinkage 100 %)")
     # the longest prefix the format holds; what follows an unheld effect is left out
     joint = SimpleNamespace(effects=[white, lowpass, rrw], gap_before=100.0, gap_after=0.5)
@@ -391,7 +391,7 @@ def test_write_corrected_folds_in_the_joint_explanation() -> None:
     joint = SimpleNamespace(effects=[lowpass, rrw], gap_before=100.0, gap_after=0.5)
     diagnosis = SimpleNamespace(significant=True, attribution=[lowpass, rrw], explanation=joint)
     out, what = corrected_model(model, diagnosis, px4_plugin.HOLDS)
-    assert what.startswith("folded in rescale:rrw (scale=0.17); gap 100 -> 1 (shrinkage 90 %)")
+    assert what.startswith("folded in rescale:rrw (x0.17); gap 100 -> 1 (shrinkage 90 %)")
     assert "skipped lowpass" in what
 
 

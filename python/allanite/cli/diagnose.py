@@ -29,8 +29,10 @@ EXAMPLES = """examples:
   allanite diagnose real.csv --fs 2000 --sim-record sim.npy --input angle --json
 
 JSON (--json) is one object: gap {statistic, p_value, significant}, where {tau_bands_s,
-frequency_lines_hz, time_segments_s}, attribution [{effect, params, gap_before, gap_after,
-shrinkage, consistent_after}, ...] (best first) and holdout {shrinkage} or null.
+frequency_lines_hz, time_segments_s}, attribution [{effect, params, params_units, gap_before,
+gap_after, shrinkage, consistent_after}, ...] (best first) and holdout {shrinkage} or null.
+The text shows parameters in the customary units of `allanite fit` (N in deg/sqrt(h), ...);
+the JSON keeps them in the units of --units, named in params_units.
 """
 
 
