@@ -278,7 +278,7 @@ def test_ramp_next_to_white_is_not_a_slow_telegraph(monkeypatch) -> None:  # typ
     monkeypatch.setattr(
         attribution,
         "_degenerate",
-        lambda cand, logp, lo, dt, hi=None: degenerate(cand, logp, lo, dt),
+        lambda cand, logp, lo, dt, hi=None, extra=None: degenerate(cand, logp, lo, dt),
     )
     named1 = {a.effect for a in diagnose(x, base, **kw).explanation.effects}
     assert "ramp" in named1  # the Welch spectrum alone keeps it
