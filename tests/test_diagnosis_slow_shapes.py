@@ -15,26 +15,10 @@ from allanite.diagnosis.holdout import tau_model_for
 from allanite.diagnosis.inputs import SimSource
 from allanite.model import NoiseModel
 from allanite.terms import TERM_TYPES
+from test_diagnosis_pairs import UNITS, _pair_record
 
-UNITS = {"rate": "deg/s", "time": "s"}
 T = TERM_TYPES
 FS = 100.0
-
-
-def _pair_record(seed: int, terms: tuple[object, object]) -> tuple[NoiseModel, np.ndarray]:
-    """A designed two-effect record of benchmarks/validate_diagnosis.py: its base model (seed)
-    plus each effect simulated on its own (seeds ``seed + 7``, ``seed + 13``), 2^16 at 100 Hz."""
-    n = 2**16
-    base = NoiseModel(
-        (T["white"](N=0.05), T["quantization"](Q=0.2 / FS), T["flicker"](B=0.01),
-         T["rrw"](K=0.0008)),
-        UNITS,
-    )  # fmt: skip
-    x = np.asarray(base.simulate(n, fs=FS, seed=seed), dtype=np.float64).ravel()
-    for term, s in zip(terms, (seed + 7, seed + 13), strict=True):
-        y = NoiseModel((term,), UNITS).simulate(n, fs=FS, seed=s, allow_aliasing=True)
-        x = x + np.asarray(y).ravel()
-    return base, x
 
 
 #: designed pair 'warmup + markov' at 5x/5x the clear level (seed 1000 + 17 * 28)
