@@ -20,6 +20,11 @@ In both steps the time view's window-mean spreads include the slow noise of the 
 effects already in the set (:func:`with_level_background`): a ramp or a warm-up on top of
 Gauss-Markov noise is judged against that noise, not against the bare simulation.
 
+The opening also tries a warm-up measured on the window means with each stationary partner
+fitted on top of it (:func:`_shape_and_noise`): the tau view reads a warm-up under slow noise
+as a random walk, and a warm-up fitted alone there takes the noise's Allan variance too, so
+greedy selection never reaches the pair.
+
 Spectral shape: in both steps the candidates on top of the set are ordered by their penalised
 score *plus* the misfit of the spectrum's shape with the set and the candidate added
 (:meth:`~allanite.diagnosis.frequency_view.FrequencyView.shape_misfit`, ``F = sum_b z_b^2``
@@ -299,6 +304,13 @@ def _two_processes(
     return best
 
 
+#: a warm-up measured on the window means settles within the record: its time constant is at
+#: most the record over this factor (the transient decays to e^-4 = 2 % by the end); a slower
+#: one is a drift over the whole record, which a ramp or a random walk describes (a bias step
+#: under a random walk was read as a warm-up with T_w the record's length)
+WARMUP_SETTLES = 4.0
+
+
 def _shape_and_noise(
     shape_c: Candidate,
     partners: list[Candidate],
@@ -315,13 +327,14 @@ def _shape_and_noise(
     counts the noise's wander against it; a random walk then explains the level alone. A
     warm-up is deterministic and sits in the first windows: the window means measure it
     (:func:`~allanite.diagnosis.level_shape.warmup_shape`, amplitude and time constant fixed
-    there), and each partner is fitted on top of it in the tau view, against the evidence the
-    warm-up leaves. A pair is kept when the partner passes its own test on top of the
-    warm-up and the warm-up still lowers the window means' ``chi^2`` by more than
-    ``chi2_{1-alpha}(2)`` with the partner's slow noise in their spreads
-    (:func:`with_level_background`); it is scored like one effect, ``T_after + k
-    chi2_{1-alpha}(1)`` (``k`` the partner's free parameters and the warm-up's amplitude) plus
-    the evidence both leave and the warm-up's shape misfit against those spreads.
+    there; it must settle within the record, ``T_w <= T /`` :data:`WARMUP_SETTLES`), and each
+    partner is fitted on top of it in the tau view, against the evidence the warm-up leaves.
+    A pair is kept when the partner passes its own test on top of the warm-up and the warm-up
+    still lowers the window means' ``chi^2`` by more than ``chi2_{1-alpha}(2)`` with the
+    partner's slow noise in their spreads (:func:`with_level_background`); it is scored like
+    one effect, ``T_after + k chi2_{1-alpha}(1)`` (``k`` the partner's free parameters and the
+    warm-up's amplitude) plus the evidence both leave and the warm-up's shape misfit against
+    those spreads.
     """
     view: TimeView | None = fit_kw["time_view"]
     alpha = float(fit_kw["alpha"])
@@ -330,7 +343,7 @@ def _shape_and_noise(
     if view is None or shape_c.effect != "warmup" or "level" not in view.spread:
         return []
     tau_w, amp, _ = warmup_shape(view, duration)
-    if amp == 0.0:
+    if amp == 0.0 or tau_w * WARMUP_SETTLES > duration:
         return []
     fixed = {**shape_c.fixed, "tau_w": tau_w, "amplitude": amp}
     measured = replace(shape_c, fixed=fixed, free=tuple(n for n in shape_c.free if n not in fixed))
