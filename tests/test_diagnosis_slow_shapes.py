@@ -8,11 +8,13 @@ import numpy as np
 import pytest
 
 import allanite.diagnosis.joint as joint
+import benchmark_module
 from allanite.diagnosis import diagnose
 from allanite.diagnosis.attribution import _bounds, _degenerate
 from allanite.diagnosis.candidates import candidate_library
 from allanite.diagnosis.holdout import tau_model_for
 from allanite.diagnosis.inputs import SimSource
+from allanite.diagnosis.level_shape import warmup_shape
 from allanite.model import NoiseModel
 from allanite.terms import TERM_TYPES
 from test_diagnosis_pairs import UNITS, _pair_record
@@ -98,3 +100,36 @@ def test_random_walk_next_to_noise_bursts_is_not_a_long_gauss_markov_process() -
     assert "bursts" in named
     assert named & {"rrw", "rescale:rrw"}
     assert not named & {"markov", "telegraph"}
+
+
+def _quick_case(name: str) -> tuple[NoiseModel, np.ndarray, dict[str, object]]:
+    """A single-effect case of the validation's quick suite, as it simulates it."""
+    vd = benchmark_module.load("validate_diagnosis")
+    cases = vd.make_cases(True)
+    i = next(i for i, c in enumerate(cases) if c.name == name)
+    seed = vd.pair_seed(1000, i)
+    real, _, _ = vd.simulate_case(cases[i], seed)
+    kw = {"fs": FS, "units": "deg/s", "holdout": 0.5, "n_mc": 60, "seed": seed + 1}
+    return cases[i].base, np.asarray(real, dtype=np.float64), kw
+
+
+def test_a_bias_step_is_not_a_warmup_that_never_settles() -> None:
+    """The quick suite's strong bias step: the window means' best warm-up has the record's
+    length as its time constant (a drift, not a transient), so the warm-up + partner opening
+    is not tried and the step stays the explanation."""
+    base, x, kw = _quick_case("step-strong-fs100")
+    d = diagnose(x, base, **kw)
+    duration = x.size / 2 / FS
+    tau_w = warmup_shape(d.time, duration)[0]
+    assert tau_w * joint.WARMUP_SETTLES > duration
+    assert [a.effect for a in d.explanation.effects] == ["step"]
+
+
+@pytest.mark.slow
+def test_a_bias_step_is_not_a_warmup_that_never_settles_control(monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """The control: without the settling rule the step reads as a slow warm-up + random walk."""
+    base, x, kw = _quick_case("step-strong-fs100")
+    monkeypatch.setattr(joint, "WARMUP_SETTLES", 0.0)
+    named = {a.effect for a in diagnose(x, base, **kw).explanation.effects}
+    assert "warmup" in named
+    assert "step" not in named
