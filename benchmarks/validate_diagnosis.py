@@ -1428,21 +1428,24 @@ def summarize_oov(rows: list[dict[str, Any]]) -> dict[str, Any]:
 
 
 def oov_table(s: dict[str, Any]) -> str:
+    def rate(key: str) -> str:  # a rate over no cases (e.g. --nulls 0) is n/a
+        return "n/a" if s[key] is None else f"{s[key]:.3f}"
+
     out = [
         "| metric | value | goal |",
         "|---|---|---|",
         f"| handled (not fully explained, or the right candidate named) | "
-        f"{s['handled_rate']:.3f} of {s['oov_cases']} | >= 0.90 |",
+        f"{rate('handled_rate')} of {s['oov_cases']} | >= 0.90 |",
         f'| false "closed" | {s["false_closed"]} | 0 |',
-        f"| right candidate named (kinds with one) | {s['candidate_named_rate']:.3f} of "
+        f"| right candidate named (kinds with one) | {rate('candidate_named_rate')} of "
         f"{s['candidate_cases']} | |",
         f"| spurious lines in `where` (records without a line) | {s['spurious_line_cases']} of "
         f"{s['no_line_cases']} | 0 |",
         f"| spurious lines in the frequency view (hints included) | "
         f"{s['spurious_view_line_cases']} of {s['no_line_cases']} | |",
-        f"| null cases: false alarms (significant) | {s['null_false_alarm_rate']:.3f} of "
+        f"| null cases: false alarms (significant) | {rate('null_false_alarm_rate')} of "
         f"{s['null_cases']} | <= 0.05 |",
-        f"| null cases: not closed | {s['null_not_closed_rate']:.3f} of {s['null_cases']} | |",
+        f"| null cases: not closed | {rate('null_not_closed_rate')} of {s['null_cases']} | |",
         "",
         "| kind | cases | handled | closed | expected candidate named | effects named |",
         "|---|---|---|---|---|---|",

@@ -117,3 +117,15 @@ def test_drifting_line_law_is_the_fitted_halfs(vd: Any) -> None:
     assert np.all(np.abs(mean - law) < 4.0 * se + 0.01 * law), mean / law
     whole = np.asarray(term.avar(tau, dt))  # the whole record's law, the old design's
     assert np.any(np.abs(mean - whole) > 4.0 * se + 0.1 * whole), mean / whole
+
+
+def test_oov_table_without_null_cases(vd: Any) -> None:
+    """``--oov --nulls 0``: the null rates are over no cases, reported n/a (not a crash)."""
+    row = {"kind": "bursts", "handled": True, "closed": False, "false_closed": False,
+           "expected": "bursts", "expected_named": True, "named": ["bursts"], "lines_hz": [],
+           "view_lines_hz": [], "significant": True}  # fmt: skip
+    summary = vd.summarize_oov([row])
+    assert summary["null_false_alarm_rate"] is None
+    text = vd.oov_table(summary)
+    assert "| null cases: false alarms (significant) | n/a of 0 |" in text
+    assert "| handled (not fully explained, or the right candidate named) | 1.000 of 1 |" in text

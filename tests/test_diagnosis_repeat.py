@@ -155,7 +155,9 @@ def test_a_ramp_is_not_read_as_a_process_at_the_bound(monkeypatch) -> None:  # t
     assert at_bound(ranked) == []
     original = attribution._degenerate
     monkeypatch.setattr(
-        attribution, "_degenerate", lambda c, logp, lo, dt, hi=None: original(c, logp, lo, dt)
+        attribution,
+        "_degenerate",
+        lambda c, logp, lo, dt, hi=None, extra=None: original(c, logp, lo, dt),
     )
     assert set(at_bound(rank(cands, tm, **test))) == {"markov", "telegraph"}
 

@@ -231,6 +231,7 @@ def _degenerate(
     lo: NDArray[np.float64],
     dt: float,
     hi: NDArray[np.float64] | None = None,
+    extra: NDArray[np.float64] | None = None,
 ) -> bool:
     """Whether the fit sits where the effect is not identified.
 
@@ -239,18 +240,26 @@ def _degenerate(
     or a time parameter at its upper bound ``hi`` (four times the record: a Gauss-Markov or
     telegraph process, or a warm-up, that never decorrelates within the record is a drift,
     which the ramp and the random walk describe with fewer parameters): a simpler candidate
-    describes the same curve.
+    describes the same curve. Likewise a stationary process with a fitted time whose Allan
+    variance ``extra`` (on the tau grid) still rises at the longest tau: its turnover, the
+    only mark of its correlation time, lies beyond the taus the record measures (a
+    Gauss-Markov process peaks at ``1.89 tau_c``), so over the measured taus it is a random
+    walk with a second parameter the record does not determine (a random walk next to noise
+    bursts read as a Gauss-Markov process of ``tau_c`` 27 s with the longest tau 20 s).
     """
     if np.any((logp - lo < 0.01) & (lo > -700.0)):
         return True
     specs = {p.name: p for p in cand.term_cls.params}
+    timed = False
     for i, (name, v) in enumerate(zip(cand.free, logp, strict=True)):
         spec = specs.get(name)
         if spec is None or spec.rate != 0 or spec.time != 1:
             continue
+        timed = True
         if np.exp(v) < dt or (hi is not None and hi[i] - v < 0.01):
             return True
-    return False
+    rising = extra is not None and extra.size > 1 and bool(extra[-1] >= np.max(extra))
+    return bool(timed and cand.term_cls.stationary and rising)
 
 
 def tau_size(extra: NDArray[np.float64], tm: TauModel) -> float:
@@ -379,9 +388,9 @@ def fit_candidate(
     if cand.free and (best is None or best.fun >= 1e299):
         return None
     logp = np.asarray(best.x if cand.free else [], dtype=np.float64)
-    if cand.base is None and _degenerate(cand, logp, lo, tm.dt, hi):
-        return None
     extra = _extra(cand, logp, tm)
+    if cand.base is None and _degenerate(cand, logp, lo, tm.dt, hi, extra):
+        return None
     if extra is None or negligible(cand, _values(cand, logp), extra, tm):
         return None
     k = len(cand.free)

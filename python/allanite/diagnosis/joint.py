@@ -20,6 +20,11 @@ In both steps the time view's window-mean spreads include the slow noise of the 
 effects already in the set (:func:`with_level_background`): a ramp or a warm-up on top of
 Gauss-Markov noise is judged against that noise, not against the bare simulation.
 
+The opening also tries a warm-up measured on the window means with each stationary partner
+fitted on top of it (:func:`_shape_and_noise`): the tau view reads a warm-up under slow noise
+as a random walk, and a warm-up fitted alone there takes the noise's Allan variance too, so
+greedy selection never reaches the pair.
+
 Spectral shape: in both steps the candidates on top of the set are ordered by their penalised
 score *plus* the misfit of the spectrum's shape with the set and the candidate added
 (:meth:`~allanite.diagnosis.frequency_view.FrequencyView.shape_misfit`, ``F = sum_b z_b^2``
@@ -54,6 +59,7 @@ from scipy import stats
 from allanite.diagnosis.attribution import EVIDENCE_CAP, Attribution, fit_candidate, rank
 from allanite.diagnosis.candidates import DISTINCT_FACTOR, Candidate
 from allanite.diagnosis.frequency_view import FrequencyView
+from allanite.diagnosis.level_shape import level_misfit, warmup_shape
 from allanite.diagnosis.tau_view import TauModel
 from allanite.diagnosis.time_view import TimeView, added_level_variance
 
@@ -298,6 +304,78 @@ def _two_processes(
     return best
 
 
+#: a warm-up measured on the window means settles within the record: its time constant is at
+#: most the record over this factor (the transient decays to e^-4 = 2 % by the end); a slower
+#: one is a drift over the whole record, which a ramp or a random walk describes (a bias step
+#: under a random walk was read as a warm-up with T_w the record's length)
+WARMUP_SETTLES = 4.0
+
+
+def _shape_and_noise(
+    shape_c: Candidate,
+    partners: list[Candidate],
+    tm: TauModel,
+    fit_kw: dict[str, Any],
+    duration: float,
+    cache: dict[str, NDArray[np.float64]],
+) -> list[tuple[float, list[Attribution]]]:
+    """A warm-up measured on the window means, with each stationary partner on top of it.
+
+    The tau view alone cannot split a warm-up from slow noise next to it (a Gauss-Markov
+    process or a random walk: their Allan variances imitate each other), and a warm-up fitted
+    alone there takes the noise's Allan variance as well, while its window-mean shape misfit
+    counts the noise's wander against it; a random walk then explains the level alone. A
+    warm-up is deterministic and sits in the first windows: the window means measure it
+    (:func:`~allanite.diagnosis.level_shape.warmup_shape`, amplitude and time constant fixed
+    there; it must settle within the record, ``T_w <= T /`` :data:`WARMUP_SETTLES`), and each
+    partner is fitted on top of it in the tau view, against the evidence the warm-up leaves.
+    A pair is kept when the partner passes its own test on top of the warm-up and the warm-up
+    still lowers the window means' ``chi^2`` by more than ``chi2_{1-alpha}(2)`` with the
+    partner's slow noise in their spreads (:func:`with_level_background`); it is scored like
+    one effect, ``T_after + k chi2_{1-alpha}(1)`` (``k`` the partner's free parameters and the
+    warm-up's amplitude) plus the evidence both leave and the warm-up's shape misfit against
+    those spreads.
+    """
+    view: TimeView | None = fit_kw["time_view"]
+    alpha = float(fit_kw["alpha"])
+    evidence_p: dict[str, float] = fit_kw["evidence_p"]
+    left: dict[str, bool] = fit_kw["significant"]
+    if view is None or shape_c.effect != "warmup" or "level" not in view.spread:
+        return []
+    tau_w, amp, _ = warmup_shape(view, duration)
+    if amp == 0.0 or tau_w * WARMUP_SETTLES > duration:
+        return []
+    fixed = {**shape_c.fixed, "tau_w": tau_w, "amplitude": amp}
+    measured = replace(shape_c, fixed=fixed, free=tuple(n for n in shape_c.free if n not in fixed))
+    shape = fit_candidate(measured, tm, **fit_kw)
+    if shape is None:
+        return []
+    e_shape = np.asarray(measured.extra_avar({}, tm.tau, tm.dt), dtype=np.float64)
+    told = set(shape.evidence.get("explained", []))
+    rest = {e: s and e not in told for e, s in left.items()}
+    tm_shape = with_background(tm, e_shape)
+    per_param = float(stats.chi2.isf(alpha, 1))
+    gain = float(stats.chi2.isf(alpha, 2))
+    out = []
+    for c in partners:
+        a = fit_candidate(c, tm_shape, **{**fit_kw, "significant": rest})
+        if a is None:
+            continue
+        view_bg = with_level_background(view, [a], [c], tm, duration, cache)
+        if view_bg is None or warmup_shape(view_bg, duration)[2] <= gain:
+            continue
+        explained = told | set(a.evidence.get("explained", []))
+        unexplained = [e for e, sig in left.items() if sig and e not in explained]
+        penalty = sum(
+            min(-2.0 * np.log(max(evidence_p[e], 1e-300)), EVIDENCE_CAP) for e in unexplained
+        )
+        k = len(shape_c.free) + len(c.free)
+        t_after = tm.statistic(e_shape + _own_extra(a, c, tm))
+        misfit = level_misfit(shape_c.effect, view_bg, duration, per_param)
+        out.append((float(t_after + k * per_param + penalty + misfit), [shape, a]))
+    return out
+
+
 #: deterministic level shapes whose Welch spectrum is their own samples' (see effect_psd)
 WELCH_SHAPES = ("ramp", "warmup")
 
@@ -457,6 +535,11 @@ def explain(
                 and _distinct(a, _candidate_of(a, by_effect), on, on_c)
             ]
         groups: list[tuple[float, list[Attribution]]] = [(a.score, [a]) for a in kept]
+        if singles is not None and room >= 2:
+            # the opening: a warm-up the window means measure, with slow noise next to it
+            partners = [c for c in candidates if c.effect not in LEVEL_SHAPES]
+            for c in candidates:
+                groups += _shape_and_noise(c, partners, tm_bg, fit_kw, duration, cache)
         if room >= 2:
             for c in candidates:
                 if c.repeat_key is None or any(d.term_cls is c.term_cls for d in on_c):

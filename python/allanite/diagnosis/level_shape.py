@@ -28,7 +28,7 @@ from numpy.typing import NDArray
 
 from allanite.diagnosis.time_view import TimeView
 
-__all__ = ["level_misfit", "warmup_time_constant"]
+__all__ = ["level_misfit", "warmup_shape", "warmup_time_constant"]
 
 #: at most this many bias steps in the shape fit
 MAX_STEPS = 8
@@ -94,24 +94,45 @@ def level_misfit(effect: str, view: TimeView, duration: float, per_param: float 
             chi2 = trials[k]
         extra_steps = len(cols) - len(view.change_points_s)
         return max(0.0, chi2 - (w - len(cols))) + 2.0 * per_param * extra_steps
-    best, _ = _warmup_fit(view, duration)
+    best, _, _ = _warmup_fit(view, duration)
     return max(0.0, best - (w - 2))
 
 
-def _warmup_fit(view: TimeView, duration: float) -> tuple[float, float]:
+def _warmup_fit(view: TimeView, duration: float) -> tuple[float, float, float]:
+    """Weighted least-squares warm-up on the window means: ``(chi^2, T_w, A)``."""
     sd = np.where(view.level_sd > 0, view.level_sd, np.inf)
     t0 = view.t_s - view.window_s / 2
     t1 = view.t_s + view.window_s / 2
-    best, best_tw = np.inf, float(view.window_s)
+    best, best_tw, best_a = np.inf, float(view.window_s), 0.0
     for tw in np.geomspace(view.window_s / 4, duration, 48):
         shape = tw * (np.exp(-t0 / tw) - np.exp(-t1 / tw)) / view.window_s
         shape = shape - tw * (1.0 - np.exp(-duration / tw)) / duration
-        chi2 = _wls_chi2(shape[:, None], view.level, sd)
+        a = shape[:, None] / sd[:, None]
+        coef, *_ = np.linalg.lstsq(a, view.level / sd, rcond=None)
+        r = view.level / sd - a @ coef
+        chi2 = float(r @ r)
         if chi2 < best:
-            best, best_tw = chi2, float(tw)
-    return float(best), best_tw
+            best, best_tw, best_a = chi2, float(tw), float(coef[0])
+    return float(best), best_tw, best_a
 
 
 def warmup_time_constant(view: TimeView, duration: float) -> float:
     """Warm-up time constant ``T_w`` that best fits the window means (log grid, 48 points)."""
     return _warmup_fit(view, duration)[1]
+
+
+def warmup_shape(view: TimeView, duration: float) -> tuple[float, float, float]:
+    """The warm-up the window means measure, and how much it explains of them.
+
+    Returns
+    -------
+    (tau_w, amplitude, gain)
+        Time constant ``T_w`` and signed amplitude ``A`` of ``A e^{-t/T_w}`` fitted by
+        weighted least squares on the window means (spreads ``view.level_sd``), and the drop
+        of ``chi^2`` it brings against no shape (``sum_w (l_w / s_w)^2``): chi-square with two
+        degrees of freedom (``A``, ``T_w``) when there is no warm-up.
+    """
+    best, tw, amp = _warmup_fit(view, duration)
+    sd = np.where(view.level_sd > 0, view.level_sd, np.inf)
+    none = float(np.sum((view.level / sd) ** 2))
+    return tw, amp, none - best
