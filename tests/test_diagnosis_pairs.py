@@ -287,3 +287,84 @@ def test_ramp_next_to_white_is_not_a_slow_telegraph(monkeypatch) -> None:  # typ
     named0 = {a.effect for a in diagnose(x, base, **kw).explanation.effects}
     assert "telegraph" in named0
     assert "ramp" not in named0
+
+
+# --- jump-like effects and their random look-alikes -------------------------------------------
+
+
+def test_sparse_jump_test_is_calibrated_on_gaussian_jumps_and_finds_steps() -> None:
+    from allanite.diagnosis.time_view import sparse_jump_p
+
+    rng = np.random.default_rng(20261125)
+    n_draws, level = 100, 0.05
+    for g in (0.0, 30.0):  # the null's own jumps, and a random walk 30x their variance on top
+        p = np.array([sparse_jump_p(rng.normal(0.0, np.sqrt(1.0 + g), 31)) for _ in range(n_draws)])
+        # the rejection rate at 5 % within three binomial standard errors of 5 %
+        assert np.mean(p < level) <= level + 3.0 * np.sqrt(level * (1 - level) / n_draws)
+    # four bias steps among 31 window boundaries: 8 null spreads each, the rest the null's own
+    z = rng.normal(0.0, 1.0, 31)
+    z[[3, 11, 12, 25]] += np.array([8.0, -8.0, 8.0, -8.0])
+    assert sparse_jump_p(z) < 2e-3
+    # the same jump variance spread evenly is what a random walk makes
+    assert sparse_jump_p(z.std() * rng.normal(0.0, 1.0, 31)) > 2e-3
+
+
+def test_bias_steps_next_to_white_are_not_a_random_walk() -> None:
+    """The designed pair 'step + white' at 5x/5x the clear level (seed 1000 + 17 * 16): four
+    change points, seven steps. A random walk of the same Allan variance spreads its jumps
+    evenly over the windows; its largest jump alone does not reject it, the few large jumps
+    among small ones do (:func:`~allanite.diagnosis.time_view.sparse_jump_p`), so the walk no
+    longer explains the jump evidence and the steps are named."""
+    seed = 1000 + 17 * 16
+    terms = (T["bias_steps"](size=0.30890190151152863, interval=81.92),
+             T["white"](N=0.01835577068005403))  # fmt: skip
+    base, x = _pair_record(seed, terms)
+    d = diagnose(x, base, fs=100.0, units="deg/s", holdout=0.5, n_mc=60, seed=seed + 1)
+    named = {a.effect for a in d.explanation.effects}
+    assert "step" in named
+    assert named & {"white", "rescale:white"}
+    assert not named & {"rrw", "rescale:rrw", "markov"}
+    walk = next(a for a in d.attribution if a.effect == "rrw")
+    assert "jump" not in walk.evidence["explained"]
+    assert "level" in walk.evidence["explained"]  # its wander still covers the level
+    # the control: the largest jump alone (the max test) is consistent with the walk
+    a_w = float(T["rrw"](K=walk.params["K"]).avar(np.array([d.time.window_s]), 0.01)[0])
+    alpha_ev = 0.05 / 8  # the evidence's Bonferroni level (8 statistics)
+    assert d.time.level_p_values(a_w, gaussian=False)["jump"] >= alpha_ev
+    assert d.time.level_p_values(a_w)["jump"] < alpha_ev
+
+
+def _level_view(level: np.ndarray, change_points: list[float], window: float = 10.0):  # type: ignore[no-untyped-def]
+    """A time view with these window means (unit null spread) and change points only."""
+    from allanite.diagnosis.time_view import TimeView
+
+    w = level.size
+    return TimeView(
+        t_s=(np.arange(w) + 0.5) * window, window_s=window, level=level - level.mean(),
+        level_sd=np.ones(w), z={}, thresholds={}, family_p={}, kurtosis={}, spike_times_s=[],
+        spike_amplitudes=[], change_points_s=change_points, segments_s=[],
+    )  # fmt: skip
+
+
+def test_step_without_change_points_pays_for_its_shape() -> None:
+    """A step proposed on the jump evidence alone (no change point detected) used to pay no
+    shape misfit at all, so it explained a random walk's wander for free. Now its steps are all
+    further ones: each costs two parameters and the misfit of the staircase remains."""
+    from allanite.diagnosis.level_shape import level_misfit
+
+    rng = np.random.default_rng(7)
+    w, per_param = 32, float(stats.chi2.isf(0.05, 1))
+    duration = 10.0 * w
+    # a random walk of the window means, 3 null spreads per window: no staircase fits it
+    walk = np.cumsum(rng.normal(0.0, 3.0, w))
+    misfit = level_misfit("step", _level_view(walk, []), duration, per_param)
+    assert misfit > 2.0 * per_param
+    # one level shift of 12 null spreads between windows 20 and 21, nothing detected: one
+    # further step, its two parameters, and a chance misfit (chi2 with w - 1 degrees of freedom)
+    noise = rng.normal(0.0, 1.0, w)
+    shift = noise + 12.0 * (np.arange(w) >= 21)
+    got = level_misfit("step", _level_view(shift, []), duration, per_param)
+    assert 2.0 * per_param <= got <= 2.0 * per_param + float(stats.chi2.isf(1e-3, w - 1)) - (w - 1)
+    # detected at its time, the step is free and the misfit is chance alone
+    detected = level_misfit("step", _level_view(shift, [210.0]), duration, per_param)
+    assert detected == pytest.approx(got - 2.0 * per_param, abs=1e-9)

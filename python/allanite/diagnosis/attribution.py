@@ -77,6 +77,11 @@ from allanite.diagnosis.time_view import TimeView, added_block_kurtosis, added_l
 
 __all__ = ["LEVEL_NEGLIGIBLE", "Attribution", "fit_candidate", "negligible", "rank", "tau_size"]
 
+#: slow processes whose window means move in jumps (two levels): the sparse-jump test, which
+#: asks whether a Gaussian process explains the jumps, does not apply to them; one is only an
+#: explanation when its own process reproduces the platykurtic block means (kurt_lf)
+TWO_LEVEL = ("telegraph",)
+
 #: cap of one piece of evidence on the -2 ln p scale
 EVIDENCE_CAP = 1000.0
 
@@ -403,7 +408,9 @@ def fit_candidate(
             level_var = None
             if added is not None and n_fit >= 2 * time_view.level.size:
                 level_var = added_level_variance(added, fs, n_fit, time_view.level.size)
-            level_p = time_view.level_p_values(float(a_w[0]), level_var)
+            level_p = time_view.level_p_values(
+                float(a_w[0]), level_var, gaussian=cand.effect not in TWO_LEVEL
+            )
             n_ev = max(len(evidence_p), 1)
             for e, p in level_p.items():
                 if significant.get(e, False) and p >= alpha / n_ev and e not in explained:
@@ -415,6 +422,10 @@ def fit_candidate(
         if p_lf is not None and p_lf >= alpha / max(len(evidence_p), 1):
             explained = sorted([*explained, "kurt_lf"])
     if lr_p >= alpha and not explained:
+        return None
+    if cand.effect in TWO_LEVEL and "kurt_lf" not in explained:
+        # its own two levels do not reproduce the platykurtic block means: it is a
+        # Gauss-Markov process with the same spectrum, and the simpler term is the answer
         return None
     unexplained = sorted(e for e, s in significant.items() if s and e not in explained)
     penalty = sum(min(-2.0 * np.log(max(evidence_p[e], 1e-300)), EVIDENCE_CAP) for e in unexplained)
