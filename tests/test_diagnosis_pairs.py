@@ -368,3 +368,50 @@ def test_step_without_change_points_pays_for_its_shape() -> None:
     # detected at its time, the step is free and the misfit is chance alone
     detected = level_misfit("step", _level_view(shift, [210.0]), duration, per_param)
     assert detected == pytest.approx(got - 2.0 * per_param, abs=1e-9)
+
+
+def test_random_walk_next_to_a_resonance_is_not_a_telegraph(monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """The designed pair 'resonance + rrw' at 2x/16x the clear level (seed 1000 + 17 * 39): the
+    strong walk makes the block means platykurtic. A telegraph process used to explain that
+    (and the jumps and level) by name whatever its size; fitted on top of the resonance it is
+    a two-level process of a tenth of the block means' variance, which its own re-test
+    rejects, so it is no explanation and the walk is named."""
+    import allanite.diagnosis.attribution as attribution
+    from allanite.diagnosis.attribution import fit_candidate
+    from allanite.diagnosis.joint import with_background
+
+    seed = 1000 + 17 * 39
+    terms = (T["resonance"](N=0.03687061091472085, frequency=20.0, damping=0.1),
+             T["rrw"](K=0.07450000974539323))  # fmt: skip
+    base, x = _pair_record(seed, terms)
+    seen: dict[str, object] = {}
+    explain = engine.explain
+
+    def spy(best, cands, tm, **kw):  # type: ignore[no-untyped-def]
+        seen.update(cands=cands, tm=tm, kw=kw)
+        return explain(best, cands, tm, **kw)
+
+    monkeypatch.setattr(engine, "explain", spy)
+    d = diagnose(x, base, fs=100.0, units="deg/s", holdout=0.5, n_mc=60, seed=seed + 1)
+    named = {a.effect for a in d.explanation.effects}
+    assert "resonance" in named
+    assert named & {"rrw", "rescale:rrw"}
+    assert "telegraph" not in named
+    assert d.time.family_p["kurt_lf"] < 1e-6  # the platykurtic block means are there
+
+    # the telegraph on top of the resonance: kept only without the rule, and then its own
+    # process does not reproduce the block means (it explains no kurt_lf)
+    kw = {k: v for k, v in seen["kw"].items() if k != "frequency"}  # type: ignore[attr-defined]
+    by = {c.effect: c for c in seen["cands"]}  # type: ignore[attr-defined]
+    reso = next(a for a in d.attribution if a.effect == "resonance")
+    extra = by["resonance"].extra_avar(
+        {k: reso.params[k] for k in by["resonance"].free},
+        seen["tm"].tau,
+        seen["tm"].dt,  # type: ignore[attr-defined]
+    )
+    tm_bg = with_background(seen["tm"], extra)  # type: ignore[arg-type]
+    assert fit_candidate(by["telegraph"], tm_bg, **kw) is None
+    monkeypatch.setattr(attribution, "TWO_LEVEL", ())
+    tele = fit_candidate(by["telegraph"], tm_bg, **kw)
+    assert tele is not None
+    assert "kurt_lf" not in tele.evidence["explained"]
