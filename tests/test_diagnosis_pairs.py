@@ -215,8 +215,10 @@ def _designed_quantization_rrw() -> tuple[NoiseModel, np.ndarray]:
 
 
 def test_slow_noise_explains_platykurtic_block_means(monkeypatch) -> None:  # type: ignore[no-untyped-def]
-    """A strong random walk makes the block means platykurtic; without the re-test with the
-    walk's own kurtosis only a telegraph process explains that and is named instead."""
+    """A strong random walk makes the block means platykurtic; the re-test with the walk's
+    own kurtosis lets it explain them. Without the re-test nothing does: the walk leaves them
+    unexplained, and a telegraph process (which explains them only through the same re-test of
+    its own process) is no explanation either."""
     import allanite.diagnosis.attribution as attribution
 
     base, x = _designed_quantization_rrw()
@@ -238,8 +240,10 @@ def test_slow_noise_explains_platykurtic_block_means(monkeypatch) -> None:  # ty
     monkeypatch.setattr(attribution, "_lf_kurtosis_p", lambda *a, **k: None)
     d0 = diagnose(x, base, **kw)
     named0 = {a.effect for a in d0.explanation.effects}
-    assert "telegraph" in named0
-    assert not named0 & {"rrw", "rescale:rrw"}
+    assert "telegraph" not in named0
+    walk0 = next(a for a in d0.attribution if a.effect == "rrw")
+    assert "kurt_lf" not in walk0.evidence["explained"]
+    assert "kurt_lf" in walk0.evidence["unexplained"]
 
 
 def test_ramp_welch_spectrum_is_its_own_and_scales_with_its_slope() -> None:
@@ -283,7 +287,15 @@ def test_ramp_next_to_white_is_not_a_slow_telegraph(monkeypatch) -> None:  # typ
     named1 = {a.effect for a in diagnose(x, base, **kw).explanation.effects}
     assert "ramp" in named1  # the Welch spectrum alone keeps it
     assert "telegraph" not in named1
+    # ... and without the rule that a telegraph explains block means, jumps and level only
+    # through its own process (the old rule: by name; a third protection here)
+    import allanite.diagnosis.candidates as candidates
+
     monkeypatch.setattr(joint, "WELCH_SHAPES", ())
+    monkeypatch.setattr(attribution, "TWO_LEVEL", ())
+    monkeypatch.setitem(
+        candidates.EXPLAINS, "telegraph", frozenset({"kurt_lf", "dyn", "jump", "level"})
+    )
     named0 = {a.effect for a in diagnose(x, base, **kw).explanation.effects}
     assert "telegraph" in named0
     assert "ramp" not in named0
