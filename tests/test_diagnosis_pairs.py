@@ -382,6 +382,21 @@ def test_step_without_change_points_pays_for_its_shape() -> None:
     assert detected == pytest.approx(got - 2.0 * per_param, abs=1e-9)
 
 
+def _diagnose_seen(seed: int, terms: tuple[object, object], monkeypatch):  # type: ignore[no-untyped-def]
+    """Diagnose a designed pair record; also return the joint step's candidates and inputs."""
+    base, x = _pair_record(seed, terms)
+    seen: dict[str, object] = {}
+    explain = engine.explain
+
+    def spy(best, cands, tm, **kw):  # type: ignore[no-untyped-def]
+        seen.update(cands=cands, tm=tm, kw=kw)
+        return explain(best, cands, tm, **kw)
+
+    monkeypatch.setattr(engine, "explain", spy)
+    d = diagnose(x, base, fs=100.0, units="deg/s", holdout=0.5, n_mc=60, seed=seed + 1)
+    return d, seen
+
+
 def test_random_walk_next_to_a_resonance_is_not_a_telegraph(monkeypatch) -> None:  # type: ignore[no-untyped-def]
     """The designed pair 'resonance + rrw' at 2x/16x the clear level (seed 1000 + 17 * 39): the
     strong walk makes the block means platykurtic. A telegraph process used to explain that
@@ -395,16 +410,7 @@ def test_random_walk_next_to_a_resonance_is_not_a_telegraph(monkeypatch) -> None
     seed = 1000 + 17 * 39
     terms = (T["resonance"](N=0.03687061091472085, frequency=20.0, damping=0.1),
              T["rrw"](K=0.07450000974539323))  # fmt: skip
-    base, x = _pair_record(seed, terms)
-    seen: dict[str, object] = {}
-    explain = engine.explain
-
-    def spy(best, cands, tm, **kw):  # type: ignore[no-untyped-def]
-        seen.update(cands=cands, tm=tm, kw=kw)
-        return explain(best, cands, tm, **kw)
-
-    monkeypatch.setattr(engine, "explain", spy)
-    d = diagnose(x, base, fs=100.0, units="deg/s", holdout=0.5, n_mc=60, seed=seed + 1)
+    d, seen = _diagnose_seen(seed, terms, monkeypatch)
     named = {a.effect for a in d.explanation.effects}
     assert "resonance" in named
     assert named & {"rrw", "rescale:rrw"}
@@ -427,3 +433,28 @@ def test_random_walk_next_to_a_resonance_is_not_a_telegraph(monkeypatch) -> None
     tele = fit_candidate(by["telegraph"], tm_bg, **kw)
     assert tele is not None
     assert "kurt_lf" not in tele.evidence["explained"]
+
+
+def test_telegraph_next_to_white_noise_is_named_despite_its_fitted_variance(monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """The designed pair 'telegraph + white' at 16x/2x the clear level (seed 1000 + 17 * 35):
+    the tau view fits the telegraph with 0.69 of its variance (it trades amplitude for
+    correlation time next to the extra white noise), and at exactly that variance its block
+    means' predicted kurtosis is rejected; within a factor 2 of it (LF_VARIANCE_FACTOR) the
+    two-level process reproduces the platykurtic block means and is named."""
+    import allanite.diagnosis.attribution as attribution
+    from allanite.diagnosis.attribution import fit_candidate
+
+    seed = 1000 + 17 * 35
+    terms = (T["telegraph"](amplitude=0.1443240400199345, tau_c=3.0),
+             T["white"](N=0.01474012233651864))  # fmt: skip
+    d, seen = _diagnose_seen(seed, terms, monkeypatch)
+    named = {a.effect for a in d.explanation.effects}
+    assert "telegraph" in named
+    assert named & {"white", "rescale:white"}
+    tele = next(a for a in d.attribution if a.effect == "telegraph")
+    assert "kurt_lf" in tele.evidence["explained"]
+    # the control: the re-test at the fitted variance alone drops the telegraph
+    kw = {k: v for k, v in seen["kw"].items() if k != "frequency"}  # type: ignore[attr-defined]
+    by = {c.effect: c for c in seen["cands"]}  # type: ignore[attr-defined]
+    monkeypatch.setattr(attribution, "LF_VARIANCE_FACTOR", 1.0)
+    assert fit_candidate(by["telegraph"], seen["tm"], **kw) is None  # type: ignore[arg-type]
