@@ -217,8 +217,10 @@ def _designed_quantization_rrw() -> tuple[NoiseModel, np.ndarray]:
 
 
 def test_slow_noise_explains_platykurtic_block_means(monkeypatch) -> None:  # type: ignore[no-untyped-def]
-    """A strong random walk makes the block means platykurtic; without the re-test with the
-    walk's own kurtosis only a telegraph process explains that and is named instead."""
+    """A strong random walk makes the block means platykurtic; the re-test with the walk's
+    own kurtosis lets it explain them. Without the re-test nothing does: the walk leaves them
+    unexplained, and a telegraph process (which explains them only through the same re-test of
+    its own process) is no explanation either."""
     import allanite.diagnosis.attribution as attribution
 
     base, x = _designed_quantization_rrw()
@@ -240,18 +242,10 @@ def test_slow_noise_explains_platykurtic_block_means(monkeypatch) -> None:  # ty
     monkeypatch.setattr(attribution, "_lf_kurtosis_p", lambda *a, **k: None)
     d0 = diagnose(x, base, **kw)
     named0 = {a.effect for a in d0.explanation.effects}
-    assert "telegraph" in named0
-    # and without the rule that a process still rising at the longest tau is not identified
-    # (which names the walk next to the telegraph here), the telegraph takes the walk's place
-    degenerate = attribution._degenerate
-    monkeypatch.setattr(
-        attribution,
-        "_degenerate",
-        lambda cand, logp, lo, dt, hi=None, extra=None: degenerate(cand, logp, lo, dt, hi),
-    )
-    named1 = {a.effect for a in diagnose(x, base, **kw).explanation.effects}
-    assert "telegraph" in named1
-    assert not named1 & {"rrw", "rescale:rrw"}
+    assert "telegraph" not in named0
+    walk0 = next(a for a in d0.attribution if a.effect == "rrw")
+    assert "kurt_lf" not in walk0.evidence["explained"]
+    assert "kurt_lf" in walk0.evidence["unexplained"]
 
 
 def test_ramp_welch_spectrum_is_its_own_and_scales_with_its_slope() -> None:
@@ -295,7 +289,182 @@ def test_ramp_next_to_white_is_not_a_slow_telegraph(monkeypatch) -> None:  # typ
     named1 = {a.effect for a in diagnose(x, base, **kw).explanation.effects}
     assert "ramp" in named1  # the Welch spectrum alone keeps it
     assert "telegraph" not in named1
+    # ... and without the rule that a telegraph explains block means, jumps and level only
+    # through its own process (the old rule: by name; a third protection here)
+    import allanite.diagnosis.candidates as candidates
+
     monkeypatch.setattr(joint, "WELCH_SHAPES", ())
+    monkeypatch.setattr(attribution, "TWO_LEVEL", ())
+    monkeypatch.setitem(
+        candidates.EXPLAINS, "telegraph", frozenset({"kurt_lf", "dyn", "jump", "level"})
+    )
     named0 = {a.effect for a in diagnose(x, base, **kw).explanation.effects}
     assert "telegraph" in named0
     assert "ramp" not in named0
+
+
+# --- jump-like effects and their random look-alikes -------------------------------------------
+
+
+def test_sparse_jump_test_is_calibrated_on_gaussian_jumps_and_finds_steps() -> None:
+    from allanite.diagnosis.time_view import sparse_jump_p
+
+    rng = np.random.default_rng(20261125)
+    n_draws, level = 100, 0.05
+    for g in (0.0, 30.0):  # the null's own jumps, and a random walk 30x their variance on top
+        p = np.array([sparse_jump_p(rng.normal(0.0, np.sqrt(1.0 + g), 31)) for _ in range(n_draws)])
+        # the rejection rate at 5 % within three binomial standard errors of 5 %
+        assert np.mean(p < level) <= level + 3.0 * np.sqrt(level * (1 - level) / n_draws)
+    # four bias steps among 31 window boundaries: 8 null spreads each, the rest the null's own
+    z = rng.normal(0.0, 1.0, 31)
+    z[[3, 11, 12, 25]] += np.array([8.0, -8.0, 8.0, -8.0])
+    assert sparse_jump_p(z) < 2e-3
+    # the same jump variance spread evenly is what a random walk makes
+    assert sparse_jump_p(z.std() * rng.normal(0.0, 1.0, 31)) > 2e-3
+
+
+def test_bias_steps_next_to_white_are_not_a_random_walk() -> None:
+    """The designed pair 'step + white' at 5x/5x the clear level (seed 1000 + 17 * 16): four
+    change points, seven steps. A random walk of the same Allan variance spreads its jumps
+    evenly over the windows; its largest jump alone does not reject it, the few large jumps
+    among small ones do (:func:`~allanite.diagnosis.time_view.sparse_jump_p`), so the walk no
+    longer explains the jump evidence and the steps are named."""
+    seed = 1000 + 17 * 16
+    terms = (T["bias_steps"](size=0.30890190151152863, interval=81.92),
+             T["white"](N=0.01835577068005403))  # fmt: skip
+    base, x = _pair_record(seed, terms)
+    d = diagnose(x, base, fs=100.0, units="deg/s", holdout=0.5, n_mc=60, seed=seed + 1)
+    named = {a.effect for a in d.explanation.effects}
+    assert "step" in named
+    assert named & {"white", "rescale:white"}
+    assert not named & {"rrw", "rescale:rrw", "markov"}
+    walk = next(a for a in d.attribution if a.effect == "rrw")
+    assert "jump" not in walk.evidence["explained"]
+    assert "level" in walk.evidence["explained"]  # its wander still covers the level
+    # the control: the largest jump alone (the max test) is consistent with the walk
+    a_w = float(T["rrw"](K=walk.params["K"]).avar(np.array([d.time.window_s]), 0.01)[0])
+    alpha_ev = 0.05 / 8  # the evidence's Bonferroni level (8 statistics)
+    assert d.time.level_p_values(a_w, gaussian=False)["jump"] >= alpha_ev
+    assert d.time.level_p_values(a_w)["jump"] < alpha_ev
+
+
+def _level_view(level: np.ndarray, change_points: list[float], window: float = 10.0):  # type: ignore[no-untyped-def]
+    """A time view with these window means (unit null spread) and change points only."""
+    from allanite.diagnosis.time_view import TimeView
+
+    w = level.size
+    return TimeView(
+        t_s=(np.arange(w) + 0.5) * window, window_s=window, level=level - level.mean(),
+        level_sd=np.ones(w), z={}, thresholds={}, family_p={}, kurtosis={}, spike_times_s=[],
+        spike_amplitudes=[], change_points_s=change_points, segments_s=[],
+    )  # fmt: skip
+
+
+def test_step_without_change_points_pays_for_its_shape() -> None:
+    """A step proposed on the jump evidence alone (no change point detected) used to pay no
+    shape misfit at all, so it explained a random walk's wander for free. Now its steps are all
+    further ones: each costs two parameters and the misfit of the staircase remains."""
+    from allanite.diagnosis.level_shape import level_misfit
+
+    rng = np.random.default_rng(7)
+    w, per_param = 32, float(stats.chi2.isf(0.05, 1))
+    duration = 10.0 * w
+    # a random walk of the window means, 3 null spreads per window: no staircase fits it
+    walk = np.cumsum(rng.normal(0.0, 3.0, w))
+    misfit = level_misfit("step", _level_view(walk, []), duration, per_param)
+    assert misfit > 2.0 * per_param
+    # one level shift of 12 null spreads between windows 20 and 21, nothing detected: one
+    # further step, its two parameters, and a chance misfit (chi2 with w - 1 degrees of freedom)
+    noise = rng.normal(0.0, 1.0, w)
+    shift = noise + 12.0 * (np.arange(w) >= 21)
+    got = level_misfit("step", _level_view(shift, []), duration, per_param)
+    assert 2.0 * per_param <= got <= 2.0 * per_param + float(stats.chi2.isf(1e-3, w - 1)) - (w - 1)
+    # detected at its time, the step is free and the misfit is chance alone
+    detected = level_misfit("step", _level_view(shift, [210.0]), duration, per_param)
+    assert detected == pytest.approx(got - 2.0 * per_param, abs=1e-9)
+
+
+def _diagnose_seen(seed: int, terms: tuple[object, object], monkeypatch):  # type: ignore[no-untyped-def]
+    """Diagnose a designed pair record; also return the joint step's candidates and inputs."""
+    base, x = _pair_record(seed, terms)
+    seen: dict[str, object] = {}
+    explain = engine.explain
+
+    def spy(best, cands, tm, **kw):  # type: ignore[no-untyped-def]
+        seen.update(cands=cands, tm=tm, kw=kw)
+        return explain(best, cands, tm, **kw)
+
+    monkeypatch.setattr(engine, "explain", spy)
+    d = diagnose(x, base, fs=100.0, units="deg/s", holdout=0.5, n_mc=60, seed=seed + 1)
+    return d, seen
+
+
+def test_random_walk_next_to_a_resonance_is_not_a_telegraph(monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """The designed pair 'resonance + rrw' at 2x/16x the clear level (seed 1000 + 17 * 39): the
+    strong walk makes the block means platykurtic. A telegraph process used to explain that
+    (and the jumps and level) by name whatever its size; fitted on top of the resonance it is
+    a two-level process of a tenth of the block means' variance, which its own re-test
+    rejects, so it is no explanation and the walk is named."""
+    import allanite.diagnosis.attribution as attribution
+    from allanite.diagnosis.attribution import fit_candidate
+    from allanite.diagnosis.joint import with_background
+
+    seed = 1000 + 17 * 39
+    terms = (T["resonance"](N=0.03687061091472085, frequency=20.0, damping=0.1),
+             T["rrw"](K=0.07450000974539323))  # fmt: skip
+    d, seen = _diagnose_seen(seed, terms, monkeypatch)
+    named = {a.effect for a in d.explanation.effects}
+    assert "resonance" in named
+    assert named & {"rrw", "rescale:rrw"}
+    assert "telegraph" not in named
+    assert d.time.family_p["kurt_lf"] < 1e-6  # the platykurtic block means are there
+
+    # the telegraph on top of the resonance: kept only without the rule, and then its own
+    # process does not reproduce the block means (it explains no kurt_lf)
+    kw = {k: v for k, v in seen["kw"].items() if k != "frequency"}  # type: ignore[attr-defined]
+    by = {c.effect: c for c in seen["cands"]}  # type: ignore[attr-defined]
+    reso = next(a for a in d.attribution if a.effect == "resonance")
+    extra = by["resonance"].extra_avar(
+        {k: reso.params[k] for k in by["resonance"].free},
+        seen["tm"].tau,
+        seen["tm"].dt,  # type: ignore[attr-defined]
+    )
+    tm_bg = with_background(seen["tm"], extra)  # type: ignore[arg-type]
+    assert fit_candidate(by["telegraph"], tm_bg, **kw) is None
+    monkeypatch.setattr(attribution, "TWO_LEVEL", ())
+    # (and without the rule that a process still rising at the longest tau is not identified,
+    # which alone also drops this telegraph)
+    degenerate = attribution._degenerate
+    monkeypatch.setattr(
+        attribution,
+        "_degenerate",
+        lambda cand, logp, lo, dt, hi=None, extra=None: degenerate(cand, logp, lo, dt, hi),
+    )
+    tele = fit_candidate(by["telegraph"], tm_bg, **kw)
+    assert tele is not None
+    assert "kurt_lf" not in tele.evidence["explained"]
+
+
+def test_telegraph_next_to_white_noise_is_named_despite_its_fitted_variance(monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """The designed pair 'telegraph + white' at 16x/2x the clear level (seed 1000 + 17 * 35):
+    the tau view fits the telegraph with 0.69 of its variance (it trades amplitude for
+    correlation time next to the extra white noise), and at exactly that variance its block
+    means' predicted kurtosis is rejected; within a factor 2 of it (LF_VARIANCE_FACTOR) the
+    two-level process reproduces the platykurtic block means and is named."""
+    import allanite.diagnosis.attribution as attribution
+    from allanite.diagnosis.attribution import fit_candidate
+
+    seed = 1000 + 17 * 35
+    terms = (T["telegraph"](amplitude=0.1443240400199345, tau_c=3.0),
+             T["white"](N=0.01474012233651864))  # fmt: skip
+    d, seen = _diagnose_seen(seed, terms, monkeypatch)
+    named = {a.effect for a in d.explanation.effects}
+    assert "telegraph" in named
+    assert named & {"white", "rescale:white"}
+    tele = next(a for a in d.attribution if a.effect == "telegraph")
+    assert "kurt_lf" in tele.evidence["explained"]
+    # the control: the re-test at the fitted variance alone drops the telegraph
+    kw = {k: v for k, v in seen["kw"].items() if k != "frequency"}  # type: ignore[attr-defined]
+    by = {c.effect: c for c in seen["cands"]}  # type: ignore[attr-defined]
+    monkeypatch.setattr(attribution, "LF_VARIANCE_FACTOR", 1.0)
+    assert fit_candidate(by["telegraph"], seen["tm"], **kw) is None  # type: ignore[arg-type]

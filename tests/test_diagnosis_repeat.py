@@ -159,6 +159,10 @@ def test_a_ramp_is_not_read_as_a_process_at_the_bound(monkeypatch) -> None:  # t
         "_degenerate",
         lambda c, logp, lo, dt, hi=None, extra=None: original(c, logp, lo, dt),
     )
+    # a telegraph that explains no platykurtic block means is not kept at all (it is a
+    # Gauss-Markov process, attribution.TWO_LEVEL); without that rule too it runs to the bound
+    assert set(at_bound(rank(cands, tm, **test))) == {"markov"}
+    monkeypatch.setattr(attribution, "TWO_LEVEL", ())
     assert set(at_bound(rank(cands, tm, **test))) == {"markov", "telegraph"}
 
 

@@ -11,7 +11,9 @@ is compared with its expectation ``W - p`` (``W`` windows, ``p`` fitted paramete
 
 * step(s) at the detected change points ``t_c``: ``l_w = sum_c b_c (f_w(t_c) - (T - t_c)/T)``
   with ``f_w`` the fraction of window ``w`` after ``t_c``, plus further steps at window
-  boundaries while each lowers ``chi^2`` by more than 10.8 (``chi2_1`` quantile 0.999): bias
+  boundaries (all of them when no change point was detected: the level starts flat, so a
+  step proposed on the jump evidence alone pays for its shape too)
+  while each lowers ``chi^2`` by more than 10.8 (``chi2_1`` quantile 0.999): bias
   steps come at random times with random sizes. Each further step has two parameters the
   tau view does not see (its time and size), so it adds ``2 c`` to the misfit, with ``c`` the
   per-parameter penalty of the ranking (a staircase of many steps can mimic any smooth level
@@ -75,10 +77,12 @@ def level_misfit(effect: str, view: TimeView, duration: float, per_param: float 
         line = view.t_s - duration / 2
         return max(0.0, _wls_chi2(line[:, None], view.level, sd) - (w - 1))
     if effect == "step":
-        if not view.change_points_s:
-            return 0.0
+        # no detected change point: the steps are all "further" ones, from a flat level
         cols = [_step_column(tc, t1, view.window_s, duration) for tc in view.change_points_s]
-        chi2 = _wls_chi2(np.stack(cols, axis=1), view.level, sd)
+        if cols:
+            chi2 = _wls_chi2(np.stack(cols, axis=1), view.level, sd)
+        else:
+            chi2 = float(np.sum((view.level / sd) ** 2))
         # bias steps come at random times with random sizes: add further steps at window
         # boundaries while each lowers chi^2 by more than chi2_1(0.999) = 10.8
         while len(cols) < MAX_STEPS:
