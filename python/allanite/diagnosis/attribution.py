@@ -339,7 +339,7 @@ def _fisher_sigma(cand: Candidate, tm: TauModel, logp: NDArray[np.float64]) -> N
     jac = np.stack(cols, axis=1) / np.sqrt(tm.real_scale)
     fisher = jac.T @ tm.cov_inv @ jac
     cov = np.linalg.pinv(fisher)
-    return np.sqrt(np.maximum(np.diag(cov), 0.0))
+    return np.asarray(np.sqrt(np.maximum(np.diag(cov), 0.0)), dtype=np.float64)
 
 
 #: the kurt_lf re-test simulates the candidate over the fitted record: up to this many samples

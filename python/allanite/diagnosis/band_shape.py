@@ -153,7 +153,7 @@ def _fit_resonance(
             frequency=float(np.exp(p[1])),
             damping=float(1 / (1 + np.exp(-p[2]))),
         )
-        return np.log(sim + np.exp(p[3]) + term.psd_sampled(fb, dt)) - target
+        return np.asarray(np.log(sim + np.exp(p[3]) + term.psd_sampled(fb, dt)) - target)
 
     # the fourth parameter is a flat excess under the peak (more white noise, say): the local
     # continuum, which must not pull the resonance's frequency and width

@@ -193,7 +193,7 @@ class SimSource:
         )
         coef[0] = 0.0
         coef[-1] = np.sqrt(power[-1]) * rng.standard_normal()
-        return np.fft.irfft(coef, m)[:n] + mean
+        return np.asarray(np.fft.irfft(coef, m)[:n] + mean, dtype=np.float64)
 
 
 def _smooth_spectrum(power: NDArray[np.float64]) -> NDArray[np.float64]:

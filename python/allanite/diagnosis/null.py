@@ -222,7 +222,7 @@ def rescaled(
 
 def gumbel_scale(null: NDArray[np.float64]) -> float:
     """Scale ``beta = s sqrt(6) / pi`` of the moment-matched Gumbel law of a maximum."""
-    return float(np.std(null, ddof=1)) * np.sqrt(6.0) / np.pi
+    return float(np.std(null, ddof=1) * np.sqrt(6.0) / np.pi)
 
 
 def max_shift(null: NDArray[np.float64], k: float) -> float:
