@@ -44,7 +44,9 @@ def rates() -> np.ndarray:
     return np.array([1e10, -3e9]) + rng.standard_normal((N, 2)) + walk
 
 
-FACTORS = [1, 2, 3, 255, 256, 257, 8192, 8193, 70_000, (N + 1) // 3]
+# 40_000, 50_000, 65_000: lanes spread m, m / 2 and m / 3 apart (whole groups of 4 m, 2 m and
+# 4 m / 3 terms, then neighbouring lanes for the rest); 70_000: neighbouring lanes only
+FACTORS = [1, 2, 3, 255, 256, 257, 8192, 8193, 40_000, 50_000, 65_000, 70_000, (N + 1) // 3]
 
 
 def test_modified_long_wandering_record_matches_exact_value(rates: np.ndarray) -> None:
@@ -54,6 +56,21 @@ def test_modified_long_wandering_record_matches_exact_value(rates: np.ndarray) -
     exact = np.array([_exact_modified(phase[:, 0], m) for m in FACTORS])
     rel = np.abs(got / exact - 1.0)
     assert rel.max() < 1e-12, f"worst relative error {rel.max():.2e} at m = {FACTORS[rel.argmax()]}"
+
+
+def test_modified_spread_lanes_over_two_passes_match_exact_value() -> None:
+    """A factor beyond 64 Ki whose lanes are spread m apart covers each lane's m terms in two
+    passes (64 Ki terms, then the rest), each started from the prefix sums; the record is
+    the same hard case, long enough for one whole group of 4 m terms and a tail."""
+    rng = np.random.default_rng(20261126)
+    n = 470_000
+    walk = np.cumsum(rng.standard_normal(n)) * 0.1
+    rates = (1e10 + rng.standard_normal(n) + walk).reshape(-1, 1)
+    phase = np.asarray(_core.phase(rates, "rate"))
+    m = 66_000  # 4 m = 264_000 of the 272_002 terms in spread lanes
+    got = float(np.asarray(_core.variance(phase, [m], "modified", 1))[0, 0])
+    assert abs(got / _exact_modified(phase[:, 0], m) - 1.0) < 1e-12
+    assert np.asarray(_core.variance(phase, [8, m], "modified", 2))[1, 0] == got
 
 
 def test_modified_paths_agree_bit_for_bit(rates: np.ndarray) -> None:
