@@ -1,7 +1,7 @@
 """The modified Allan variance kernel at its worst case, against exact rational arithmetic.
 
 The kernel moves a running window w(j+1) = w(j) + d3(j) along the terms, in lanes restarted
-from the exact prefix sums of the phase (every 256 terms for factors up to 8192, at most every
+from the exact prefix sums of the phase (every 1024 terms for factors up to 8192, at most every
 64 Ki terms beyond); the steps d3 round relative to the phase's lag-m differences, not to the
 phase. The worst case for that drift is a long record on a large bias whose phase wanders far
 from zero (white rate noise plus a rate random walk: |phase| ~ 1e6 while a step at m = 1 is
@@ -46,7 +46,24 @@ def rates() -> np.ndarray:
 
 # 40_000, 50_000, 65_000: lanes spread m, m / 2 and m / 3 apart (whole groups of 4 m, 2 m and
 # 4 m / 3 terms, then neighbouring lanes for the rest); 70_000: neighbouring lanes only
-FACTORS = [1, 2, 3, 255, 256, 257, 8192, 8193, 40_000, 50_000, 65_000, 70_000, (N + 1) // 3]
+FACTORS = [
+    1,
+    2,
+    3,
+    255,
+    256,
+    257,
+    1023,
+    1024,
+    1025,
+    8192,
+    8193,
+    40_000,
+    50_000,
+    65_000,
+    70_000,
+    (N + 1) // 3,
+]
 
 
 def test_modified_long_wandering_record_matches_exact_value(rates: np.ndarray) -> None:
