@@ -44,26 +44,11 @@ def rates() -> np.ndarray:
     return np.array([1e10, -3e9]) + rng.standard_normal((N, 2)) + walk
 
 
-# 40_000, 50_000, 65_000: lanes spread m, m / 2 and m / 3 apart (whole groups of 4 m, 2 m and
-# 4 m / 3 terms, then neighbouring lanes for the rest); 70_000: neighbouring lanes only
-FACTORS = [
-    1,
-    2,
-    3,
-    255,
-    256,
-    257,
-    1023,
-    1024,
-    1025,
-    8192,
-    8193,
-    40_000,
-    50_000,
-    65_000,
-    70_000,
-    (N + 1) // 3,
-]
+# up to 8192: the tiled pass (lanes of 1024 terms); beyond, one factor at a time: 40_000, 50_000,
+# 65_000 with lanes spread m, m / 2 and m / 3 apart (whole groups of 4 m, 2 m and 4 m / 3 terms,
+# then neighbouring lanes for the rest), 8193 and 70_000 with neighbouring lanes only
+TILED = [1, 2, 3, 255, 256, 257, 1023, 1024, 1025, 8192]
+FACTORS = [*TILED, 8193, 40_000, 50_000, 65_000, 70_000, (N + 1) // 3]
 
 
 def test_modified_long_wandering_record_matches_exact_value(rates: np.ndarray) -> None:

@@ -558,34 +558,49 @@ ALLANITE_TARGET_CLONES static void window_steps(const double* b, std::int64_t m,
   for (std::int64_t j = std::max<std::int64_t>(avail, 0); j < n; ++j) out[j] = 0.0;
 }
 
+/// Groups of four steps whose moves of an exact (TwoSum) window are summed before they are
+/// folded into it (see lane_run).
+constexpr std::int64_t kModFoldGroups = 4;
+
 /// The running window of one lane of the modified estimator: `n` terms from the window
 /// hi + lo, moved on by the steps d[0 .. n) (readable up to n rounded up to 4), squares added
 /// to acc. The arithmetic, in groups of four steps from the lane's start (shared bit for bit by
-/// lane_groups): with w = hi + lo (kExact) or hi, p1 = d0, p2 = p1 + d1, p3 = p2 + d2,
-/// p4 = p3 + d3, the windows of the group are w, w + p1, w + p2, w + p3 (missing terms count
-/// as 0), acc += (w^2 + (w + p1)^2) + ((w + p2)^2 + (w + p3)^2), and the window moves on by
-/// p4: hi += p4 (kExact: as a TwoSum pair, so that only the steps' own rounding accumulates).
-/// One dependent add per four terms on each chain.
+/// lane_groups): with w the window, p1 = d0, p2 = p1 + d1, p3 = p2 + d2, p4 = p3 + d3, the
+/// windows of the group are w, w + p1, w + p2, w + p3 (missing terms count as 0),
+/// acc += (w^2 + (w + p1)^2) + ((w + p2)^2 + (w + p3)^2), and the window moves on by p4.
+/// Not kExact: w = hi, hi = w + p4. kExact (hi, lo a TwoSum pair, so that only the steps' own
+/// rounding accumulates, not that of the window): the moves of kModFoldGroups groups are
+/// summed, part = p4 + p4' + ..., the windows meanwhile w = (hi + lo) + part, and part is
+/// folded into the pair (TwoSum into hi, its error into lo) after every kModFoldGroups groups
+/// from the lane's start and after the last; part rounds to O(eps) of a few steps, like the
+/// steps. One dependent add per four terms on each chain.
 template <bool kExact>
 ALLANITE_ALWAYS_INLINE void lane_run(const double* d, std::int64_t n, double& hi, double& lo, double& acc) noexcept {
+  double base = hi + lo, part = 0.0;
   for (std::int64_t j = 0; j < n; j += 4) {
-    const double w = kExact ? hi + lo : hi;
+    const double w = kExact ? base + part : hi;
     const double p1 = d[j], p2 = p1 + d[j + 1], p3 = p2 + d[j + 2], p4 = p3 + d[j + 3];
     const double x1 = w + p1, x2 = w + p2, x3 = w + p3;
     const double q1 = j + 1 < n ? x1 * x1 : 0.0, q2 = j + 2 < n ? x2 * x2 : 0.0, q3 = j + 3 < n ? x3 * x3 : 0.0;
     acc += (w * w + q1) + (q2 + q3);
     if constexpr (kExact) {
-      double s, e;
-      two_sum(hi, p4, s, e);
-      hi = s;
-      lo += e;
+      part += p4;
+      if ((j / 4 + 1) % kModFoldGroups == 0 || j + 4 >= n) {
+        double s, e;
+        two_sum(hi, part, s, e);
+        hi = s;
+        lo += e;
+        base = hi + lo;
+        part = 0.0;
+      }
     } else {
       hi = w + p4;
     }
   }
 }
 
-/// lane_run of eight lanes side by side, `steps` (a multiple of 4) steps each: lane k's steps
+/// lane_run of eight lanes side by side, `steps` (a multiple of 4, of 4 kModFoldGroups if
+/// kExact) steps each: lane k's steps
 /// are src[k ls + j] (kFromPhase false) or computed from the phase, src = x of lane 0's first
 /// term, unit row stride, every step readable (kFromPhase true). The same arithmetic as
 /// lane_run with the lanes in two vectors: four steps of each lane are loaded as a row and
@@ -603,6 +618,7 @@ ALLANITE_ALWAYS_INLINE void lane_groups(const double* src, std::int64_t m, std::
   typedef long long v4i __attribute__((vector_size(32)));
   const v4i lo2 = {0, 4, 2, 6}, hi2 = {1, 5, 3, 7}, lo4 = {0, 1, 4, 5}, hi4 = {2, 3, 6, 7};
   const v4d three = {3.0, 3.0, 3.0, 3.0};
+  constexpr std::int64_t kGroups = kExact ? kModFoldGroups : 1;  // groups between folds
 #define ALLANITE_LOAD(p) (*reinterpret_cast<const v4u*>(p))
   v4d h0 = ALLANITE_LOAD(hi), l0 = ALLANITE_LOAD(lo), a0 = ALLANITE_LOAD(acc);
   v4d h1 = h0, l1 = l0, a1 = a0;
@@ -612,39 +628,51 @@ ALLANITE_ALWAYS_INLINE void lane_groups(const double* src, std::int64_t m, std::
     a1 = ALLANITE_LOAD(acc + 4);
   }
   const double* p = src;
-  for (std::int64_t s = 0; s < steps; s += 4, p += 4) {
-    // rows: four steps of one lane; columns after the transpose: one step of four lanes
+  for (std::int64_t s0 = 0; s0 < steps; s0 += 4 * kGroups) {
+    const v4d b0 = h0 + l0, b1 = h1 + l1;  // kExact: the windows' base until the next fold
+    v4d part0 = {}, part1 = {};             // kExact: the moves since the last fold
+    for (std::int64_t g = 0; g < kGroups; ++g, p += 4) {
+      // rows: four steps of one lane; columns after the transpose: one step of four lanes
 #define ALLANITE_TAP(k, t) ALLANITE_LOAD(p + (k) * ls + (t) * m)
 #define ALLANITE_ROW(k)                                                                             \
   (kFromPhase ? (ALLANITE_TAP(k, 3) - ALLANITE_TAP(k, 0)) - three * (ALLANITE_TAP(k, 2) - ALLANITE_TAP(k, 1)) \
               : ALLANITE_TAP(k, 0))
-    // lanes 4g .. 4g + 3 in one vector: window state h, l, squares a
-#define ALLANITE_LANES(g, h, l, a)                                                                  \
+      // lanes 4q .. 4q + 3 in one vector: window h (kExact: base b, moves part), squares a
+#define ALLANITE_LANES(q, h, b, part, a)                                                            \
   do {                                                                                              \
-    const v4d r0 = ALLANITE_ROW(4 * (g)), r1 = ALLANITE_ROW(4 * (g) + 1);                           \
-    const v4d r2 = ALLANITE_ROW(4 * (g) + 2), r3 = ALLANITE_ROW(4 * (g) + 3);                       \
+    const v4d r0 = ALLANITE_ROW(4 * (q)), r1 = ALLANITE_ROW(4 * (q) + 1);                           \
+    const v4d r2 = ALLANITE_ROW(4 * (q) + 2), r3 = ALLANITE_ROW(4 * (q) + 3);                       \
     const v4d t0 = __builtin_shuffle(r0, r1, lo2), t1 = __builtin_shuffle(r0, r1, hi2);             \
     const v4d t2 = __builtin_shuffle(r2, r3, lo2), t3 = __builtin_shuffle(r2, r3, hi2);             \
     const v4d p1 = __builtin_shuffle(t0, t2, lo4);                                                  \
     const v4d p2 = p1 + __builtin_shuffle(t1, t3, lo4);                                             \
     const v4d p3 = p2 + __builtin_shuffle(t0, t2, hi4);                                             \
     const v4d p4 = p3 + __builtin_shuffle(t1, t3, hi4);                                             \
-    const v4d w = kExact ? h + l : h;                                                               \
+    const v4d w = kExact ? b + part : h;                                                            \
     const v4d x1 = w + p1, x2 = w + p2, x3 = w + p3;                                                \
     a += (w * w + x1 * x1) + (x2 * x2 + x3 * x3);                                                   \
-    if constexpr (kExact) { /* TwoSum, lane by lane */                                              \
-      const v4d sum = h + p4, bb = sum - h;                                                         \
-      l += (h - (sum - bb)) + (p4 - bb);                                                            \
-      h = sum;                                                                                      \
+    if constexpr (kExact) {                                                                         \
+      part += p4;                                                                                   \
     } else {                                                                                        \
       h = w + p4;                                                                                   \
     }                                                                                               \
   } while (false)
-    ALLANITE_LANES(0, h0, l0, a0);
-    if constexpr (V == 2) ALLANITE_LANES(1, h1, l1, a1);
+      ALLANITE_LANES(0, h0, b0, part0, a0);
+      if constexpr (V == 2) ALLANITE_LANES(1, h1, b1, part1, a1);
 #undef ALLANITE_LANES
 #undef ALLANITE_ROW
 #undef ALLANITE_TAP
+    }
+    if constexpr (kExact) {  // the fold: TwoSum of h and the moves, lane by lane (as two_sum)
+      const v4d sum0 = h0 + part0, bb0 = sum0 - h0;
+      l0 += (h0 - (sum0 - bb0)) + (part0 - bb0);
+      h0 = sum0;
+      if constexpr (V == 2) {
+        const v4d sum1 = h1 + part1, bb1 = sum1 - h1;
+        l1 += (h1 - (sum1 - bb1)) + (part1 - bb1);
+        h1 = sum1;
+      }
+    }
   }
 #undef ALLANITE_LOAD
   *reinterpret_cast<v4u*>(hi) = h0;
