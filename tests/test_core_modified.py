@@ -1,13 +1,13 @@
 """The modified Allan variance kernel at its worst case, against exact rational arithmetic.
 
 The kernel moves a running window w(j+1) = w(j) + d3(j) along the terms, in lanes restarted
-from the exact prefix sums of the phase (every 1024 terms for factors up to 8192, at most every
-64 Ki terms beyond); the steps d3 round relative to the phase's lag-m differences, not to the
-phase. The worst case for that drift is a long record on a large bias whose phase wanders far
-from zero (white rate noise plus a rate random walk: |phase| ~ 1e6 while a step at m = 1 is
-~1) and factors from 1 to M/3. The reference is the definition evaluated exactly on the very
-float64 phase the kernel reads (every double is an integer times a power of two: prefix sums
-and windows in Python integers, the sum of squares as a fraction).
+from the exact prefix sums of the phase (every 256 or 1024 terms for factors up to 8192, at
+most every 64 Ki terms beyond); the steps d3 round relative to the phase's lag-m differences,
+not to the phase. The worst case for that drift is a long record on a large bias whose phase
+wanders far from zero (white rate noise plus a rate random walk: |phase| ~ 1e6 while a step at
+m = 1 is ~1) and factors from 1 to M/3. The reference is the definition evaluated exactly on
+the very float64 phase the kernel reads (every double is an integer times a power of two:
+prefix sums and windows in Python integers, the sum of squares as a fraction).
 """
 
 from __future__ import annotations
@@ -44,10 +44,11 @@ def rates() -> np.ndarray:
     return np.array([1e10, -3e9]) + rng.standard_normal((N, 2)) + walk
 
 
-# up to 8192: the tiled pass (lanes of 1024 terms); beyond, one factor at a time: 40_000, 50_000,
+# up to 8192: the tiled pass, lanes of 1024 terms (100, 1000, 5752) or of 256 (the others, whose
+# taps fall near each other modulo 512 rows); beyond, one factor at a time: 40_000, 50_000,
 # 65_000 with lanes spread m, m / 2 and m / 3 apart (whole groups of 4 m, 2 m and 4 m / 3 terms,
 # then neighbouring lanes for the rest), 8193 and 70_000 with neighbouring lanes only
-TILED = [1, 2, 3, 255, 256, 257, 1023, 1024, 1025, 8192]
+TILED = [1, 2, 3, 100, 255, 256, 257, 1000, 1023, 1024, 1025, 5752, 8192]
 FACTORS = [*TILED, 8193, 40_000, 50_000, 65_000, 70_000, (N + 1) // 3]
 
 

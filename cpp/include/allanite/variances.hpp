@@ -526,15 +526,28 @@ constexpr int kModSingleLanes = 4;
 constexpr int kModTileLanes = 4;
 
 /// Terms per lane of the modified estimator's running window in the tiled pass (see
-/// add_modified_lanes): kSumBlock / kModLane lanes make a summation block. A lane of a whole
-/// block starts from the prefix sums a quarter as often as one of a quarter block (the
-/// windows took about a tenth of the tiled pass at kSumBlock / 4); its 256 unguarded moves of the
-/// window round to at most O(256 eps) of it (measured at the worst case of
-/// test_core_modified.py, factors 1 to 8193: within 2.3e-16 of the exact variance).
-constexpr std::int64_t kModLane = kSumBlock;
-constexpr int kModLanesPerBlock = static_cast<int>(kSumBlock / kModLane);
-static_assert(kModLanesPerBlock == 1 || kModLanesPerBlock == 2 || kModLanesPerBlock == 4,
-              "a block is one, two or four lanes");
+/// add_modified_lanes), chosen per factor by mod_lane: a whole block, or a quarter block (four
+/// lanes make a summation block). A lane of a whole block starts from the prefix sums a
+/// quarter as often (the windows took about a tenth of the tiled pass with quarter blocks);
+/// its 256 unguarded moves of the window round to at most O(256 eps) of it (measured at the
+/// worst case of test_core_modified.py, factors 1 to 8193: within 2.3e-16 of the exact
+/// variance).
+constexpr std::int64_t kModLaneLong = kSumBlock;
+constexpr std::int64_t kModLaneShort = kSumBlock / 4;
+
+/// The lane of the tiled pass for factor m (a function of m alone, so that every layout of
+/// the phase gives the same bits). Whole-block lanes are 8 KiB apart, so the four lanes of a
+/// tap share one set of the 8-way L1 cache (4 KiB period); if two taps of a lane fall within
+/// a cache line of each other modulo 4 KiB (512 rows), 8 or more streams share a set and the
+/// pass slows down up to 3.5x (measured at m = 4096). Quarter-block lanes, 2 KiB apart, spread
+/// them over two sets.
+inline std::int64_t mod_lane(std::int64_t m) noexcept {
+  for (std::int64_t d = 1; d <= 3; ++d) {
+    const std::int64_t r = d * m % 512;
+    if (r < 8 || r > 504) return kModLaneShort;
+  }
+  return kModLaneLong;
+}
 
 /// The step of the modified estimator's window, w(j+1) - w(j) = d3(j), the third difference at
 /// lag m of the phase, written differences first: x3 - x0 and x2 - x1 round relative to the
@@ -699,7 +712,12 @@ ALLANITE_ALWAYS_INLINE void lane_groups(const double* src, std::int64_t m, std::
 
 ALLANITE_TARGET_CLONES static void lane_groups_phase(const double* x, std::int64_t m, std::int64_t ls,
                                                      std::int64_t steps, double* hi, double* lo, double* acc) noexcept {
-  lane_groups<true, false, kModTileLanes / 4, kModLane>(x, m, ls, steps, hi, lo, acc);
+  lane_groups<true, false, kModTileLanes / 4, kModLaneLong>(x, m, ls, steps, hi, lo, acc);
+}
+ALLANITE_TARGET_CLONES static void lane_groups_phase_short(const double* x, std::int64_t m, std::int64_t ls,
+                                                           std::int64_t steps, double* hi, double* lo,
+                                                           double* acc) noexcept {
+  lane_groups<true, false, kModTileLanes / 4, kModLaneShort>(x, m, ls, steps, hi, lo, acc);
 }
 ALLANITE_TARGET_CLONES static void lane_groups_phase_exact(const double* x, std::int64_t m, std::int64_t ls,
                                                            std::int64_t steps, double* hi, double* lo,
@@ -717,39 +735,41 @@ ALLANITE_TARGET_CLONES static void lane_groups_steps(const double* d, std::int64
 
 /// Add the modified AVAR's squares of `count` terms (from a block boundary, one channel: the
 /// phase x from the first term's row on, row stride rs) to total, block by block; a block is
-/// kModLanesPerBlock lanes of kModLane terms, its sum the lanes' lane_run sums combined
-/// pairwise ((a_0 + a_1) + (a_2 + a_3) for four).
+/// kSumBlock / kLane lanes of kLane terms (see mod_lane), its sum the lanes' lane_run sums
+/// (combined (a_0 + a_1) + (a_2 + a_3) for four).
 /// Lane l starts from the exact window w0[l] (from the prefix sums) and moves on by steps
 /// rounded to O(eps) of the window and of the phase's lag-m differences; restarting every
-/// kModLane terms keeps that drift from growing with the record. `avail`: steps readable
-/// (the last term of the record has none). `buf`: kModTileLanes kModLane + 4 doubles.
-inline void add_modified_lanes(const double* x, std::int64_t rs, std::int64_t m, const double* w0,
-                               std::int64_t count, std::int64_t avail, NeumaierSum& total, double* buf) {
-  constexpr std::int64_t kStride = kModTileLanes * kModLane;  // terms per call: whole blocks
+/// kLane terms keeps that drift from growing with the record. `avail`: steps readable
+/// (the last term of the record has none). `buf`: kModTileLanes kLane + 4 doubles.
+template <std::int64_t kLane>
+void add_modified_lanes(const double* x, std::int64_t rs, std::int64_t m, const double* w0, std::int64_t count,
+                        std::int64_t avail, NeumaierSum& total, double* buf) {
+  static_assert(kLane == kModLaneLong || kLane == kModLaneShort, "a whole or a quarter block");
+  constexpr std::int64_t kStride = kModTileLanes * kLane;  // terms per call: whole blocks
   for (std::int64_t b = 0; b < count; b += kStride) {
     const std::int64_t len = std::min(kStride, count - b);
     double hi[kModTileLanes], lo[kModTileLanes] = {}, acc[kModTileLanes] = {};
-    std::copy(w0 + b / kModLane, w0 + b / kModLane + (len + kModLane - 1) / kModLane, hi);
+    std::copy(w0 + b / kLane, w0 + b / kLane + (len + kLane - 1) / kLane, hi);
     if (len == kStride && rs == 1 && avail - b >= len) {  // whole blocks, steps from the phase
-      lane_groups_phase(x + b, m, kModLane, kModLane, hi, lo, acc);
+      if constexpr (kLane == kModLaneLong) {
+        lane_groups_phase(x + b, m, kLane, kLane, hi, lo, acc);
+      } else {
+        lane_groups_phase_short(x + b, m, kLane, kLane, hi, lo, acc);
+      }
     } else {
       window_steps(x + b * rs, m, rs, std::min(len, avail - b), len + 4, buf);
       if (len == kStride) {
-        lane_groups_steps(buf, kModLane, kModLane, hi, lo, acc);
+        lane_groups_steps(buf, kLane, kLane, hi, lo, acc);
       } else {
-        for (std::int64_t k = 0; k * kModLane < len; ++k)
-          lane_run<false>(buf + k * kModLane, std::min(kModLane, len - k * kModLane), hi[k], lo[k], acc[k]);
+        for (std::int64_t k = 0; k * kLane < len; ++k)
+          lane_run<false>(buf + k * kLane, std::min(kLane, len - k * kLane), hi[k], lo[k], acc[k]);
       }
     }
-    constexpr int P = kModLanesPerBlock;
-    for (std::int64_t k = 0; P * k < kModTileLanes && k * kSumBlock < len; ++k) {
-      const double* a = acc + P * k;
-      if constexpr (P == 1) {
-        total.add(a[0]);
-      } else if constexpr (P == 2) {
-        total.add(a[0] + a[1]);
-      } else {
-        total.add((a[0] + a[1]) + (a[2] + a[3]));
+    for (std::int64_t k = 0; k * kLane < len; ++k) {
+      if constexpr (kLane == kModLaneLong) {
+        total.add(acc[k]);
+      } else if (k % 4 == 0) {
+        total.add((acc[k] + acc[k + 1]) + (acc[k + 2] + acc[k + 3]));
       }
     }
   }
@@ -1002,8 +1022,9 @@ struct PrefixRing {
   }
 
   /// The exact windows w(j) = S[j+3m] - 3 S[j+2m] + 3 S[j+m] - S[j] of channel c at
-  /// j = k0, k0 + kModLane, ... (`lanes` of them) into out.
-  void windows(std::int64_t k0, std::int64_t m, Eigen::Index c, std::int64_t lanes, double* out) const {
+  /// j = k0, k0 + lane, ... (`lanes` of them) into out.
+  void windows(std::int64_t k0, std::int64_t m, std::int64_t lane, Eigen::Index c, std::int64_t lanes,
+               double* out) const {
     std::int64_t slot[4];
     for (int i = 0; i < 4; ++i) slot[i] = (k0 + i * m) % span;
     for (std::int64_t q = 0; q < lanes; ++q) {
@@ -1012,7 +1033,7 @@ struct PrefixRing {
                         nc};
       out[q] = tap_diff(t, c);
       for (int i = 0; i < 4; ++i) {
-        slot[i] += kModLane;
+        slot[i] += lane;
         if (slot[i] >= span) slot[i] -= span;
       }
     }
@@ -1056,7 +1077,8 @@ inline void variance_group(const PhaseRef& phase, const PrefixPlan* plan, Varian
   // modified: the prefix sums of the tile's rows, where its lanes start (add_modified_lanes)
   std::optional<PrefixRing> ring;
   if (windowed) ring.emplace(phase, *plan, top_m);
-  std::vector<double> anchors(windowed ? kTileTerms / kModLane : 0), steps(windowed ? kModTileLanes * kModLane + 4 : 0);
+  std::vector<double> anchors(windowed ? kTileTerms / kModLaneShort : 0),
+      steps(windowed ? kModTileLanes * kModLaneLong + 4 : 0);
   for (std::int64_t k0 = 0; k0 < longest; k0 += kTileTerms) {
     if (windowed) ring->cover(k0);
     for (std::size_t a = 0; a < idx.size(); ++a) {
@@ -1068,10 +1090,17 @@ inline void variance_group(const PhaseRef& phase, const PrefixPlan* plan, Varian
       switch (kind) {
         case VarianceKind::Modified: {
           // every lane's first window from the prefix sums, the others by steps of the phase
-          const std::int64_t lanes = (count + kModLane - 1) / kModLane;
+          const std::int64_t lane = mod_lane(m);
+          const std::int64_t lanes = (count + lane - 1) / lane;
           for (Eigen::Index c = 0; c < nc; ++c) {
-            ring->windows(k0, m, c, lanes, anchors.data());
-            add_modified_lanes(x + k0 * rs + c, rs, m, anchors.data(), count, n[a] - 1 - k0, tot[c], steps.data());
+            ring->windows(k0, m, lane, c, lanes, anchors.data());
+            const double* b = x + k0 * rs + c;
+            const std::int64_t avail = n[a] - 1 - k0;
+            if (lane == kModLaneLong) {
+              add_modified_lanes<kModLaneLong>(b, rs, m, anchors.data(), count, avail, tot[c], steps.data());
+            } else {
+              add_modified_lanes<kModLaneShort>(b, rs, m, anchors.data(), count, avail, tot[c], steps.data());
+            }
           }
           break;
         }
