@@ -28,6 +28,7 @@
 #include <optional>
 #include <cstdint>
 #include <cstring>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -979,10 +980,11 @@ ALLANITE_TARGET_CLONES static void fill_blocks4(const double* x, double big, con
 /// a tile fills only the blocks it adds, each regenerated from its mark of the plan, four
 /// blocks side by side, so that S[r] depends on r alone (not on the tiles or threads).
 struct PrefixRing {
-  PrefixRing(const PhaseRef& ph, const PrefixPlan& pl, std::int64_t top_m)
+  /// From row `first` on (a multiple of kSumBlock: the tile where the pass starts).
+  PrefixRing(const PhaseRef& ph, const PrefixPlan& pl, std::int64_t top_m, std::int64_t first = 0)
       : phase(ph), plan(pl), rows(ph.rows() + 1), nc(ph.cols()),
         span(kTileTerms + (3 * top_m + kSumBlock - 1) / kSumBlock * kSumBlock),
-        hi(static_cast<std::size_t>(span * nc)), lo(hi.size()) {}
+        hi(static_cast<std::size_t>(span * nc)), lo(hi.size()), filled(first) {}
 
   /// Make rows [k0, k0 + span) present (those below rows).
   void cover(std::int64_t k0) {
@@ -1047,16 +1049,33 @@ struct PrefixRing {
   Eigen::Index nc;
   std::int64_t span;
   std::vector<double> hi, lo;
-  std::int64_t filled = 0;  // rows [0, filled) have been generated
+  std::int64_t filled;  // rows [first, filled) have been generated
 };
 
 /// Variances of the factors ms[idx[...]] in one pass over the rows: tile by tile of
 /// kTileTerms terms, every factor adds the tile's terms to its own compensated sums (for a
 /// single factor that is one plain pass). `plan`: the prefix sums (modified only), regenerated
 /// tile by tile into a PrefixRing where the lanes start.
+/// The normalisation of a kind's sum of squares for factor m on M rows.
+inline double variance_norm(VarianceKind kind, std::int64_t M, std::int64_t m) {
+  const double md = static_cast<double>(m);
+  const double nd = static_cast<double>(n_terms(kind, M, m));
+  if (kind == VarianceKind::Hadamard || kind == VarianceKind::StandardHadamard) return 6.0 * md * md * nd;
+  if (kind == VarianceKind::Modified) return 2.0 * md * md * md * md * nd;
+  return 2.0 * md * md * nd;
+}
+
+/// `terms` [k_begin, k_end) of a variance_group (tile-aligned) whose sums go to `sums`
+/// (per factor, per channel) instead of the result: the modified factors up to kTileMaxM run
+/// in two such row ranges (see variance).
+struct TermRange {
+  std::int64_t k_begin, k_end;
+  std::vector<std::vector<NeumaierSum>>* sums;
+};
+
 inline void variance_group(const PhaseRef& phase, const PrefixPlan* plan, VarianceKind kind,
                            const std::vector<std::int64_t>& ms, const std::vector<std::size_t>& idx,
-                           RowMatrix& out) {
+                           RowMatrix& out, const TermRange* range = nullptr) {
   const std::int64_t M = phase.rows();
   const Eigen::Index nc = phase.cols();
   const double* x = phase.data();
@@ -1076,10 +1095,12 @@ inline void variance_group(const PhaseRef& phase, const PrefixPlan* plan, Varian
   if (kind == VarianceKind::Modified && !windowed) longest = 0;
   // modified: the prefix sums of the tile's rows, where its lanes start (add_modified_lanes)
   std::optional<PrefixRing> ring;
-  if (windowed) ring.emplace(phase, *plan, top_m);
+  const std::int64_t k_begin = range != nullptr ? range->k_begin : 0;
+  if (range != nullptr) longest = std::min(longest, range->k_end);
+  if (windowed) ring.emplace(phase, *plan, top_m, k_begin);
   std::vector<double> anchors(windowed ? kTileTerms / kModLaneShort : 0),
       steps(windowed ? kModTileLanes * kModLaneLong + 4 : 0);
-  for (std::int64_t k0 = 0; k0 < longest; k0 += kTileTerms) {
+  for (std::int64_t k0 = k_begin; k0 < longest; k0 += kTileTerms) {
     if (windowed) ring->cover(k0);
     for (std::size_t a = 0; a < idx.size(); ++a) {
       if (k0 >= n[a]) continue;
@@ -1118,16 +1139,16 @@ inline void variance_group(const PhaseRef& phase, const PrefixPlan* plan, Varian
       }
     }
   }
+  if (range != nullptr) {
+    *range->sums = std::move(totals);
+    return;
+  }
   for (std::size_t a = 0; a < idx.size(); ++a) {
     const std::int64_t m = ms[idx[a]];
     if (kind == VarianceKind::Modified && top_m > kTileMaxM)
       add_modified_single(phase, *plan, m, n[a], totals[a].data());
     if (kind == VarianceKind::Total) add_total_ends(phase, m, totals[a].data());
-    const double md = static_cast<double>(m);
-    const double nd = static_cast<double>(n_terms(kind, M, m));
-    double norm = 2.0 * md * md * nd;
-    if (kind == VarianceKind::Hadamard || kind == VarianceKind::StandardHadamard) norm = 6.0 * md * md * nd;
-    if (kind == VarianceKind::Modified) norm = 2.0 * md * md * md * md * nd;
+    const double norm = variance_norm(kind, M, m);
     for (Eigen::Index c = 0; c < nc; ++c)
       out(static_cast<Eigen::Index>(idx[a]), c) = totals[a][static_cast<std::size_t>(c)].value() / norm;
   }
@@ -1169,7 +1190,20 @@ inline RowMatrix variance(const PhaseRef& phase, const std::vector<std::int64_t>
     else
       single.push_back(i);
   }
-  if (small.size() > 1) {
+  // The modified factors up to kTileMaxM: one group whose terms run in two row ranges, split
+  // at a tile near the middle of the record (a function of M alone), as two tasks; each
+  // generates only its own rows' prefix sums and reads only its half of the phase. The sums
+  // of the second range are added to those of the first, so the bits depend neither on the
+  // threads nor on the other factors.
+  const bool ranged = kind == VarianceKind::Modified && !small.empty();
+  std::vector<std::vector<NeumaierSum>> range_sums[2];
+  const std::int64_t split = M / 2 / detail::kTileTerms * detail::kTileTerms;
+  const detail::TermRange ranges[2] = {{0, split, &range_sums[0]},
+                                       {split, std::numeric_limits<std::int64_t>::max(), &range_sums[1]}};
+  const std::size_t n_ranged = ranged ? 2 : 0;
+  if (ranged) {
+    // the two range tasks come first (see parallel_for below)
+  } else if (small.size() > 1) {
     const std::size_t ng = std::min<std::size_t>(static_cast<std::size_t>(nthreads), small.size());
     groups.resize(ng);
     for (std::size_t a = 0; a < small.size(); ++a) groups[a % ng].push_back(small[a]);
@@ -1184,13 +1218,27 @@ inline RowMatrix variance(const PhaseRef& phase, const std::vector<std::int64_t>
       groups.emplace_back(wide.begin() + static_cast<std::ptrdiff_t>(a),
                           wide.begin() + static_cast<std::ptrdiff_t>(std::min(wide.size(), a + kWideGroup)));
   }
-  parallel_for(groups.size() + single.size(), nthreads, [&](std::size_t task) {
-    if (task < groups.size()) {
-      detail::variance_group(phase, &plan, kind, ms, groups[task], out);
+  parallel_for(n_ranged + groups.size() + single.size(), nthreads, [&](std::size_t task) {
+    if (task < n_ranged) {
+      detail::variance_group(phase, &plan, kind, ms, small, out, &ranges[task]);
+    } else if (task < n_ranged + groups.size()) {
+      detail::variance_group(phase, &plan, kind, ms, groups[task - n_ranged], out);
     } else {
-      detail::variance_group(phase, &plan, kind, ms, {single[task - groups.size()]}, out);
+      detail::variance_group(phase, &plan, kind, ms, {single[task - n_ranged - groups.size()]}, out);
     }
   });
+  if (ranged) {
+    for (std::size_t a = 0; a < small.size(); ++a) {
+      const double norm = detail::variance_norm(kind, M, ms[small[a]]);
+      for (Eigen::Index c = 0; c < phase.cols(); ++c) {
+        const auto uc = static_cast<std::size_t>(c);
+        NeumaierSum total = range_sums[0][a][uc];
+        total.add(range_sums[1][a][uc].hi());
+        total.add(range_sums[1][a][uc].lo());
+        out(static_cast<Eigen::Index>(small[a]), c) = total.value() / norm;
+      }
+    }
+  }
   return out;
 }
 
