@@ -1200,14 +1200,12 @@ inline RowMatrix variance(const PhaseRef& phase, const std::vector<std::int64_t>
   const std::int64_t split = M / 2 / detail::kTileTerms * detail::kTileTerms;
   const detail::TermRange ranges[2] = {{0, split, &range_sums[0]},
                                        {split, std::numeric_limits<std::int64_t>::max(), &range_sums[1]}};
-  const std::size_t n_ranged = ranged ? 2 : 0;
-  if (ranged) {
-    // the two range tasks come first (see parallel_for below)
-  } else if (small.size() > 1) {
+  const std::size_t n_ranged = ranged ? 2 : 0;  // the first tasks
+  if (!ranged && small.size() > 1) {
     const std::size_t ng = std::min<std::size_t>(static_cast<std::size_t>(nthreads), small.size());
     groups.resize(ng);
     for (std::size_t a = 0; a < small.size(); ++a) groups[a % ng].push_back(small[a]);
-  } else {
+  } else if (!ranged) {
     single.insert(single.begin(), small.begin(), small.end());
   }
   if (tiled && kind != VarianceKind::Modified) {
