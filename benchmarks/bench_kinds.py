@@ -18,15 +18,26 @@ kind, >= 20 for the overlapping kind at 1e7 samples and 100 taus), kernel time p
 kind / the overlapping kernel's (<= 2), identification / kernel (<= 0.5). The memory floor of
 a kernel is the time to stream the phase once per tau (``8 M`` bytes per tau) at the
 bandwidth of a numpy copy measured in the same run (read + write bytes / time); a kernel
-below its floor shares passes between taus (tiles in cache). Every timing is the best of
-``--repeat`` after one untimed warm-up call (allantools and the oracle included, so that no
-kind runs cold); the 1-minute load average is recorded before and after each record size and
-each kind, since the machine may be shared.
+below its floor shares passes between taus (tiles in cache).
+
+The two sides of every goal's ratio are timed in pairs (:func:`paired_runs`), ``--pairs``
+times each, alternately (A then B, then B then A, ...), so that a change of the machine's
+load hits both sides of a pair: end to end against allantools, each kind's kernel against
+the overlapping kernel, the identification against the kernel. Each goal uses the median of
+its paired ratios, reported with the inter-quartile range (:func:`ratio_summary`); next to
+the median against allantools the best-of-k ratio (fastest allantools run / fastest allanite
+run of the same pairs). Best-of-k alone is noisy at these margins: on a shared machine each
+side's fastest run comes from a different moment. The seconds reported are the fastest of
+the pairs; the other timings (given alpha, phase, oracle) the best of ``--repeat``. Every
+timing follows one untimed warm-up call (allantools and the oracle included, so that no kind
+runs cold); the 1-minute load average is recorded before and after each record size and each
+kind, since the machine may be shared.
 
 Writes benchmarks/results/bench_kinds.json and .md.
 
-Usage: ``python benchmarks/bench_kinds.py [--sizes 1000000:50 10000000:100:1] [--repeat 3]``
-(``N:points[:repeat]``; the default runs 1e7 samples once).
+Usage: ``python benchmarks/bench_kinds.py [--sizes 1000000:50 10000000:100:1:3] [--repeat 3]
+[--pairs 15] [--out STEM] [--results DIR]`` (``N:points[:repeat[:pairs]]``; the default times
+1e7 samples once for the best-of timings and in 3 pairs).
 """
 
 from __future__ import annotations
@@ -35,6 +46,7 @@ import argparse
 import json
 import os
 import platform
+import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any, Literal
@@ -75,6 +87,60 @@ def _warm_best(fn: Callable[[], Any], repeat: int) -> tuple[float, Any]:
     return _best(fn, repeat)
 
 
+def paired_runs(
+    first: Callable[[], Any],
+    second: Callable[[], Any],
+    pairs: int,
+    clock: Callable[[], float] = time.perf_counter,
+) -> tuple[np.ndarray, np.ndarray, Any, Any]:
+    """Seconds of ``pairs`` runs of ``first`` and of ``second``, timed alternately.
+
+    After one untimed warm-up call of each, pair ``i`` runs ``first`` then ``second`` for even
+    ``i`` and ``second`` then ``first`` for odd ``i``: a load that rises or falls during the
+    measurement slows both sides of a pair alike, and neither side always runs right after the
+    other (caches, clock boost).
+
+    Returns
+    -------
+    tuple
+        ``(seconds_first, seconds_second, last_result_first, last_result_second)``, the
+        seconds as arrays of length ``pairs``.
+    """
+    if pairs < 1:
+        raise ValueError(f"pairs must be at least 1, got {pairs}; pass --pairs 1 or more")
+    fns = (first, second)
+    seconds = np.empty((2, pairs))
+    results: list[Any] = [fn() for fn in fns]  # warm-up
+    for i in range(pairs):
+        for side in (0, 1) if i % 2 == 0 else (1, 0):
+            t0 = clock()
+            results[side] = fns[side]()
+            seconds[side, i] = clock() - t0
+    return seconds[0], seconds[1], results[0], results[1]
+
+
+def ratio_summary(fast: np.ndarray, slow: np.ndarray) -> dict[str, float]:
+    """Median and quartiles of the paired ratios ``slow / fast``, and the best-of-k ratio.
+
+    ``best_of`` is ``min(slow) / min(fast)``: the ratio of the two fastest runs, which may come
+    from different moments of a shared machine.
+    """
+    fast, slow = np.asarray(fast, dtype=float), np.asarray(slow, dtype=float)
+    if fast.shape != slow.shape or fast.ndim != 1 or fast.size == 0:
+        raise ValueError(
+            f"need two equal, non-empty 1-D series of paired seconds, got {fast.shape} and "
+            f"{slow.shape}"
+        )
+    q25, median, q75 = np.percentile(slow / fast, [25.0, 50.0, 75.0])
+    return {
+        "pairs": float(fast.size),
+        "median": float(median),
+        "q25": float(q25),
+        "q75": float(q75),
+        "best_of": float(slow.min() / fast.min()),
+    }
+
+
 def _allantools(kind: str, y: np.ndarray, m: np.ndarray) -> np.ndarray:
     import allantools
 
@@ -92,31 +158,47 @@ def bench_kind(
     m: np.ndarray,
     *,
     repeat: int,
+    pairs: int,
     threads: int,
     oracle: bool,
     floor_per_tau: float,
 ) -> dict[str, Any]:
     """Timings and differences of one kind on one record (see the module docstring)."""
     load = os.getloadavg()[0]
-    t_kernel, var = _warm_best(lambda: np.asarray(_core.variance(phase, m, kind, threads)), repeat)
+
+    def kernel() -> np.ndarray:
+        return np.asarray(_core.variance(phase, m, kind, threads))
+
+    s_over, s_kernel, _, var = paired_runs(
+        lambda: _core.variance(phase, m, "overlapping", threads), kernel, pairs
+    )
     var1 = np.asarray(_core.variance(phase, m, kind, 1))
-    t_id, _ = _warm_best(
-        lambda: identify_alpha(phase, m, kind, data="frequency", threads=threads), repeat
+    s_kernel2, s_id, _, _ = paired_runs(
+        kernel, lambda: identify_alpha(phase, m, kind, data="frequency", threads=threads), pairs
     )
-    t_e2e, res = _warm_best(
-        lambda: allanite.avar(y, fs=1.0, kind=kind, m=m, threads=threads), repeat
-    )
+    t_kernel = float(min(s_kernel.min(), s_kernel2.min()))
     t_given, _ = _warm_best(
         lambda: allanite.avar(y, fs=1.0, kind=kind, m=m, alpha=0, threads=threads), repeat
     )
-    t_at, v_at = _warm_best(lambda: _allantools(kind, y, m), repeat)
+    s_e2e, s_at, res, v_at = paired_runs(
+        lambda: allanite.avar(y, fs=1.0, kind=kind, m=m, threads=threads),
+        lambda: _allantools(kind, y, m),
+        pairs,
+    )
     entry: dict[str, Any] = {
         "seconds": {
             "kernel": t_kernel,
-            "identification": t_id,
-            "end_to_end": t_e2e,
+            "identification": float(s_id.min()),
+            "end_to_end": float(s_e2e.min()),
             "given_alpha": t_given,
-            "allantools": t_at,
+            "allantools": float(s_at.min()),
+        },
+        "paired": {
+            "end_to_end_median_seconds": float(np.median(s_e2e)),
+            "allantools_median_seconds": float(np.median(s_at)),
+            "allantools_over_end_to_end": ratio_summary(s_e2e, s_at),
+            "kernel_over_overlapping": ratio_summary(s_over, s_kernel),
+            "identification_over_kernel": ratio_summary(s_kernel2, s_id),
         },
         "bit_identical_1_vs_all_threads": bool(np.array_equal(var[:, 0], var1[:, 0])),
         "max_rel_diff": {
@@ -144,7 +226,9 @@ def bench_kind(
     return entry
 
 
-def bench_size(n: int, points: int, repeat: int, threads: int, oracle: bool) -> dict[str, Any]:
+def bench_size(
+    n: int, points: int, repeat: int, pairs: int, threads: int, oracle: bool
+) -> dict[str, Any]:
     """Every timing and ratio for one record size."""
     load_before = os.getloadavg()[0]
     rng = np.random.default_rng(12345)
@@ -162,6 +246,7 @@ def bench_size(n: int, points: int, repeat: int, threads: int, oracle: bool) -> 
             phase,
             m,
             repeat=repeat,
+            pairs=pairs,
             threads=threads,
             oracle=oracle,
             floor_per_tau=floor_per_tau,
@@ -171,11 +256,15 @@ def bench_size(n: int, points: int, repeat: int, threads: int, oracle: bool) -> 
     t_over = kinds["overlapping"]["seconds"]["kernel"]
     for entry in kinds.values():
         s = entry["seconds"]
+        paired = entry["paired"]
         ratios = {
             "allantools_over_end_to_end": s["allantools"] / s["end_to_end"],
+            "allantools_over_end_to_end_median": paired["allantools_over_end_to_end"]["median"],
             "allantools_over_given_alpha": s["allantools"] / s["given_alpha"],
             "kernel_per_tau_over_overlapping": s["kernel"] / t_over,
+            "kernel_per_tau_over_overlapping_median": paired["kernel_over_overlapping"]["median"],
             "identification_over_kernel": s["identification"] / s["kernel"],
+            "identification_over_kernel_median": paired["identification_over_kernel"]["median"],
             "kernel_over_memory_floor": s["kernel"] / entry["memory_floor_seconds"],
         }
         if "oracle" in s:
@@ -188,6 +277,8 @@ def bench_size(n: int, points: int, repeat: int, threads: int, oracle: bool) -> 
         "m_min": int(m[0]),
         "m_max": int(m[-1]),
         "threads": threads,
+        "repeat": repeat,
+        "pairs": pairs,
         "phase_seconds": t_phase,
         "copy_bandwidth_GBps": bandwidth / 1e9,
         "load_average_1min": {"before": load_before, "after": os.getloadavg()[0]},
@@ -196,30 +287,46 @@ def bench_size(n: int, points: int, repeat: int, threads: int, oracle: bool) -> 
 
 
 def goals(record: dict[str, Any]) -> list[tuple[str, float, float, bool]]:
-    """(goal, measured, bound, met) of issue 17 for one record size."""
+    """(goal, measured, bound, met) of issue 17 for one record size.
+
+    Every goal is judged on the median of its paired ratios (see :func:`paired_runs`): end to
+    end against allantools, each kernel against the overlapping one, the identification
+    against the kernel; not on ratios of best-of-k timings taken at different moments.
+    """
     out = []
     large = record["n_samples"] >= 10_000_000 and record["n_taus"] >= 90
     for kind, entry in record["kinds"].items():
         r = entry["ratios"]
         bound = GOAL_OVERLAPPING_LARGE if (kind == "overlapping" and large) else GOAL_VS_ALLANTOOLS
+        median = r["allantools_over_end_to_end_median"]
         out.append(
-            (
-                f"{kind}: allantools / allanite (identified)",
-                r["allantools_over_end_to_end"],
-                bound,
-                r["allantools_over_end_to_end"] >= bound,
-            )
+            (f"{kind}: allantools / allanite (identified), median", median, bound, median >= bound)
         )
         if kind in ("modified", "total"):
-            v = r["kernel_per_tau_over_overlapping"]
+            v = r["kernel_per_tau_over_overlapping_median"]
             out.append(
-                (f"{kind}: kernel per tau / overlapping", v, GOAL_PER_TAU, v <= GOAL_PER_TAU)
+                (
+                    f"{kind}: kernel per tau / overlapping, median",
+                    v,
+                    GOAL_PER_TAU,
+                    v <= GOAL_PER_TAU,
+                )
             )
-        v = r["identification_over_kernel"]
+        v = r["identification_over_kernel_median"]
         out.append(
-            (f"{kind}: identification / kernel", v, GOAL_IDENTIFICATION, v <= GOAL_IDENTIFICATION)
+            (
+                f"{kind}: identification / kernel, median",
+                v,
+                GOAL_IDENTIFICATION,
+                v <= GOAL_IDENTIFICATION,
+            )
         )
     return out
+
+
+def _spread(summary: dict[str, float], fmt: str, unit: str = "") -> str:
+    """``median [q25-q75]`` of a :func:`ratio_summary` (``unit`` after the median)."""
+    return f"{summary['median']:{fmt}}{unit} [{summary['q25']:{fmt}}-{summary['q75']:{fmt}}]"
 
 
 def markdown(records: list[dict[str, Any]]) -> str:
@@ -228,31 +335,36 @@ def markdown(records: list[dict[str, Any]]) -> str:
         load = rec["load_average_1min"]
         lines += [
             f"## N = {rec['n_samples']:,}, {rec['n_taus']} taus (m = {rec['m_min']} .. "
-            f"{rec['m_max']}), {rec['threads']} threads, best of {rec['repeat']}",
+            f"{rec['m_max']}), {rec['threads']} threads; ratios: median [inter-quartile range] "
+            f"of {rec['pairs']} alternating pairs; other timings best of {rec['repeat']}",
             "",
             f"load average (1 min) {load['before']:.2f} before, {load['after']:.2f} after; "
             f"numpy copy bandwidth {rec['copy_bandwidth_GBps']:.1f} GB/s; phase "
             f"{rec['phase_seconds'] * 1e3:.1f} ms",
             "",
-            "| kind | kernel ms | floor ms | ident ms | allanite ms | given alpha ms | "
-            "allantools ms | oracle ms | vs allantools | (alpha given) | per tau / overl. | "
-            "ident / kernel | oracle / kernel | bit-identical threads |",
-            "|---|" + "---:|" * 13 + "---|",
+            "| kind | kernel ms | floor ms | ident ms | allanite ms (median) | given alpha ms | "
+            "allantools ms (median) | oracle ms | vs allantools, median [IQR] | best of pairs | "
+            "(alpha given) | per tau / overl., median [IQR] | ident / kernel, median [IQR] | "
+            "oracle / kernel | bit-identical threads |",
+            "|---|" + "---:|" * 14 + "---|",
         ]
         for kind, e in rec["kinds"].items():
-            s, r = e["seconds"], e["ratios"]
+            s, r, p = e["seconds"], e["ratios"], e["paired"]
+            pr = p["allantools_over_end_to_end"]
             ref = f"{s['oracle'] * 1e3:.0f}" if "oracle" in s else "-"
             vs_ref = f"{r['oracle_over_kernel']:.1f}x" if "oracle" in s else "-"
             if "oracle" in s and e["oracle_taus"] < rec["n_taus"]:
                 ref += f" ({e['oracle_taus']} taus)"
             lines.append(
                 f"| {kind} | {s['kernel'] * 1e3:.1f} | {e['memory_floor_seconds'] * 1e3:.1f} | "
-                f"{s['identification'] * 1e3:.1f} | {s['end_to_end'] * 1e3:.1f} | "
-                f"{s['given_alpha'] * 1e3:.1f} | {s['allantools'] * 1e3:.0f} | {ref} | "
-                f"{r['allantools_over_end_to_end']:.1f}x | "
+                f"{s['identification'] * 1e3:.1f} | {s['end_to_end'] * 1e3:.1f} "
+                f"({p['end_to_end_median_seconds'] * 1e3:.1f}) | {s['given_alpha'] * 1e3:.1f} | "
+                f"{s['allantools'] * 1e3:.0f} ({p['allantools_median_seconds'] * 1e3:.0f}) | "
+                f"{ref} | {_spread(pr, '.1f', 'x')} | "
+                f"{pr['best_of']:.1f}x | "
                 f"{r['allantools_over_given_alpha']:.1f}x | "
-                f"{r['kernel_per_tau_over_overlapping']:.2f} | "
-                f"{r['identification_over_kernel']:.2f} | {vs_ref} | "
+                f"{_spread(p['kernel_over_overlapping'], '.2f')} | "
+                f"{_spread(p['identification_over_kernel'], '.2f')} | {vs_ref} | "
                 f"{e['bit_identical_1_vs_all_threads']} |"
             )
         lines += ["", "| goal | measured | bound | met |", "|---|---:|---:|---|"]
@@ -267,10 +379,17 @@ def main() -> None:
     parser.add_argument(
         "--sizes",
         nargs="+",
-        default=["1000000:50", "10000000:100:1"],
-        help="record sizes as N:points of the log grid[:repeat]",
+        default=["1000000:50", "10000000:100:1:3"],
+        help="record sizes as N:points of the log grid[:repeat[:pairs]]",
     )
     parser.add_argument("--repeat", type=int, default=3, help="best of this many runs")
+    parser.add_argument(
+        "--pairs",
+        type=int,
+        default=15,
+        help="alternating runs of allanite and allantools (end to end) whose median ratio is "
+        "the goal",
+    )
     parser.add_argument("--threads", type=int, default=0, help="worker threads (0: all cores)")
     parser.add_argument("--no-oracle", action="store_true", help="skip the numpy oracle")
     parser.add_argument("--out", default="bench_kinds", help="stem of the result files")
@@ -282,9 +401,9 @@ def main() -> None:
         fields = [int(float(v)) for v in spec.split(":")]
         n, points = fields[0], fields[1]
         repeat = fields[2] if len(fields) > 2 else args.repeat
+        pairs = fields[3] if len(fields) > 3 else args.pairs
         threads = args.threads if args.threads > 0 else (os.cpu_count() or 1)
-        rec = bench_size(n, points, repeat, threads, oracle=not args.no_oracle)
-        rec["repeat"] = repeat
+        rec = bench_size(n, points, repeat, pairs, threads, oracle=not args.no_oracle)
         records.append(rec)
         print(markdown([rec]), flush=True)
     result = {

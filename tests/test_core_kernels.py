@@ -234,6 +234,31 @@ def test_long_record_paths_match_reference_and_each_other(kind: str) -> None:
     assert np.array_equal(alone, got)
 
 
+def test_hadamard_factors_side_by_side_match_reference_and_alone() -> None:
+    """One channel of Hadamard factors on a record of several tiles (8192 terms): the factors
+    of a tile run up to four side by side (their first taps share the loads) over the whole
+    blocks they all have, the rest of a tile one by one. Threads 1, 2 and 3 split the factors
+    into groups of 8, 4 + 4 and 3 + 3 + 2 (four, three and two side by side), the factors
+    above 8192 in a four and a one; the last tiles end at different terms for each factor.
+    White noise on a 1e10 bias: 1e-12 against the oracle, and every factor alone, whatever
+    the thread count, gives the bits it gets in the list."""
+    rng = np.random.default_rng(31)
+    n = 40_000
+    x = 1e10 + rng.standard_normal(n)
+    phase = _core.phase(x.reshape(-1, 1), "rate")
+    top = int(_core.max_m("hadamard", phase.shape[0]))
+    factors = np.array([1, 2, 3, 5, 64, 1000, 3000, 8192, 8193, 9000, 10000, 12000, top])
+    got = np.asarray(_core.variance(phase, factors, "hadamard", 1))
+    want = np.asarray(oracle.variance(x, factors, "hadamard", input="rate")).reshape(got.shape)
+    np.testing.assert_allclose(got, want, rtol=RTOL, atol=0)
+    for threads in (2, 3):
+        assert np.array_equal(np.asarray(_core.variance(phase, factors, "hadamard", threads)), got)
+    alone = np.vstack(
+        [np.asarray(_core.variance(phase, factors[i : i + 1], "hadamard", 1)) for i in range(13)]
+    )
+    assert np.array_equal(alone, got)
+
+
 @pytest.mark.parametrize(
     "n", [3, 1023, 1024, 1025, 3 * 1024 - 1, 4 * 1024 - 1, 4 * 1024, 5 * 1024 + 7]
 )

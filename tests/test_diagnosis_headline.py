@@ -120,7 +120,7 @@ def test_rescaled_white_noise_is_closed_in_all_views():
         if d.closed:
             assert d.unexplained == []
             assert "agree in all three views" in d.headline
-            assert "deg/sqrt(s)" in d.headline
+            assert "deg/sqrt(h)" in d.headline
     # each view is tested at level alpha after the effect: most records close
     assert closed >= 2
 
@@ -168,7 +168,7 @@ def test_cli_text_leads_with_the_headline(tmp_path, capsys):
     else:
         assert "agree in all three views" in out[0]
     assert out[0].index(":") < out[0].index("bursts")  # the effect comes first
-    assert any("deg/sqrt(s)" in line for line in out)
+    assert any("deg/sqrt(h)" in line for line in out)
 
 
 def test_joint_attribution_names_both_effects():

@@ -187,11 +187,13 @@ def test_added_block_kurtosis_random_walk_is_platykurtic_white_is_not() -> None:
     assert np.all(k_rw < -5.0 * sd_rw / np.sqrt(n_rep))
     assert np.all(np.abs(k_w) < 4.0 * sd_w / np.sqrt(n_rep))
     # the cached unit-amplitude Monte Carlo, scaled, is the Monte Carlo of the term itself
-    from allanite.diagnosis.time_view import _block_kurtosis_mc
+    # (at its time scales rounded to the cache's grid, tests/test_diagnosis_cost.py)
+    from allanite.diagnosis.time_view import _block_kurtosis_mc, _rounded_shape
 
     for term in (T["rrw"](K=0.07), T["markov"](sigma=0.3, tau_c=5.0)):
         got = added_block_kurtosis(term, fs, n, w, blocks, n_rep=n_rep)
-        direct = _block_kurtosis_mc(term, fs, n, w, blocks, n_rep, 20261125)
+        shape = term.with_values(**_rounded_shape(term))
+        direct = _block_kurtosis_mc(shape, fs, n, w, blocks, n_rep, 20261125)
         for a, b in zip(got, direct, strict=True):
             np.testing.assert_allclose(a, b, rtol=1e-9, atol=1e-12)
 

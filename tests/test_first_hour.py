@@ -217,7 +217,16 @@ def test_a_config_without_the_sensor_names_the_other_one(
     np.save(real, RNG.standard_normal(4000) * 0.01)
     argv = ["diagnose", str(real), "--fs", "100", "--units", "rad/s", "--sim-model", str(config)]
     assert main(argv) == 2
-    assert "choose it with --sim-sensor accel" in _one_line_error(capsys, "diagnose")
+    line = _one_line_error(capsys, "diagnose")
+    assert line.endswith("choose it with --sim-sensor accel")  # the CLI's spelling only
+    # a file that is no simulator config: the option that names the format, once
+    (tmp_path / "log.csv").write_text("t,gz\n0,1\n")
+    argv[-1] = str(tmp_path / "log.csv")
+    assert main(argv) == 2
+    line = _one_line_error(capsys, "diagnose")
+    assert "cannot tell which simulator config this is; give it with --sim-format NAME " \
+        "(model convert: --from NAME or --to NAME), NAME one of allanite, " in line  # fmt: skip
+    assert "CLI:" not in line
 
 
 def test_a_filter_bandwidth_above_nyquist_is_stated(
@@ -367,7 +376,7 @@ def test_write_corrected_folds_in_the_joint_explanation() -> None:
         ("white", {"N": 1e-4}),
         ("rrw", {"K": 5e-6}),
     ]
-    assert what.startswith("folded in the joint explanation: rescale:white (scale=0.5); ")
+    assert what.startswith("folded in the joint explanation: rescale:white (x0.5); ")
     assert what.endswith("gap 100 -> 0.5 (shrinkage 100 %)")
     # the longest prefix the format holds; what follows an unheld effect is left out
     joint = SimpleNamespace(effects=[white, lowpass, rrw], gap_before=100.0, gap_after=0.5)
@@ -382,7 +391,7 @@ def test_write_corrected_folds_in_the_joint_explanation() -> None:
     joint = SimpleNamespace(effects=[lowpass, rrw], gap_before=100.0, gap_after=0.5)
     diagnosis = SimpleNamespace(significant=True, attribution=[lowpass, rrw], explanation=joint)
     out, what = corrected_model(model, diagnosis, px4_plugin.HOLDS)
-    assert what.startswith("folded in rescale:rrw (scale=0.17); gap 100 -> 1 (shrinkage 90 %)")
+    assert what.startswith("folded in rescale:rrw (x0.17); gap 100 -> 1 (shrinkage 90 %)")
     assert "skipped lowpass" in what
 
 
@@ -589,3 +598,241 @@ def test_model_convert_takes_one_sensor(tmp_path: Path, capsys: pytest.CaptureFi
     assert white.values()["N"] == pytest.approx(0.002)
     assert main(["model", "convert", str(out), str(tmp_path / "x.yaml"), "--sensor", "gyro"]) == 2
     assert "it holds an accel model: choose it with --sensor accel" in capsys.readouterr().err
+
+
+def _header_csv(path: Path, unit: str = "deg/h") -> None:
+    """A 3 h-like navigation-gyro log with a header stating units: ``time[s],gz[deg/h]``."""
+    t = np.arange(20_000) / FS
+    # white noise N = 0.18 deg/h*sqrt(s) = 0.003 deg/sqrt(h)
+    rate = 0.18 * np.sqrt(FS) * np.random.default_rng(3).standard_normal(t.size)
+    np.savetxt(path, np.column_stack([t, rate]), delimiter=",", header=f"time[s],gz[{unit}]",
+               comments="", fmt="%.10g")  # fmt: skip
+
+
+def test_a_column_is_named_without_the_unit_its_header_states(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Regression: with a header ``time[s],gz[deg/h]`` (the form allanite simulate writes),
+    ``--time-column time`` and ``--channels gz`` were refused: "no time column named 'time'"."""
+    path = tmp_path / "fog.csv"
+    _header_csv(path)
+    assert main(["fit", str(path), "--time-column", "time", "--channels", "gz"]) == 0
+    printed = capsys.readouterr().out
+    assert "channel gz[deg/h] (gyro, deg/h):" in printed
+    n = float(printed.split("N = ")[1].split(" deg/sqrt(h)")[0])
+    assert abs(n / 0.003 - 1) < 0.04  # 20000 samples: s.e. of N about 0.7 %
+    # the full name still works, and a name that is no column is still refused
+    assert main(["analyze", str(path), "--time-column", "time[s]", "--summary"]) == 0
+    capsys.readouterr()
+    assert main(["analyze", str(path), "--time-column", "time", "--channels", "gy"]) == 2
+    assert "no column named 'gy'; available: time[s], gz[deg/h]" in _one_line_error(
+        capsys, "analyze"
+    )
+
+
+def test_units_given_against_the_header_are_warned(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Regression: a header stating deg/h read with --units deg/s gave N 3600 times too large
+    (10.8 deg/sqrt(h), inside the plausible range) without a word about the header."""
+    path = tmp_path / "fog.csv"
+    _header_csv(path)
+    argv = ["fit", str(path), "--time-column", "time[s]"]
+    assert main([*argv, "--units", "deg/s"]) == 0
+    out, err = capsys.readouterr()
+    assert "(gyro, deg/s)" in out  # --units wins
+    assert "allanite fit: note: --units differs from the unit the file states (gz[deg/h] " \
+        "read as deg/s)" in err  # fmt: skip
+    assert main([*argv, "--units", "dph", "--json"]) == 0  # the same unit spelled otherwise
+    out, err = capsys.readouterr()
+    assert "file states" not in err
+    # one unit per channel: the same check, and the JSON keeps it
+    six = tmp_path / "six.csv"
+    t = np.arange(5000) / FS
+    np.savetxt(six, np.column_stack([t, RNG.standard_normal((5000, 2))]), delimiter=",",
+               header="t,gz[deg/s],az[m/s^2]", comments="")  # fmt: skip
+    assert main(["fit", str(six), "--time-column", "t", "--units", "deg/h,m/s^2", "--json"]) == 0
+    out, err = capsys.readouterr()
+    assert "(gz[deg/s] read as deg/h)" in err
+    assert "az[m/s^2] read" not in err
+    import json
+
+    assert any("gz[deg/s] read as deg/h" in w for w in json.loads(out)["record"]["warnings"])
+
+
+def test_a_template_without_an_entry_gets_it(tmp_path: Path) -> None:
+    """Regression: diagnose --write-corrected into a PX4 plugin block allanite had written for
+    a gyro model failed after the whole diagnosis: "the template has no
+    <accelerometerNoiseDensity> element" (the plugin takes defaults for absent entries)."""
+    from allanite.formats import read_config, write_config
+
+    model = NoiseModel([White(2e-4)], units={"rate": "rad/s", "time": "s"})
+    model.save(tmp_path / "g.json")
+    write_config(read_config(tmp_path / "g.json"), tmp_path / "px4.sdf", format="px4-plugin")
+    template_path = tmp_path / "px4.sdf"
+    assert "accelerometer" not in template_path.read_text()
+    config = read_config(tmp_path / "px4.sdf")  # accel: the plugin's defaults
+    corrected = config.with_model("gyro", NoiseModel([White(3e-4)], units=model.units))
+    write_config(corrected, tmp_path / "out.sdf", format="px4-plugin", template=template_path)
+    text = (tmp_path / "out.sdf").read_text()
+    assert "  <accelerometerNoiseDensity>0.004</accelerometerNoiseDensity>\n" in text
+    assert text.index("<accelerometerTurnOnBiasSigma>") < text.index("</plugin>")
+    back = read_config(tmp_path / "out.sdf")
+    assert back.notes == ()  # every entry is in the file now
+    assert back.model("gyro").terms_of_type("white")[0].values()["N"] == pytest.approx(3e-4)
+    assert back.model("accel") == config.model("accel")
+    (tmp_path / "b.sdf").write_text("<sdf/>\n")
+    with pytest.raises(ValueError, match="no IMU plugin block"):
+        write_config(
+            corrected, tmp_path / "x.sdf", format="px4-plugin", template=tmp_path / "b.sdf"
+        )
+
+
+def test_a_template_keeps_the_other_sensors_entries_and_notes(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Regression: converting an accelerometer model into a Kalibr file holding the gyro's
+    warned "has no gyro noise entries" (it had) and deleted the gyro's projection note."""
+    from allanite.terms import Flicker
+
+    gyro = NoiseModel([White(1.7e-4), Flicker(4.7e-5)], units={"rate": "rad/s", "time": "s"})
+    accel = NoiseModel([White(2e-3), Flicker(6e-4)], units={"rate": "m/s^2", "time": "s"})
+    gyro.save(tmp_path / "g.json")
+    accel.save(tmp_path / "a.json")
+    out = tmp_path / "imu.yaml"
+    assert main(["model", "convert", str(tmp_path / "g.json"), str(out), "--rate", "400"]) == 0
+    assert "has no accel noise entries" in capsys.readouterr().err  # a new file: true
+    both = tmp_path / "both.yaml"
+    argv = ["model", "convert", str(tmp_path / "a.json"), str(both), "--template", str(out)]
+    assert main(argv) == 0
+    err = capsys.readouterr().err
+    assert "noise entries" not in err
+    text = both.read_text()
+    assert "# projected: gyro: flicker" in text
+    assert "# projected: accel: flicker" in text
+    # the template's update_rate (400 Hz) is the rate of the projection: 10 samples = 0.025 s
+    assert "evaluated at 100 Hz" not in text
+    accel_note = next(ln for ln in text.splitlines() if ln.startswith("# projected: accel:"))
+    assert "over 0.025-3.6e+03 s" in accel_note
+    assert text.count("# projected: ") == 2
+    # writing the accelerometer again replaces its own note only
+    assert main([*argv[:3], str(tmp_path / "again.yaml"), "--template", str(both)]) == 0
+    again = (tmp_path / "again.yaml").read_text()
+    assert again.count("# projected: accel:") == 1
+    assert again.count("# projected: gyro:") == 1
+
+
+def test_units_given_against_a_robot_logs_units_are_warned(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Regression: a ROS bag (sensor_msgs/Imu: rad/s) diagnosed with --units deg/s was read 57
+    times too quiet without a word: the readouts (N 0.012 deg/sqrt(h)) look plausible."""
+    pytest.importorskip("rosbags")
+    from test_io_robot_logs import write_bag
+
+    n = 3000
+    data = np.random.default_rng(9).standard_normal((n, 6)) * 0.01
+    write_bag(tmp_path / "imu.bag", "ros1", data, np.arange(n) / 200.0, topics=("/imu0",))
+    bag = str(tmp_path / "imu.bag")
+    assert main(["analyze", bag, "--channels", "gyro_x", "--units", "deg/s", "--summary"]) == 0
+    out, err = capsys.readouterr()
+    note = "--units differs from the unit the file states (gyro_x in rad/s read as deg/s)"
+    assert f"warning: {note}" in out  # the record summary lists it with the reader's notes
+    assert main(["analyze", bag, "--channels", "gyro_x", "--units", "rad/s", "--summary"]) == 0
+    assert "file states" not in "".join(capsys.readouterr())
+    assert main(["fit", bag, "--units", "deg/s,m/s^2"]) == 0  # one unit per sensor
+    err = capsys.readouterr().err
+    assert "(gyro_x in rad/s read as deg/s, gyro_y in rad/s read as deg/s" in err
+    assert "accel_x in" not in err
+
+
+def test_fit_prints_what_the_reader_noticed(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Regression: fit and diagnose dropped the reader's notes (analyze shows them in its
+    summary): a "t,gz" CSV fitted with --fs said only "angle given as rate?" about t."""
+    path = tmp_path / "nav.csv"
+    t = np.arange(3000) / FS
+    np.savetxt(path, np.column_stack([t, RNG.standard_normal(3000)]), delimiter=",",
+               header="t,gz", comments="")  # fmt: skip
+    assert main(["fit", str(path), "--fs", "100", "--units", "deg/s"]) == 0
+    err = capsys.readouterr().err
+    assert "allanite fit: note: channel t is named like time stamps and always increases: if " \
+        "it is the time, give --time-column t" in err  # fmt: skip
+    assert err.count("named like time stamps") == 1
+    model = tmp_path / "m.json"
+    NoiseModel([White(0.01)], units={"rate": "deg/s", "time": "s"}).save(model)
+    argv = ["diagnose", str(path), "--fs", "100", "--units", "deg/s", "--channels", "t"]
+    assert main([*argv, "--sim-model", str(model), "--n-mc", "20"]) == 0
+    assert "allanite diagnose: note: channel t is named like time stamps" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    ("name", "first", "step", "scale"),
+    [("t_ms", 0.0, 10.0, 1e-3), ("time[us]", 0.0, 1e4, 1e-6), ("stamp", 1.7e18, 1e7, 1e-9)],
+)
+def test_time_stamps_that_are_not_seconds_are_named(
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    name: str,
+    first: float,
+    step: float,
+    scale: float,
+) -> None:
+    """Regression: a log with time stamps in ms (``t_ms``) or a Unix time in us/ns was read in
+    seconds without a word: fs 0.1 Hz instead of 100 Hz, N 32 times too large, yet plausible."""
+    path = tmp_path / "log.csv"
+    n = 4000
+    stamps = first + np.arange(n) * step  # 100 Hz in the stamps' own unit
+    rate = 0.01 * np.sqrt(FS) * np.random.default_rng(4).standard_normal(n)  # N 0.6 deg/sqrt(h)
+    with path.open("w") as out:
+        out.write(f"{name},gz\n")
+        out.writelines(f"{s:.0f},{r:.10g}\n" for s, r in zip(stamps, rate, strict=True))
+    argv = ["fit", str(path), "--time-column", name, "--units", "deg/s"]
+    assert main(argv) == 0
+    err = capsys.readouterr().err
+    assert f"allanite fit: note: time column {name!r} is read in seconds (fs = " in err
+    assert f"give --time-scale {scale:g} (time_scale={scale:g})" in err
+    assert main([*argv, "--time-scale", f"{scale:g}"]) == 0
+    out, err = capsys.readouterr()
+    assert "time-scale" not in err
+    value = float(out.split("N = ")[1].split(" deg/sqrt(h)")[0])
+    assert abs(value / 0.6 - 1) < 0.05  # 4000 samples: s.e. of N about 1.5 %
+
+
+def test_a_missing_ulog_topic_lists_the_ones_there(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Regression: --topic sensor_gyro on a log with only sensor_combined said "found none"
+    (the reader had filtered the log down to the topic asked for)."""
+    pytest.importorskip("pyulog")
+    from test_io_robot_logs import write_ulog
+
+    fields = [("uint64_t", "timestamp")] + [("float", f"gyro_rad[{i}]") for i in range(3)]
+    rows = [(1_000_000 + 5000 * k, 0.01 * k % 3, 0.0, 0.0) for k in range(600)]
+    write_ulog(tmp_path / "f.ulg", "sensor_combined", fields, rows)
+    assert main(["analyze", str(tmp_path / "f.ulg"), "--topic", "sensor_gyro"]) == 2
+    line = _one_line_error(capsys, "analyze")
+    assert line.endswith(
+        "no IMU topic sensor_gyro (instance 0) in the log; found sensor_combined:0"
+    )
+
+
+def test_report_without_o_names_its_file(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Regression: ``allanite report fog.csv`` printed the whole usage text: -o was required."""
+    data = tmp_path / "data"
+    data.mkdir()
+    path = data / "fog.csv"
+    _header_csv(path)
+    monkeypatch.chdir(tmp_path)
+    assert main(["report", str(path), "--time-column", "time", "--no-fit"]) == 0
+    assert capsys.readouterr().out.strip().endswith("wrote fog.html")
+    assert "<html" in (tmp_path / "fog.html").read_text()[:200].lower()
+    assert not (data / "fog.html").exists()  # in the current directory, not beside the data
+    # several records go into one report: its name is asked for, nothing is written
+    assert main(["report", str(path), str(path), "--time-column", "time", "--no-fit"]) == 2
+    assert "2 records go into one report: name it with -o FILE.html" in _one_line_error(
+        capsys, "report"
+    )

@@ -196,6 +196,18 @@ def test_bad_arguments(kwargs, error, match):
         allanite.fit(exact_curve(MODEL), **kwargs)
 
 
+@pytest.mark.parametrize("seed", range(5))
+def test_automatic_fit_refuses_a_record_with_two_usable_taus(seed):
+    # 20 white samples give two usable taus; any single term fits two points exactly, so the
+    # selection was chance (Q or B instead of N in 5 of 20 seeds, with tight intervals)
+    x = 0.1 * np.random.default_rng(seed).standard_normal(20)
+    with pytest.raises(ValueError, match=r"too short for an automatic fit: 20 samples give only 2"):
+        allanite.fit(x, fs=100.0)
+    assert allanite.fit(x, ["N"], fs=100.0).coefficients["N"].value > 0  # named terms still fit
+    longer = 0.1 * np.random.default_rng(seed).standard_normal(40)  # three usable taus
+    assert set(allanite.fit(longer, fs=100.0).coefficients) == {"N"}
+
+
 def test_bad_curves():
     curve = exact_curve(MODEL, n=2**8)
     with pytest.raises(ValueError, match="usable taus"):

@@ -10,6 +10,9 @@
 // AVAR's sum plus the 2 (m - 1) end terms that read the reflected extension
 // (detail::add_total_ends), so no extended series is built.
 //
+// One channel's Hadamard factors run four side by side in a tile, the loads of their common
+// first tap shared (detail::add_hadamard_side_by_side); every factor keeps its own sums.
+//
 // Definitions (x = phase, M rows, d2(k) = x[k+2m] - 2 x[k+m] + x[k]):
 //   overlapping AVAR   sum_{k=0}^{M-2m-1} d2(k)^2 / (2 m^2 (M-2m))
 //   standard AVAR      same over k = 0, m, 2m, ...; n = floor((M-1)/m) - 1 terms
@@ -132,8 +135,17 @@ void add_squares(std::int64_t count, Eigen::Index nc, Fn&& value, NeumaierSum* t
 /// Second difference (x2 - 2 x1) + x0 and third difference ((x3 - 3 x2) + 3 x1) - x0: the
 /// one place where the arithmetic of the Allan and Hadamard terms is written down.
 ALLANITE_ALWAYS_INLINE double diff2(double x0, double x1, double x2) noexcept { return (x2 - 2.0 * x1) + x0; }
+/// diff3 into `out`, for doubles (three = 3.0) or lane by lane for four terms in Pack4s
+/// (three = {3, 3, 3, 3}; a Pack4 is not returned by value, see simd.hpp).
+template <class V>
+ALLANITE_ALWAYS_INLINE void diff3_into(V& out, const V& x0, const V& x1, const V& x2, const V& x3,
+                                       const V& three) noexcept {
+  out = ((x3 - three * x2) + three * x1) - x0;
+}
 ALLANITE_ALWAYS_INLINE double diff3(double x0, double x1, double x2, double x3) noexcept {
-  return ((x3 - 3.0 * x2) + 3.0 * x1) - x0;
+  double out;
+  diff3_into(out, x0, x1, x2, x3, 3.0);
+  return out;
 }
 
 /// Taps of a difference estimator: term j of channel c reads p[i][j * step + c] for tap i
@@ -263,6 +275,57 @@ ALLANITE_TARGET_CLONES static void add_diff_squares_3ch(const Taps<2>& t, std::i
 ALLANITE_TARGET_CLONES static void add_diff_squares_3ch(const Taps<3>& t, std::int64_t count,
                                                         NeumaierSum* totals) {
   add_diff_squares_nc_impl<3>(t, count, totals);
+}
+
+/// F Hadamard factors of one channel (unit row stride) side by side over `count` terms, a
+/// multiple of kSumBlock: the factors' first taps read the same rows (x0), loaded once for
+/// all of them; tap i of factor f reads p[f][i - 1]. Each factor's block sums are those of
+/// add_diff_squares_1ch_impl (the same terms, partial sums and order), so its result does not
+/// depend on the factors it runs beside.
+template <int F>
+ALLANITE_ALWAYS_INLINE void add_hadamard_side_by_side_impl(const double* x0, const double* const (*p)[3],
+                                                           std::int64_t count, NeumaierSum* const* totals) {
+  static_assert(kPartials<Taps<3>> == 8, "two Pack4 of partial sums per factor");
+  const Pack4 three = {3.0, 3.0, 3.0, 3.0};
+  for (std::int64_t start = 0; start < count; start += kSumBlock) {
+    Pack4 lo[F], hi[F];  // partial sums r = 0..3 and 4..7 of each factor
+    for (int f = 0; f < F; ++f) lo[f] = hi[f] = Pack4{0.0, 0.0, 0.0, 0.0};
+    for (std::int64_t j = start; j < start + kSumBlock; j += 8) {
+      Pack4 u0, w0;  // tap 0 of terms j .. j + 3 and j + 4 .. j + 7, shared
+      std::memcpy(&u0, x0 + j, sizeof u0);
+      std::memcpy(&w0, x0 + j + 4, sizeof w0);
+      for (int f = 0; f < F; ++f) {
+        Pack4 u1, u2, u3, w1, w2, w3;
+        std::memcpy(&u1, p[f][0] + j, sizeof u1);
+        std::memcpy(&u2, p[f][1] + j, sizeof u2);
+        std::memcpy(&u3, p[f][2] + j, sizeof u3);
+        std::memcpy(&w1, p[f][0] + j + 4, sizeof w1);
+        std::memcpy(&w2, p[f][1] + j + 4, sizeof w2);
+        std::memcpy(&w3, p[f][2] + j + 4, sizeof w3);
+        Pack4 u, w;
+        diff3_into(u, u0, u1, u2, u3, three);
+        diff3_into(w, w0, w1, w2, w3, three);
+        lo[f] += u * u;
+        hi[f] += w * w;
+      }
+    }
+    for (int f = 0; f < F; ++f) {
+      double a[8];
+      std::memcpy(a, &lo[f], sizeof lo[f]);
+      std::memcpy(a + 4, &hi[f], sizeof hi[f]);
+      totals[f]->add(combine_partials<8>(a));
+    }
+  }
+}
+
+ALLANITE_TARGET_CLONES static void add_hadamard_side_by_side(int factors, const double* x0,
+                                                             const double* const (*p)[3], std::int64_t count,
+                                                             NeumaierSum* const* totals) {
+  switch (factors) {
+    case 2: add_hadamard_side_by_side_impl<2>(x0, p, count, totals); return;
+    case 3: add_hadamard_side_by_side_impl<3>(x0, p, count, totals); return;
+    default: add_hadamard_side_by_side_impl<4>(x0, p, count, totals); return;
+  }
 }
 
 /// Add the squared differences of `count` terms to totals[0..nc).
@@ -1100,8 +1163,39 @@ inline void variance_group(const PhaseRef& phase, const PrefixPlan* plan, Varian
   if (windowed) ring.emplace(phase, *plan, top_m, k_begin);
   std::vector<double> anchors(windowed ? kTileTerms / kModLaneShort : 0),
       steps(windowed ? kModTileLanes * kModLaneLong + 4 : 0);
+  // Hadamard, one channel in unit stride: the factors of a tile go in fours side by side (their
+  // first taps read the same rows), over the whole blocks all four have; the rest one by one
+  constexpr std::size_t kSide = 4;
+  const bool side_by_side = kind == VarianceKind::Hadamard && nc == 1 && rs == 1 && idx.size() > 1;
   for (std::int64_t k0 = k_begin; k0 < longest; k0 += kTileTerms) {
     if (windowed) ring->cover(k0);
+    if (side_by_side) {
+      for (std::size_t a0 = 0; a0 < idx.size(); a0 += kSide) {
+        const std::size_t a1 = std::min(idx.size(), a0 + kSide);
+        std::int64_t common = kTileTerms;  // whole blocks of the tile that every factor has
+        for (std::size_t a = a0; a < a1; ++a) common = std::min(common, n[a] - k0);
+        common = a1 - a0 > 1 && common > 0 ? common / kSumBlock * kSumBlock : 0;
+        const double* b = x + k0;
+        if (common > 0) {
+          const double* p[kSide][3];
+          NeumaierSum* tot[kSide];
+          for (std::size_t a = a0; a < a1; ++a) {
+            const std::int64_t m = ms[idx[a]];
+            for (std::int64_t i = 0; i < 3; ++i) p[a - a0][i] = b + (i + 1) * m;
+            tot[a - a0] = totals[a].data();
+          }
+          add_hadamard_side_by_side(static_cast<int>(a1 - a0), b, p, common, tot);
+        }
+        for (std::size_t a = a0; a < a1; ++a) {
+          const std::int64_t rest = std::min(kTileTerms, n[a] - k0) - common;
+          if (rest <= 0) continue;
+          const std::int64_t m = ms[idx[a]];
+          const double* c = b + common;
+          add_diff_squares(Taps<3>{{c, c + m, c + 2 * m, c + 3 * m}, 1}, rest, 1, totals[a].data());
+        }
+      }
+      continue;
+    }
     for (std::size_t a = 0; a < idx.size(); ++a) {
       if (k0 >= n[a]) continue;
       const std::int64_t m = ms[idx[a]];

@@ -10,6 +10,7 @@ from typing import Any
 
 from allanite.cli.record_options import (
     add_record_arguments,
+    print_reader_notes,
     rate_unit,
     read_from_args,
     warn_implausible,
@@ -28,8 +29,10 @@ EXAMPLES = """examples:
   allanite diagnose real.csv --fs 2000 --sim-record sim.npy --input angle --json
 
 JSON (--json) is one object: gap {statistic, p_value, significant}, where {tau_bands_s,
-frequency_lines_hz, time_segments_s}, attribution [{effect, params, gap_before, gap_after,
-shrinkage, consistent_after}, ...] (best first) and holdout {shrinkage} or null.
+frequency_lines_hz, time_segments_s}, attribution [{effect, params, params_units, gap_before,
+gap_after, shrinkage, consistent_after}, ...] (best first) and holdout {shrinkage} or null.
+The text shows parameters in the customary units of `allanite fit` (N in deg/sqrt(h), ...);
+the JSON keeps them in the units of --units, named in params_units.
 """
 
 
@@ -211,6 +214,7 @@ def run(args: argparse.Namespace) -> int:
     from allanite.diagnosis import diagnose
 
     record = read_from_args(args.real, args)
+    print_reader_notes([record], args)
     real, part = _one_channel(record, "real")
     warnings = warn_implausible(part, args).warnings[len(part.warnings) :]
     fs = part.require_fs()

@@ -111,7 +111,10 @@ def run(args: argparse.Namespace) -> int:
     )
     for line in written.report():
         print(line, file=sys.stderr)
-    for line in check_written(config, args.output, args.to_format, rate, args.tau_range):
+    checks = check_written(
+        config, args.output, args.to_format, rate, args.tau_range, template=args.template
+    )
+    for line in checks:
         print(f"allanite model convert: warning: {line}", file=sys.stderr)
     return 0
 
@@ -127,10 +130,13 @@ def check_written(
     format: str | None,
     rate: float | None,
     tau_range: list[float] | None,
+    *,
+    template: str | None = None,
 ) -> list[str]:
     """What a user must know about the written file, read back as the simulator reads it.
 
-    A sensor of the source missing from the output, and a sensor whose read-back Allan
+    A sensor of the source missing from the output (unless the ``template`` written into
+    holds it: its entries are kept), and a sensor whose read-back Allan
     deviation departs from the source's by more than :data:`POOR_ADEV_ERROR` anywhere over
     the tau range (default: 10 samples to one hour; at 100 Hz without a rate).
     """
@@ -144,6 +150,8 @@ def check_written(
         if model is None:
             if back.source_format == "allanite":
                 continue  # a model JSON holds one sensor by design
+            if template is not None and getattr(back, sensor) is not None:
+                continue  # the template's own entries, kept
             out.append(
                 f"{path} has no {sensor} noise entries: the source holds no {sensor} model "
                 "(add them by hand if the simulator or estimator needs them)"

@@ -11,6 +11,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import sys
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -18,7 +19,7 @@ import numpy as np
 from allanite.cli.progress import progress_bars
 from allanite.confidence import DEFAULT_LEVEL
 from allanite.io.options import ReadOptions
-from allanite.io.readers import FORMATS, read_record
+from allanite.io.readers import FORMATS, read_record, stated_unit_conflict
 from allanite.io.record import INPUT_KINDS, Record
 from allanite.io.timebase import GAP_POLICIES
 from allanite.plausibility import (
@@ -35,6 +36,7 @@ __all__ = [
     "add_record_arguments",
     "avar_from_args",
     "example_record",
+    "print_reader_notes",
     "rate_unit",
     "read_from_args",
     "read_sensors",
@@ -210,7 +212,7 @@ def read_from_args(path: str | None, args: argparse.Namespace) -> Record:
         )
     record = _read(path, args)
     rate_unit(record)  # the unit must suit the input kind
-    return record
+    return _against_file(record, units * record.n_channels) if units else record
 
 
 def read_sensors(path: str | None, args: argparse.Namespace) -> list[Record]:
@@ -230,6 +232,7 @@ def read_sensors(path: str | None, args: argparse.Namespace) -> list[Record]:
     units = unit_list(getattr(args, "units", None))
     if len(units) <= 1:
         record = read_from_args(path, args)
+        print_reader_notes([record], args)
         stated = stated_units(record) if not units else None
         if stated is None:
             return [record]
@@ -241,7 +244,30 @@ def read_sensors(path: str | None, args: argparse.Namespace) -> list[Record]:
             f"--units gives {len(units)} units for {n} channels ({', '.join(record.channels)}); "
             "give one unit, one per channel or one per equal group of consecutive channels"
         )
-    return _split_by_unit(record, [units[c // (n // len(units))] for c in range(n)], args)
+    per_channel = [units[c // (n // len(units))] for c in range(n)]
+    record = _against_file(record, per_channel)
+    print_reader_notes([record], args)
+    return _split_by_unit(record, per_channel, args)
+
+
+def _against_file(record: Record, per_channel: list[str]) -> Record:
+    """The record with a note on units given against the file's (see ``stated_unit_conflict``)."""
+    note = stated_unit_conflict(record, per_channel)
+    if note is None or note in record.warnings:  # the reader notes it for one unit
+        return record
+    return dataclasses.replace(record, warnings=(*record.warnings, note))
+
+
+def print_reader_notes(records: Sequence[Record], args: argparse.Namespace) -> None:
+    """Print what the reader noticed (``Record.warnings``) on stderr, each note once.
+
+    For the commands whose output has no record summary (``fit``, ``diagnose``): time base
+    gaps and jitter, units from or against the file, a channel named like time stamps,
+    time stamps that are not seconds.
+    """
+    command = getattr(args, "command", None) or "allanite"
+    for note in dict.fromkeys(w for record in records for w in record.warnings):
+        print(f"allanite {command}: note: {note}", file=sys.stderr)
 
 
 def stated_units(record: Record) -> list[str] | None:

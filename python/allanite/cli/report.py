@@ -53,7 +53,12 @@ def register(subparsers: Any) -> None:
     )
     parser.add_argument("files", nargs="*", metavar="FILE", help="record files")
     parser.add_argument("--example", action="store_true", help="report on the example record")
-    parser.add_argument("-o", "--output", required=True, help="HTML file to write")
+    parser.add_argument(
+        "-o",
+        "--output",
+        help="HTML file to write (default: the record's name with .html, in the current "
+        "directory: report.html for --example)",
+    )
     parser.add_argument("--title", help="page title")
     parser.add_argument(
         "--reference", metavar="FILE", help="reference device record (same options)"
@@ -114,8 +119,20 @@ def _sensor_name(record: Any) -> str:
     return f"{sensor_kind(rate_unit(record) or 'unit')}, {record.units}"
 
 
+def _default_output(args: argparse.Namespace) -> str:
+    """``-o`` when not given: ``NAME.html`` in the current directory for one record."""
+    if len(args.files) > 1:
+        raise ValueError(f"{len(args.files)} records go into one report: name it with -o FILE.html")
+    if not args.files:
+        return "report.html"
+    stem = Path(args.files[0].rstrip("/\\")).stem  # a ROS 2 bag is a directory
+    return f"{stem or 'report'}.html"
+
+
 def run(args: argparse.Namespace) -> int:
     """Run ``allanite report``."""
+    if args.output is None:
+        args.output = _default_output(args)
     if Path(args.output).suffix.lower() not in (".html", ".htm"):
         raise ValueError(f"output {args.output}: give an .html file name")
     if not args.files and not args.example:

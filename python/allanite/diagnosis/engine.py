@@ -30,7 +30,7 @@ from allanite.diagnosis.scaled_null import ADDED_SEED, ReplicateStore, uses_scal
 from allanite.diagnosis.time_base import time_base_evidence, with_time_base
 from allanite.diagnosis.verdict import verdict
 from allanite.io.record import Record
-from allanite.terms import term_from_dict
+from allanite.terms import Resonance, term_from_dict
 from allanite.variance.checks import check_fs as _check_fs
 from allanite.variance.checks import resolve_source
 
@@ -209,8 +209,10 @@ def diagnose(
     )  # fmt: skip
     p = analysis.p_value
     significant = bool(p < significance)
+    bands = band_shapes(x_fit, rate, analysis.frequency) if significant else []
+    analysis = _lines_beyond_resonances(analysis, bands, rate)
     ev_p = _evidence(analysis)
-    found = _attribute(run, analysis, ev_p, effects) if significant else _Found()
+    found = _attribute(run, analysis, ev_p, effects, bands) if significant else _Found()
     after = _reanalysis(run, found.explanation)
     if store is not None:
         store.release()  # the null's replicate blocks served the re-analysis (or nothing)
@@ -298,10 +300,34 @@ class _Found:
     unavailable: list[str] = field(default_factory=list)
 
 
+def _lines_beyond_resonances(analysis: Analysis, bands: list[Any], fs: float) -> Analysis:
+    """The analysis whose lines stand out once the resonances found are expected.
+
+    A narrow resonance's own peak can pass the line detector on a short record (see
+    :meth:`FrequencyView.lines_beyond`): such a "line" is the resonance, not a sinusoid.
+    """
+    psd: Any = 0.0
+    for band in bands:
+        if band.kind == "resonance":
+            with np.errstate(all="ignore"):
+                one = Resonance(**band.params).psd_sampled(analysis.frequency.f, 1.0 / fs)
+            psd = psd + np.where(np.isfinite(one), one, 0.0)
+    if np.ndim(psd) == 0:
+        return analysis
+    return replace(analysis, frequency=analysis.frequency.lines_beyond(psd))
+
+
 def _attribute(
-    run: _Run, analysis: Analysis, ev_p: dict[str, float], effects: list[str] | None
+    run: _Run,
+    analysis: Analysis,
+    ev_p: dict[str, float],
+    effects: list[str] | None,
+    bands: list[Any],
 ) -> _Found:
-    """Fit every candidate effect on top of the sensor, rank them and select the joint set."""
+    """Fit every candidate effect on top of the sensor, rank them and select the joint set.
+
+    ``bands``: the band-pass shaped excesses of the frequency view (:func:`band_shapes`).
+    """
     sig = {k: v < run.significance / len(ev_p) for k, v in ev_p.items()}
     spikes = None
     if analysis.time.spike_times_s:
@@ -319,7 +345,7 @@ def _attribute(
         spikes=spikes,
         effects=effects,
         bursts=_bursts(analysis.time),
-        band=band_shapes(run.x_fit, run.fs, analysis.frequency),
+        band=bands,
         drift=drift_shape(run.x_fit, run.fs, analysis.time, run.source.model),
     )
     # the same calibrated test ranks single effects and selects the joint set

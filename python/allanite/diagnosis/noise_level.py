@@ -22,7 +22,8 @@ every shape number the tau view does not see (drift: ``ratio``, ``t_start``, ``t
 bursts: one per raised window) enters the ranking of the two candidates (:func:`noise_misfit`,
 through :func:`allanite.diagnosis.level_shape.level_misfit`). Separate raised stretches fit
 only the bursts; a level that rises or falls once fits the drift with fewer numbers. Spikes,
-which also raise ``hf``, only raise it in the windows that hold them (:func:`noise_misfit`).
+which also raise ``hf``, raise it only by what their heights add to the windows that hold
+them (:func:`noise_misfit`).
 
 The drift's ``ratio`` (final over initial white-noise level) is then measured on the record
 itself: the per-window white-noise variance is ``(D_w - D_o) / (2 fs)`` with ``D_w`` the
@@ -208,12 +209,20 @@ def _burst_fit(view: TimeView, raised: NDArray[np.bool_]) -> tuple[float, int, i
     return chi2, int(quiet.sum()), int(raised.sum())
 
 
-def _flat_fit(view: TimeView) -> tuple[float, int, int] | None:
-    """``(chi2, W, 0)`` of one common level on the hf residuals (a stationary noise level)."""
+def _flat_fit(
+    view: TimeView, raise_: NDArray[np.float64] | None = None
+) -> tuple[float, int, int] | None:
+    """``(chi2, W, 0)`` of one common level on the hf residuals (a stationary noise level).
+
+    ``raise_``: a known per-window raise on top of the common level (the spikes' own, see
+    :attr:`TimeView.spike_raise`), no fitted number.
+    """
     hf = _hf(view)
     if hf is None:
         return None
     r, sd = hf
+    if raise_ is not None:
+        r = r - raise_
     wgt = 1.0 / sd**2
     c = float((r * wgt).sum() / wgt.sum())
     return float((((r - c) / sd) ** 2).sum()), int(r.size), 0
@@ -225,21 +234,21 @@ def noise_misfit(effect: str, view: TimeView, per_param: float = 0.0) -> float:
     The excess ``max(0, chi^2 - (W - p))`` plus ``per_param`` (the ranking's per-parameter
     penalty, ``chi2_1`` quantile ``1 - alpha``) for every shape number the tau view does not
     see: three for the drift (``ratio``, ``t_start``, ``t_end``), one per raised window for the
-    bursts. Spikes explain a changed short-term level only in the windows that hold them: when
-    ``hf`` is significant (``alpha / 8``, the evidence's Bonferroni level) they pay the misfit
-    of the other windows (their times and heights come from the time view, no penalty; with
-    no spike located, of all windows around one level).
+    bursts. Spikes explain a changed short-term level only by as much as their heights raise
+    it: when ``hf`` is significant (``alpha / 8``, the evidence's Bonferroni level) they pay
+    the misfit of all windows around one common level plus each window's
+    :attr:`TimeView.spike_raise` (their times and heights come from the time view, no
+    penalty). A level step raises the tails of the sample distribution enough for the spike
+    finder to list a few samples per window after it, but those add a fraction of a percent
+    to a window's level, not the step's factor: the step stays a misfit of the spikes.
     """
     w = int(view.t_s.size)
     if effect == "spikes":
         alpha = float(stats.chi2.sf(per_param, 1)) if per_param > 0 else 0.05
         if view.family_p.get("hf", 1.0) >= alpha / 8.0 or "hf" not in view.z:
             return 0.0
-        held = np.zeros(w, dtype=bool)
-        for t in view.spike_times_s:
-            held[min(int(t // view.window_s), w - 1)] = True
         # no located spike (a dense, fitted spike process is stationary): one common level
-        spiky = _burst_fit(view, held) if held.any() else _flat_fit(view)
+        spiky = _flat_fit(view, view.spike_raise if view.spike_raise.size == w else None)
         if spiky is None:
             return 0.0
         return max(0.0, spiky[0] - (spiky[1] - 1))

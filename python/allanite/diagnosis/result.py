@@ -12,7 +12,7 @@ from allanite.diagnosis.frequency_view import FrequencyView
 from allanite.diagnosis.joint import Explanation
 from allanite.diagnosis.tau_view import TauView
 from allanite.diagnosis.time_view import TimeView
-from allanite.diagnosis.verdict import Unexplained
+from allanite.diagnosis.verdict import Unexplained, param_units
 from allanite.notebook import diagnosis_html
 
 __all__ = ["Diagnosis", "Holdout"]
@@ -172,6 +172,7 @@ class Diagnosis:
             "holdout": self.holdout.to_dict() if self.holdout is not None else None,
             "meta": dict(self.meta),
         }
+        _state_units(out, self.attribution, self.explanation, self.meta.get("units"))
         if views:
             out["views"] = {
                 "tau": self.tau.to_dict(),
@@ -184,3 +185,17 @@ class Diagnosis:
     def to_json(self, *, views: bool = True, **kwargs: Any) -> str:
         """Strict JSON text of :meth:`to_dict`."""
         return json.dumps(self.to_dict(views=views), allow_nan=False, **kwargs)
+
+
+def _state_units(
+    out: dict[str, Any],
+    attribution: list[Attribution],
+    explanation: Explanation | None,
+    units: str | None,
+) -> None:
+    """``params_units`` next to each ``params``: the unit of each value (the model's units)."""
+    for item, a in zip(out["attribution"], attribution, strict=True):
+        item["params_units"] = param_units(a, units)
+    if explanation is not None:
+        for item, a in zip(out["explanation"]["effects"], explanation.effects, strict=True):
+            item["params_units"] = param_units(a, units)

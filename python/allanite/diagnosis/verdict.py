@@ -34,8 +34,18 @@ from allanite.diagnosis.joint import Explanation
 from allanite.diagnosis.null import runs
 from allanite.diagnosis.tau_view import TauModel, TauView
 from allanite.diagnosis.time_view import TimeView
+from allanite.units import coefficient_unit, convert, customary_unit
 
-__all__ = ["Unexplained", "Verdict", "effect_psd", "param_unit", "verdict"]
+__all__ = [
+    "Unexplained",
+    "Verdict",
+    "effect_psd",
+    "format_params",
+    "param_unit",
+    "param_units",
+    "shown_param",
+    "verdict",
+]
 
 #: plain names of the term types (the headline's vocabulary)
 TERM_NAMES = {
@@ -74,8 +84,8 @@ EVIDENCE_TEXT = {
 #: variance of a short-tau Allan variance estimate by the factor ``1 + kappa / 2`` (Gaussian
 #: reference), i.e. by less than 10 %, so the Gaussian intervals stay within 5 %
 KURTOSIS_NEGLIGIBLE = 0.2
-#: an explanation whose effects shrink the tau gap by less than this is not named in the
-#: headline of a gap it leaves open (they explain nothing)
+#: an explanation whose effects shrink the tau gap by less than this and explain no evidence
+#: of the other views is not named in the headline of a gap it leaves open
 SHRINKAGE_NEGLIGIBLE = 0.01
 _NEGLIGIBLE = ": significant on this long record, but negligible in size"
 
@@ -146,33 +156,69 @@ class Verdict:
 
 
 def param_unit(rate: str | None, rate_power: float, time_power: float) -> str:
-    """Readable unit ``rate^rate_power * s^time_power`` (``N`` in ``deg/s`` -> ``deg/sqrt(s)``)."""
+    """Unit ``rate^rate_power * s^time_power`` of a parameter in the model's units.
+
+    The unit the JSON values are in (``N`` of a ``deg/s`` model in ``deg/sqrt(s)``, of a
+    ``rad/s`` model in ``rad/sqrt(s)``; :func:`allanite.units.coefficient_unit`); without a
+    rate unit, ``rate*s^0.5``-style text. Dimensionless parameters give ``""``.
+    """
     if rate_power == 0:
         return {1.0: "s", -1.0: "Hz", 0.0: ""}.get(float(time_power), f"s^{time_power:g}")
-    if rate is None:
-        rate = "rate"
-    if rate_power == 1 and rate.endswith("/s"):
-        angle = rate[:-2]
-        e = float(time_power) - 1.0
-        names = {0.0: angle, -1.0: f"{angle}/s", -0.5: f"{angle}/sqrt(s)"}
-        names.update({-1.5: f"{angle}/s/sqrt(s)", -2.0: f"{angle}/s^2", 0.5: f"{angle}*sqrt(s)"})
-        return names.get(e, f"{angle}*s^{e:g}")
-    text = rate if rate_power == 1 else f"({rate})^{rate_power:g}"
+    if rate is not None:
+        try:
+            return coefficient_unit(rate, rate_power, time_power).text
+        except ValueError:
+            pass
+    text = (rate or "rate") if rate_power == 1 else f"({rate or 'rate'})^{rate_power:g}"
     return text if time_power == 0 else f"{text}*s^{time_power:g}"
 
 
-def format_params(
-    a: Attribution, units: str | None, *, skip: tuple[str, ...] = (), fs: float | None = None
-) -> str:
-    """``N = 0.014 deg/sqrt(s)``-style text of an attribution's parameters.
+def param_units(a: Attribution, units: str | None) -> dict[str, str]:
+    """Unit of each of an attribution's parameters as the JSON holds them (the model's units).
 
-    With the sampling frequency ``fs``, a frequency above the Nyquist frequency (a sensor
-    filter's bandwidth can be: it acts before sampling) says so.
+    ``""`` for a dimensionless parameter (``scale``, ``ratio``, a damping ratio).
     """
-    specs = {}
-    cls = _term_class(a)
-    if cls is not None:
-        specs = {p.name: p for p in cls.params + cls.optional}
+    specs = _specs(a)
+    out = {}
+    for name in a.params:
+        spec = specs.get(name)
+        out[name] = param_unit(units, spec.rate, spec.time) if spec is not None else ""
+    return out
+
+
+def shown_param(name: str, value: float, unit: str, units: str | None) -> tuple[float, str]:
+    """``(value, unit)`` of a parameter in the customary unit ``allanite fit`` shows.
+
+    :func:`allanite.units.customary_unit` of the model's rate unit ``units``: a gyro's N in
+    deg/sqrt(h), B and sigma in deg/h, K in deg/h/sqrt(h) (deg/s and rad/s alike); an
+    accelerometer's N in m/s/sqrt(h); times in s, frequencies in Hz. ``value`` is in
+    ``unit`` (:func:`param_unit`); without ``units`` or a unit it is returned as it is.
+    """
+    if units is None or not unit or unit in ("s", "Hz"):
+        return value, unit
+    try:
+        shown = customary_unit(units, name, unit)
+        return convert(value, unit, shown), shown
+    except ValueError:
+        return value, unit
+
+
+def format_params(
+    a: Attribution,
+    units: str | None,
+    *,
+    skip: tuple[str, ...] = (),
+    fs: float | None = None,
+    sigma: bool = False,
+) -> str:
+    """``N = 0.84 deg/sqrt(h)``-style text of an attribution's parameters.
+
+    Coefficients are shown in the customary units of ``allanite fit`` (:func:`shown_param`),
+    with ``sigma`` their one-sigma uncertainty (``± ...``). With the sampling frequency
+    ``fs``, a frequency above the Nyquist frequency (a sensor filter's bandwidth can be: it
+    acts before sampling) says so.
+    """
+    own = param_units(a, units)
     parts = []
     for name, value in a.params.items():
         if name in skip:
@@ -180,9 +226,12 @@ def format_params(
         if name == "scale":
             parts.append(f"x{value:.3g}")
             continue
-        spec = specs.get(name)
-        unit = param_unit(units, spec.rate, spec.time) if spec is not None else ""
-        text = f"{name} = {value:.4g}" + (f" {unit}" if unit else "")
+        shown, unit = shown_param(name, value, own[name], units)
+        text = f"{name} = {shown:.4g}"
+        err = a.params_sigma.get(name) if sigma else None
+        if err:
+            text += f" ± {shown_param(name, err, own[name], units)[0]:.2g}"
+        text += f" {unit}" if unit else ""
         if fs is not None and unit == "Hz" and value > fs / 2:
             text += (
                 f" [above the Nyquist frequency {fs / 2:.4g} Hz: it acts before sampling and is "
@@ -190,6 +239,12 @@ def format_params(
             )
         parts.append(text)
     return ", ".join(parts)
+
+
+def _specs(a: Attribution) -> dict[str, Any]:
+    """The parameter specifications of an attribution's term type, by name."""
+    cls = _term_class(a)
+    return {p.name: p for p in cls.params + cls.optional} if cls is not None else {}
 
 
 def _term_class(a: Attribution) -> Any:
@@ -437,8 +492,12 @@ def verdict(
         explanation is not None
         and not closed
         and all(a.shrinkage < SHRINKAGE_NEGLIGIBLE for a in explanation.effects)
+        and not explanation.explained
     ):
-        explanation = None  # effects that shrink nothing are not named as "missing"
+        # effects that shrink nothing and explain no evidence are not named as "missing" (a
+        # level change at an unchanged rms level shrinks no tau gap, but explains the time
+        # view's)
+        explanation = None
     if explanation is not None:
         fs = 1.0 / tau_model.dt
         effect = "; and ".join(describe_effect(a, units, fs) for a in explanation.effects)

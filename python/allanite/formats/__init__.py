@@ -116,8 +116,9 @@ def detect_format(path: str | Path, text: str | None = None) -> str:
         if suffix in SUFFIX_DEFAULTS:
             return SUFFIX_DEFAULTS[suffix]
     raise ValueError(
-        f"{path}: cannot tell which simulator config this is; give the format "
-        f"(CLI: --sim-format / --from / --to NAME), one of {', '.join(FORMATS)}"
+        f"{path}: cannot tell which simulator config this is; give it with format=NAME "
+        f"(CLI: --sim-format NAME; model convert: --from NAME or --to NAME), NAME one of "
+        f"{', '.join(FORMATS)}"
     )
 
 
@@ -133,6 +134,15 @@ def read_config(
     except ValueError as exc:
         raise ValueError(f"{path} ({name}): {exc}") from None
     return config
+
+
+def _template_rate(module: ModuleType, text: str) -> float | None:
+    """The IMU rate a template states (``update_rate``, ``<update_rate>``...), or None."""
+    try:
+        rate: float | None = module.read(text).rate
+    except ValueError:  # a template the reader cannot take as a whole states no rate we use
+        return None
+    return rate
 
 
 def write_config(
@@ -163,9 +173,10 @@ def write_config(
                 format = config.source_format  # e.g. .yaml -> .yaml keeps the format
             else:
                 format = detect_format(path)
-    written: Written = format_module(format).write(
-        config, rate=rate, template=template_text, tau_range=tau_range
-    )
+    module = format_module(format)
+    if rate is None and config.rate is None and template_text is not None:
+        rate = _template_rate(module, template_text)
+    written: Written = module.write(config, rate=rate, template=template_text, tau_range=tau_range)
     with atomic_output(path) as tmp:
         Path(tmp).write_text(written.text, encoding="utf-8")
     return written

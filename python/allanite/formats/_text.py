@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import re
+from collections.abc import Collection
 from typing import Any
 
 from allanite.extras import require
@@ -61,15 +62,27 @@ def update_keys(text: str, values: dict[str, str], *, indent: str = "") -> str:
     return "\n".join(lines + missing) + "\n"
 
 
-_NOTE = re.compile(r"^\s*# (projected|dropped|not representable[^:]*, dropped): ")
+_NOTE = re.compile(r"^\s*# (projected|dropped|not representable[^:]*, dropped): (\w+)?")
 
 
-def with_notes(text: str, dropped: list[str], projections: list[str]) -> str:
+def with_notes(
+    text: str,
+    dropped: list[str],
+    projections: list[str],
+    sensors: Collection[str] | None = None,
+) -> str:
     """``text`` with ``# dropped: ...`` / ``# projected: ...`` lines for what it cannot hold.
 
     For configs written into a user's template: the notes of an earlier allanite write are
-    replaced, so a corrected config says what this write projected or left out, once.
+    replaced, so a corrected config says what this write projected or left out, once. With
+    ``sensors`` (the sensors this write sets, e.g. ``("accel",)``) only their notes are
+    replaced: the other sensor's entries stay as the template had them, and so do its notes.
     """
-    lines = [line for line in text.splitlines() if not _NOTE.match(line)]
+
+    def replaced(line: str) -> bool:
+        match = _NOTE.match(line)
+        return match is not None and (sensors is None or match.group(2) in sensors)
+
+    lines = [line for line in text.splitlines() if not replaced(line)]
     lines += [f"# dropped: {d}" for d in dropped] + [f"# projected: {p}" for p in projections]
     return "\n".join(lines) + "\n"

@@ -68,6 +68,11 @@ class ImuConfig:
     source_format: str = ""
     notes: tuple[str, ...] = ()
 
+    @property
+    def sensors(self) -> tuple[str, ...]:
+        """The sensors the config holds a model of (``("gyro", "accel")``, ``("gyro",)``, ...)."""
+        return tuple(s for s in SENSORS if getattr(self, s) is not None)
+
     def model(self, sensor: str = "gyro", *, option: str = "--sim-sensor") -> NoiseModel:
         """The model of one sensor, with a clear error when the config has none.
 
@@ -80,7 +85,7 @@ class ImuConfig:
             other = "accel" if sensor == "gyro" else "gyro"
             hint = (
                 f"; it holds {'an' if other == 'accel' else 'a'} {other} model: choose it with "
-                f"{option} {other} (library: config.model({other!r}))"
+                f"sensor={other!r} (CLI: {option} {other})"
                 if getattr(self, other) is not None
                 else ""
             )

@@ -52,8 +52,11 @@ def _fold(model: NoiseModel, effect: str, term_dict: dict[str, Any]) -> NoiseMod
     return model.plus(term)
 
 
-def _params(a: Any) -> str:
-    return ", ".join(f"{k}={v:.4g}" for k, v in a.params.items())
+def _params(a: Any, model: NoiseModel) -> str:
+    """The effect's parameters as ``allanite diagnose`` shows them (customary units)."""
+    from allanite.diagnosis.verdict import format_params
+
+    return format_params(a, model.units.get("rate"))
 
 
 def _joint(
@@ -79,7 +82,7 @@ def _joint(
     out = model
     for a in prefix:
         out = _fold(out, a.effect, a.term)
-    folded = "; ".join(f"{a.effect} ({_params(a)})" for a in prefix)
+    folded = "; ".join(f"{a.effect} ({_params(a, model)})" for a in prefix)
     if len(prefix) == len(effects):
         gap = (
             f"gap {explanation.gap_before:.4g} -> {explanation.gap_after:.4g} "
@@ -127,6 +130,6 @@ def corrected_model(
     best = usable[0]
     out = _fold(model, best.effect, best.term)
     return out, (
-        f"folded in {best.effect} ({_params(best)}); gap {best.gap_before:.4g} -> "
+        f"folded in {best.effect} ({_params(best, model)}); gap {best.gap_before:.4g} -> "
         f"{best.gap_after:.4g} (shrinkage {100 * best.shrinkage:.0f} %){note}"
     )

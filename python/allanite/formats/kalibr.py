@@ -77,7 +77,7 @@ def write(
         text = update_keys(template, {k: number_text(v) for k, v in values.items()})
         if rate:
             text = update_keys(text, {"update_rate": number_text(rate)})
-        return Written(with_notes(text, dropped, projections), dropped, projections)
+        return Written(with_notes(text, dropped, projections, config.sensors), dropped, projections)
     lines = ["# IMU noise model exported by allanite (continuous-time densities, SI units)"]
     for key in sorted(values):
         lines.append(f"{key}: {number_text(values[key])}  # {UNITS[key]}")

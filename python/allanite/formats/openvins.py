@@ -51,7 +51,7 @@ def write(
         text_values["update_rate"] = number_text(rate)
     if template is not None:
         text = update_keys(template, text_values, indent="  ")
-        return Written(with_notes(text, dropped, projections), dropped, projections)
+        return Written(with_notes(text, dropped, projections, config.sensors), dropped, projections)
     lines = ["%YAML:1.0 # need to specify the file type at the top!", "", "imu0:"]
     lines += [f"  {k}: {v}  # {kalibr.UNITS[k]}" for k, v in sorted(text_values.items())]
     lines += ["  rostopic: /imu0", "  time_offset: 0.0"]

@@ -44,7 +44,7 @@ def write(
     if rate:
         values["IMU.Frequency"] = number_text(rate)
     if template is not None:
-        text = with_notes(update_keys(template, values), dropped, projections)
+        text = with_notes(update_keys(template, values), dropped, projections, config.sensors)
         return Written(text, dropped, projections)
     lines = ["%YAML:1.0", "# IMU noise (continuous densities, SI units) written by allanite"]
     lines += [f"{k}: {v}" for k, v in values.items()]

@@ -131,11 +131,8 @@ def write(
             if pattern.search(text):
                 text = pattern.sub(rf"\g<1>{number_text(value)}\g<3>", text)
             else:
-                raise ValueError(
-                    f"the template has no <{key}> element; add it to the plugin block or write "
-                    "without a template"
-                )
-        return Written(_with_notes(text, notes), dropped, projections)
+                text = _insert_element(text, key, number_text(value))
+        return Written(_with_notes(text, notes, config.sensors), dropped, projections)
     lines = [*notes, '<plugin name="imu_plugin" filename="libgazebo_imu_plugin.so">']
     lines += ["  <linkName>imu_link</linkName>", "  <imuTopic>/imu</imuTopic>"]
     lines += [f"  <{k}>{number_text(v)}</{k}>" for k, v in values.items()]
@@ -143,13 +140,43 @@ def write(
     return Written("\n".join(lines) + "\n", dropped, projections)
 
 
-_NOTE = re.compile(r"[ \t]*<!-- (dropped|projected): .*? -->\n?")
+_PLUGIN_END = re.compile(r"^([ \t]*)</plugin>", re.M)
+_FIRST_CHILD = re.compile(r"<plugin\b[^>]*imu_plugin[^>]*>\s*?\n([ \t]*)<")
+
+
+def _insert_element(text: str, key: str, value: str) -> str:
+    """``text`` with ``<key>value</key>`` added as the last element of the IMU plugin block.
+
+    A template without a parameter (the plugin then takes its default, as
+    :func:`read` does) gets it written, as the plugin reads it; the element goes before the
+    ``</plugin>`` that closes the IMU plugin, indented like the block's first element.
+    """
+    start = _PLUGIN.search(text)
+    end = _PLUGIN_END.search(text, start.end()) if start is not None else None
+    if start is None or end is None:
+        raise ValueError(
+            f"the template has no <{key}> element and no IMU plugin block "
+            '(<plugin ... filename="libgazebo_imu_plugin.so"> ... </plugin>) to add it to; add '
+            "it by hand or write without a template"
+        )
+    child = _FIRST_CHILD.search(text, start.start())
+    inside = child is not None and child.end() < end.start()
+    indent = child.group(1) if child is not None and inside else end.group(1) + "  "
+    line = f"{indent}<{key}>{value}</{key}>\n"
+    return text[: end.start()] + line + text[end.start() :]
+
+
+_NOTE = re.compile(r"[ \t]*<!-- (dropped|projected): (\w+).*? -->\n?")
 _PLUGIN = re.compile(r"^([ \t]*)<plugin\b[^>]*imu_plugin", re.M)
 
 
-def _with_notes(text: str, notes: list[str]) -> str:
-    """A template with this write's notes before its plugin element (earlier notes replaced)."""
-    text = _NOTE.sub("", text)
+def _with_notes(text: str, notes: list[str], sensors: tuple[str, ...]) -> str:
+    """A template with this write's notes before its plugin element.
+
+    The earlier notes of the ``sensors`` this write sets are replaced; the other sensor's
+    entries stay as the template had them, and so do its notes.
+    """
+    text = _NOTE.sub(lambda m: "" if m.group(2) in sensors else m.group(0), text)
     if not notes:
         return text
     found = _PLUGIN.search(text)

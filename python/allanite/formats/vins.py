@@ -41,7 +41,7 @@ def write(
     densities, dropped, projections = density_entries(config, KEYS, rate, tau_range)
     values = {key: number_text(value) for key, value in densities.items()}
     if template is not None:
-        text = with_notes(update_keys(template, values), dropped, projections)
+        text = with_notes(update_keys(template, values), dropped, projections, config.sensors)
         return Written(text, dropped, projections)
     lines = ["%YAML:1.0", "# IMU noise (continuous densities, SI units) written by allanite"]
     lines += [f"{k}: {v}" for k, v in values.items()]

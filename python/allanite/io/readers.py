@@ -9,6 +9,7 @@ a policy, see :mod:`allanite.io.timebase`), a scale factor from counts to units,
 
 from __future__ import annotations
 
+import math
 import os
 import re
 import zipfile
@@ -110,6 +111,16 @@ def _as_list(columns: Column | Sequence[Column] | None) -> list[Column] | None:
     return out
 
 
+#: a column name stating its unit, ``gz[deg/s]``: the name and the unit
+_HEADER_UNIT = re.compile(r"^(.*\S)\s*\[([^\[\]]+)\]$")
+
+
+def _bare_name(name: str) -> str:
+    """A column name without the unit in brackets a header may state (``gz[deg/s]`` -> ``gz``)."""
+    match = _HEADER_UNIT.match(name)
+    return name.strip() if match is None else match.group(1)
+
+
 def _resolve(names: tuple[str, ...], key: Column, source: str, what: str) -> int:
     if isinstance(key, (int, np.integer)) and not isinstance(key, bool):
         i = int(key)
@@ -129,6 +140,9 @@ def _resolve(names: tuple[str, ...], key: Column, source: str, what: str) -> int
     if isinstance(key, str):
         if key in names:
             return names.index(key)
+        bare = [i for i, name in enumerate(names) if _bare_name(name) == key.strip()]
+        if len(bare) == 1:  # ``gz`` for a header ``gz[deg/s]`` (as allanite simulate writes)
+            return bare[0]
         if key.lstrip("-").isdigit():
             return _resolve(names, int(key), source, what)
         raise InputError(f"no {what} named {key!r}; available: {', '.join(names)}", path=source)
@@ -277,7 +291,7 @@ def make_record(
             scale=scale,
             warnings=_time_channels(channels, samples) if fs is not None else (),
         )
-        return _header_units(record) if units is None and scale is None else record
+        return _with_header(record, scale)
     if not np.isfinite(time_scale) or time_scale <= 0:
         raise ValueError(f"time_scale must be a positive number of seconds, got {time_scale!r}")
     t = np.asarray(arr[:, t_index], dtype=np.float64) * time_scale
@@ -292,14 +306,118 @@ def make_record(
         channels=channels,
         source=source,
         segments=base.segments,
-        warnings=base.warnings,
+        warnings=(*base.warnings, *_time_scale_note(col_names[t_index], t, time_scale, base.fs)),
         timing=base.timing,
         scale=scale,
     )
-    return _header_units(record) if units is None and scale is None else record
+    return _with_header(record, scale)
 
 
-_HEADER_UNIT = re.compile(r"^(.*\S)\s*\[([^\[\]]+)\]$")
+#: a time column named for its unit: ``t_ms``, ``time[us]``, ``stamp (ns)``, ``timestamp_usec``
+_TIME_UNIT_NAME = re.compile(r"(?:^|[_\s\-\[(])(ms|msec|us|usec|µs|ns|nsec)[\])]?$", re.IGNORECASE)
+_TIME_UNIT_SCALE = {"ms": 1e-3, "msec": 1e-3, "us": 1e-6, "usec": 1e-6, "µs": 1e-6}
+_TIME_UNIT_SCALE |= {"ns": 1e-9, "nsec": 1e-9}
+
+
+def _time_scale_note(
+    name: str, t: NDArray[np.float64], time_scale: float, fs: float | None
+) -> tuple[str, ...]:
+    """A note when time stamps read as seconds look like milli-, micro- or nanoseconds.
+
+    Either the column's name says so (``t_ms``, ``time[us]``) or the first stamp is beyond
+    1e11 s (year 5000): a Unix time in ms (~1.7e12), us (~1.7e15) or ns (~1.7e18). Read as
+    seconds, fs comes out 1e3-1e9 times too low and every coefficient wrong, yet plausible.
+    """
+    if time_scale != 1.0 or t.size == 0:
+        return ()
+    named = _TIME_UNIT_NAME.search(name.strip())
+    if named is not None:
+        scale = _TIME_UNIT_SCALE[named.group(1).lower()]
+        why = f"its name says {named.group(1)}"
+    elif abs(float(t[0])) >= 1e11:
+        first = abs(float(t[0]))
+        scale = 1e-3 if first < 1e14 else 1e-6 if first < 1e17 else 1e-9
+        why = f"the first stamp {float(t[0]):.4g} is no time in seconds (year 5000 is 1e11 s)"
+    else:
+        return ()
+    unit = {1e-3: "milliseconds", 1e-6: "microseconds", 1e-9: "nanoseconds"}[scale]
+    rate = f" (fs = {fs:.4g} Hz)" if fs else ""
+    return (
+        f"time column {name!r} is read in seconds{rate}, but {why}: if the stamps are "
+        f"{unit}, give --time-scale {scale:g} (time_scale={scale:g})",
+    )
+
+
+def _with_header(record: Record, scale: float | None) -> Record:
+    """The record with what its header states: units when none were given, else a check."""
+    if record.units is not None:
+        return _units_against_file(record)
+    return _header_units(record) if scale is None else record
+
+
+def _stated_units(channels: tuple[str, ...]) -> list[str] | None:
+    """The unit each channel's header name states (``gz[deg/s]``), or None unless all do."""
+    from allanite.units import parse_unit
+
+    found = []
+    for name in channels:
+        match = _HEADER_UNIT.match(name)
+        if match is None:
+            return None
+        try:
+            parse_unit(match.group(2))
+        except ValueError:
+            return None
+        found.append(match.group(2).strip())
+    return found
+
+
+def stated_unit_conflict(record: Record, units: Sequence[str]) -> str | None:
+    """The note for units given against the ones the file states, or None when they agree.
+
+    A file states units in a header (``gz[deg/h]``) or by its message definition (a ROS
+    ``sensor_msgs/Imu`` or PX4 ``sensor_combined``: rad/s and m/s^2, ``meta["channel_units"]``).
+    ``--units`` wins (it may correct a wrong header), but ``gz[deg/h]`` read with ``--units
+    deg/s`` changes every coefficient by 3600, so the record says so. ``units`` has one unit
+    per channel; channels whose file states no unit are not compared.
+    """
+    from allanite.units import parse_unit
+
+    def same(a: str, b: str) -> bool:
+        try:
+            ua, ub = parse_unit(a), parse_unit(b)
+        except ValueError:
+            return True  # an unreadable stated unit states nothing
+        return ua.same_dimension(ub) and math.isclose(ua.scale, ub.scale, rel_tol=1e-12)
+
+    meta = record.meta if isinstance(record.meta, dict) else {}
+    found = meta.get("channel_units")
+    per: dict[str, Any] = found if isinstance(found, dict) else {}
+    differ = []
+    for name, unit in zip(record.channels, units, strict=True):
+        match = _HEADER_UNIT.match(name)
+        stated = per.get(name) or (match.group(2).strip() if match is not None else None)
+        if stated is not None and not same(stated, unit):
+            shown = name if match is not None else f"{name} in {stated}"
+            differ.append(f"{shown} read as {unit}")
+    if not differ:
+        return None
+    return (
+        f"--units differs from the unit the file states ({', '.join(differ)}): the given "
+        "unit is used; leave --units out to use the file's, or check the file"
+    )
+
+
+def _units_against_file(record: Record) -> Record:
+    """A record read with a unit its file contradicts: the note added to its warnings."""
+    import dataclasses
+
+    if record.units is None:
+        return record
+    note = stated_unit_conflict(record, [record.units] * record.n_channels)
+    if note is None:
+        return record
+    return dataclasses.replace(record, warnings=(*record.warnings, note))
 
 
 def _header_units(record: Record) -> Record:
@@ -311,18 +429,9 @@ def _header_units(record: Record) -> Record:
     """
     import dataclasses
 
-    from allanite.units import parse_unit
-
-    found = []
-    for name in record.channels:
-        match = _HEADER_UNIT.match(name)
-        if match is None:
-            return record
-        try:
-            parse_unit(match.group(2))
-        except ValueError:
-            return record
-        found.append(match.group(2).strip())
+    found = _stated_units(record.channels)
+    if found is None:
+        return record
     stated = ", ".join(dict.fromkeys(found))
     try:
         for unit in set(found):
@@ -674,4 +783,4 @@ def _read_robot_log(path: Path, fmt: str, topic: str | None, options: dict[str, 
     changes: dict[str, Any] = {"warnings": (*warnings, *record.warnings), "meta": meta}
     if options.get("units") is None and len(units) == 1:
         changes["units"] = units.pop()
-    return dataclasses.replace(record, **changes)
+    return _units_against_file(dataclasses.replace(record, **changes))

@@ -129,6 +129,9 @@ def load_ulog(
             data = present[(n, instance)]
             break
     else:
+        if len(wanted) < len(ULOG_TOPICS):  # the filter hid the other IMU topics: list them
+            every = ULog(str(path), message_name_filter_list=list(ULOG_TOPICS)).data_list
+            present = {(d.name, d.multi_id): d for d in every}
         found = ", ".join(f"{n}:{i}" for n, i in sorted(present)) or "none"
         raise InputError(
             f"no IMU topic {' / '.join(wanted)} (instance {instance}) in the log; found {found}",

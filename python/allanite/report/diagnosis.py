@@ -32,13 +32,6 @@ def _p(value: float, n_mc: int | None) -> str:
     return h.fmt(value, 3)
 
 
-def _params(params: dict[str, float], sigma: dict[str, float]) -> str:
-    return ", ".join(
-        f"{k} = {h.fmt(v)}" + (f" ± {h.fmt(sigma[k], 2)}" if sigma.get(k) else "")
-        for k, v in params.items()
-    )
-
-
 def _ranges(items: list[Any], unit: str) -> str:
     if not items:
         return "none"
@@ -104,10 +97,13 @@ def diagnosis_html(diagnosis: Any, *, channel: str, model_name: str) -> str:
         h.table(["view", "p-value", "where the gap is"], views, text_columns=1),
     ]
     if diagnosis.attribution:
+        from allanite.diagnosis.verdict import format_params
+
+        units = diagnosis.meta.get("units")
         rows = [
             [
                 a.effect,
-                _params(a.params, a.params_sigma),
+                format_params(a, units, fs=diagnosis.meta.get("fs"), sigma=True),
                 f"{100 * a.shrinkage:.0f} %",
                 "yes" if a.consistent_after else "no",
                 ", ".join(a.alternatives) or "–",

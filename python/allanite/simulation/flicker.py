@@ -74,6 +74,7 @@ from allanite.simulation.gaussian import Ar1BankStream
 from allanite.simulation.kasdin import KasdinStream
 from allanite.simulation.spectral import SpectralStream
 from allanite.simulation.streams import TermStream, seed_sequence
+from allanite.terms.flicker_psd import flicker_psd_sampled
 
 __all__ = [
     "FLICKER_METHODS",
@@ -114,11 +115,6 @@ FITTED_TC = 300.0
 DEFAULT_BANK_SAMPLES = 10**9
 
 
-def _unit_psd(u: NDArray[np.float64], cutoff: float) -> NDArray[np.float64]:
-    """Return the sampled flicker PSD for B = 1, dt = 1 at u = f dt (<= 1/2)."""
-    return np.where(u <= cutoff, np.sinc(u) ** 2 / (np.pi * u), 0.0)
-
-
 def _ar1_psd(u: NDArray[np.float64], tc: float) -> NDArray[np.float64]:
     """One-sided PSD of a unit-variance point-sampled AR(1) with Tc in samples (dt = 1)."""
     phi = math.exp(-1.0 / tc)
@@ -144,7 +140,7 @@ def _unit_bank(decades: int, cutoff: float) -> tuple[NDArray[np.float64], NDArra
     weights = np.zeros(tcs.size + 1)
     weights[:-1][slow] = math.log(ratio) / math.pi
     u = np.logspace(-4.0, math.log10(0.5), 1500)
-    target = _unit_psd(u, cutoff)
+    target = flicker_psd_sampled(u, 1.0, 1.0, cutoff)  # B = 1, dt = 1: u = f dt
     keep = target > 0
     u, target = u[keep], target[keep]
     analytic = sum(
@@ -253,7 +249,7 @@ def _unit_design(n_components: int, cutoff: float) -> FlickerDesign:
     n_taps = min(STREAM_FIR_TAPS << max(0, math.ceil(math.log2(0.5 / cutoff))), 1 << 18)
     grid = max(STREAM_DESIGN_GRID, 8 * n_taps)
     u = np.arange(1, grid // 2 + 1) / grid
-    target = _unit_psd(u, cutoff)
+    target = flicker_psd_sampled(u, 1.0, 1.0, cutoff)  # B = 1, dt = 1: u = f dt
     lowpass = None if cutoff >= 0.5 else _lowpass(cutoff)
     design = FlickerDesign(tcs, variance, walk, np.zeros(1), 0.0, lowpass, grid)
     residual = target - design.lowpass_gain(grid)[1:] * design.bank_psd(u)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
@@ -17,6 +18,19 @@ if TYPE_CHECKING:
     from allanite.simulation.streams import TermStream
 
 __all__ = ["DriftingLine"]
+
+
+@lru_cache(maxsize=16)
+def _gauss_legendre(n: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Gauss-Legendre nodes and weights of order ``n``, cached.
+
+    An eigenvalue problem of size ``n`` (0.5 s and more at the orders of a diagnosis), asked
+    again by every Allan variance of the same line's fit.
+    """
+    x, w = np.polynomial.legendre.leggauss(n)
+    x.setflags(write=False)
+    w.setflags(write=False)
+    return x, w
 
 
 @dataclass(frozen=True)
@@ -74,7 +88,7 @@ class DriftingLine(Term):
     def _nodes(self, tau_max: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         span = abs(self.f_end - self.f_start)
         n = int(min(max(64, 16 * span * tau_max), 20000))
-        x, w = np.polynomial.legendre.leggauss(n)
+        x, w = _gauss_legendre(n)
         lo = min(self.f_start, self.f_end)
         return lo + 0.5 * span * (x + 1.0), 0.5 * w
 

@@ -13,6 +13,7 @@ from scipy import special
 from allanite.terms._checks import averaging_factor, check_parameters
 from allanite.terms._guess import curve_bound
 from allanite.terms.base import ParamSpec, Term
+from allanite.terms.flicker_psd import flicker_psd_sampled
 
 if TYPE_CHECKING:
     from allanite.simulation.streams import TermStream
@@ -90,9 +91,7 @@ class Flicker(Term):
 
     def psd_sampled(self, f: ArrayLike, dt: float) -> NDArray[np.float64]:
         """One-sided PSD of the sampled rate (interval averages): ``psd(f) sinc^2(f dt)``."""
-        f = np.asarray(f, dtype=np.float64)
-        out = self.B**2 / (np.pi * f) * np.sinc(f * dt) ** 2
-        return np.where(f <= self.cutoff(dt), out, 0.0)
+        return flicker_psd_sampled(f, self.B, dt, self.cutoff(dt))
 
     def stream(
         self,
