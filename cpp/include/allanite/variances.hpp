@@ -31,6 +31,7 @@
 #include <optional>
 #include <cstdint>
 #include <cstring>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -589,8 +590,28 @@ constexpr int kModSingleLanes = 4;
 constexpr int kModTileLanes = 4;
 
 /// Terms per lane of the modified estimator's running window in the tiled pass (see
-/// add_modified_lanes): four lanes make a summation block.
-constexpr std::int64_t kModLane = kSumBlock / 4;
+/// add_modified_lanes), chosen per factor by mod_lane: a whole block, or a quarter block (four
+/// lanes make a summation block). A lane of a whole block starts from the prefix sums a
+/// quarter as often (the windows took about a tenth of the tiled pass with quarter blocks);
+/// its 256 unguarded moves of the window round to at most O(256 eps) of it (measured at the
+/// worst case of test_core_modified.py, factors 1 to 8193: within 2.3e-16 of the exact
+/// variance).
+constexpr std::int64_t kModLaneLong = kSumBlock;
+constexpr std::int64_t kModLaneShort = kSumBlock / 4;
+
+/// The lane of the tiled pass for factor m (a function of m alone, so that every layout of
+/// the phase gives the same bits). Whole-block lanes are 8 KiB apart, so the four lanes of a
+/// tap share one set of the 8-way L1 cache (4 KiB period); if two taps of a lane fall within
+/// a cache line of each other modulo 4 KiB (512 rows), 8 or more streams share a set and the
+/// pass slows down up to 3.5x (measured at m = 4096). Quarter-block lanes, 2 KiB apart, spread
+/// them over two sets.
+inline std::int64_t mod_lane(std::int64_t m) noexcept {
+  for (std::int64_t d = 1; d <= 3; ++d) {
+    const std::int64_t r = d * m % 512;
+    if (r < 8 || r > 504) return kModLaneShort;
+  }
+  return kModLaneLong;
+}
 
 /// The step of the modified estimator's window, w(j+1) - w(j) = d3(j), the third difference at
 /// lag m of the phase, written differences first: x3 - x0 and x2 - x1 round relative to the
@@ -614,41 +635,57 @@ ALLANITE_TARGET_CLONES static void window_steps(const double* b, std::int64_t m,
   for (std::int64_t j = std::max<std::int64_t>(avail, 0); j < n; ++j) out[j] = 0.0;
 }
 
+/// Groups of four steps whose moves of an exact (TwoSum) window are summed before they are
+/// folded into it (see lane_run).
+constexpr std::int64_t kModFoldGroups = 4;
+
 /// The running window of one lane of the modified estimator: `n` terms from the window
 /// hi + lo, moved on by the steps d[0 .. n) (readable up to n rounded up to 4), squares added
 /// to acc. The arithmetic, in groups of four steps from the lane's start (shared bit for bit by
-/// lane_groups): with w = hi + lo (kExact) or hi, p1 = d0, p2 = p1 + d1, p3 = p2 + d2,
-/// p4 = p3 + d3, the windows of the group are w, w + p1, w + p2, w + p3 (missing terms count
-/// as 0), acc += (w^2 + (w + p1)^2) + ((w + p2)^2 + (w + p3)^2), and the window moves on by
-/// p4: hi += p4 (kExact: as a TwoSum pair, so that only the steps' own rounding accumulates).
-/// One dependent add per four terms on each chain.
+/// lane_groups): with w the window, p1 = d0, p2 = p1 + d1, p3 = p2 + d2, p4 = p3 + d3, the
+/// windows of the group are w, w + p1, w + p2, w + p3 (missing terms count as 0),
+/// acc += (w^2 + (w + p1)^2) + ((w + p2)^2 + (w + p3)^2), and the window moves on by p4.
+/// Not kExact: w = hi, hi = w + p4. kExact (hi, lo a TwoSum pair, so that only the steps' own
+/// rounding accumulates, not that of the window): the moves of kModFoldGroups groups are
+/// summed, part = p4 + p4' + ..., the windows meanwhile w = (hi + lo) + part, and part is
+/// folded into the pair (TwoSum into hi, its error into lo) after every kModFoldGroups groups
+/// from the lane's start and after the last; part rounds to O(eps) of a few steps, like the
+/// steps. One dependent add per four terms on each chain.
 template <bool kExact>
 ALLANITE_ALWAYS_INLINE void lane_run(const double* d, std::int64_t n, double& hi, double& lo, double& acc) noexcept {
+  double base = hi + lo, part = 0.0;
   for (std::int64_t j = 0; j < n; j += 4) {
-    const double w = kExact ? hi + lo : hi;
+    const double w = kExact ? base + part : hi;
     const double p1 = d[j], p2 = p1 + d[j + 1], p3 = p2 + d[j + 2], p4 = p3 + d[j + 3];
     const double x1 = w + p1, x2 = w + p2, x3 = w + p3;
     const double q1 = j + 1 < n ? x1 * x1 : 0.0, q2 = j + 2 < n ? x2 * x2 : 0.0, q3 = j + 3 < n ? x3 * x3 : 0.0;
     acc += (w * w + q1) + (q2 + q3);
     if constexpr (kExact) {
-      double s, e;
-      two_sum(hi, p4, s, e);
-      hi = s;
-      lo += e;
+      part += p4;
+      if ((j / 4 + 1) % kModFoldGroups == 0 || j + 4 >= n) {
+        double s, e;
+        two_sum(hi, part, s, e);
+        hi = s;
+        lo += e;
+        base = hi + lo;
+        part = 0.0;
+      }
     } else {
       hi = w + p4;
     }
   }
 }
 
-/// lane_run of eight lanes side by side, `steps` (a multiple of 4) steps each: lane k's steps
+/// lane_run of eight lanes side by side, `steps` (a multiple of 4, of 4 kModFoldGroups if
+/// kExact) steps each: lane k's steps
 /// are src[k ls + j] (kFromPhase false) or computed from the phase, src = x of lane 0's first
 /// term, unit row stride, every step readable (kFromPhase true). The same arithmetic as
 /// lane_run with the lanes in two vectors: four steps of each lane are loaded as a row and
 /// the rows transposed in registers. hi, lo, acc: eight lanes' state, updated.
-template <bool kFromPhase, bool kExact, int V = 2>
-ALLANITE_ALWAYS_INLINE void lane_groups(const double* src, std::int64_t m, std::int64_t ls, std::int64_t steps,
+template <bool kFromPhase, bool kExact, int V = 2, std::int64_t kLs = 0>
+ALLANITE_ALWAYS_INLINE void lane_groups(const double* src, std::int64_t m, std::int64_t ls_arg, std::int64_t steps,
                                         double* hi, double* lo, double* acc) noexcept {
+  const std::int64_t ls = kLs != 0 ? kLs : ls_arg;  // a constant lane stride frees the address registers
   static_assert(V == 1 || V == 2, "four or eight lanes");
 // GCC vector extensions; elsewhere (or with ALLANITE_SCALAR_LANES defined, to check that the
 // two give the same bits) lane by lane through lane_run
@@ -658,6 +695,7 @@ ALLANITE_ALWAYS_INLINE void lane_groups(const double* src, std::int64_t m, std::
   typedef long long v4i __attribute__((vector_size(32)));
   const v4i lo2 = {0, 4, 2, 6}, hi2 = {1, 5, 3, 7}, lo4 = {0, 1, 4, 5}, hi4 = {2, 3, 6, 7};
   const v4d three = {3.0, 3.0, 3.0, 3.0};
+  constexpr std::int64_t kGroups = kExact ? kModFoldGroups : 1;  // groups between folds
 #define ALLANITE_LOAD(p) (*reinterpret_cast<const v4u*>(p))
   v4d h0 = ALLANITE_LOAD(hi), l0 = ALLANITE_LOAD(lo), a0 = ALLANITE_LOAD(acc);
   v4d h1 = h0, l1 = l0, a1 = a0;
@@ -667,39 +705,51 @@ ALLANITE_ALWAYS_INLINE void lane_groups(const double* src, std::int64_t m, std::
     a1 = ALLANITE_LOAD(acc + 4);
   }
   const double* p = src;
-  for (std::int64_t s = 0; s < steps; s += 4, p += 4) {
-    // rows: four steps of one lane; columns after the transpose: one step of four lanes
+  for (std::int64_t s0 = 0; s0 < steps; s0 += 4 * kGroups) {
+    const v4d b0 = h0 + l0, b1 = h1 + l1;  // kExact: the windows' base until the next fold
+    v4d part0 = {}, part1 = {};             // kExact: the moves since the last fold
+    for (std::int64_t g = 0; g < kGroups; ++g, p += 4) {
+      // rows: four steps of one lane; columns after the transpose: one step of four lanes
 #define ALLANITE_TAP(k, t) ALLANITE_LOAD(p + (k) * ls + (t) * m)
 #define ALLANITE_ROW(k)                                                                             \
   (kFromPhase ? (ALLANITE_TAP(k, 3) - ALLANITE_TAP(k, 0)) - three * (ALLANITE_TAP(k, 2) - ALLANITE_TAP(k, 1)) \
               : ALLANITE_TAP(k, 0))
-    // lanes 4g .. 4g + 3 in one vector: window state h, l, squares a
-#define ALLANITE_LANES(g, h, l, a)                                                                  \
+      // lanes 4q .. 4q + 3 in one vector: window h (kExact: base b, moves part), squares a
+#define ALLANITE_LANES(q, h, b, part, a)                                                            \
   do {                                                                                              \
-    const v4d r0 = ALLANITE_ROW(4 * (g)), r1 = ALLANITE_ROW(4 * (g) + 1);                           \
-    const v4d r2 = ALLANITE_ROW(4 * (g) + 2), r3 = ALLANITE_ROW(4 * (g) + 3);                       \
+    const v4d r0 = ALLANITE_ROW(4 * (q)), r1 = ALLANITE_ROW(4 * (q) + 1);                           \
+    const v4d r2 = ALLANITE_ROW(4 * (q) + 2), r3 = ALLANITE_ROW(4 * (q) + 3);                       \
     const v4d t0 = __builtin_shuffle(r0, r1, lo2), t1 = __builtin_shuffle(r0, r1, hi2);             \
     const v4d t2 = __builtin_shuffle(r2, r3, lo2), t3 = __builtin_shuffle(r2, r3, hi2);             \
     const v4d p1 = __builtin_shuffle(t0, t2, lo4);                                                  \
     const v4d p2 = p1 + __builtin_shuffle(t1, t3, lo4);                                             \
     const v4d p3 = p2 + __builtin_shuffle(t0, t2, hi4);                                             \
     const v4d p4 = p3 + __builtin_shuffle(t1, t3, hi4);                                             \
-    const v4d w = kExact ? h + l : h;                                                               \
+    const v4d w = kExact ? b + part : h;                                                            \
     const v4d x1 = w + p1, x2 = w + p2, x3 = w + p3;                                                \
     a += (w * w + x1 * x1) + (x2 * x2 + x3 * x3);                                                   \
-    if constexpr (kExact) { /* TwoSum, lane by lane */                                              \
-      const v4d sum = h + p4, bb = sum - h;                                                         \
-      l += (h - (sum - bb)) + (p4 - bb);                                                            \
-      h = sum;                                                                                      \
+    if constexpr (kExact) {                                                                         \
+      part += p4;                                                                                   \
     } else {                                                                                        \
       h = w + p4;                                                                                   \
     }                                                                                               \
   } while (false)
-    ALLANITE_LANES(0, h0, l0, a0);
-    if constexpr (V == 2) ALLANITE_LANES(1, h1, l1, a1);
+      ALLANITE_LANES(0, h0, b0, part0, a0);
+      if constexpr (V == 2) ALLANITE_LANES(1, h1, b1, part1, a1);
 #undef ALLANITE_LANES
 #undef ALLANITE_ROW
 #undef ALLANITE_TAP
+    }
+    if constexpr (kExact) {  // the fold: TwoSum of h and the moves, lane by lane (as two_sum)
+      const v4d sum0 = h0 + part0, bb0 = sum0 - h0;
+      l0 += (h0 - (sum0 - bb0)) + (part0 - bb0);
+      h0 = sum0;
+      if constexpr (V == 2) {
+        const v4d sum1 = h1 + part1, bb1 = sum1 - h1;
+        l1 += (h1 - (sum1 - bb1)) + (part1 - bb1);
+        h1 = sum1;
+      }
+    }
   }
 #undef ALLANITE_LOAD
   *reinterpret_cast<v4u*>(hi) = h0;
@@ -726,7 +776,12 @@ ALLANITE_ALWAYS_INLINE void lane_groups(const double* src, std::int64_t m, std::
 
 ALLANITE_TARGET_CLONES static void lane_groups_phase(const double* x, std::int64_t m, std::int64_t ls,
                                                      std::int64_t steps, double* hi, double* lo, double* acc) noexcept {
-  lane_groups<true, false, kModTileLanes / 4>(x, m, ls, steps, hi, lo, acc);
+  lane_groups<true, false, kModTileLanes / 4, kModLaneLong>(x, m, ls, steps, hi, lo, acc);
+}
+ALLANITE_TARGET_CLONES static void lane_groups_phase_short(const double* x, std::int64_t m, std::int64_t ls,
+                                                           std::int64_t steps, double* hi, double* lo,
+                                                           double* acc) noexcept {
+  lane_groups<true, false, kModTileLanes / 4, kModLaneShort>(x, m, ls, steps, hi, lo, acc);
 }
 ALLANITE_TARGET_CLONES static void lane_groups_phase_exact(const double* x, std::int64_t m, std::int64_t ls,
                                                            std::int64_t steps, double* hi, double* lo,
@@ -744,45 +799,64 @@ ALLANITE_TARGET_CLONES static void lane_groups_steps(const double* d, std::int64
 
 /// Add the modified AVAR's squares of `count` terms (from a block boundary, one channel: the
 /// phase x from the first term's row on, row stride rs) to total, block by block; a block is
-/// four lanes of kModLane terms, its sum (a_0 + a_1) + (a_2 + a_3) of the lanes' lane_run.
+/// kSumBlock / kLane lanes of kLane terms (see mod_lane), its sum the lanes' lane_run sums
+/// (combined (a_0 + a_1) + (a_2 + a_3) for four).
 /// Lane l starts from the exact window w0[l] (from the prefix sums) and moves on by steps
 /// rounded to O(eps) of the window and of the phase's lag-m differences; restarting every
-/// kModLane terms keeps that drift from growing with the record. `avail`: steps readable
-/// (the last term of the record has none). `buf`: 2 kSumBlock + 4 doubles.
-inline void add_modified_lanes(const double* x, std::int64_t rs, std::int64_t m, const double* w0,
-                               std::int64_t count, std::int64_t avail, NeumaierSum& total, double* buf) {
-  constexpr std::int64_t kStride = kModTileLanes * kModLane;  // terms per call: whole blocks
+/// kLane terms keeps that drift from growing with the record. `avail`: steps readable
+/// (the last term of the record has none). `buf`: kModTileLanes kLane + 4 doubles.
+template <std::int64_t kLane>
+void add_modified_lanes(const double* x, std::int64_t rs, std::int64_t m, const double* w0, std::int64_t count,
+                        std::int64_t avail, NeumaierSum& total, double* buf) {
+  static_assert(kLane == kModLaneLong || kLane == kModLaneShort, "a whole or a quarter block");
+  constexpr std::int64_t kStride = kModTileLanes * kLane;  // terms per call: whole blocks
   for (std::int64_t b = 0; b < count; b += kStride) {
     const std::int64_t len = std::min(kStride, count - b);
     double hi[kModTileLanes], lo[kModTileLanes] = {}, acc[kModTileLanes] = {};
-    std::copy(w0 + b / kModLane, w0 + b / kModLane + (len + kModLane - 1) / kModLane, hi);
+    std::copy(w0 + b / kLane, w0 + b / kLane + (len + kLane - 1) / kLane, hi);
     if (len == kStride && rs == 1 && avail - b >= len) {  // whole blocks, steps from the phase
-      lane_groups_phase(x + b, m, kModLane, kModLane, hi, lo, acc);
+      if constexpr (kLane == kModLaneLong) {
+        lane_groups_phase(x + b, m, kLane, kLane, hi, lo, acc);
+      } else {
+        lane_groups_phase_short(x + b, m, kLane, kLane, hi, lo, acc);
+      }
     } else {
       window_steps(x + b * rs, m, rs, std::min(len, avail - b), len + 4, buf);
       if (len == kStride) {
-        lane_groups_steps(buf, kModLane, kModLane, hi, lo, acc);
+        lane_groups_steps(buf, kLane, kLane, hi, lo, acc);
       } else {
-        for (std::int64_t k = 0; k * kModLane < len; ++k)
-          lane_run<false>(buf + k * kModLane, std::min(kModLane, len - k * kModLane), hi[k], lo[k], acc[k]);
+        for (std::int64_t k = 0; k * kLane < len; ++k)
+          lane_run<false>(buf + k * kLane, std::min(kLane, len - k * kLane), hi[k], lo[k], acc[k]);
       }
     }
-    for (std::int64_t k = 0; 4 * k < kModTileLanes && k * kSumBlock < len; ++k)
-      total.add((acc[4 * k] + acc[4 * k + 1]) + (acc[4 * k + 2] + acc[4 * k + 3]));
+    for (std::int64_t k = 0; k * kLane < len; ++k) {
+      if constexpr (kLane == kModLaneLong) {
+        total.add(acc[k]);
+      } else if (k % 4 == 0) {
+        total.add((acc[k] + acc[k + 1]) + (acc[k + 2] + acc[k + 3]));
+      }
+    }
   }
 }
 
 /// Most terms of a lane of the single-factor pass between starts from the exact prefix sums.
 constexpr std::int64_t kModSegment = 64 * kSumBlock;
 
+/// Smallest factor whose single-factor lanes are spread m apart (see add_modified_single).
+constexpr std::int64_t kModSpreadMin = 32 * kSumBlock;
+
 /// Modified AVAR sums of one factor beyond kTileMaxM (no other factor shares its rows). The
-/// terms go in groups of eight neighbouring lanes of whole blocks, as long as the group allows
-/// up to kModSegment (so that the lanes' taps stay close enough to share the cache, as the
-/// overlapping kernel's do); each lane's window starts from four prefix cursors and moves on
+/// terms go in passes of four lanes of up to kModSegment terms, evenly spaced, that advance
+/// together a block at a time; each lane's window starts from four prefix cursors and moves on
 /// by the steps (lane_run, the window a TwoSum pair: at these factors a step rounds to far
-/// below eps of the window). The lanes advance a block at a time, steps straight from the
-/// phase or via a buffer; block sums go to totals lane by lane, in order. The lanes depend
-/// only on m and the record length. No prefix sums are stored.
+/// below eps of the window), steps straight from the phase or via a buffer. Up to
+/// kModSpreadMin the lanes of a pass are neighbours (up to 4 kModSegment terms, so that their
+/// taps stay close enough to share the cache, as the overlapping kernel's do); from it on they
+/// are m apart, lane k covering terms [g + k m, g + (k + 1) m) of a group of 4 m terms in
+/// passes of kModSegment, so that tap t + 1 of lane k reads the rows of tap t of lane k + 1
+/// in the same block: the four lanes stream 7 row ranges from memory instead of 16. Block
+/// sums go to totals pass by pass, lane by lane, in order. The passes depend only on m and
+/// the record length. No prefix sums are stored.
 static void add_modified_single(const PhaseRef& phase, const PrefixPlan& plan, std::int64_t m,
                                 std::int64_t count, NeumaierSum* totals) {
   constexpr int kLanes = kModSingleLanes;
@@ -792,12 +866,11 @@ static void add_modified_single(const PhaseRef& phase, const PrefixPlan& plan, s
   const std::int64_t rs = phase.outerStride();
   std::vector<double> w0(kLanes * unc), buf(8 * unc), d(static_cast<std::size_t>(kLanes * kSumBlock + 4));
   std::vector<double> sums(static_cast<std::size_t>(kLanes * kMaxBlocks));
-  for (std::int64_t g0 = 0; g0 < count; ) {
-    const std::int64_t blocks = (count - g0 + kSumBlock - 1) / kSumBlock;
-    const std::int64_t lane_len = std::min(kMaxBlocks, (blocks + kLanes - 1) / kLanes) * kSumBlock;
+  // one pass: lane k covers terms [base + k ls, base + k ls + lane_len) (within the record)
+  const auto pass = [&](std::int64_t base, std::int64_t ls, std::int64_t lane_len) {
     std::int64_t first[kLanes], len[kLanes];
     for (int k = 0; k < kLanes; ++k) {  // the window at each lane's first term, from the prefix sums
-      first[k] = std::min(count, g0 + k * lane_len);
+      first[k] = std::min(count, base + k * ls);
       len[k] = std::min(count, first[k] + lane_len) - first[k];
       if (len[k] == 0) continue;
       PrefixCursor c0 = prefix_cursor(phase, plan, first[k]), c1 = prefix_cursor(phase, plan, first[k] + m),
@@ -826,7 +899,7 @@ static void add_modified_single(const PhaseRef& phase, const PrefixPlan& plan, s
         }
         std::fill(acc, acc + kLanes, 0.0);
         if (full && rs == 1 && first[kLanes - 1] + start + kSumBlock < count) {  // steps from the phase
-          lane_groups_phase_exact(x + first[0] + start, m, lane_len, kSumBlock, hi, lo, acc);
+          lane_groups_phase_exact(x + first[0] + start, m, ls, kSumBlock, hi, lo, acc);
         } else {
           for (int k = 0; k < kLanes; ++k) {
             const std::int64_t avail = std::min(n[k], count - 1 - (first[k] + start));
@@ -844,6 +917,20 @@ static void add_modified_single(const PhaseRef& phase, const PrefixPlan& plan, s
         for (std::int64_t b = 0; b < len[k]; b += kSumBlock)
           totals[c].add(sums[static_cast<std::size_t>(k * kMaxBlocks + b / kSumBlock)]);
     }
+  };
+  // groups of lanes spread m / q apart while whole ones fit (q = 1, 2, 3: tap t + q of lane k
+  // reads about the rows of tap t of lane k + q), the rest (and every term below
+  // kModSpreadMin) in passes of neighbouring lanes
+  std::int64_t g0 = 0;
+  for (std::int64_t q = 1; q <= 3 && m >= kModSpreadMin; ++q) {
+    const std::int64_t spacing = (m + q - 1) / q;
+    for (; g0 + kLanes * spacing <= count; g0 += kLanes * spacing)
+      for (std::int64_t r = 0; r < spacing; r += kModSegment) pass(g0 + r, spacing, std::min(kModSegment, spacing - r));
+  }
+  while (g0 < count) {
+    const std::int64_t blocks = (count - g0 + kSumBlock - 1) / kSumBlock;
+    const std::int64_t lane_len = std::min(kMaxBlocks, (blocks + kLanes - 1) / kLanes) * kSumBlock;
+    pass(g0, lane_len, lane_len);
     g0 += kLanes * lane_len;
   }
 }
@@ -956,10 +1043,11 @@ ALLANITE_TARGET_CLONES static void fill_blocks4(const double* x, double big, con
 /// a tile fills only the blocks it adds, each regenerated from its mark of the plan, four
 /// blocks side by side, so that S[r] depends on r alone (not on the tiles or threads).
 struct PrefixRing {
-  PrefixRing(const PhaseRef& ph, const PrefixPlan& pl, std::int64_t top_m)
+  /// From row `first` on (a multiple of kSumBlock: the tile where the pass starts).
+  PrefixRing(const PhaseRef& ph, const PrefixPlan& pl, std::int64_t top_m, std::int64_t first = 0)
       : phase(ph), plan(pl), rows(ph.rows() + 1), nc(ph.cols()),
         span(kTileTerms + (3 * top_m + kSumBlock - 1) / kSumBlock * kSumBlock),
-        hi(static_cast<std::size_t>(span * nc)), lo(hi.size()) {}
+        hi(static_cast<std::size_t>(span * nc)), lo(hi.size()), filled(first) {}
 
   /// Make rows [k0, k0 + span) present (those below rows).
   void cover(std::int64_t k0) {
@@ -999,8 +1087,9 @@ struct PrefixRing {
   }
 
   /// The exact windows w(j) = S[j+3m] - 3 S[j+2m] + 3 S[j+m] - S[j] of channel c at
-  /// j = k0, k0 + kModLane, ... (`lanes` of them) into out.
-  void windows(std::int64_t k0, std::int64_t m, Eigen::Index c, std::int64_t lanes, double* out) const {
+  /// j = k0, k0 + lane, ... (`lanes` of them) into out.
+  void windows(std::int64_t k0, std::int64_t m, std::int64_t lane, Eigen::Index c, std::int64_t lanes,
+               double* out) const {
     std::int64_t slot[4];
     for (int i = 0; i < 4; ++i) slot[i] = (k0 + i * m) % span;
     for (std::int64_t q = 0; q < lanes; ++q) {
@@ -1009,7 +1098,7 @@ struct PrefixRing {
                         nc};
       out[q] = tap_diff(t, c);
       for (int i = 0; i < 4; ++i) {
-        slot[i] += kModLane;
+        slot[i] += lane;
         if (slot[i] >= span) slot[i] -= span;
       }
     }
@@ -1023,16 +1112,33 @@ struct PrefixRing {
   Eigen::Index nc;
   std::int64_t span;
   std::vector<double> hi, lo;
-  std::int64_t filled = 0;  // rows [0, filled) have been generated
+  std::int64_t filled;  // rows [first, filled) have been generated
 };
 
 /// Variances of the factors ms[idx[...]] in one pass over the rows: tile by tile of
 /// kTileTerms terms, every factor adds the tile's terms to its own compensated sums (for a
 /// single factor that is one plain pass). `plan`: the prefix sums (modified only), regenerated
 /// tile by tile into a PrefixRing where the lanes start.
+/// The normalisation of a kind's sum of squares for factor m on M rows.
+inline double variance_norm(VarianceKind kind, std::int64_t M, std::int64_t m) {
+  const double md = static_cast<double>(m);
+  const double nd = static_cast<double>(n_terms(kind, M, m));
+  if (kind == VarianceKind::Hadamard || kind == VarianceKind::StandardHadamard) return 6.0 * md * md * nd;
+  if (kind == VarianceKind::Modified) return 2.0 * md * md * md * md * nd;
+  return 2.0 * md * md * nd;
+}
+
+/// `terms` [k_begin, k_end) of a variance_group (tile-aligned) whose sums go to `sums`
+/// (per factor, per channel) instead of the result: the modified factors up to kTileMaxM run
+/// in two such row ranges (see variance).
+struct TermRange {
+  std::int64_t k_begin, k_end;
+  std::vector<std::vector<NeumaierSum>>* sums;
+};
+
 inline void variance_group(const PhaseRef& phase, const PrefixPlan* plan, VarianceKind kind,
                            const std::vector<std::int64_t>& ms, const std::vector<std::size_t>& idx,
-                           RowMatrix& out) {
+                           RowMatrix& out, const TermRange* range = nullptr) {
   const std::int64_t M = phase.rows();
   const Eigen::Index nc = phase.cols();
   const double* x = phase.data();
@@ -1052,13 +1158,16 @@ inline void variance_group(const PhaseRef& phase, const PrefixPlan* plan, Varian
   if (kind == VarianceKind::Modified && !windowed) longest = 0;
   // modified: the prefix sums of the tile's rows, where its lanes start (add_modified_lanes)
   std::optional<PrefixRing> ring;
-  if (windowed) ring.emplace(phase, *plan, top_m);
-  std::vector<double> anchors(windowed ? kTileTerms / kModLane : 0), steps(windowed ? 2 * kSumBlock + 4 : 0);
+  const std::int64_t k_begin = range != nullptr ? range->k_begin : 0;
+  if (range != nullptr) longest = std::min(longest, range->k_end);
+  if (windowed) ring.emplace(phase, *plan, top_m, k_begin);
+  std::vector<double> anchors(windowed ? kTileTerms / kModLaneShort : 0),
+      steps(windowed ? kModTileLanes * kModLaneLong + 4 : 0);
   // Hadamard, one channel in unit stride: the factors of a tile go in fours side by side (their
   // first taps read the same rows), over the whole blocks all four have; the rest one by one
   constexpr std::size_t kSide = 4;
   const bool side_by_side = kind == VarianceKind::Hadamard && nc == 1 && rs == 1 && idx.size() > 1;
-  for (std::int64_t k0 = 0; k0 < longest; k0 += kTileTerms) {
+  for (std::int64_t k0 = k_begin; k0 < longest; k0 += kTileTerms) {
     if (windowed) ring->cover(k0);
     if (side_by_side) {
       for (std::size_t a0 = 0; a0 < idx.size(); a0 += kSide) {
@@ -1096,10 +1205,17 @@ inline void variance_group(const PhaseRef& phase, const PrefixPlan* plan, Varian
       switch (kind) {
         case VarianceKind::Modified: {
           // every lane's first window from the prefix sums, the others by steps of the phase
-          const std::int64_t lanes = (count + kModLane - 1) / kModLane;
+          const std::int64_t lane = mod_lane(m);
+          const std::int64_t lanes = (count + lane - 1) / lane;
           for (Eigen::Index c = 0; c < nc; ++c) {
-            ring->windows(k0, m, c, lanes, anchors.data());
-            add_modified_lanes(x + k0 * rs + c, rs, m, anchors.data(), count, n[a] - 1 - k0, tot[c], steps.data());
+            ring->windows(k0, m, lane, c, lanes, anchors.data());
+            const double* b = x + k0 * rs + c;
+            const std::int64_t avail = n[a] - 1 - k0;
+            if (lane == kModLaneLong) {
+              add_modified_lanes<kModLaneLong>(b, rs, m, anchors.data(), count, avail, tot[c], steps.data());
+            } else {
+              add_modified_lanes<kModLaneShort>(b, rs, m, anchors.data(), count, avail, tot[c], steps.data());
+            }
           }
           break;
         }
@@ -1117,16 +1233,16 @@ inline void variance_group(const PhaseRef& phase, const PrefixPlan* plan, Varian
       }
     }
   }
+  if (range != nullptr) {
+    *range->sums = std::move(totals);
+    return;
+  }
   for (std::size_t a = 0; a < idx.size(); ++a) {
     const std::int64_t m = ms[idx[a]];
     if (kind == VarianceKind::Modified && top_m > kTileMaxM)
       add_modified_single(phase, *plan, m, n[a], totals[a].data());
     if (kind == VarianceKind::Total) add_total_ends(phase, m, totals[a].data());
-    const double md = static_cast<double>(m);
-    const double nd = static_cast<double>(n_terms(kind, M, m));
-    double norm = 2.0 * md * md * nd;
-    if (kind == VarianceKind::Hadamard || kind == VarianceKind::StandardHadamard) norm = 6.0 * md * md * nd;
-    if (kind == VarianceKind::Modified) norm = 2.0 * md * md * md * md * nd;
+    const double norm = variance_norm(kind, M, m);
     for (Eigen::Index c = 0; c < nc; ++c)
       out(static_cast<Eigen::Index>(idx[a]), c) = totals[a][static_cast<std::size_t>(c)].value() / norm;
   }
@@ -1168,11 +1284,22 @@ inline RowMatrix variance(const PhaseRef& phase, const std::vector<std::int64_t>
     else
       single.push_back(i);
   }
-  if (small.size() > 1) {
+  // The modified factors up to kTileMaxM: one group whose terms run in two row ranges, split
+  // at a tile near the middle of the record (a function of M alone), as two tasks; each
+  // generates only its own rows' prefix sums and reads only its half of the phase. The sums
+  // of the second range are added to those of the first, so the bits depend neither on the
+  // threads nor on the other factors.
+  const bool ranged = kind == VarianceKind::Modified && !small.empty();
+  std::vector<std::vector<NeumaierSum>> range_sums[2];
+  const std::int64_t split = M / 2 / detail::kTileTerms * detail::kTileTerms;
+  const detail::TermRange ranges[2] = {{0, split, &range_sums[0]},
+                                       {split, std::numeric_limits<std::int64_t>::max(), &range_sums[1]}};
+  const std::size_t n_ranged = ranged ? 2 : 0;  // the first tasks
+  if (!ranged && small.size() > 1) {
     const std::size_t ng = std::min<std::size_t>(static_cast<std::size_t>(nthreads), small.size());
     groups.resize(ng);
     for (std::size_t a = 0; a < small.size(); ++a) groups[a % ng].push_back(small[a]);
-  } else {
+  } else if (!ranged) {
     single.insert(single.begin(), small.begin(), small.end());
   }
   if (tiled && kind != VarianceKind::Modified) {
@@ -1183,13 +1310,27 @@ inline RowMatrix variance(const PhaseRef& phase, const std::vector<std::int64_t>
       groups.emplace_back(wide.begin() + static_cast<std::ptrdiff_t>(a),
                           wide.begin() + static_cast<std::ptrdiff_t>(std::min(wide.size(), a + kWideGroup)));
   }
-  parallel_for(groups.size() + single.size(), nthreads, [&](std::size_t task) {
-    if (task < groups.size()) {
-      detail::variance_group(phase, &plan, kind, ms, groups[task], out);
+  parallel_for(n_ranged + groups.size() + single.size(), nthreads, [&](std::size_t task) {
+    if (task < n_ranged) {
+      detail::variance_group(phase, &plan, kind, ms, small, out, &ranges[task]);
+    } else if (task < n_ranged + groups.size()) {
+      detail::variance_group(phase, &plan, kind, ms, groups[task - n_ranged], out);
     } else {
-      detail::variance_group(phase, &plan, kind, ms, {single[task - groups.size()]}, out);
+      detail::variance_group(phase, &plan, kind, ms, {single[task - n_ranged - groups.size()]}, out);
     }
   });
+  if (ranged) {
+    for (std::size_t a = 0; a < small.size(); ++a) {
+      const double norm = detail::variance_norm(kind, M, ms[small[a]]);
+      for (Eigen::Index c = 0; c < phase.cols(); ++c) {
+        const auto uc = static_cast<std::size_t>(c);
+        NeumaierSum total = range_sums[0][a][uc];
+        total.add(range_sums[1][a][uc].hi());
+        total.add(range_sums[1][a][uc].lo());
+        out(static_cast<Eigen::Index>(small[a]), c) = total.value() / norm;
+      }
+    }
+  }
   return out;
 }
 
