@@ -14,7 +14,7 @@ from allanite.diagnosis.attribution import _bounds, _degenerate
 from allanite.diagnosis.candidates import candidate_library
 from allanite.diagnosis.holdout import tau_model_for
 from allanite.diagnosis.inputs import SimSource
-from allanite.diagnosis.level_shape import warmup_shape
+from allanite.diagnosis.level_shape import ramp_shape, warmup_shape
 from allanite.model import NoiseModel
 from allanite.terms import TERM_TYPES
 from test_diagnosis_pairs import UNITS, _pair_record
@@ -61,6 +61,55 @@ def test_warmup_under_gauss_markov_noise_control(monkeypatch) -> None:  # type: 
     named0 = {a.effect for a in diagnose(x, base, **WARMUP_KW).explanation.effects}
     assert "warmup" not in named0
     assert named0 & {"rrw", "rescale:rrw"}
+
+
+def tw_total(view: object) -> float:
+    """Duration of the time view's windows together (the fitted half)."""
+    return float(view.window_s * view.level.size)  # type: ignore[attr-defined]
+
+
+#: designed pair 'ramp + markov' at 2x/16x the clear level (seed 1000 + 17 * 21)
+RAMP_SEED = 1000 + 17 * 21
+RAMP_KW = {**WARMUP_KW, "seed": RAMP_SEED + 1}
+
+
+def _ramp_markov() -> tuple[NoiseModel, np.ndarray, object, object]:
+    ramp = T["ramp"](R=0.017007719341042296)
+    gm = T["markov"](sigma=0.13458598142172354, tau_c=2.0)
+    base, x = _pair_record(RAMP_SEED, (ramp, gm))
+    return base, x, ramp, gm
+
+
+def test_ramp_under_gauss_markov_noise_is_named_with_it() -> None:
+    """A ramp under strong Gauss-Markov noise: the tau view reads the pair as a random walk
+    (the best single effect). With the ramp's slope measured on the window means and the
+    process fitted on top of it, the set is ramp + Gauss-Markov, the slope within three of
+    its standard errors on the window means."""
+    base, x, _, _ = _ramp_markov()
+    d = diagnose(x, base, **RAMP_KW)
+    assert d.attribution[0].effect in ("rrw", "rescale:rrw")  # the look-alike of the two
+    by_effect = {a.effect: a for a in d.explanation.effects}
+    assert {"ramp", "markov"} <= by_effect.keys(), by_effect.keys()
+    assert not by_effect.keys() & {"rrw", "rescale:rrw"}
+    # the slope is the window means' least-squares slope of the fitted half (weighted by the
+    # null spreads, which vary by a few per cent between windows: the unweighted slope of the
+    # raw window means agrees to within a tenth of its spread between records, 1.7e-4)
+    view = d.time
+    n, w = x.size // 2, view.level.size
+    t = view.t_s - view.window_s * w / 2
+    means = x[: n - n % w].reshape(w, -1).mean(axis=1)
+    ols = float(t @ (means - means.mean()) / (t @ t))
+    assert by_effect["ramp"].params["R"] == pytest.approx(ols, abs=1.7e-5)
+    assert by_effect["ramp"].params["R"] == pytest.approx(ramp_shape(view, tw_total(view))[0])
+
+
+@pytest.mark.slow
+def test_ramp_under_gauss_markov_noise_control(monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """The control: without the measured-shape + partner opening the ramp is not named."""
+    base, x, _, _ = _ramp_markov()
+    monkeypatch.setattr(joint, "_shape_and_noise", lambda *args, **kwargs: [])
+    named0 = {a.effect for a in diagnose(x, base, **RAMP_KW).explanation.effects}
+    assert "ramp" not in named0
 
 
 def test_a_process_whose_allan_variance_still_rises_at_the_longest_tau_is_degenerate() -> None:

@@ -20,10 +20,10 @@ In both steps the time view's window-mean spreads include the slow noise of the 
 effects already in the set (:func:`with_level_background`): a ramp or a warm-up on top of
 Gauss-Markov noise is judged against that noise, not against the bare simulation.
 
-The opening also tries a warm-up measured on the window means with each stationary partner
-fitted on top of it (:func:`_shape_and_noise`): the tau view reads a warm-up under slow noise
-as a random walk, and a warm-up fitted alone there takes the noise's Allan variance too, so
-greedy selection never reaches the pair.
+The opening also tries a warm-up or a ramp measured on the window means with each stationary
+partner fitted on top of it (:func:`_shape_and_noise`): the tau view reads a warm-up or ramp
+under slow noise as a random walk, and the shape fitted alone there takes the noise's Allan
+variance too, so greedy selection never reaches the pair.
 
 Spectral shape: in both steps the candidates on top of the set are ordered by their penalised
 score *plus* the misfit of the spectrum's shape with the set and the candidate added
@@ -59,7 +59,7 @@ from scipy import stats
 from allanite.diagnosis.attribution import EVIDENCE_CAP, Attribution, fit_candidate, rank
 from allanite.diagnosis.candidates import DISTINCT_FACTOR, Candidate
 from allanite.diagnosis.frequency_view import FrequencyView
-from allanite.diagnosis.level_shape import level_misfit, warmup_shape
+from allanite.diagnosis.level_shape import level_misfit, ramp_shape, warmup_shape
 from allanite.diagnosis.tau_view import TauModel
 from allanite.diagnosis.time_view import TimeView, added_level_variance
 
@@ -311,6 +311,26 @@ def _two_processes(
 WARMUP_SETTLES = 4.0
 
 
+def _measured_level_shape(
+    effect: str, view: TimeView, duration: float
+) -> dict[str, float] | None:
+    """Parameters of a warm-up or ramp measured on the window means; None for other effects."""
+    if effect == "warmup":
+        tau_w, amp, _ = warmup_shape(view, duration)
+        if amp == 0.0 or tau_w * WARMUP_SETTLES > duration:
+            return None
+        return {"tau_w": tau_w, "amplitude": amp}
+    if effect == "ramp":
+        slope, _ = ramp_shape(view, duration)
+        return {"R": abs(slope)} if slope != 0.0 else None
+    return None
+
+
+def _shape_gain(effect: str, view: TimeView, duration: float) -> float:
+    """Drop of the window means' ``chi^2`` the measured warm-up or ramp brings."""
+    return warmup_shape(view, duration)[2] if effect == "warmup" else ramp_shape(view, duration)[1]
+
+
 def _shape_and_noise(
     shape_c: Candidate,
     partners: list[Candidate],
@@ -319,7 +339,7 @@ def _shape_and_noise(
     duration: float,
     cache: dict[str, NDArray[np.float64]],
 ) -> list[tuple[float, list[Attribution]]]:
-    """A warm-up measured on the window means, with each stationary partner on top of it.
+    """A warm-up or ramp measured on the window means, with each stationary partner on top.
 
     The tau view alone cannot split a warm-up from slow noise next to it (a Gauss-Markov
     process or a random walk: their Allan variances imitate each other), and a warm-up fitted
@@ -334,18 +354,21 @@ def _shape_and_noise(
     partner's slow noise in their spreads (:func:`with_level_background`); it is scored like
     one effect, ``T_after + k chi2_{1-alpha}(1)`` (``k`` the partner's free parameters and the
     warm-up's amplitude) plus the evidence both leave and the warm-up's shape misfit against
-    those spreads.
+    those spreads. A ramp under slow noise is the same case (the tau view reads a ramp next to
+    a Gauss-Markov process as a random walk): its slope is measured on the window means
+    (:func:`~allanite.diagnosis.level_shape.ramp_shape`, one parameter, gain against
+    ``chi2_{1-alpha}(1)``).
     """
     view: TimeView | None = fit_kw["time_view"]
     alpha = float(fit_kw["alpha"])
     evidence_p: dict[str, float] = fit_kw["evidence_p"]
     left: dict[str, bool] = fit_kw["significant"]
-    if view is None or shape_c.effect != "warmup" or "level" not in view.spread:
+    if view is None or "level" not in view.spread:
         return []
-    tau_w, amp, _ = warmup_shape(view, duration)
-    if amp == 0.0 or tau_w * WARMUP_SETTLES > duration:
+    measured_params = _measured_level_shape(shape_c.effect, view, duration)
+    if measured_params is None:
         return []
-    fixed = {**shape_c.fixed, "tau_w": tau_w, "amplitude": amp}
+    fixed = {**shape_c.fixed, **measured_params}
     measured = replace(shape_c, fixed=fixed, free=tuple(n for n in shape_c.free if n not in fixed))
     shape = fit_candidate(measured, tm, **fit_kw)
     if shape is None:
@@ -355,14 +378,14 @@ def _shape_and_noise(
     rest = {e: s and e not in told for e, s in left.items()}
     tm_shape = with_background(tm, e_shape)
     per_param = float(stats.chi2.isf(alpha, 1))
-    gain = float(stats.chi2.isf(alpha, 2))
+    gain = float(stats.chi2.isf(alpha, len(measured_params)))
     out = []
     for c in partners:
         a = fit_candidate(c, tm_shape, **{**fit_kw, "significant": rest})
         if a is None:
             continue
         view_bg = with_level_background(view, [a], [c], tm, duration, cache)
-        if view_bg is None or warmup_shape(view_bg, duration)[2] <= gain:
+        if view_bg is None or _shape_gain(shape_c.effect, view_bg, duration) <= gain:
             continue
         explained = told | set(a.evidence.get("explained", []))
         unexplained = [e for e, sig in left.items() if sig and e not in explained]

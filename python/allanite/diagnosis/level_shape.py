@@ -30,7 +30,7 @@ from numpy.typing import NDArray
 
 from allanite.diagnosis.time_view import TimeView
 
-__all__ = ["level_misfit", "warmup_shape", "warmup_time_constant"]
+__all__ = ["level_misfit", "ramp_shape", "warmup_shape", "warmup_time_constant"]
 
 #: at most this many bias steps in the shape fit
 MAX_STEPS = 8
@@ -140,3 +140,23 @@ def warmup_shape(view: TimeView, duration: float) -> tuple[float, float, float]:
     sd = np.where(view.level_sd > 0, view.level_sd, np.inf)
     none = float(np.sum((view.level / sd) ** 2))
     return tw, amp, none - best
+
+
+def ramp_shape(view: TimeView, duration: float) -> tuple[float, float]:
+    """The ramp the window means measure, and how much it explains of them.
+
+    Returns
+    -------
+    (slope, gain)
+        Signed slope ``R`` of ``R (t_w - T/2)`` fitted by weighted least squares on the window
+        means (spreads ``view.level_sd``), and the drop of ``chi^2`` it brings against no shape:
+        chi-square with one degree of freedom when there is no ramp.
+    """
+    sd = np.where(view.level_sd > 0, view.level_sd, np.inf)
+    line = (view.t_s - duration / 2) / sd
+    b = view.level / sd
+    denom = float(line @ line)
+    if denom == 0.0:
+        return 0.0, 0.0
+    slope = float(line @ b) / denom
+    return slope, slope * slope * denom
