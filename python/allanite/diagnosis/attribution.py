@@ -378,6 +378,23 @@ def _lf_kurtosis_p(
     return max((x for x in p if x is not None), default=None)
 
 
+def _level_p_with(
+    cand: Candidate, values: dict[str, float], time_view: TimeView, dt: float, duration: float
+) -> dict[str, float]:
+    """p-values of the time view's ``jump``/``level`` tests with the candidate's noise added."""
+    window = np.array([time_view.window_s])
+    with np.errstate(all="ignore"):
+        a_w = np.asarray(cand.extra_avar(values, window, dt), dtype=float)
+    if not (a_w.size and np.isfinite(a_w[0]) and a_w[0] > 0):
+        return {}
+    added = cand.added_term(values)
+    n_fit = round(duration / dt)
+    level_var = None
+    if added is not None and n_fit >= 2 * time_view.level.size:
+        level_var = added_level_variance(added, 1.0 / dt, n_fit, time_view.level.size)
+    return time_view.level_p_values(float(a_w[0]), level_var, gaussian=cand.effect not in TWO_LEVEL)
+
+
 def fit_candidate(
     cand: Candidate,
     tm: TauModel,
@@ -419,24 +436,12 @@ def fit_candidate(
     level_p: dict[str, float] = {}
     pending = [e for e in ("jump", "level") if significant.get(e, False) and e not in explained]
     if time_view is not None and pending:
-        values = _values(cand, logp)
-        window = np.array([time_view.window_s])
-        with np.errstate(all="ignore"):
-            a_w = np.asarray(cand.extra_avar(values, window, tm.dt), dtype=float)
-        if a_w.size and np.isfinite(a_w[0]) and a_w[0] > 0:
-            added = cand.added_term(values)
-            fs, n_fit = 1.0 / tm.dt, round(duration / tm.dt)
-            level_var = None
-            if added is not None and n_fit >= 2 * time_view.level.size:
-                level_var = added_level_variance(added, fs, n_fit, time_view.level.size)
-            level_p = time_view.level_p_values(
-                float(a_w[0]), level_var, gaussian=cand.effect not in TWO_LEVEL
-            )
-            n_ev = max(len(evidence_p), 1)
-            for e, p in level_p.items():
-                if significant.get(e, False) and p >= alpha / n_ev and e not in explained:
-                    explained.append(e)
-            explained.sort()
+        level_p = _level_p_with(cand, _values(cand, logp), time_view, tm.dt, duration)
+        n_ev = max(len(evidence_p), 1)
+        for e, p in level_p.items():
+            if significant.get(e, False) and p >= alpha / n_ev and e not in explained:
+                explained.append(e)
+        explained.sort()
     # slow stationary noise makes block means platykurtic too: re-test kurt_lf with it
     if time_view is not None and significant.get("kurt_lf", False) and "kurt_lf" not in explained:
         p_lf = _lf_kurtosis_p(cand, _values(cand, logp), time_view, tm.dt, duration)

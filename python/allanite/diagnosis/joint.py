@@ -311,9 +311,7 @@ def _two_processes(
 WARMUP_SETTLES = 4.0
 
 
-def _measured_level_shape(
-    effect: str, view: TimeView, duration: float
-) -> dict[str, float] | None:
+def _measured_level_shape(effect: str, view: TimeView, duration: float) -> dict[str, float] | None:
     """Parameters of a warm-up or ramp measured on the window means; None for other effects."""
     if effect == "warmup":
         tau_w, amp, _ = warmup_shape(view, duration)
