@@ -311,8 +311,15 @@ def _two_processes(
 WARMUP_SETTLES = 4.0
 
 
-def _measured_level_shape(effect: str, view: TimeView, duration: float) -> dict[str, float] | None:
-    """Parameters of a warm-up or ramp measured on the window means; None for other effects."""
+def _measured_level_shape(
+    effect: str, view: TimeView, duration: float, per_param: float
+) -> dict[str, float] | None:
+    """Parameters of a warm-up or ramp measured on the window means; None for other effects.
+
+    A ramp only where the window means follow a line at least as well as bias steps (with
+    their penalty, :func:`~allanite.diagnosis.level_shape.level_misfit`): a step under white
+    noise also has a slope on the window means, and was read as a ramp plus noise.
+    """
     if effect == "warmup":
         tau_w, amp, _ = warmup_shape(view, duration)
         if amp == 0.0 or tau_w * WARMUP_SETTLES > duration:
@@ -320,7 +327,10 @@ def _measured_level_shape(effect: str, view: TimeView, duration: float) -> dict[
         return {"tau_w": tau_w, "amplitude": amp}
     if effect == "ramp":
         slope, _ = ramp_shape(view, duration)
-        return {"R": abs(slope)} if slope != 0.0 else None
+        steps = level_misfit("step", view, duration, per_param)
+        if slope == 0.0 or level_misfit("ramp", view, duration, per_param) > steps:
+            return None
+        return {"R": abs(slope)}
     return None
 
 
@@ -363,7 +373,8 @@ def _shape_and_noise(
     left: dict[str, bool] = fit_kw["significant"]
     if view is None or "level" not in view.spread:
         return []
-    measured_params = _measured_level_shape(shape_c.effect, view, duration)
+    per_param = float(stats.chi2.isf(alpha, 1))
+    measured_params = _measured_level_shape(shape_c.effect, view, duration, per_param)
     if measured_params is None:
         return []
     fixed = {**shape_c.fixed, **measured_params}
@@ -375,7 +386,6 @@ def _shape_and_noise(
     told = set(shape.evidence.get("explained", []))
     rest = {e: s and e not in told for e, s in left.items()}
     tm_shape = with_background(tm, e_shape)
-    per_param = float(stats.chi2.isf(alpha, 1))
     gain = float(stats.chi2.isf(alpha, len(measured_params)))
     out = []
     for c in partners:
