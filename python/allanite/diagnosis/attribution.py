@@ -346,10 +346,10 @@ def _fisher_sigma(cand: Candidate, tm: TauModel, logp: NDArray[np.float64]) -> N
 LF_KURTOSIS_MAX_SAMPLES = 2**18
 
 #: the kurt_lf re-test takes the most favourable block-mean variance of the candidate within
-#: this factor of its fitted one: a slow process realises few correlation times in one record,
-#: and look-alikes trade amplitude for correlation time in the tau view (a telegraph next to
-#: more white noise is fitted with ~0.7 of its variance), while the test itself resolves the
-#: variance share to a few percent
+#: this factor of its fitted one: an allowance for a systematic trade, not a statistical
+#: interval (a telegraph next to more white noise is fitted with ~0.7 of its variance, while
+#: the fit's own 99 % Fisher interval of the amplitude is only about x1.25; see
+#: docs/diagnosis.md, "Jump-like effects and their random look-alikes")
 LF_VARIANCE_FACTOR = 2.0
 
 

@@ -567,7 +567,7 @@ def explain(
             ]
         groups: list[tuple[float, list[Attribution]]] = [(a.score, [a]) for a in kept]
         if singles is not None and room >= 2:
-            # the opening: a warm-up the window means measure, with slow noise next to it
+            # the opening: a warm-up or ramp the window means measure, slow noise next to it
             partners = [c for c in candidates if c.effect not in LEVEL_SHAPES]
             for c in candidates:
                 groups += _shape_and_noise(c, partners, tm_bg, fit_kw, duration, cache)

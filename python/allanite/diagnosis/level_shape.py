@@ -38,14 +38,31 @@ MAX_STEPS = 8
 STEP_GAIN = 10.83
 
 
-def _wls_chi2(
+def _wls(
     design: NDArray[np.float64], level: NDArray[np.float64], sd: NDArray[np.float64]
-) -> float:
+) -> tuple[float, NDArray[np.float64]]:
+    """Weighted least squares of ``level`` on the columns of ``design``: ``(chi^2, coef)``."""
     a = design / sd[:, None]
     b = level / sd
     coef, *_ = np.linalg.lstsq(a, b, rcond=None)
     r = b - a @ coef
-    return float(r @ r)
+    return float(r @ r), np.asarray(coef, dtype=np.float64)
+
+
+def _wls_chi2(
+    design: NDArray[np.float64], level: NDArray[np.float64], sd: NDArray[np.float64]
+) -> float:
+    return _wls(design, level, sd)[0]
+
+
+def _level_sd(view: TimeView) -> NDArray[np.float64]:
+    """The window means' null spreads, infinite (no weight) where there is none."""
+    return np.where(view.level_sd > 0, view.level_sd, np.inf)
+
+
+def _flat_chi2(view: TimeView, sd: NDArray[np.float64]) -> float:
+    """``chi^2`` of the window means against no level shape at all."""
+    return float(np.sum((view.level / sd) ** 2))
 
 
 def _step_column(
@@ -70,7 +87,7 @@ def level_misfit(effect: str, view: TimeView, duration: float, per_param: float 
         return noise_misfit(effect, view, per_param)
     if effect not in ("step", "warmup", "ramp"):
         return 0.0
-    sd = np.where(view.level_sd > 0, view.level_sd, np.inf)
+    sd = _level_sd(view)
     w = view.level.size
     t1 = view.t_s + view.window_s / 2
     if effect == "ramp":
@@ -79,10 +96,8 @@ def level_misfit(effect: str, view: TimeView, duration: float, per_param: float 
     if effect == "step":
         # no detected change point: the steps are all "further" ones, from a flat level
         cols = [_step_column(tc, t1, view.window_s, duration) for tc in view.change_points_s]
-        if cols:
-            chi2 = _wls_chi2(np.stack(cols, axis=1), view.level, sd)
-        else:
-            chi2 = float(np.sum((view.level / sd) ** 2))
+        stacked = np.stack(cols, axis=1) if cols else None
+        chi2 = _wls_chi2(stacked, view.level, sd) if stacked is not None else _flat_chi2(view, sd)
         # bias steps come at random times with random sizes: add further steps at window
         # boundaries while each lowers chi^2 by more than chi2_1(0.999) = 10.8
         while len(cols) < MAX_STEPS:
@@ -104,17 +119,14 @@ def level_misfit(effect: str, view: TimeView, duration: float, per_param: float 
 
 def _warmup_fit(view: TimeView, duration: float) -> tuple[float, float, float]:
     """Weighted least-squares warm-up on the window means: ``(chi^2, T_w, A)``."""
-    sd = np.where(view.level_sd > 0, view.level_sd, np.inf)
+    sd = _level_sd(view)
     t0 = view.t_s - view.window_s / 2
     t1 = view.t_s + view.window_s / 2
     best, best_tw, best_a = np.inf, float(view.window_s), 0.0
     for tw in np.geomspace(view.window_s / 4, duration, 48):
         shape = tw * (np.exp(-t0 / tw) - np.exp(-t1 / tw)) / view.window_s
         shape = shape - tw * (1.0 - np.exp(-duration / tw)) / duration
-        a = shape[:, None] / sd[:, None]
-        coef, *_ = np.linalg.lstsq(a, view.level / sd, rcond=None)
-        r = view.level / sd - a @ coef
-        chi2 = float(r @ r)
+        chi2, coef = _wls(shape[:, None], view.level, sd)
         if chi2 < best:
             best, best_tw, best_a = chi2, float(tw), float(coef[0])
     return float(best), best_tw, best_a
@@ -137,9 +149,7 @@ def warmup_shape(view: TimeView, duration: float) -> tuple[float, float, float]:
         degrees of freedom (``A``, ``T_w``) when there is no warm-up.
     """
     best, tw, amp = _warmup_fit(view, duration)
-    sd = np.where(view.level_sd > 0, view.level_sd, np.inf)
-    none = float(np.sum((view.level / sd) ** 2))
-    return tw, amp, none - best
+    return tw, amp, _flat_chi2(view, _level_sd(view)) - best
 
 
 def ramp_shape(view: TimeView, duration: float) -> tuple[float, float]:
@@ -152,11 +162,9 @@ def ramp_shape(view: TimeView, duration: float) -> tuple[float, float]:
         means (spreads ``view.level_sd``), and the drop of ``chi^2`` it brings against no shape:
         chi-square with one degree of freedom when there is no ramp.
     """
-    sd = np.where(view.level_sd > 0, view.level_sd, np.inf)
-    line = (view.t_s - duration / 2) / sd
-    b = view.level / sd
-    denom = float(line @ line)
-    if denom == 0.0:
+    sd = _level_sd(view)
+    line = view.t_s - duration / 2
+    if not np.any(np.isfinite(sd) & (line != 0.0)):
         return 0.0, 0.0
-    slope = float(line @ b) / denom
-    return slope, slope * slope * denom
+    chi2, coef = _wls(line[:, None], view.level, sd)
+    return float(coef[0]), _flat_chi2(view, sd) - chi2
