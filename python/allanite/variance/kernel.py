@@ -7,8 +7,10 @@ two give the same variances bit for bit.
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Callable
-from typing import Any
+from concurrent.futures import ThreadPoolExecutor
+from typing import Any, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -17,7 +19,16 @@ from allanite import _core
 from allanite.variance.edf import cap_few_point_alpha, identify_alpha
 from allanite.variance.fast import DEFAULT_Q, fast_variance
 
-__all__ = ["ProgressCallback", "fast_q", "identify_bounded", "series_points", "variances"]
+__all__ = [
+    "ProgressCallback",
+    "fast_q",
+    "identify_bounded",
+    "series_points",
+    "variances",
+    "variances_beside",
+]
+
+_T = TypeVar("_T")
 
 #: progress(stage, done, total): stage "phase" counts samples x passes, "variance" counts taus
 ProgressCallback = Callable[[str, int, int], None]
@@ -86,6 +97,50 @@ def variances(
         var[sl] = _core.variance(phase, factors[sl], kernel_kind, threads)
         progress("variance", min(start + group, nt), nt)
     return var
+
+
+_BACKGROUND: list[ThreadPoolExecutor] = []  # one worker, made on first use, kept for the process
+_BACKGROUND_LOCK = threading.Lock()
+
+
+def _background() -> ThreadPoolExecutor:
+    """The worker thread that runs kernels beside Python work (started once, then reused)."""
+    with _BACKGROUND_LOCK:
+        if not _BACKGROUND:
+            _BACKGROUND.append(ThreadPoolExecutor(1, thread_name_prefix="allanite-kernel"))
+        return _BACKGROUND[0]
+
+
+def variances_beside(
+    phase: NDArray[np.float64],
+    factors: NDArray[np.int64],
+    kernel_kind: str,
+    *,
+    threads: int,
+    beside: Callable[[], _T],
+) -> tuple[NDArray[np.float64], _T]:
+    """Exact :func:`variances` computed while ``beside()`` runs on the calling thread.
+
+    The compiled kernel releases the GIL, so the Python and compiled work of ``beside`` (the
+    noise identification, the EDF) fills the cores the kernel leaves idle: at its serial
+    steps and while its last tasks finish. With ``threads == 1`` (the caller asked for one
+    thread) the two run one after the other. The variances are those of :func:`variances`
+    bit for bit (the same call); an exception of either side is raised here.
+
+    Returns
+    -------
+    tuple
+        ``(variances (T, C), beside())``.
+    """
+    if threads == 1:
+        return np.asarray(_core.variance(phase, factors, kernel_kind, 1)), beside()
+    job = _background().submit(_core.variance, phase, factors, kernel_kind, threads)
+    try:
+        other = beside()
+    except BaseException:
+        job.exception()  # the kernel reads the caller's phase: let it end before raising
+        raise
+    return np.asarray(job.result()), other
 
 
 def series_points(decimated_rows: int, identify: str) -> int:
