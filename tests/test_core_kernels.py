@@ -303,3 +303,46 @@ def test_phase_blocks_match_reference_on_a_bias(kind: str) -> None:
         [np.asarray(oracle.variance(x[:, c], factors, kind, input="rate")) for c in range(2)]
     )
     np.testing.assert_allclose(got, want, rtol=RTOL, atol=0)
+
+
+@pytest.mark.parametrize("kind", ["hadamard", "overlapping", "modified", "total"])
+def test_avar_identification_beside_the_kernel_matches_one_after_the_other(kind: str) -> None:
+    """avar runs the identification and the EDF beside the kernel (kernel.variances_beside):
+    the variances, exponents and EDF are those of the sequential path (given alpha, then
+    identify_alpha and equivalent_dof) bit for bit, for one thread and for several."""
+    from allanite.variance.edf import equivalent_dof, identify_alpha, smooth_isolated_alpha
+    from allanite.variance.taus import KERNEL_KIND
+
+    rng = np.random.default_rng(7)
+    # white rate plus a random walk: the exponents change along the grid
+    y = 1e3 + rng.standard_normal(60_000) + 0.02 * np.cumsum(rng.standard_normal(60_000))
+    ref = allanite.avar(y, fs=2.0, kind=kind, alpha=0, threads=1)
+    phase = _core.phase(y.reshape(-1, 1), "rate", 1)
+    found = identify_alpha(phase, ref.m, KERNEL_KIND[kind], data="frequency", threads=1)
+    alphas = smooth_isolated_alpha(found, ref.m)[:, 0]
+    assert np.unique(alphas).size > 1  # the record exercises more than one noise type
+    edf = equivalent_dof(KERNEL_KIND[kind], alphas[:, None], ref.m, phase.shape[0])[:, 0]
+    for threads in (1, 2, 3):
+        res = allanite.avar(y, fs=2.0, kind=kind, threads=threads)
+        assert np.array_equal(res.var, ref.var)
+        assert np.array_equal(res.alpha, alphas)
+        assert np.array_equal(res.edf, edf)
+
+
+def test_variances_beside_raises_the_error_of_either_side() -> None:
+    """An error of the Python side is raised after the kernel ended; one of the kernel too."""
+    from allanite.variance.kernel import variances_beside
+
+    phase = _core.phase(np.random.default_rng(3).standard_normal((5000, 1)), "rate", 1)
+    factors = np.array([1, 10, 100], dtype=np.int64)
+    var, other = variances_beside(phase, factors, "hadamard", threads=2, beside=lambda: 42)
+    assert other == 42
+    assert np.array_equal(var, _core.variance(phase, factors, "hadamard", 1))
+
+    def fails() -> None:
+        raise RuntimeError("beside failed")
+
+    with pytest.raises(RuntimeError, match="beside failed"):
+        variances_beside(phase, factors, "hadamard", threads=2, beside=fails)
+    with pytest.raises(ValueError, match="outside the supported range"):
+        variances_beside(phase, np.array([10**6]), "hadamard", threads=2, beside=lambda: 0)
