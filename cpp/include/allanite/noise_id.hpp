@@ -27,6 +27,7 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "allanite/compensated.hpp"
@@ -135,6 +136,25 @@ ALLANITE_TARGET_CLONES static void acf_level_of_difference(const double* v, std:
 
 ALLANITE_TARGET_CLONES static void acf_difference(double* v, std::int64_t len) noexcept {
   for (std::int64_t k = 0; k + 1 < len; ++k) v[k] = v[k + 1] - v[k];
+}
+
+/// dst[i] = in[i * step], i < n: the decimated points of a run. Strides 1 to 4 (the
+/// factors with the most points) are compile-time constants, so that the copy is vectorised
+/// (loads of whole rows, shuffled); others one by one. A plain copy: the same values.
+template <std::int64_t S>
+ALLANITE_ALWAYS_INLINE void gather_fixed(const double* in, std::int64_t n, double* dst) noexcept {
+  for (std::int64_t i = 0; i < n; ++i) dst[i] = in[i * S];
+}
+ALLANITE_TARGET_CLONES static void gather_points(const double* in, std::int64_t step, std::int64_t n,
+                                                 double* dst) noexcept {
+  switch (step) {
+    case 1: gather_fixed<1>(in, n, dst); return;
+    case 2: gather_fixed<2>(in, n, dst); return;
+    case 3: gather_fixed<3>(in, n, dst); return;
+    case 4: gather_fixed<4>(in, n, dst); return;
+    default:
+      for (std::int64_t i = 0; i < n; ++i) dst[i] = in[i * step];
+  }
 }
 
 /// Streaming lag-1 statistics of one channel at one factor. The decimated points
@@ -259,7 +279,11 @@ void lag1_acf_group(const StridedMap<T>& x, const std::vector<std::int64_t>& ms,
           const std::int64_t n = std::min((r1 - row + m - 1) / m, kAcfBlock - (s.size - s.history));
           double* dst = s.buf.data() + s.size;
           const T* in = col + row * x.rowStride();
-          for (std::int64_t i = 0; i < n; ++i) dst[i] = static_cast<double>(in[i * step]);
+          if constexpr (std::is_same_v<T, double>) {
+            gather_points(in, step, n, dst);
+          } else {
+            for (std::int64_t i = 0; i < n; ++i) dst[i] = static_cast<double>(in[i * step]);
+          }
           s.size += n;
           s.j += n;
           row += n * m;

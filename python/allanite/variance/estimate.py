@@ -131,7 +131,11 @@ def avar(
     ----------
     W. J. Riley, *Handbook of Frequency Stability Analysis*, NIST SP1065 (2008).
     """
-    if memory_limit is not None or isinstance(x, (str, os.PathLike, ChunkedRecord)):
+    # an array is never a chunked record: skip the slow structural (Protocol) check for it
+    large_source = not isinstance(x, np.ndarray) and isinstance(
+        x, (str, os.PathLike, ChunkedRecord)
+    )
+    if memory_limit is not None or large_source:
         return avar_large(
             x,
             fs=fs,
