@@ -134,6 +134,42 @@ ALLANITE_TARGET_CLONES static void acf_level_of_difference(const double* v, std:
   sums[2] = (ac[0] + ac[1]) + (ac[2] + ac[3]);
 }
 
+/// acf_level_of_difference of the points v[k * step] (step > 1) read where they are, in the
+/// phase, instead of from a copy: the same values in the same lanes, so the same sums.
+ALLANITE_TARGET_CLONES static void acf_level_of_difference_strided(const double* v, std::int64_t step,
+                                                                   std::int64_t lo, std::int64_t hi, double centre,
+                                                                   double* sums) noexcept {
+  Pack4 a1 = {}, a2 = {}, ac = {};
+  std::int64_t k = lo;
+  if (k == 0 && k < hi) {
+    const double u = (v[step] - v[0]) - centre;
+    a1[0] += u;
+    a2[0] += u * u;
+    ++k;
+  }
+  const Pack4 c = {centre, centre, centre, centre};
+  for (; k + 4 <= hi; k += 4) {  // lane r: difference k + r and its predecessor
+    const double* q = v + (k - 1) * step;
+    const double p0 = q[0], p1 = q[step], p2 = q[2 * step], p3 = q[3 * step], p4 = q[4 * step],
+                 p5 = q[5 * step];
+    const Pack4 v0 = {p0, p1, p2, p3}, v1 = {p1, p2, p3, p4}, v2 = {p2, p3, p4, p5};
+    const Pack4 u = (v2 - v1) - c;
+    const Pack4 p = (v1 - v0) - c;
+    a1 += u;
+    a2 += u * u;
+    ac += u * p;
+  }
+  for (; k < hi; ++k) {
+    const double u = (v[(k + 1) * step] - v[k * step]) - centre;
+    a1[0] += u;
+    a2[0] += u * u;
+    ac[0] += u * ((v[k * step] - v[(k - 1) * step]) - centre);
+  }
+  sums[0] = (a1[0] + a1[1]) + (a1[2] + a1[3]);
+  sums[1] = (a2[0] + a2[1]) + (a2[2] + a2[3]);
+  sums[2] = (ac[0] + ac[1]) + (ac[2] + ac[3]);
+}
+
 ALLANITE_TARGET_CLONES static void acf_difference(double* v, std::int64_t len) noexcept {
   for (std::int64_t k = 0; k + 1 < len; ++k) v[k] = v[k + 1] - v[k];
 }
@@ -174,6 +210,10 @@ struct AcfState {
   NeumaierSum s1[L], s2[L], cross[L];
   std::vector<double> buf;  // history (D points after the first block), then pending points
   std::int64_t history = 0, size = 0;
+  // the frequency series' first pass (L = 1, Off = 1) on float64 rows: the pending points are
+  // read in place, point i at direct[i * direct_step], and buf is not filled (see fold)
+  const double* direct = nullptr;
+  std::int64_t direct_step = 0;
 
   /// Centres and end values of every level from the first and last D points.
   template <class Point>
@@ -203,6 +243,23 @@ struct AcfState {
   /// Difference and sum the pending points in place; keep the last D points as history.
   void fold() noexcept {
     if (size == history) return;
+    if constexpr (L == 1 && Off == 1) {
+      if (direct != nullptr) {  // buf[k] would hold point j - size + k: read it in place
+        const double* v = direct + (j - size) * direct_step;
+        const std::int64_t from = std::max<std::int64_t>(0, history - 1);
+        double sums[3];
+        if (direct_step == 1) {
+          acf_level_of_difference(v, from, size - 1, centre[0], sums);
+        } else {
+          acf_level_of_difference_strided(v, direct_step, from, size - 1, centre[0], sums);
+        }
+        s1[0].add(sums[0]);
+        s2[0].add(sums[1]);
+        cross[0].add(sums[2]);
+        history = size = std::min<std::int64_t>(D, size);  // the last points, still in place
+        return;
+      }
+    }
     double tail[D];
     const std::int64_t keep = std::min<std::int64_t>(D, size);
     std::copy(buf.begin() + (size - keep), buf.begin() + size, tail);
@@ -260,9 +317,14 @@ void lag1_acf_group(const StridedMap<T>& x, const std::vector<std::int64_t>& ms,
   std::vector<AcfState<L, Off>> states(group.size() * static_cast<std::size_t>(nc));
   for (std::size_t g = 0; g < group.size(); ++g) {
     const std::int64_t m = ms[group[g]];
-    for (Eigen::Index c = 0; c < nc; ++c)
-      states[g * static_cast<std::size_t>(nc) + static_cast<std::size_t>(c)].start(
-          (rows + m - 1) / m, [&](std::int64_t i) { return static_cast<double>(x(i * m, c)); });
+    for (Eigen::Index c = 0; c < nc; ++c) {
+      auto& s = states[g * static_cast<std::size_t>(nc) + static_cast<std::size_t>(c)];
+      s.start((rows + m - 1) / m, [&](std::int64_t i) { return static_cast<double>(x(i * m, c)); });
+      if constexpr (L == 1 && Off == 1 && std::is_same_v<T, double>) {
+        s.direct = x.data() + c * x.colStride();  // the points are read where they are
+        s.direct_step = m * x.rowStride();
+      }
+    }
   }
   const std::int64_t tile = std::max<std::int64_t>(
       1, kAcfTileBytes / static_cast<std::int64_t>(sizeof(T) * static_cast<std::size_t>(nc)));
@@ -280,7 +342,7 @@ void lag1_acf_group(const StridedMap<T>& x, const std::vector<std::int64_t>& ms,
           double* dst = s.buf.data() + s.size;
           const T* in = col + row * x.rowStride();
           if constexpr (std::is_same_v<T, double>) {
-            gather_points(in, step, n, dst);
+            if (s.direct == nullptr) gather_points(in, step, n, dst);  // else read in place
           } else {
             for (std::int64_t i = 0; i < n; ++i) dst[i] = static_cast<double>(in[i * step]);
           }
