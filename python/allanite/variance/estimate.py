@@ -2,7 +2,8 @@
 
 The numeric work runs in :mod:`allanite._core` (compensated prefix sums, then one O(N) pass per
 averaging factor, threaded over factors); this module validates the input, resolves the tau
-grid, identifies the noise type and attaches equivalent degrees of freedom. Records larger than
+grid, identifies the noise type (beside the running kernel, :func:`variances_beside`) and
+attaches equivalent degrees of freedom. Records larger than
 memory (a ``memory_limit``, a file path or a chunked record) go to
 :func:`allanite.variance.outofcore.avar_large`; everything else stays in memory.
 """
@@ -108,7 +109,9 @@ def avar(
         The EDF follows Greenhall & Riley (2003) for every kind but ``total``, which uses the
         SP1065 formulas (:mod:`allanite.variance.edf`).
     threads : int, optional
-        Worker threads (default: all cores). Results are identical for any thread count.
+        Worker threads of each compiled pass (default: all cores). With more than one, the
+        noise identification runs on the calling thread while the variance kernel runs (so
+        the two passes may overlap). Results are identical for any thread count.
     units : str, optional
         Unit of the record, carried into the result as its rate unit: an angular rate
         (``deg/s``, ``deg/h``, ``dph``, ``rad/s``, ...) or an acceleration (``m/s^2``, ``g``,
