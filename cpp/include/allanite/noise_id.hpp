@@ -98,15 +98,19 @@ ALLANITE_TARGET_CLONES static void acf_level(const double* v, std::int64_t lo, s
   sums[2] = (ac[0] + ac[1]) + (ac[2] + ac[3]);
 }
 
-/// acf_level of the first differences w[k] = v[k + 1] - v[k] of v, without storing them (the
-/// same operations on the same values, so the same sums as acf_difference then acf_level):
-/// the frequency series' only level in the identification's first pass.
-ALLANITE_TARGET_CLONES static void acf_level_of_difference(const double* v, std::int64_t lo, std::int64_t hi,
-                                                           double centre, double* sums) noexcept {
+/// acf_level of the first differences w[k] = v[(k + 1) s] - v[k s] of the points v[k s],
+/// without storing them (the same operations on the same values, so the same sums as
+/// acf_difference then acf_level): the frequency series' only level in the identification's
+/// first pass. kUnit: s = 1 (a buffer or a contiguous column, vector loads), else s = step
+/// (the points read in place in the phase rows, four gathered per vector).
+template <bool kUnit>
+ALLANITE_ALWAYS_INLINE void acf_level_of_difference_impl(const double* v, std::int64_t step, std::int64_t lo,
+                                                         std::int64_t hi, double centre, double* sums) noexcept {
+  const std::int64_t s = kUnit ? 1 : step;
   Pack4 a1 = {}, a2 = {}, ac = {};
   std::int64_t k = lo;
   if (k == 0 && k < hi) {
-    const double u = (v[1] - v[0]) - centre;
+    const double u = (v[s] - v[0]) - centre;
     a1[0] += u;
     a2[0] += u * u;
     ++k;
@@ -114,9 +118,17 @@ ALLANITE_TARGET_CLONES static void acf_level_of_difference(const double* v, std:
   const Pack4 c = {centre, centre, centre, centre};
   for (; k + 4 <= hi; k += 4) {  // lane r: difference k + r and its predecessor
     Pack4 v0, v1, v2;
-    std::memcpy(&v0, v + k - 1, sizeof v0);
-    std::memcpy(&v1, v + k, sizeof v1);
-    std::memcpy(&v2, v + k + 1, sizeof v2);
+    const double* q = v + (k - 1) * s;
+    if constexpr (kUnit) {
+      std::memcpy(&v0, q, sizeof v0);
+      std::memcpy(&v1, q + 1, sizeof v1);
+      std::memcpy(&v2, q + 2, sizeof v2);
+    } else {
+      const double p0 = q[0], p1 = q[s], p2 = q[2 * s], p3 = q[3 * s], p4 = q[4 * s], p5 = q[5 * s];
+      v0 = Pack4{p0, p1, p2, p3};
+      v1 = Pack4{p1, p2, p3, p4};
+      v2 = Pack4{p2, p3, p4, p5};
+    }
     const Pack4 u = (v2 - v1) - c;
     const Pack4 p = (v1 - v0) - c;
     a1 += u;
@@ -124,50 +136,24 @@ ALLANITE_TARGET_CLONES static void acf_level_of_difference(const double* v, std:
     ac += u * p;
   }
   for (; k < hi; ++k) {
-    const double u = (v[k + 1] - v[k]) - centre;
+    const double u = (v[(k + 1) * s] - v[k * s]) - centre;
     a1[0] += u;
     a2[0] += u * u;
-    ac[0] += u * ((v[k] - v[k - 1]) - centre);
+    ac[0] += u * ((v[k * s] - v[(k - 1) * s]) - centre);
   }
   sums[0] = (a1[0] + a1[1]) + (a1[2] + a1[3]);
   sums[1] = (a2[0] + a2[1]) + (a2[2] + a2[3]);
   sums[2] = (ac[0] + ac[1]) + (ac[2] + ac[3]);
 }
 
-/// acf_level_of_difference of the points v[k * step] (step > 1) read where they are, in the
-/// phase, instead of from a copy: the same values in the same lanes, so the same sums.
+ALLANITE_TARGET_CLONES static void acf_level_of_difference(const double* v, std::int64_t lo, std::int64_t hi,
+                                                           double centre, double* sums) noexcept {
+  acf_level_of_difference_impl<true>(v, 1, lo, hi, centre, sums);
+}
 ALLANITE_TARGET_CLONES static void acf_level_of_difference_strided(const double* v, std::int64_t step,
                                                                    std::int64_t lo, std::int64_t hi, double centre,
                                                                    double* sums) noexcept {
-  Pack4 a1 = {}, a2 = {}, ac = {};
-  std::int64_t k = lo;
-  if (k == 0 && k < hi) {
-    const double u = (v[step] - v[0]) - centre;
-    a1[0] += u;
-    a2[0] += u * u;
-    ++k;
-  }
-  const Pack4 c = {centre, centre, centre, centre};
-  for (; k + 4 <= hi; k += 4) {  // lane r: difference k + r and its predecessor
-    const double* q = v + (k - 1) * step;
-    const double p0 = q[0], p1 = q[step], p2 = q[2 * step], p3 = q[3 * step], p4 = q[4 * step],
-                 p5 = q[5 * step];
-    const Pack4 v0 = {p0, p1, p2, p3}, v1 = {p1, p2, p3, p4}, v2 = {p2, p3, p4, p5};
-    const Pack4 u = (v2 - v1) - c;
-    const Pack4 p = (v1 - v0) - c;
-    a1 += u;
-    a2 += u * u;
-    ac += u * p;
-  }
-  for (; k < hi; ++k) {
-    const double u = (v[(k + 1) * step] - v[k * step]) - centre;
-    a1[0] += u;
-    a2[0] += u * u;
-    ac[0] += u * ((v[k * step] - v[(k - 1) * step]) - centre);
-  }
-  sums[0] = (a1[0] + a1[1]) + (a1[2] + a1[3]);
-  sums[1] = (a2[0] + a2[1]) + (a2[2] + a2[3]);
-  sums[2] = (ac[0] + ac[1]) + (ac[2] + ac[3]);
+  acf_level_of_difference_impl<false>(v, step, lo, hi, centre, sums);
 }
 
 ALLANITE_TARGET_CLONES static void acf_difference(double* v, std::int64_t len) noexcept {
