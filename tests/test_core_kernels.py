@@ -346,3 +346,26 @@ def test_variances_beside_raises_the_error_of_either_side() -> None:
         variances_beside(phase, factors, "hadamard", threads=2, beside=fails)
     with pytest.raises(ValueError, match="outside the supported range"):
         variances_beside(phase, np.array([10**6]), "hadamard", threads=2, beside=lambda: 0)
+
+
+def _avar_in_child(queue: object) -> None:
+    y = np.random.default_rng(5).standard_normal(20_000)
+    res = allanite.avar(y, fs=1.0, kind="hadamard", threads=2)
+    queue.put(res.var.tolist())  # type: ignore[attr-defined]
+
+
+def test_identification_beside_the_kernel_works_in_a_forked_child() -> None:
+    """The worker thread of variances_beside is the parent's: a child forked after a call
+    makes its own (a job given to the inherited executor would never run)."""
+    import multiprocessing
+
+    y = np.random.default_rng(5).standard_normal(20_000)
+    want = allanite.avar(y, fs=1.0, kind="hadamard", threads=2).var  # the parent's worker runs
+    ctx = multiprocessing.get_context("fork")
+    queue = ctx.Queue()
+    child = ctx.Process(target=_avar_in_child, args=(queue,))
+    child.start()
+    got = queue.get(timeout=120)
+    child.join(timeout=60)
+    assert child.exitcode == 0
+    assert np.array_equal(np.asarray(got), want)

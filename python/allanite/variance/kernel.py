@@ -7,6 +7,7 @@ two give the same variances bit for bit.
 
 from __future__ import annotations
 
+import os
 import threading
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
@@ -100,15 +101,30 @@ def variances(
 
 
 _BACKGROUND: list[ThreadPoolExecutor] = []  # one worker, made on first use, kept for the process
-_BACKGROUND_LOCK = threading.Lock()
+_BACKGROUND_LOCK = [threading.Lock()]
 
 
 def _background() -> ThreadPoolExecutor:
     """The worker thread that runs kernels beside Python work (started once, then reused)."""
-    with _BACKGROUND_LOCK:
+    with _BACKGROUND_LOCK[0]:
         if not _BACKGROUND:
             _BACKGROUND.append(ThreadPoolExecutor(1, thread_name_prefix="allanite-kernel"))
         return _BACKGROUND[0]
+
+
+def _forget_background() -> None:
+    """Drop the parent's worker in a forked child (registered with ``os.register_at_fork``).
+
+    The parent's worker thread does not exist in the child, so a job given to its executor
+    would never run; the child makes its own on first use (and a fresh lock, in case another
+    thread held it at the fork).
+    """
+    _BACKGROUND.clear()
+    _BACKGROUND_LOCK[0] = threading.Lock()
+
+
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=_forget_background)
 
 
 def variances_beside(
