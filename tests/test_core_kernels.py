@@ -369,3 +369,21 @@ def test_identification_beside_the_kernel_works_in_a_forked_child() -> None:
     child.join(timeout=60)
     assert child.exitcode == 0
     assert np.array_equal(np.asarray(got), want)
+
+
+def test_identification_beside_the_kernel_from_several_threads() -> None:
+    """Calls from several threads at once (one has the worker, the others run one step after
+    the other) give the results of a call alone."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    records = [np.random.default_rng(s).standard_normal(50_000) for s in range(6)]
+    want = [allanite.avar(y, fs=1.0, kind="hadamard", threads=1) for y in records]
+
+    def run(y: np.ndarray) -> allanite.AllanResult:
+        return allanite.avar(y, fs=1.0, kind="hadamard", threads=2)
+
+    with ThreadPoolExecutor(3) as pool:
+        got = list(pool.map(run, records))
+    for a, b in zip(want, got, strict=True):
+        assert np.array_equal(a.var, b.var)
+        assert np.array_equal(a.alpha, b.alpha)

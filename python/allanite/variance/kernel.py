@@ -100,31 +100,24 @@ def variances(
     return var
 
 
-_BACKGROUND: list[ThreadPoolExecutor] = []  # one worker, made on first use, kept for the process
-_BACKGROUND_LOCK = [threading.Lock()]
+class _Worker:
+    """The one thread that runs kernels beside Python work: made on first use, then reused."""
+
+    def __init__(self) -> None:
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget the worker (also in a forked child, see below)."""
+        self.pool: ThreadPoolExecutor | None = None
+        self.busy = threading.Lock()  # held by the call whose kernel the worker runs
 
 
-def _background() -> ThreadPoolExecutor:
-    """The worker thread that runs kernels beside Python work (started once, then reused)."""
-    with _BACKGROUND_LOCK[0]:
-        if not _BACKGROUND:
-            _BACKGROUND.append(ThreadPoolExecutor(1, thread_name_prefix="allanite-kernel"))
-        return _BACKGROUND[0]
-
-
-def _forget_background() -> None:
-    """Drop the parent's worker in a forked child (registered with ``os.register_at_fork``).
-
-    The parent's worker thread does not exist in the child, so a job given to its executor
-    would never run; the child makes its own on first use (and a fresh lock, in case another
-    thread held it at the fork).
-    """
-    _BACKGROUND.clear()
-    _BACKGROUND_LOCK[0] = threading.Lock()
-
-
+_WORKER = _Worker()
 if hasattr(os, "register_at_fork"):
-    os.register_at_fork(after_in_child=_forget_background)
+    # the parent's worker thread does not exist in a forked child: a job given to its
+    # executor would never run, so the child makes its own (and a fresh lock, in case another
+    # thread held it at the fork)
+    os.register_at_fork(after_in_child=_WORKER.reset)
 
 
 def variances_beside(
@@ -140,23 +133,29 @@ def variances_beside(
     The compiled kernel releases the GIL, so the Python and compiled work of ``beside`` (the
     noise identification, the EDF) fills the cores the kernel leaves idle: at its serial
     steps and while its last tasks finish. With ``threads == 1`` (the caller asked for one
-    thread) the two run one after the other. The variances are those of :func:`variances`
-    bit for bit (the same call); an exception of either side is raised here.
+    thread), or while another call's kernel has the worker (calls from several threads keep
+    running side by side), the two run one after the other. The variances are those of
+    :func:`variances` bit for bit (the same call); an exception of either side is raised here.
 
     Returns
     -------
     tuple
         ``(variances (T, C), beside())``.
     """
-    if threads == 1:
-        return np.asarray(_core.variance(phase, factors, kernel_kind, 1)), beside()
-    job = _background().submit(_core.variance, phase, factors, kernel_kind, threads)
+    if threads == 1 or not _WORKER.busy.acquire(blocking=False):
+        return np.asarray(_core.variance(phase, factors, kernel_kind, threads)), beside()
     try:
-        other = beside()
-    except BaseException:
-        job.exception()  # the kernel reads the caller's phase: let it end before raising
-        raise
-    return np.asarray(job.result()), other
+        if _WORKER.pool is None:
+            _WORKER.pool = ThreadPoolExecutor(1, thread_name_prefix="allanite-kernel")
+        job = _WORKER.pool.submit(_core.variance, phase, factors, kernel_kind, threads)
+        try:
+            other = beside()
+        except BaseException:
+            job.exception()  # the kernel reads the caller's phase: let it end before raising
+            raise
+        return np.asarray(job.result()), other
+    finally:
+        _WORKER.busy.release()
 
 
 def series_points(decimated_rows: int, identify: str) -> int:
