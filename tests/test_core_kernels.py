@@ -303,3 +303,87 @@ def test_phase_blocks_match_reference_on_a_bias(kind: str) -> None:
         [np.asarray(oracle.variance(x[:, c], factors, kind, input="rate")) for c in range(2)]
     )
     np.testing.assert_allclose(got, want, rtol=RTOL, atol=0)
+
+
+@pytest.mark.parametrize("kind", ["hadamard", "overlapping", "modified", "total"])
+def test_avar_identification_beside_the_kernel_matches_one_after_the_other(kind: str) -> None:
+    """avar runs the identification and the EDF beside the kernel (kernel.variances_beside):
+    the variances, exponents and EDF are those of the sequential path (given alpha, then
+    identify_alpha and equivalent_dof) bit for bit, for one thread and for several."""
+    from allanite.variance.edf import equivalent_dof, identify_alpha, smooth_isolated_alpha
+    from allanite.variance.taus import KERNEL_KIND
+
+    rng = np.random.default_rng(7)
+    # white rate plus a random walk: the exponents change along the grid
+    y = 1e3 + rng.standard_normal(60_000) + 0.02 * np.cumsum(rng.standard_normal(60_000))
+    ref = allanite.avar(y, fs=2.0, kind=kind, alpha=0, threads=1)
+    phase = _core.phase(y.reshape(-1, 1), "rate", 1)
+    found = identify_alpha(phase, ref.m, KERNEL_KIND[kind], data="frequency", threads=1)
+    alphas = smooth_isolated_alpha(found, ref.m)[:, 0]
+    assert np.unique(alphas).size > 1  # the record exercises more than one noise type
+    edf = equivalent_dof(KERNEL_KIND[kind], alphas[:, None], ref.m, phase.shape[0])[:, 0]
+    for threads in (1, 2, 3):
+        res = allanite.avar(y, fs=2.0, kind=kind, threads=threads)
+        assert np.array_equal(res.var, ref.var)
+        assert np.array_equal(res.alpha, alphas)
+        assert np.array_equal(res.edf, edf)
+
+
+def test_variances_beside_raises_the_error_of_either_side() -> None:
+    """An error of the Python side is raised after the kernel ended; one of the kernel too."""
+    from allanite.variance.kernel import variances_beside
+
+    phase = _core.phase(np.random.default_rng(3).standard_normal((5000, 1)), "rate", 1)
+    factors = np.array([1, 10, 100], dtype=np.int64)
+    var, other = variances_beside(phase, factors, "hadamard", threads=2, beside=lambda: 42)
+    assert other == 42
+    assert np.array_equal(var, _core.variance(phase, factors, "hadamard", 1))
+
+    def fails() -> None:
+        raise RuntimeError("beside failed")
+
+    with pytest.raises(RuntimeError, match="beside failed"):
+        variances_beside(phase, factors, "hadamard", threads=2, beside=fails)
+    with pytest.raises(ValueError, match="outside the supported range"):
+        variances_beside(phase, np.array([10**6]), "hadamard", threads=2, beside=lambda: 0)
+
+
+def _avar_in_child(queue: object) -> None:
+    y = np.random.default_rng(5).standard_normal(20_000)
+    res = allanite.avar(y, fs=1.0, kind="hadamard", threads=2)
+    queue.put(res.var.tolist())  # type: ignore[attr-defined]
+
+
+def test_identification_beside_the_kernel_works_in_a_forked_child() -> None:
+    """The worker thread of variances_beside is the parent's: a child forked after a call
+    makes its own (a job given to the inherited executor would never run)."""
+    import multiprocessing
+
+    y = np.random.default_rng(5).standard_normal(20_000)
+    want = allanite.avar(y, fs=1.0, kind="hadamard", threads=2).var  # the parent's worker runs
+    ctx = multiprocessing.get_context("fork")
+    queue = ctx.Queue()
+    child = ctx.Process(target=_avar_in_child, args=(queue,))
+    child.start()
+    got = queue.get(timeout=120)
+    child.join(timeout=60)
+    assert child.exitcode == 0
+    assert np.array_equal(np.asarray(got), want)
+
+
+def test_identification_beside_the_kernel_from_several_threads() -> None:
+    """Calls from several threads at once (one has the worker, the others run one step after
+    the other) give the results of a call alone."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    records = [np.random.default_rng(s).standard_normal(50_000) for s in range(6)]
+    want = [allanite.avar(y, fs=1.0, kind="hadamard", threads=1) for y in records]
+
+    def run(y: np.ndarray) -> allanite.AllanResult:
+        return allanite.avar(y, fs=1.0, kind="hadamard", threads=2)
+
+    with ThreadPoolExecutor(3) as pool:
+        got = list(pool.map(run, records))
+    for a, b in zip(want, got, strict=True):
+        assert np.array_equal(a.var, b.var)
+        assert np.array_equal(a.alpha, b.alpha)

@@ -27,6 +27,7 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "allanite/compensated.hpp"
@@ -97,15 +98,19 @@ ALLANITE_TARGET_CLONES static void acf_level(const double* v, std::int64_t lo, s
   sums[2] = (ac[0] + ac[1]) + (ac[2] + ac[3]);
 }
 
-/// acf_level of the first differences w[k] = v[k + 1] - v[k] of v, without storing them (the
-/// same operations on the same values, so the same sums as acf_difference then acf_level):
-/// the frequency series' only level in the identification's first pass.
-ALLANITE_TARGET_CLONES static void acf_level_of_difference(const double* v, std::int64_t lo, std::int64_t hi,
-                                                           double centre, double* sums) noexcept {
+/// acf_level of the first differences w[k] = v[(k + 1) s] - v[k s] of the points v[k s],
+/// without storing them (the same operations on the same values, so the same sums as
+/// acf_difference then acf_level): the frequency series' only level in the identification's
+/// first pass. kUnit: s = 1 (a buffer or a contiguous column, vector loads), else s = step
+/// (the points read in place in the phase rows, four gathered per vector).
+template <bool kUnit>
+ALLANITE_ALWAYS_INLINE void acf_level_of_difference_impl(const double* v, std::int64_t step, std::int64_t lo,
+                                                         std::int64_t hi, double centre, double* sums) noexcept {
+  const std::int64_t s = kUnit ? 1 : step;
   Pack4 a1 = {}, a2 = {}, ac = {};
   std::int64_t k = lo;
   if (k == 0 && k < hi) {
-    const double u = (v[1] - v[0]) - centre;
+    const double u = (v[s] - v[0]) - centre;
     a1[0] += u;
     a2[0] += u * u;
     ++k;
@@ -113,9 +118,17 @@ ALLANITE_TARGET_CLONES static void acf_level_of_difference(const double* v, std:
   const Pack4 c = {centre, centre, centre, centre};
   for (; k + 4 <= hi; k += 4) {  // lane r: difference k + r and its predecessor
     Pack4 v0, v1, v2;
-    std::memcpy(&v0, v + k - 1, sizeof v0);
-    std::memcpy(&v1, v + k, sizeof v1);
-    std::memcpy(&v2, v + k + 1, sizeof v2);
+    const double* q = v + (k - 1) * s;
+    if constexpr (kUnit) {
+      std::memcpy(&v0, q, sizeof v0);
+      std::memcpy(&v1, q + 1, sizeof v1);
+      std::memcpy(&v2, q + 2, sizeof v2);
+    } else {
+      const double p0 = q[0], p1 = q[s], p2 = q[2 * s], p3 = q[3 * s], p4 = q[4 * s], p5 = q[5 * s];
+      v0 = Pack4{p0, p1, p2, p3};
+      v1 = Pack4{p1, p2, p3, p4};
+      v2 = Pack4{p2, p3, p4, p5};
+    }
     const Pack4 u = (v2 - v1) - c;
     const Pack4 p = (v1 - v0) - c;
     a1 += u;
@@ -123,18 +136,47 @@ ALLANITE_TARGET_CLONES static void acf_level_of_difference(const double* v, std:
     ac += u * p;
   }
   for (; k < hi; ++k) {
-    const double u = (v[k + 1] - v[k]) - centre;
+    const double u = (v[(k + 1) * s] - v[k * s]) - centre;
     a1[0] += u;
     a2[0] += u * u;
-    ac[0] += u * ((v[k] - v[k - 1]) - centre);
+    ac[0] += u * ((v[k * s] - v[(k - 1) * s]) - centre);
   }
   sums[0] = (a1[0] + a1[1]) + (a1[2] + a1[3]);
   sums[1] = (a2[0] + a2[1]) + (a2[2] + a2[3]);
   sums[2] = (ac[0] + ac[1]) + (ac[2] + ac[3]);
 }
 
+ALLANITE_TARGET_CLONES static void acf_level_of_difference(const double* v, std::int64_t lo, std::int64_t hi,
+                                                           double centre, double* sums) noexcept {
+  acf_level_of_difference_impl<true>(v, 1, lo, hi, centre, sums);
+}
+ALLANITE_TARGET_CLONES static void acf_level_of_difference_strided(const double* v, std::int64_t step,
+                                                                   std::int64_t lo, std::int64_t hi, double centre,
+                                                                   double* sums) noexcept {
+  acf_level_of_difference_impl<false>(v, step, lo, hi, centre, sums);
+}
+
 ALLANITE_TARGET_CLONES static void acf_difference(double* v, std::int64_t len) noexcept {
   for (std::int64_t k = 0; k + 1 < len; ++k) v[k] = v[k + 1] - v[k];
+}
+
+/// dst[i] = in[i * step], i < n: the decimated points of a run. Strides 1 to 4 (the
+/// factors with the most points) are compile-time constants, so that the copy is vectorised
+/// (loads of whole rows, shuffled); others one by one. A plain copy: the same values.
+template <std::int64_t S>
+ALLANITE_ALWAYS_INLINE void gather_fixed(const double* in, std::int64_t n, double* dst) noexcept {
+  for (std::int64_t i = 0; i < n; ++i) dst[i] = in[i * S];
+}
+ALLANITE_TARGET_CLONES static void gather_points(const double* in, std::int64_t step, std::int64_t n,
+                                                 double* dst) noexcept {
+  switch (step) {
+    case 1: gather_fixed<1>(in, n, dst); return;
+    case 2: gather_fixed<2>(in, n, dst); return;
+    case 3: gather_fixed<3>(in, n, dst); return;
+    case 4: gather_fixed<4>(in, n, dst); return;
+    default:
+      for (std::int64_t i = 0; i < n; ++i) dst[i] = in[i * step];
+  }
 }
 
 /// Streaming lag-1 statistics of one channel at one factor. The decimated points
@@ -154,6 +196,10 @@ struct AcfState {
   NeumaierSum s1[L], s2[L], cross[L];
   std::vector<double> buf;  // history (D points after the first block), then pending points
   std::int64_t history = 0, size = 0;
+  // the frequency series' first pass (L = 1, Off = 1) on float64 rows: the pending points are
+  // read in place, point i at direct[i * direct_step], and buf is not filled (see fold)
+  const double* direct = nullptr;
+  std::int64_t direct_step = 0;
 
   /// Centres and end values of every level from the first and last D points.
   template <class Point>
@@ -183,6 +229,23 @@ struct AcfState {
   /// Difference and sum the pending points in place; keep the last D points as history.
   void fold() noexcept {
     if (size == history) return;
+    if constexpr (L == 1 && Off == 1) {
+      if (direct != nullptr) {  // buf[k] would hold point j - size + k: read it in place
+        const double* v = direct + (j - size) * direct_step;
+        const std::int64_t from = std::max<std::int64_t>(0, history - 1);
+        double sums[3];
+        if (direct_step == 1) {
+          acf_level_of_difference(v, from, size - 1, centre[0], sums);
+        } else {
+          acf_level_of_difference_strided(v, direct_step, from, size - 1, centre[0], sums);
+        }
+        s1[0].add(sums[0]);
+        s2[0].add(sums[1]);
+        cross[0].add(sums[2]);
+        history = size = std::min<std::int64_t>(D, size);  // the last points, still in place
+        return;
+      }
+    }
     double tail[D];
     const std::int64_t keep = std::min<std::int64_t>(D, size);
     std::copy(buf.begin() + (size - keep), buf.begin() + size, tail);
@@ -240,9 +303,14 @@ void lag1_acf_group(const StridedMap<T>& x, const std::vector<std::int64_t>& ms,
   std::vector<AcfState<L, Off>> states(group.size() * static_cast<std::size_t>(nc));
   for (std::size_t g = 0; g < group.size(); ++g) {
     const std::int64_t m = ms[group[g]];
-    for (Eigen::Index c = 0; c < nc; ++c)
-      states[g * static_cast<std::size_t>(nc) + static_cast<std::size_t>(c)].start(
-          (rows + m - 1) / m, [&](std::int64_t i) { return static_cast<double>(x(i * m, c)); });
+    for (Eigen::Index c = 0; c < nc; ++c) {
+      auto& s = states[g * static_cast<std::size_t>(nc) + static_cast<std::size_t>(c)];
+      s.start((rows + m - 1) / m, [&](std::int64_t i) { return static_cast<double>(x(i * m, c)); });
+      if constexpr (L == 1 && Off == 1 && std::is_same_v<T, double>) {
+        s.direct = x.data() + c * x.colStride();  // the points are read where they are
+        s.direct_step = m * x.rowStride();
+      }
+    }
   }
   const std::int64_t tile = std::max<std::int64_t>(
       1, kAcfTileBytes / static_cast<std::int64_t>(sizeof(T) * static_cast<std::size_t>(nc)));
@@ -259,7 +327,11 @@ void lag1_acf_group(const StridedMap<T>& x, const std::vector<std::int64_t>& ms,
           const std::int64_t n = std::min((r1 - row + m - 1) / m, kAcfBlock - (s.size - s.history));
           double* dst = s.buf.data() + s.size;
           const T* in = col + row * x.rowStride();
-          for (std::int64_t i = 0; i < n; ++i) dst[i] = static_cast<double>(in[i * step]);
+          if constexpr (std::is_same_v<T, double>) {
+            if (s.direct == nullptr) gather_points(in, step, n, dst);  // else read in place
+          } else {
+            for (std::int64_t i = 0; i < n; ++i) dst[i] = static_cast<double>(in[i * step]);
+          }
           s.size += n;
           s.j += n;
           row += n * m;
