@@ -10,6 +10,15 @@ ratio test ``Delta T > chi2_{1-alpha}(k)`` or significant evidence explained, wi
 Selection stops when the tau view is consistent with chance and no significant evidence is
 left, when no candidate passes the test, or after :data:`MAX_EFFECTS` effects.
 
+Backfitting: an effect of the set was fitted before the later ones existed and may have
+taken part of their Allan variance (a resonance fitted alone takes some of the extra white
+noise next to it and overshoots the shortest taus, which a Gauss-Markov look-alike of
+``tau_c`` ~ one sample then fits better than the white noise). So every single candidate on
+top of the set is judged on the set refitted with it: each effect of the set refitted from
+its own values on top of the others and the candidate, then the candidate on top of them
+(one sweep, :func:`_backfit`, kept only when it lowers ``T``); the winner's refitted set is
+adopted.
+
 Exchange: each chosen effect is then refitted, with every candidate, on top of the others
 (the same ranking against the evidence the others leave); when another candidate ranks
 first it replaces the effect (greedy forward selection can start from an effect that only
