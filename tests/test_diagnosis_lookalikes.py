@@ -98,6 +98,8 @@ def test_resonance_next_to_white_noise_is_not_a_low_pass_lookalike(
     white2, (reso2,) = got
     assert white2 is not None
     assert reso2.params["N"] < alone.params["N"]
+    # it moves by more than its own standard error (a smaller move keeps the set as fitted)
+    assert joint._moved(reso2, alone, by["resonance"])
     before = e_alone + by["white"].extra_avar({"N": white.params["N"]}, tm.tau, tm.dt)
     after = by["resonance"].extra_avar({"N": reso2.params["N"]}, tm.tau, tm.dt) + by[
         "white"

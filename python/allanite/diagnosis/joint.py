@@ -501,6 +501,19 @@ def _distinct(a: Attribution, c: Candidate, on: list[Attribution], on_c: list[Ca
     return True
 
 
+def _moved(refit: Attribution, old: Attribution, c: Candidate) -> bool:
+    """Whether a refit moves a free parameter of ``c`` by more than its standard error.
+
+    The standard error is the old fit's Fisher one (``params_sigma``); a parameter without a
+    finite one does not count as moved.
+    """
+    for k in c.free:
+        sigma = old.params_sigma.get(k, float("nan"))
+        if np.isfinite(sigma) and abs(refit.params[k] - old.params[k]) > sigma:
+            return True
+    return False
+
+
 def _backfit(
     a: Attribution,
     c: Candidate,
@@ -517,9 +530,12 @@ def _backfit(
     which then overshoots the shortest taus; a low-pass look-alike fits that overshoot better
     than the white noise itself). So each effect of the set is refitted, from its own values,
     on top of the others and ``a``, and then ``a`` on top of the refitted set. An effect of
-    the set keeps its old fit when its refit is not kept, explains less of the evidence, or is
-    a level shape (measured on the window means, not on the tau view). Returns None when no
-    effect of the set changes or the sweep does not lower ``T`` of the whole set; otherwise
+    the set keeps its old fit when its refit is not kept, explains less of the evidence, moves
+    no parameter by more than that parameter's own standard error (:func:`_moved`: within it
+    the refit is the same fit at the record's resolution, and adopting it would let the fit's
+    rounding decide a tie between look-alikes), or is a level shape (measured on the window
+    means, not on the tau view). Returns None when no effect of the set changes or the sweep
+    does not lower ``T`` of the whole set; otherwise
     the refitted ``a`` (None: it no longer passes its test on top of the refitted set) and the
     refitted set.
     """
@@ -548,6 +564,8 @@ def _backfit(
             or not _distinct(refit, d, [x for i, x in enumerate(new) if i != j] + [a],
                              [x for i, x in enumerate(on_c) if i != j] + [c])
         ):  # fmt: skip
+            continue
+        if not _moved(refit, b, d):
             continue
         new[j], extras[j] = refit, _own_extra(refit, d, tm)
         changed = True
