@@ -10,6 +10,15 @@ ratio test ``Delta T > chi2_{1-alpha}(k)`` or significant evidence explained, wi
 Selection stops when the tau view is consistent with chance and no significant evidence is
 left, when no candidate passes the test, or after :data:`MAX_EFFECTS` effects.
 
+Backfitting: an effect of the set was fitted before the later ones existed and may have
+taken part of their Allan variance (a resonance fitted alone takes some of the extra white
+noise next to it and overshoots the shortest taus, which a Gauss-Markov look-alike of
+``tau_c`` ~ one sample then fits better than the white noise). So every single candidate on
+top of the set is judged on the set refitted with it: each effect of the set refitted from
+its own values on top of the others and the candidate, then the candidate on top of them
+(one sweep, :func:`_backfit`, kept only when it lowers ``T``); the winner's refitted set is
+adopted.
+
 Exchange: each chosen effect is then refitted, with every candidate, on top of the others
 (the same ranking against the evidence the others leave); when another candidate ranks
 first it replaces the effect (greedy forward selection can start from an effect that only
@@ -492,6 +501,90 @@ def _distinct(a: Attribution, c: Candidate, on: list[Attribution], on_c: list[Ca
     return True
 
 
+def _moved(refit: Attribution, old: Attribution, c: Candidate) -> bool:
+    """Whether a refit moves a free parameter of ``c`` by more than its standard error.
+
+    The standard error is the old fit's Fisher one (``params_sigma``); a parameter without a
+    finite one does not count as moved.
+    """
+    for k in c.free:
+        sigma = old.params_sigma.get(k, float("nan"))
+        if np.isfinite(sigma) and abs(refit.params[k] - old.params[k]) > sigma:
+            return True
+    return False
+
+
+def _backfit(
+    a: Attribution,
+    c: Candidate,
+    on: list[Attribution],
+    on_c: list[Candidate],
+    tm: TauModel,
+    fit_kw: dict[str, Any],
+    significant: dict[str, bool],
+) -> tuple[Attribution | None, list[Attribution]] | None:
+    """One backfitting sweep of the set ``on`` with the new effect ``a`` (fitted on top of it).
+
+    Each effect of the set was fitted before ``a`` existed and may have taken part of ``a``'s
+    Allan variance (a resonance fitted alone takes some of the extra white noise next to it,
+    which then overshoots the shortest taus; a low-pass look-alike fits that overshoot better
+    than the white noise itself). So each effect of the set is refitted, from its own values,
+    on top of the others and ``a``, and then ``a`` on top of the refitted set. An effect of
+    the set keeps its old fit when its refit is not kept, explains less of the evidence, moves
+    no parameter by more than that parameter's own standard error (:func:`_moved`: within it
+    the refit is the same fit at the record's resolution, and adopting it would let the fit's
+    rounding decide a tie between look-alikes), or is a level shape (measured on the window
+    means, not on the tau view). Returns None when no effect of the set changes or the sweep
+    does not lower ``T`` of the whole set; otherwise
+    the refitted ``a`` (None: it no longer passes its test on top of the refitted set) and the
+    refitted set.
+    """
+    extras = [_own_extra(b, d, tm) for b, d in zip(on, on_c, strict=True)]
+    e_a = _own_extra(a, c, tm)
+    t_old = tm.statistic(np.sum(extras, axis=0) + e_a)
+    new = list(on)
+    changed = False
+    for j, (b, d) in enumerate(zip(on, on_c, strict=True)):
+        if d.effect in LEVEL_SHAPES or (d.base is None and not d.free):
+            continue
+        others = [e for i, e in enumerate(extras) if i != j]
+        told = set(a.evidence.get("explained", [])).union(
+            *(set(x.evidence.get("explained", [])) for i, x in enumerate(new) if i != j)
+        )
+        left = {e: s and e not in told for e, s in significant.items()}
+        start = {k: b.params[k] for k in d.free} if d.base is None else {}
+        refit = fit_candidate(
+            replace(d, start={**d.start, **start}),
+            with_background(tm, np.sum(others, axis=0) + e_a),
+            **{**fit_kw, "significant": left},
+        )
+        if (
+            refit is None
+            or not set(b.evidence.get("explained", [])) <= set(refit.evidence.get("explained", []))
+            or not _distinct(refit, d, [x for i, x in enumerate(new) if i != j] + [a],
+                             [x for i, x in enumerate(on_c) if i != j] + [c])
+        ):  # fmt: skip
+            continue
+        if not _moved(refit, b, d):
+            continue
+        new[j], extras[j] = refit, _own_extra(refit, d, tm)
+        changed = True
+    if not changed:
+        return None
+    start = {k: a.params[k] for k in c.free} if c.base is None else {}
+    again = fit_candidate(
+        replace(c, start={**c.start, **start}),
+        with_background(tm, np.sum(extras, axis=0)),
+        **fit_kw,
+    )
+    if again is not None and not _distinct(again, c, new, on_c):
+        again = None
+    e_again = _own_extra(again, c, tm) if again is not None else np.zeros_like(e_a)
+    if tm.statistic(np.sum(extras, axis=0) + e_again) >= t_old:
+        return None
+    return again, new
+
+
 def _candidate_of(a: Attribution, by_effect: dict[str, Candidate]) -> Candidate:
     """The candidate ``a`` was fitted from: its effect's, or the further process it is.
 
@@ -534,7 +627,7 @@ def explain(
         left: dict[str, bool],
         room: int = 1,
         singles: list[Attribution] | None = None,
-    ) -> list[list[Attribution]]:
+    ) -> list[tuple[list[Attribution], list[Attribution]]]:
         """The candidates of another slot, ranked on top of the effects ``on``.
 
         Each entry is a group of effects to add: one effect, or (with ``room`` for two) two
@@ -543,6 +636,8 @@ def explain(
         kind fits a compromise between them. An effect that explains time/frequency evidence
         but makes the tau view significantly worse is not an explanation of this record.
         ``singles`` (the opening step): the single effects already ranked, not refitted.
+        Each entry comes with the set it is judged on: ``on``, or ``on`` refitted with a
+        single effect on top when that fits better (:func:`_backfit`); the caller adopts it.
         """
         fit_kw: dict[str, Any] = {
             "alpha": alpha,
@@ -565,6 +660,19 @@ def explain(
                 if a.evidence["tau"]["delta_T"] > -worse
                 and _distinct(a, _candidate_of(a, by_effect), on, on_c)
             ]
+        # each single effect judged on the set refitted with it (one backfitting sweep)
+        sets: dict[int, list[Attribution]] = {}
+        if on and singles is None:
+            refitted = []
+            for a in kept:
+                c_a = _candidate_of(a, by_effect)
+                got = _backfit(a, c_a, on, on_c, tm, fit_kw, significant)
+                if got is None:
+                    refitted.append(a)
+                elif got[0] is not None:
+                    refitted.append(got[0])
+                    sets[id(got[0])] = got[1]
+            kept = refitted
         groups: list[tuple[float, list[Attribution]]] = [(a.score, [a]) for a in kept]
         if singles is not None and room >= 2:
             # the opening: a warm-up or ramp the window means measure, slow noise next to it
@@ -579,18 +687,20 @@ def explain(
                 pair = _two_processes(c, tm_bg, fit_kw, single, worse)
                 if pair is not None:
                     groups.append(pair)
+
+        def base(g: list[Attribution]) -> list[Attribution]:
+            return sets.get(id(g[0]), on)
+
         if frequency is None or len(groups) < 2:
-            return [g for _, g in sorted(groups, key=lambda g: g[0])]
+            return [(g, base(g)) for _, g in sorted(groups, key=lambda g: g[0])]
         f = frequency.f
-        bg = np.zeros_like(f)
-        for a, c in zip(on, on_c, strict=True):
-            bg = bg + effect_psd(a, c, f, tm.dt, n_fit)
 
         def joint_score(group: tuple[float, list[Attribution]]) -> float:
-            extra = bg + sum(
-                effect_psd(a, _candidate_of(a, by_effect), f, tm.dt, n_fit) for a in group[1]
+            extra = sum(
+                effect_psd(a, _candidate_of(a, by_effect), f, tm.dt, n_fit)
+                for a in [*base(group[1]), *group[1]]
             )
-            return group[0] + frequency.shape_misfit(extra)
+            return group[0] + frequency.shape_misfit(np.asarray(extra, dtype=np.float64))
 
         scored = sorted(((joint_score(g), g[1]) for g in groups), key=lambda s: s[0])
         # the alternatives of a single effect are re-judged on the joint score: a tie in the
@@ -599,16 +709,19 @@ def explain(
         ones = [(s, g[0]) for s, g in scored if len(g) == 1]
         margin = float(stats.chi2.isf(alpha, 1))
         return [
-            [
-                replace(
-                    g[0],
-                    alternatives=tuple(
-                        b.effect for t, b in ones if b is not g[0] and abs(t - s) < margin
-                    ),
-                )
-            ]
-            if len(g) == 1
-            else g
+            (
+                [
+                    replace(
+                        g[0],
+                        alternatives=tuple(
+                            b.effect for t, b in ones if b is not g[0] and abs(t - s) < margin
+                        ),
+                    )
+                ]
+                if len(g) == 1
+                else g,
+                base(g),
+            )
             for s, g in scored
         ]
 
@@ -617,7 +730,7 @@ def explain(
     # excess in the tau view, and a look-alike wins the single ranking)
     opening = on_top(
         [], [], tm, {e: bool(s) for e, s in significant.items()}, MAX_EFFECTS, singles=[best]
-    )[0]
+    )[0][0]
     chosen = [best] if len(opening) == 1 else list(opening)  # best keeps its alternatives
     chosen_c = [_candidate_of(a, by_effect) for a in chosen]
     extras = [_own_extra(a, c, tm) for a, c in zip(chosen, chosen_c, strict=True)]
@@ -633,7 +746,11 @@ def explain(
         groups = on_top(chosen, chosen_c, tm_bg, left, room=MAX_EFFECTS - len(chosen))
         if not groups:
             break
-        for nxt in groups[0]:
+        group, refitted = groups[0]
+        if refitted is not chosen:  # the set refitted with the new effect on top
+            chosen = list(refitted)
+            extras = [_own_extra(a, c, tm) for a, c in zip(chosen, chosen_c, strict=True)]
+        for nxt in group:
             chosen.append(nxt)
             chosen_c.append(_candidate_of(nxt, by_effect))
             extras.append(_own_extra(nxt, _candidate_of(nxt, by_effect), tm))
@@ -652,13 +769,16 @@ def explain(
             )
             left = {e: bool(s) and e not in told for e, s in significant.items()}
             others_a = [a for j, a in enumerate(chosen) if j != i]
-            kept = [g[0] for g in on_top(others_a, others_c, tm_bg, left) if len(g) == 1]
+            kept = [(g[0], s) for g, s in on_top(others_a, others_c, tm_bg, left) if len(g) == 1]
             # the same term added or rescaled (white, rescale:white) is the same effect: only
             # the spectral misfit's rounding could tell them apart, so the incumbent stays
-            if not kept or _candidate_of(kept[0], by_effect).term_cls is chosen_c[i].term_cls:
+            if not kept or _candidate_of(kept[0][0], by_effect).term_cls is chosen_c[i].term_cls:
                 continue
-            chosen[i], chosen_c[i] = kept[0], _candidate_of(kept[0], by_effect)
-            extras[i] = _own_extra(kept[0], chosen_c[i], tm)
+            top, refitted = kept[0]
+            for j, a in zip([j for j in range(len(chosen)) if j != i], refitted, strict=True):
+                chosen[j], extras[j] = a, _own_extra(a, chosen_c[j], tm)
+            chosen[i], chosen_c[i] = top, _candidate_of(top, by_effect)
+            extras[i] = _own_extra(top, chosen_c[i], tm)
             swapped = True
         if not swapped:
             break
