@@ -44,6 +44,26 @@ def test_progress_bars_callback_draws_one_bar_per_stage(
     assert capsys.readouterr().err == ""
 
 
+@pytest.mark.parametrize("command", ["analyze", "fit"])
+def test_in_memory_allan_variance_shows_progress_on_a_terminal(
+    tmp_path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch, command: str
+) -> None:
+    """Regression: on a 6 h, 2 kHz, 3-axis record ``allanite analyze`` and ``fit`` spent ~20 s
+    in the Allan variance without a bar: only --memory-limit or --fast passed the callback."""
+    pytest.importorskip("tqdm")
+    import sys
+
+    from allanite.cli import main
+
+    path = tmp_path / "rec.npy"
+    np.save(path, np.random.default_rng(2).standard_normal((4000, 2)))
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
+    assert main([command, str(path), "--fs", "100", "--units", "deg/s"]) == 0
+    err = capsys.readouterr().err
+    assert "variance" in err  # the stage bar of the tau passes
+    assert "phase" in err
+
+
 def test_dump_json_is_strict() -> None:
     text = dump_json({"a": [1.0, float("nan"), float("inf")], "b": {"c": float("-inf")}})
     assert json.loads(text) == {"a": [1.0, None, None], "b": {"c": None}}

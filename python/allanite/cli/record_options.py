@@ -149,7 +149,7 @@ def add_grid_arguments(parser: argparse.ArgumentParser) -> None:
     group.add_argument(
         "--memory-limit",
         help="working-memory budget for big records, e.g. 1GB: a larger phase array goes to a "
-        "temporary file (with a progress bar on a terminal)",
+        "temporary file (the Allan variance shows a progress bar on a terminal either way)",
     )
     group.add_argument(
         "--fast",
@@ -410,7 +410,7 @@ def avar_from_args(record: Record, args: argparse.Namespace) -> AllanResult:
     memory_limit = getattr(args, "memory_limit", None)
     if memory_limit is not None or getattr(args, "fast", False):
         large = {"memory_limit": memory_limit, "fast": bool(getattr(args, "fast", False))}
-    with progress_bars() as bar:
+    with progress_bars() as bar:  # on a terminal: a 6 h, 2 kHz, 3-axis record takes ~20 s
         return avar(
             part.samples if part.n_channels > 1 else part.samples[:, 0],
             fs=part.require_fs(),
@@ -420,7 +420,7 @@ def avar_from_args(record: Record, args: argparse.Namespace) -> AllanResult:
             points=args.points,
             threads=args.threads,
             units=rate_unit(part),
-            progress=bar if large else None,
+            progress=bar,
             **large,
         )
 
