@@ -81,3 +81,10 @@ def test_docs_python_examples_run(
     assert blocks
     for block in blocks:
         exec(compile(block, doc, "exec"), scope)
+    if doc == "diagnosis.md":  # the real record is a record of the model itself
+        assert not scope["d"].significant
+        assert scope["d"].best is None
+    else:
+        table = scope["budget"].table_frame()
+        assert {"gyro", "accel", "all"} <= set(table["sensor"])
+        assert (table["sigma"] > 0).all()
