@@ -220,13 +220,20 @@ def _scaled_samples(samples: NDArray[Any], scale: float | None) -> NDArray[Any]:
     return samples.astype(np.float64) * float(scale)
 
 
+#: values checked for NaN/inf at a time (a 1e8-sample record is not doubled in memory)
+_FINITE_BLOCK = 1 << 22
+
+
 def _require_finite(samples: NDArray[Any], names: list[str], locate: Where, source: str) -> None:
     """Raise an InputError naming the first NaN/inf sample (row and column)."""
     if samples.dtype.kind != "f":
         return
-    bad = np.argwhere(~np.isfinite(samples))
-    if bad.size:
-        row, col = (int(v) for v in bad[0])
+    step = max(1, _FINITE_BLOCK // max(1, samples.shape[1]))
+    for start in range(0, samples.shape[0], step):  # in blocks: no full-size temporaries
+        bad = np.argwhere(~np.isfinite(samples[start : start + step]))
+        if not bad.size:
+            continue
+        row, col = start + int(bad[0][0]), int(bad[0][1])
         raise InputError(
             f"{locate(row)}, column {names[col]!r}: sample is "
             f"{samples[row, col]}; the Allan variance needs every sample: remove or "
@@ -287,7 +294,10 @@ def make_record(
     arr, col_names = _numeric_table(table, names, source)
     locate: Where = where if where is not None else (lambda row: f"row {row + 1}")
     t_index, idx = _sample_columns(col_names, columns, time_column, source)
-    samples = _scaled_samples(arr[:, idx], scale)
+    consecutive = idx == list(range(idx[0], idx[0] + len(idx))) if idx else False
+    # a slice keeps a memory-mapped .npy/raw file mapped (a list of columns would copy it all)
+    picked = arr[:, idx[0] : idx[0] + len(idx)] if consecutive else arr[:, idx]
+    samples = _scaled_samples(picked, scale)
     _require_finite(samples, [col_names[i] for i in idx], locate, source)
     if arr.shape[0] < 3:
         raise InputError(f"only {arr.shape[0]} sample(s); need at least 3", path=source)
