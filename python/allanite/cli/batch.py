@@ -99,12 +99,17 @@ def register(subparsers: Any) -> None:
 
 
 def _expand(patterns: list[str]) -> list[str]:
+    """The records the patterns match: files, and ROS 2 bag directories (``metadata.yaml``)."""
+    from allanite.io.robot_logs import is_ros2_bag_dir
+
     paths: list[str] = []
     for pattern in patterns:
         matches = sorted(glob.glob(pattern, recursive=True))
         if not matches and Path(pattern).exists():
             matches = [pattern]
-        paths += [m for m in matches if Path(m).is_file() and m not in paths]
+        paths += [
+            m for m in matches if (Path(m).is_file() or is_ros2_bag_dir(Path(m))) and m not in paths
+        ]
     if not paths:
         raise ValueError(f"no files match {' '.join(patterns)}; check the pattern (quote it)")
     return paths
