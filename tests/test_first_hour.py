@@ -900,9 +900,13 @@ def test_units_of_another_quantity_than_the_file_states_are_refused(
     _header_csv(tmp_path / "theta.csv", unit="deg")
     assert main(["fit", str(tmp_path / "theta.csv"), "--time-column", "time", "--units",
                  "deg/s"]) == 2  # fmt: skip
-    assert "--units deg/s is an angular rate, but the file states deg (an angle) for gz[deg]" in (
-        _one_line_error(capsys, "fit")
-    )
+    assert (
+        "--units deg/s is an angular rate, but the file states deg (an angle) for gz[deg]: give "
+        "--input angle (or increment) --units deg if the samples are angles"
+    ) in _one_line_error(capsys, "fit")
+    assert main(["fit", str(tmp_path / "theta.csv"), "--time-column", "time", "--input", "angle",
+                 "--units", "deg"]) == 0  # fmt: skip
+    capsys.readouterr()
     # the same quantity in another unit is still a note, and the unit given is used
     assert main(["analyze", bag, "--channels", "gyro_x", "--units", "deg/s", "--summary"]) == 0
     assert "(gyro_x in rad/s read as deg/s)" in capsys.readouterr().out

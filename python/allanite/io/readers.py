@@ -437,11 +437,17 @@ def stated_unit_conflict(record: Record, units: Sequence[str]) -> str | None:
             differ.append(f"{shown} read as {unit}")
     if other:
         (stated, unit), names = next(iter(other.items()))
+        kind = quantity(stated)
+        fix = (
+            f"give --input angle (or increment) --units {stated} if the samples are {kind}s"
+            if kind in ("angle", "velocity")
+            else "leave --units out to read every channel in the unit the file states, or pick "
+            "that sensor's channels with --channels (fit and report take one unit per sensor, "
+            "e.g. --units rad/s,m/s^2)"
+        )
         raise InputError(
             f"--units {unit} is {_article(quantity(unit))}, but the file states {stated} "
-            f"({_article(quantity(stated))}) for {', '.join(names)}: leave --units out to read "
-            "every channel in the unit the file states, or pick that sensor's channels with "
-            "--channels (fit and report take one unit per sensor, e.g. --units rad/s,m/s^2)",
+            f"({_article(kind)}) for {', '.join(names)}: {fix}",
             path=record.source,
         )
     if not differ:
