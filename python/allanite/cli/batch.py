@@ -235,9 +235,11 @@ def _unit_legend(result: Any, shown: list[str]) -> list[str]:
     if not names or "units" not in result.columns:
         return []
     lines = []
+    errors = result.column("error") if "error" in result.columns else [None] * len(result)
     legends = dict.fromkeys(
         (rate is None, ", ".join(f"{n} in {_display_unit(rate, n)[0]}" for n in names))
-        for rate in result.column("units")
+        for rate, error in zip(result.column("units"), errors, strict=True)
+        if not error  # a row that could not be analysed has no coefficients
     )
     for unitless, units in legends:  # deg/s and deg/h records share one legend line
         if unitless:
