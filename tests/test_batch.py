@@ -286,3 +286,46 @@ def test_cli_batch_bad_input(tmp_path, capsys):
     assert code == 2
     assert "sheet.json, line 1" in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_cli_batch_takes_ros2_bag_directories(tmp_path, capsys):
+    """Regression: ``allanite batch 'flights/*'`` skipped ROS 2 bags (a directory holding
+    metadata.yaml and the .db3/.mcap file) and said "no files match"."""
+    pytest.importorskip("rosbags")
+    from allanite.cli import main
+    from test_io_robot_logs import write_bag
+
+    n = 4000
+    data = np.random.default_rng(12).standard_normal((n, 6)) * 1e-3
+    for name in ("flight1", "flight2"):
+        write_bag(tmp_path / name, "sqlite3", data, np.arange(n) / 200.0, topics=("/imu",))
+    (tmp_path / "notes").mkdir()  # a plain directory is no record
+    argv = ["batch", str(tmp_path / "*"), "--channels", "gyro_x", "--json"]
+    assert main(argv) == 0
+    table = json.loads(capsys.readouterr().out)
+    rows = [dict(zip(table["columns"], row, strict=True)) for row in table["rows"]]
+    assert [r["record"] for r in rows] == [str(tmp_path / "flight1"), str(tmp_path / "flight2")]
+    assert all(r["channel"] == "gyro_x" and r["units"] == "rad/s" for r in rows)
+    assert all(r["n_samples"] == n and r["error"] in (None, "") for r in rows)
+
+
+def test_a_six_axis_log_is_one_sensor_at_a_time(tmp_path, capsys):
+    """Regression: ``allanite batch`` on a ROS bag (gyro rad/s, accelerometer m/s^2) fitted
+    all six axes in one unknown unit and printed "the records have no unit (give --units)",
+    advice that --units refuses for a log that states both units."""
+    pytest.importorskip("rosbags")
+    from allanite.cli import main
+    from test_io_robot_logs import write_bag
+
+    n = 4000
+    data = np.random.default_rng(13).standard_normal((n, 6)) * 1e-3
+    write_bag(tmp_path / "flight.bag", "ros1", data, np.arange(n) / 200.0, topics=("/imu",))
+    (error,) = batch([tmp_path / "flight.bag"]).column("error")
+    assert "(gyro_x, gyro_y, gyro_z in rad/s; accel_x, accel_y, accel_z in m/s^2)" in error
+    assert main(["batch", str(tmp_path / "flight.bag")]) == 1
+    out = capsys.readouterr().out
+    assert "choose its channels with --channels gyro_x,gyro_y,gyro_z, or fit the whole log" in out
+    assert "give --units" not in out
+    assert main(["batch", str(tmp_path / "flight.bag"), "--channels", "accel_x,accel_y"]) == 0
+    out = capsys.readouterr().out
+    assert "N in m/s/sqrt(h)" in out

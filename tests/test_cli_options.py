@@ -44,6 +44,63 @@ def test_progress_bars_callback_draws_one_bar_per_stage(
     assert capsys.readouterr().err == ""
 
 
+@pytest.mark.parametrize("command", ["analyze", "fit"])
+def test_in_memory_allan_variance_shows_progress_on_a_terminal(
+    tmp_path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch, command: str
+) -> None:
+    """Regression: on a 6 h, 2 kHz, 3-axis record ``allanite analyze`` and ``fit`` spent ~20 s
+    in the Allan variance without a bar: only --memory-limit or --fast passed the callback."""
+    pytest.importorskip("tqdm")
+    import sys
+
+    from allanite.cli import main
+
+    path = tmp_path / "rec.npy"
+    np.save(path, np.random.default_rng(2).standard_normal((4000, 2)))
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
+    assert main([command, str(path), "--fs", "100", "--units", "deg/s"]) == 0
+    err = capsys.readouterr().err
+    assert "variance" in err  # the stage bar of the tau passes
+    assert "phase" in err
+
+
+def test_a_record_larger_than_memory_is_analysed_out_of_core_by_default(
+    tmp_path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Regression: without --memory-limit the phase array was always built in memory (8 bytes
+    per sample and channel next to the samples): a record near the machine's memory failed
+    instead of taking the out-of-core path the library has."""
+    import allanite.cli.record_options as options
+    from allanite.cli import main
+
+    path = tmp_path / "rec.npy"
+    np.save(path, np.random.default_rng(3).standard_normal((4000, 2)))
+    argv = ["analyze", str(path), "--fs", "100", "--units", "deg/s", "--table"]
+    assert main([*argv, "-o", str(tmp_path / "in.csv")]) == 0
+    assert "out of core" not in capsys.readouterr().err
+    budgets = []
+    real_avar = options.avar
+
+    def spy(*args, **kwargs):
+        budgets.append(kwargs.get("memory_limit"))
+        return real_avar(*args, **kwargs)
+
+    monkeypatch.setattr(options, "avar", spy)
+    monkeypatch.setattr(options, "available_memory", lambda: 100_000)  # phase: 64 kB
+    assert main([*argv, "-o", str(tmp_path / "out.csv")]) == 0
+    err = capsys.readouterr().err
+    assert "note: the record's phase array (6.4e-05 GB) would take more than half of the " \
+        "available memory: working out of core with --memory-limit 0.0671GB" in err  # fmt: skip
+    assert budgets == [64 << 20]
+    assert (tmp_path / "out.csv").read_text() == (tmp_path / "in.csv").read_text()
+    # a kind that needs the phase in memory, or --fast, keeps the in-memory path
+    budgets.clear()
+    assert main([*argv, "--kind", "modified"]) == 0
+    assert main([*argv, "--fast"]) == 0
+    assert budgets == [None, None]
+    assert "out of core" not in capsys.readouterr().err
+
+
 def test_dump_json_is_strict() -> None:
     text = dump_json({"a": [1.0, float("nan"), float("inf")], "b": {"c": float("-inf")}})
     assert json.loads(text) == {"a": [1.0, None, None], "b": {"c": None}}

@@ -235,3 +235,21 @@ def test_convert_warns_when_the_written_file_departs_or_lacks_a_sensor(tmp_path,
     assert "departs" not in err  # white noise is held exactly
     assert main(["model", "convert", str(tmp_path / "k2.yaml"), str(tmp_path / "back.json")]) == 0
     assert "warning" not in capsys.readouterr().err  # a model JSON holds one sensor by design
+
+
+def test_a_config_with_both_sensors_into_a_model_json_warns_once(tmp_path, capsys):
+    """Regression: a PX4 plugin block written for a gyro (the plugin's defaults give it an
+    accelerometer) converted to a model JSON said "dropped accel: the model JSON holds one
+    sensor ..." and then warned "back.json lost the accel model (the format cannot hold
+    it)", as if a model had been lost that the user never had."""
+    gyro = NoiseModel((White(N=1.2e-4), RateRandomWalk(K=2.6e-5)), {"rate": "rad/s", "time": "s"})
+    gyro.save(tmp_path / "g.json")
+    sdf = tmp_path / "px4.sdf"
+    assert main(["model", "convert", str(tmp_path / "g.json"), str(sdf), "--to", "px4-plugin",
+                 "--rate", "200"]) == 0  # fmt: skip
+    capsys.readouterr()
+    assert main(["model", "convert", str(sdf), str(tmp_path / "back.json")]) == 0
+    err = capsys.readouterr().err
+    assert "dropped accel: the model JSON holds one sensor" in err  # how to write the other
+    assert "lost the accel model" not in err
+    assert NoiseModel.load(tmp_path / "back.json").units["rate"] == "rad/s"

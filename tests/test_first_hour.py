@@ -836,3 +836,77 @@ def test_report_without_o_names_its_file(
     assert "2 records go into one report: name it with -o FILE.html" in _one_line_error(
         capsys, "report"
     )
+
+
+def test_an_index_in_a_column_name_states_no_unit(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Regression: the README's ``allanite analyze run1.npz --key gyro_counts --scale 0.05
+    --units deg/s`` warned "--units differs from the unit the file states (gyro_counts[0] read
+    as deg/s ...)", and without --units "the header states 0, 1, 2, not a unit": the columns
+    ``key[i]`` of a 2-D array were read as stating the unit "0"."""
+    from allanite.io import read_record
+
+    path = tmp_path / "run.npz"
+    counts = np.round(RNG.standard_normal((3000, 3)) * 8).astype(np.int16)
+    np.savez(path, gyro_counts=counts)
+    given = read_record(path, fs=FS, key="gyro_counts", scale=0.05, units="deg/s")
+    assert given.channels == ("gyro_counts[0]", "gyro_counts[1]", "gyro_counts[2]")
+    assert given.warnings == ()
+    assert read_record(path, fs=FS, key="gyro_counts").warnings == ()
+    argv = ["analyze", str(path), "--key", "gyro_counts", "--fs", "100", "--summary"]
+    assert main([*argv, "--scale", "0.05", "--units", "deg/s"]) == 0
+    assert "file states" not in "".join(capsys.readouterr())
+    assert main(argv) == 0
+    assert "header states" not in "".join(capsys.readouterr())
+    # a unit in brackets is still read: gz[deg/h]
+    _header_csv(tmp_path / "fog.csv")
+    assert read_record(tmp_path / "fog.csv", time_column="time").units == "deg/h"
+
+
+def test_units_of_another_quantity_than_the_file_states_are_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Regression: a ROS bag's gyro_x (sensor_msgs/Imu: rad/s) diagnosed with --units m/s^2
+    against a Gazebo SDF was compared with the SDF's accelerometer, and --write-corrected
+    wrote the gyro's "correction" into the accelerometer block; only a note was printed."""
+    pytest.importorskip("rosbags")
+    from test_io_robot_logs import write_bag
+
+    n = 3000
+    data = np.random.default_rng(9).standard_normal((n, 6)) * 0.01
+    write_bag(tmp_path / "imu.bag", "ros1", data, np.arange(n) / 200.0, topics=("/imu0",))
+    bag = str(tmp_path / "imu.bag")
+    model = NoiseModel([White(1e-3)], units={"rate": "m/s^2", "time": "s"})
+    model.save(tmp_path / "accel.json")
+    out = tmp_path / "fixed.json"
+    argv = ["diagnose", bag, "--channels", "gyro_x", "--units", "m/s^2"]
+    argv += ["--sim-model", str(tmp_path / "accel.json"), "--write-corrected", str(out)]
+    assert main(argv) == 2
+    line = _one_line_error(capsys, "diagnose")
+    assert line.endswith(
+        "imu.bag: --units m/s^2 is an acceleration, but the file states rad/s (an angular "
+        "rate) for gyro_x: leave --units out to read every channel in the unit the file "
+        "states, or pick that sensor's channels with --channels (fit and report take one unit "
+        "per sensor, e.g. --units rad/s,m/s^2)"
+    )
+    assert not out.exists()
+    # one unit for a six-axis log: the accelerometer's channels are named
+    assert main(["analyze", bag, "--units", "rad/s", "--summary"]) == 2
+    assert "the file states m/s^2 (an acceleration) for accel_x, accel_y, accel_z" in (
+        _one_line_error(capsys, "analyze")
+    )
+    # a header stating an angle, read as rate samples
+    _header_csv(tmp_path / "theta.csv", unit="deg")
+    assert main(["fit", str(tmp_path / "theta.csv"), "--time-column", "time", "--units",
+                 "deg/s"]) == 2  # fmt: skip
+    assert (
+        "--units deg/s is an angular rate, but the file states deg (an angle) for gz[deg]: give "
+        "--input angle (or increment) --units deg if the samples are angles"
+    ) in _one_line_error(capsys, "fit")
+    assert main(["fit", str(tmp_path / "theta.csv"), "--time-column", "time", "--input", "angle",
+                 "--units", "deg"]) == 0  # fmt: skip
+    capsys.readouterr()
+    # the same quantity in another unit is still a note, and the unit given is used
+    assert main(["analyze", bag, "--channels", "gyro_x", "--units", "deg/s", "--summary"]) == 0
+    assert "(gyro_x in rad/s read as deg/s)" in capsys.readouterr().out

@@ -213,3 +213,44 @@ def test_corrupt_npz_and_hdf5_are_input_errors(tmp_path: Path) -> None:
     pytest.importorskip("h5py")
     with pytest.raises(InputError, match=r"bad.h5: not a readable HDF5 file"):
         read_record(h5, fs=1.0)
+
+
+def _mapped(samples: np.ndarray) -> bool:
+    """Whether ``samples`` is a view of a memory-mapped file."""
+    import mmap
+
+    base = samples
+    while base is not None:
+        if isinstance(base, (np.memmap, mmap.mmap)):
+            return True
+        base = getattr(base, "base", None)
+    return False
+
+
+def test_npy_and_raw_records_stay_memory_mapped(tmp_path: Path) -> None:
+    """Regression: read_record copied a memory-mapped .npy (a list of columns is a copy) and the
+    NaN check built full-size temporaries: a 6 h, 2 kHz, 3-axis .npy (1.04 GB) peaked at 2.2 GB
+    before the Allan variance began, so --memory-limit could not keep it below the record."""
+    np.save(tmp_path / "a.npy", DATA)
+    for columns in (None, [1, 2], "col1,col2"):
+        record = read_record(tmp_path / "a.npy", fs=1.0, columns=columns)
+        assert _mapped(record.samples), columns
+        np.testing.assert_array_equal(record.samples, DATA[:, 1:] if columns else DATA)
+    DATA.astype("<f4").tofile(tmp_path / "r.bin")
+    raw = read_record(tmp_path / "r.bin", fs=1.0, dtype="<f4", n_channels=3)
+    assert _mapped(raw.samples)
+    picked = read_record(tmp_path / "a.npy", fs=1.0, columns=[2, 0])  # out of order: a copy
+    np.testing.assert_array_equal(picked.samples, DATA[:, [2, 0]])
+
+
+def test_a_nan_beyond_the_first_block_is_located(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import allanite.io.readers as readers
+
+    monkeypatch.setattr(readers, "_FINITE_BLOCK", 30)  # 10 rows of 3 channels per block
+    bad = DATA.copy()
+    bad[437, 2] = np.inf
+    np.save(tmp_path / "bad.npy", bad)
+    with pytest.raises(InputError, match=r"row 438, column 'col2': sample is inf"):
+        read_record(tmp_path / "bad.npy", fs=1.0)

@@ -177,3 +177,15 @@ def test_cli_analyze_reads_a_bag(tmp_path, capsys):
     assert data["record"]["units"] == "rad/s"
     assert data["record"]["channels"] == ["gyro_z"]
     assert data["record"]["fs"] == pytest.approx(FS)
+
+
+@pytest.mark.parametrize("kind", ["ros1", "sqlite3"])
+def test_imu_topic_without_messages_is_refused_naming_it(tmp_path, kind, capsys):
+    bag = tmp_path / ("e.bag" if kind == "ros1" else "e")  # ROS 2: a directory
+    write_bag(bag, kind, np.zeros((0, 6)), np.zeros(0), topics=("/imu/data",))
+    with pytest.raises(InputError, match=r"/imu/data holds no messages"):
+        read_record(bag)
+    argv = ["fit", str(bag), "-o", str(tmp_path / "m.json")]
+    assert main(argv) == 2
+    assert "holds no messages" in capsys.readouterr().err
+    assert not (tmp_path / "m.json").exists()

@@ -37,7 +37,7 @@ import os
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -56,6 +56,9 @@ from allanite.datasheet import (
 from allanite.errors import InputError
 from allanite.extras import require
 from allanite.units import record_rate_unit
+
+if TYPE_CHECKING:
+    from allanite.io.record import Record
 
 __all__ = ["BatchResult", "batch"]
 
@@ -185,6 +188,7 @@ def _load(task: _Task) -> tuple[NDArray[Any], float, str, str | None, tuple[str,
         source = read_record(source, **options)
     if isinstance(source, Record):
         fs = source.require_fs()  # names the record and how to give fs
+        _one_sensor(source)
         names = tuple(source.channels) or tuple(str(i) for i in range(source.samples.shape[-1]))
         return source.samples, fs, source.input, source.units, names
     if task.fs is None:
@@ -198,6 +202,33 @@ def _load(task: _Task) -> tuple[NDArray[Any], float, str, str | None, tuple[str,
         task.read_options.get("input", "rate"),
         units,
         tuple(str(i) for i in range(n_channels)),
+    )
+
+
+def _one_sensor(record: Record) -> None:
+    """Refuse a record whose file states several units and none was given (a six-axis log).
+
+    A ROS bag or PX4 log states rad/s for its gyro axes and m/s^2 for its accelerometer's
+    (``meta["channel_units"]``); one table of coefficients in one unit cannot hold both.
+    """
+    meta = record.meta if isinstance(record.meta, dict) else {}
+    stated = meta.get("channel_units")
+    if record.units is not None or not isinstance(stated, dict):
+        return
+    groups: dict[str, list[str]] = {}
+    for name in record.channels:
+        unit = stated.get(name)
+        if unit is not None:
+            groups.setdefault(str(unit), []).append(name)
+    if len(groups) < 2:
+        return
+    held = "; ".join(f"{', '.join(names)} in {unit}" for unit, names in groups.items())
+    first = ",".join(next(iter(groups.values())))
+    raise InputError(
+        f"the file holds channels in {len(groups)} units ({held}): a batch table is one "
+        f"sensor at a time; choose its channels with channels= (CLI: --channels {first}), or "
+        "fit the whole log with allanite fit, which takes each sensor in its unit",
+        path=record.source,
     )
 
 

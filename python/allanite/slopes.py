@@ -26,22 +26,44 @@ __all__ = [
     "slope_table",
 ]
 
+#: canonical Allan-deviation slopes with their labels and IEEE symbols
+_CANONICAL: tuple[tuple[float, str, str], ...] = (
+    (-1.0, "−1", "Q"),
+    (-0.5, "−1/2", "N"),
+    (0.0, "0", "B"),
+    (0.5, "+1/2", "K"),
+    (1.0, "+1", "R"),
+)
+
+
+def _slope_terms(names: tuple[str, ...]) -> dict[float, tuple[str, str, str]]:
+    """Canonical slope -> (label, term that produces it, IEEE symbol), one name per slope."""
+    return {
+        slope: (label, name, symbol)
+        for (slope, label, symbol), name in zip(_CANONICAL, names, strict=True)
+    }
+
+
 #: canonical Allan-deviation slope -> (label, term that produces it, IEEE symbol)
-SLOPE_TERMS: dict[float, tuple[str, str, str]] = {
-    -1.0: ("−1", "quantization / white angle noise", "Q"),
-    -0.5: ("−1/2", "angle random walk (white rate noise)", "N"),
-    0.0: ("0", "bias instability (flicker rate noise)", "B"),
-    0.5: ("+1/2", "rate random walk", "K"),
-    1.0: ("+1", "rate ramp", "R"),
-}
+SLOPE_TERMS = _slope_terms(
+    (
+        "quantization / white angle noise",
+        "angle random walk (white rate noise)",
+        "bias instability (flicker rate noise)",
+        "rate random walk",
+        "rate ramp",
+    )
+)
 #: the same for an accelerometer (IEEE Std 1293-2018 names)
-ACCEL_SLOPE_TERMS: dict[float, tuple[str, str, str]] = {
-    -1.0: ("−1", "velocity quantization / white velocity noise", "Q"),
-    -0.5: ("−1/2", "velocity random walk (white acceleration noise)", "N"),
-    0.0: ("0", "bias instability (flicker acceleration noise)", "B"),
-    0.5: ("+1/2", "acceleration random walk", "K"),
-    1.0: ("+1", "acceleration ramp", "R"),
-}
+ACCEL_SLOPE_TERMS = _slope_terms(
+    (
+        "velocity quantization / white velocity noise",
+        "velocity random walk (white acceleration noise)",
+        "bias instability (flicker acceleration noise)",
+        "acceleration random walk",
+        "acceleration ramp",
+    )
+)
 _WINDOW_DECADES = 0.5
 #: points with fewer equivalent degrees of freedom are not classified (about 16 % scatter)
 MIN_EDF = 20.0

@@ -99,12 +99,17 @@ def register(subparsers: Any) -> None:
 
 
 def _expand(patterns: list[str]) -> list[str]:
+    """The records the patterns match: files, and ROS 2 bag directories (``metadata.yaml``)."""
+    from allanite.io.robot_logs import is_ros2_bag_dir
+
     paths: list[str] = []
     for pattern in patterns:
         matches = sorted(glob.glob(pattern, recursive=True))
         if not matches and Path(pattern).exists():
             matches = [pattern]
-        paths += [m for m in matches if Path(m).is_file() and m not in paths]
+        paths += [
+            m for m in matches if (Path(m).is_file() or is_ros2_bag_dir(Path(m))) and m not in paths
+        ]
     if not paths:
         raise ValueError(f"no files match {' '.join(patterns)}; check the pattern (quote it)")
     return paths
@@ -230,9 +235,11 @@ def _unit_legend(result: Any, shown: list[str]) -> list[str]:
     if not names or "units" not in result.columns:
         return []
     lines = []
+    errors = result.column("error") if "error" in result.columns else [None] * len(result)
     legends = dict.fromkeys(
         (rate is None, ", ".join(f"{n} in {_display_unit(rate, n)[0]}" for n in names))
-        for rate in result.column("units")
+        for rate, error in zip(result.column("units"), errors, strict=True)
+        if not error  # a row that could not be analysed has no coefficients
     )
     for unitless, units in legends:  # deg/s and deg/h records share one legend line
         if unitless:

@@ -113,11 +113,23 @@ def _as_list(columns: Column | Sequence[Column] | None) -> list[Column] | None:
 
 #: a column name stating its unit, ``gz[deg/s]``: the name and the unit
 _HEADER_UNIT = re.compile(r"^(.*\S)\s*\[([^\[\]]+)\]$")
+#: ... but an index in brackets is part of the name (``gyro_counts[0]``, a column of an array)
+_INDEX = re.compile(r"^\s*\d+\s*$")
+
+
+def _header_unit(name: str) -> re.Match[str] | None:
+    """The match of a column name that states its unit (``gz[deg/s]``), or None.
+
+    A bracketed whole number states no unit: it is an index, as in the names ``key[i]`` given
+    to the columns of a 2-D array in an ``.npz`` or HDF5 file.
+    """
+    match = _HEADER_UNIT.match(name)
+    return None if match is None or _INDEX.match(match.group(2)) else match
 
 
 def _bare_name(name: str) -> str:
     """A column name without the unit in brackets a header may state (``gz[deg/s]`` -> ``gz``)."""
-    match = _HEADER_UNIT.match(name)
+    match = _header_unit(name)
     return name.strip() if match is None else match.group(1)
 
 
@@ -208,13 +220,20 @@ def _scaled_samples(samples: NDArray[Any], scale: float | None) -> NDArray[Any]:
     return samples.astype(np.float64) * float(scale)
 
 
+#: values checked for NaN/inf at a time (a 1e8-sample record is not doubled in memory)
+_FINITE_BLOCK = 1 << 22
+
+
 def _require_finite(samples: NDArray[Any], names: list[str], locate: Where, source: str) -> None:
     """Raise an InputError naming the first NaN/inf sample (row and column)."""
     if samples.dtype.kind != "f":
         return
-    bad = np.argwhere(~np.isfinite(samples))
-    if bad.size:
-        row, col = (int(v) for v in bad[0])
+    step = max(1, _FINITE_BLOCK // max(1, samples.shape[1]))
+    for start in range(0, samples.shape[0], step):  # in blocks: no full-size temporaries
+        bad = np.argwhere(~np.isfinite(samples[start : start + step]))
+        if not bad.size:
+            continue
+        row, col = start + int(bad[0][0]), int(bad[0][1])
         raise InputError(
             f"{locate(row)}, column {names[col]!r}: sample is "
             f"{samples[row, col]}; the Allan variance needs every sample: remove or "
@@ -275,7 +294,10 @@ def make_record(
     arr, col_names = _numeric_table(table, names, source)
     locate: Where = where if where is not None else (lambda row: f"row {row + 1}")
     t_index, idx = _sample_columns(col_names, columns, time_column, source)
-    samples = _scaled_samples(arr[:, idx], scale)
+    consecutive = idx == list(range(idx[0], idx[0] + len(idx))) if idx else False
+    # a slice keeps a memory-mapped .npy/raw file mapped (a list of columns would copy it all)
+    picked = arr[:, idx[0] : idx[0] + len(idx)] if consecutive else arr[:, idx]
+    samples = _scaled_samples(picked, scale)
     _require_finite(samples, [col_names[i] for i in idx], locate, source)
     if arr.shape[0] < 3:
         raise InputError(f"only {arr.shape[0]} sample(s); need at least 3", path=source)
@@ -361,7 +383,7 @@ def _stated_units(channels: tuple[str, ...]) -> list[str] | None:
 
     found = []
     for name in channels:
-        match = _HEADER_UNIT.match(name)
+        match = _header_unit(name)
         if match is None:
             return None
         try:
@@ -377,29 +399,57 @@ def stated_unit_conflict(record: Record, units: Sequence[str]) -> str | None:
 
     A file states units in a header (``gz[deg/h]``) or by its message definition (a ROS
     ``sensor_msgs/Imu`` or PX4 ``sensor_combined``: rad/s and m/s^2, ``meta["channel_units"]``).
-    ``--units`` wins (it may correct a wrong header), but ``gz[deg/h]`` read with ``--units
-    deg/s`` changes every coefficient by 3600, so the record says so. ``units`` has one unit
-    per channel; channels whose file states no unit are not compared.
-    """
-    from allanite.units import parse_unit
+    ``--units`` wins when it names the same quantity (it may correct a wrong header), but
+    ``gz[deg/h]`` read with ``--units deg/s`` changes every coefficient by 3600, so the record
+    says so. A unit of another quantity (a gyro channel, rad/s, read as ``m/s^2``; an angle
+    header read as a rate) is refused: the record would be analysed, and a simulator config
+    corrected, as the wrong sensor. ``units`` has one unit per channel; channels whose file
+    states no unit are not compared.
 
-    def same(a: str, b: str) -> bool:
+    Raises
+    ------
+    InputError
+        If a given unit measures another quantity than the one the file states.
+    """
+    from allanite.units import _article, parse_unit, quantity
+
+    def parsed(a: str, b: str) -> tuple[Any, Any] | None:
         try:
-            ua, ub = parse_unit(a), parse_unit(b)
+            return parse_unit(a), parse_unit(b)
         except ValueError:
-            return True  # an unreadable stated unit states nothing
-        return ua.same_dimension(ub) and math.isclose(ua.scale, ub.scale, rel_tol=1e-12)
+            return None  # an unreadable stated unit states nothing
 
     meta = record.meta if isinstance(record.meta, dict) else {}
     found = meta.get("channel_units")
     per: dict[str, Any] = found if isinstance(found, dict) else {}
     differ = []
+    other: dict[tuple[str, str], list[str]] = {}
     for name, unit in zip(record.channels, units, strict=True):
-        match = _HEADER_UNIT.match(name)
+        match = _header_unit(name)
         stated = per.get(name) or (match.group(2).strip() if match is not None else None)
-        if stated is not None and not same(stated, unit):
+        both = None if stated is None else parsed(stated, unit)
+        if both is None:
+            continue
+        if not both[0].same_dimension(both[1]):
+            other.setdefault((str(stated), unit), []).append(name)
+        elif not math.isclose(both[0].scale, both[1].scale, rel_tol=1e-12):
             shown = name if match is not None else f"{name} in {stated}"
             differ.append(f"{shown} read as {unit}")
+    if other:
+        (stated, unit), names = next(iter(other.items()))
+        kind = quantity(stated)
+        fix = (
+            f"give --input angle (or increment) --units {stated} if the samples are {kind}s"
+            if kind in ("angle", "velocity")
+            else "leave --units out to read every channel in the unit the file states, or pick "
+            "that sensor's channels with --channels (fit and report take one unit per sensor, "
+            "e.g. --units rad/s,m/s^2)"
+        )
+        raise InputError(
+            f"--units {unit} is {_article(quantity(unit))}, but the file states {stated} "
+            f"({_article(kind)}) for {', '.join(names)}: {fix}",
+            path=record.source,
+        )
     if not differ:
         return None
     return (

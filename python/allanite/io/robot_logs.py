@@ -96,6 +96,12 @@ def load_rosbag(
             rows.append((w.x, w.y, w.z, a.x, a.y, a.z))
     finally:
         reader.close()
+    if not stamps:
+        raise InputError(
+            f"the IMU topic {topic} holds no messages; record the IMU into the bag (check the "
+            "recorder's topic list), or choose another topic with --topic",
+            path=str(path),
+        )
     warnings: list[str] = []
     t, data = _sorted(np.asarray(stamps), np.asarray(rows, dtype=np.float64), warnings)
     return np.column_stack([t - t[0], data]), ("t", *CHANNELS), warnings
