@@ -36,7 +36,7 @@ with ``|z_w|`` above the simultaneous threshold (the ``1 - alpha`` quantile of `
 under the null, Gumbel fit) form the time segments. A significant jump is refined to a change
 point with the CUSUM estimator ``argmax_k |sum_{i<k} (x_i - mean)|`` over the two windows
 around it; spikes are the samples whose deviation from the running median exceeds the
-threshold of a significant order (the lowest such threshold).
+threshold of the lowest significant order.
 
 References
 ----------
@@ -650,7 +650,9 @@ def time_view(
     spike_idx: list[int] = []
     spike_amp: list[float] = []
     if fam_p["spike"] < alpha and spike_thr:
-        spike_idx, spike_amp = _spikes(x, min(spike_thr))
+        # the lowest significant order's threshold: a higher order's lower threshold would
+        # also list samples the null reaches (~1.3 of them above the 8th largest's level)
+        spike_idx, spike_amp = _spikes(x, spike_thr[0])
         segments.extend(((k - 1) / fs, (k + 1) / fs) for k in spike_idx)
     spike_raise = _spike_raise(real.get("hf"), spike_idx, spike_amp, plan)
     kurt = {
@@ -703,7 +705,8 @@ def _spike_thresholds(
 
     Order ``k`` is significant when the real record's k-th largest deviation exceeds the
     level the null's k-th largest exceeds with probability ``alpha / len(orders)``: then at
-    least ``k`` samples lie above that level, and they are the spikes it locates.
+    least ``k`` samples lie above that level. Listed by order (the first is the lowest
+    significant order's, the level the spikes are located at).
     """
     r = ens.residual(real, "spike")
     null = ens.null["spike"]
