@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+import benchmark_module
 from allanite.diagnosis import diagnose
 from allanite.diagnosis.analysis import Plan, analyze
 from allanite.diagnosis.inputs import SimSource
@@ -35,16 +36,8 @@ def term(kind: str, **params: float):
 
 @pytest.fixture(scope="module")
 def base() -> NoiseModel:
-    """The validation's MEMS-like gyro."""
-    return NoiseModel(
-        (
-            term("white", N=0.05),
-            term("quantization", Q=0.2 / FS),
-            term("flicker", B=0.01),
-            term("rrw", K=0.0008),
-        ),
-        UNITS,
-    )
+    """The validation's MEMS-like gyro (white, quantization, flicker, rrw)."""
+    return benchmark_module.load("validate_diagnosis").base_model(FS)
 
 
 @pytest.fixture(scope="module")
