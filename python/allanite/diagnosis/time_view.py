@@ -14,10 +14,11 @@ Per window it computes, for the real record and for every Monte Carlo replicate:
 the noise level belongs to the tau view, the time view looks for changes in time)
 
 plus three record-wide statistics: the largest deviations from a 9-sample running median in
-units of their robust spread (``|h| / (1.4826 MAD(h))``, spikes: the 1st, 2nd, 3rd, 4th, 6th
-and 8th largest, :data:`SPIKE_ORDERS`, each tested against the law of the k-th largest of
-many values, Bonferroni over the six: a few spikes of 5 sample sigmas are not much larger
-than the largest of 2^15 Gaussian samples, but three of them are far beyond the 3rd largest),
+units of their robust spread (``|h| / (1.4826 MAD(h))``, spikes: the 1st, 2nd, 4th and 8th
+largest, :data:`SPIKE_ORDERS`, each tested against the law of the k-th largest of many
+values, Bonferroni over the four: a few spikes of 5 sample sigmas are not much larger than
+the largest of 2^15 Gaussian samples, but two or four of them are far beyond the null's 2nd
+or 4th largest),
 the excess kurtosis at the
 sample scale (two-sided: bursts, outliers, clipping; ``kurt_hf``, two statistics, Bonferroni
 over both: of the first differences, and of the samples minus their 9-sample running mean,
@@ -80,7 +81,7 @@ MAX_SPIKES = 200
 #: window of the running median that the spike finder removes
 SPIKE_MEDIAN = 9
 #: which largest deviations from the running median the spike statistic tests (k-th largest)
-SPIKE_ORDERS = (1, 2, 3, 4, 6, 8)
+SPIKE_ORDERS = (1, 2, 4, 8)
 #: window of the running mean removed before the sample-level kurtosis (``kurt_hf``'s second)
 KURT_MEAN = 9
 
