@@ -43,6 +43,8 @@ __all__ = [
     "gumbel_isf",
     "gumbel_scale",
     "gumbel_sf",
+    "kth_max_isf",
+    "kth_max_sf",
     "level_profiled",
     "max_shift",
     "rescaled",
@@ -275,6 +277,47 @@ def gumbel_isf(p: float, null: NDArray[np.float64]) -> float:
     beta = sd * np.sqrt(6.0) / np.pi
     mu = mean - np.euler_gamma * beta
     return float(mu - beta * np.log(-np.log1p(-p)))
+
+
+def _kth_max_law(null: NDArray[np.float64], k: int) -> tuple[float, float]:
+    """Location ``mu`` and scale ``beta`` of the k-th largest's law, moment-matched to ``null``.
+
+    The ``k`` largest of many values from a Gumbel-domain tail are the first points of a
+    Poisson process of intensity ``exp(-(x - mu) / beta)``, so the k-th largest is ``mu - beta
+    log G`` with ``G ~ Gamma(k, 1)``: mean ``mu - beta psi(k)``, variance ``beta^2 psi'(k)``.
+    """
+    mean, sd = float(np.mean(null)), float(np.std(null, ddof=1))
+    beta = sd / float(np.sqrt(special.polygamma(1, k)))
+    return mean + beta * float(special.digamma(k)), beta
+
+
+def kth_max_sf(value: float, null: NDArray[np.float64], k: int) -> float:
+    """Tail probability of the ``k``-th largest of many values (``k = 1``: :func:`gumbel_sf`).
+
+    ``P(X >= x) = P(G <= exp(-(x - mu) / beta))`` for ``G ~ Gamma(k, 1)`` (the regularised
+    lower incomplete gamma function), ``mu`` and ``beta`` matched to the null's mean and
+    spread (:func:`_kth_max_law`). The tail of the k-th largest is lighter than a Gumbel law
+    of the same spread (``~ exp(-k z) / k!``): several moderate outliers are far less likely
+    by chance than one.
+    """
+    if k < 1:
+        raise ValueError(f"k must be >= 1 (1 = the maximum), got {k}")
+    if k == 1:
+        return gumbel_sf(value, null)
+    if float(np.std(null, ddof=1)) <= 0:
+        return empirical_sf(value, null)
+    mu, beta = _kth_max_law(null, k)
+    return float(special.gammainc(k, np.exp(-(value - mu) / beta)))
+
+
+def kth_max_isf(p: float, null: NDArray[np.float64], k: int) -> float:
+    """Inverse of :func:`kth_max_sf`: the value the k-th largest exceeds with probability ``p``."""
+    if k < 1:
+        raise ValueError(f"k must be >= 1 (1 = the maximum), got {k}")
+    if k == 1:
+        return gumbel_isf(p, null)
+    mu, beta = _kth_max_law(null, k)
+    return float(mu - beta * np.log(special.gammaincinv(k, p)))
 
 
 def runs(mask: NDArray[np.bool_]) -> list[tuple[int, int]]:

@@ -15,7 +15,8 @@ than :data:`FULL_REPLICATES_MAX` samples, each view gets a null whose cost does 
   the Welch log PSD is mapped quantile by quantile between log-gamma laws, which also moves
   its skewness: :func:`allanite.diagnosis.null.rescaled_log_gamma`);
   the spike maximum over ``N`` samples is the maximum of ``N / N_short`` short records (Gumbel
-  location ``+ beta ln(N / N_short)``);
+  location ``+ beta ln(N / N_short)``), and the k-th largest deviations move by the same
+  shift (the first points of a Poisson process whose intensity grows ``N / N_short``-fold);
 * the reference of the Welch features (``log_psd``, ``log_line_psd``): the mean over the
   ``n_mc`` short replicates has an error that adds ``var_s / (n_mc var_N) ~ (N / N_short) /
   n_mc`` to the variance of a long record's log-PSD bin (40 % at 1e7 samples with

@@ -13,8 +13,13 @@ Per window it computes, for the real record and for every Monte Carlo replicate:
 (for ``hf`` and ``dyn`` the median residual over the windows is removed: a uniform change of
 the noise level belongs to the tau view, the time view looks for changes in time)
 
-plus three record-wide statistics: the largest deviation from a 9-sample running median in
-units of its robust spread (``max |h| / (1.4826 MAD(h))``, spikes), the excess kurtosis at the
+plus three record-wide statistics: the largest deviations from a 9-sample running median in
+units of their robust spread (``|h| / (1.4826 MAD(h))``, spikes: the 1st, 2nd, 4th and 8th
+largest, :data:`SPIKE_ORDERS`, each tested against the law of the k-th largest of many
+values, Bonferroni over the four: a few spikes of 5 sample sigmas are not much larger than
+the largest of 2^15 Gaussian samples, but two or four of them are far beyond the null's 2nd
+or 4th largest),
+the excess kurtosis at the
 sample scale (two-sided: bursts, outliers, clipping; ``kurt_hf``, two statistics, Bonferroni
 over both: of the first differences, and of the samples minus their 9-sample running mean,
 which keeps ``sum a^4 / (sum a^2)^2 = 0.79`` of a sample-level scale mixture's excess where
@@ -31,8 +36,8 @@ Each per-window residual ``r_w`` is normalised by its null spread, ``z_w = r_w /
 with ``|z_w|`` above the simultaneous threshold (the ``1 - alpha`` quantile of ``max_w |z_w|``
 under the null, Gumbel fit) form the time segments. A significant jump is refined to a change
 point with the CUSUM estimator ``argmax_k |sum_{i<k} (x_i - mean)|`` over the two windows
-around it; spikes are the samples whose deviation from the running median exceeds the spike
-threshold.
+around it; spikes are the samples whose deviation from the running median exceeds the
+threshold of the lowest significant order.
 
 References
 ----------
@@ -50,7 +55,14 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import ndimage, stats
 
-from allanite.diagnosis.null import NullEnsemble, gumbel_isf, gumbel_sf, runs
+from allanite.diagnosis.null import (
+    NullEnsemble,
+    gumbel_isf,
+    gumbel_sf,
+    kth_max_isf,
+    kth_max_sf,
+    runs,
+)
 
 __all__ = [
     "TimePlan",
@@ -68,6 +80,8 @@ WINDOW_FAMILIES = ("level", "jump", "hf", "dyn")
 MAX_SPIKES = 200
 #: window of the running median that the spike finder removes
 SPIKE_MEDIAN = 9
+#: which largest deviations from the running median the spike statistic tests (k-th largest)
+SPIKE_ORDERS = (1, 2, 4, 8)
 #: window of the running mean removed before the sample-level kurtosis (``kurt_hf``'s second)
 KURT_MEAN = 9
 
@@ -139,7 +153,7 @@ def time_features(
         out["hf"] = np.log(np.maximum(np.mean(d * d, axis=1), 1e-300))
         del d
         hp = highpass(x)
-        out["spike"] = np.array([float(np.max(np.abs(hp))) / _robust_spread(hp)])
+        out["spike"] = _largest(np.abs(hp), SPIKE_ORDERS) / _robust_spread(hp)
         del hp
         d1 = _kurtosis(np.diff(x))
         hp = ndimage.uniform_filter1d(x, KURT_MEAN, mode="nearest")
@@ -147,6 +161,20 @@ def time_features(
         out["kurt_hf"] = np.array([d1, _kurtosis(hp)])
         del hp
     return out
+
+
+def _largest(a: NDArray[np.float64], orders: tuple[int, ...]) -> NDArray[np.float64]:
+    """The ``k``-th largest values of ``a`` for ``k`` in ``orders``.
+
+    A record shorter than ``max(orders)`` repeats its smallest value.
+    """
+    top = max(orders)
+    if a.size > top:
+        part = np.partition(a, a.size - top)[a.size - top :]
+    else:
+        part = np.concatenate([a, np.full(top - a.size, float(np.min(a)))])
+    desc = np.sort(part)[::-1]
+    return np.asarray(desc[np.asarray(orders) - 1], dtype=np.float64)
 
 
 def kurtosis_blocks(plan: TimePlan) -> tuple[int, ...]:
@@ -605,9 +633,8 @@ def time_view(
         flagged[fam] = np.abs(zf) > thr[fam]
         residual[fam], spread[fam], null_max[fam] = r, sd, zmax_null
     # record-wide statistics
-    spike_null = ens.null["spike"][:, 0]
-    spike_r = float(ens.residual(real, "spike")[0])
-    fam_p["spike"] = gumbel_sf(spike_r, spike_null)
+    spike_thr = _spike_thresholds(real, ens, alpha)
+    fam_p["spike"] = _spike_p(real, ens)
     lf = _kurtosis_checks(x, real, ens, plan, fam_p)
     # localisation
     segments: list[tuple[float, float]] = []
@@ -623,9 +650,10 @@ def time_view(
             segments.append((a * length / fs, (b + 1) * length / fs))
     spike_idx: list[int] = []
     spike_amp: list[float] = []
-    if fam_p["spike"] < alpha:
-        spike_thr = float(ens.ref["spike"][0]) + gumbel_isf(alpha, spike_null)
-        spike_idx, spike_amp = _spikes(x, spike_thr)
+    if fam_p["spike"] < alpha and spike_thr:
+        # the lowest significant order's threshold: a higher order's lower threshold would
+        # also list samples the null reaches (~1.3 of them above the 8th largest's level)
+        spike_idx, spike_amp = _spikes(x, spike_thr[0])
         segments.extend(((k - 1) / fs, (k + 1) / fs) for k in spike_idx)
     spike_raise = _spike_raise(real.get("hf"), spike_idx, spike_amp, plan)
     kurt = {
@@ -656,6 +684,40 @@ def time_view(
         lf_kurtosis=lf,
         spike_raise=spike_raise,
     )
+
+
+def _spike_p(real: dict[str, NDArray[np.float64]], ens: NullEnsemble) -> float:
+    """p-value of the spike statistic, Bonferroni over the orders.
+
+    The k-th largest deviations (:data:`SPIKE_ORDERS`), each against the law of a k-th
+    largest (:func:`~allanite.diagnosis.null.kth_max_sf`).
+    """
+    r = ens.residual(real, "spike")
+    null = ens.null["spike"]
+    orders = SPIKE_ORDERS[: r.size]
+    p = min(kth_max_sf(float(r[i]), null[:, i], k) for i, k in enumerate(orders))
+    return float(min(1.0, len(orders) * p))
+
+
+def _spike_thresholds(
+    real: dict[str, NDArray[np.float64]], ens: NullEnsemble, alpha: float
+) -> list[float]:
+    """Deviation thresholds (units of the robust spread) of the orders that are significant.
+
+    Order ``k`` is significant when the real record's k-th largest deviation exceeds the
+    level the null's k-th largest exceeds with probability ``alpha / len(orders)``: then at
+    least ``k`` samples lie above that level. Listed by order (the first is the lowest
+    significant order's, the level the spikes are located at).
+    """
+    r = ens.residual(real, "spike")
+    null = ens.null["spike"]
+    orders = SPIKE_ORDERS[: r.size]
+    out = []
+    for i, k in enumerate(orders):
+        thr = kth_max_isf(alpha / len(orders), null[:, i], k)
+        if r[i] > thr:
+            out.append(float(ens.ref["spike"][i]) + thr)
+    return out
 
 
 def _spike_raise(
