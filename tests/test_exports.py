@@ -90,7 +90,7 @@ def test_kalibr_missing_terms_are_zero_and_gm_is_projected():
     assert entries["gyroscope_noise_density"] > 0.01
     assert entries["gyroscope_random_walk"] > 0.0
     assert len(entries["not_exported"]) == 1
-    assert "markov (sigma=0.1, tau_c=5)" in entries["not_exported"][0]
+    assert "markov (sigma=2.063e+04 deg/h, tau_c=5 s)" in entries["not_exported"][0]  # 0.1 rad/s
     assert "-> rrw" in entries["not_exported"][0]
     assert "markov" in kalibr_imu_yaml(model, 100.0)
 

@@ -419,7 +419,7 @@ def test_a_config_written_into_a_template_states_its_projections(
         written = write_config(config, paths[-1], format=fmt, rate=FS, template=paths[-2])
         assert written.projections
     text = paths[-1].read_text()
-    assert text.count("projected: gyro: flicker (B=3e-05) -> ") == 1
+    assert text.count("projected: gyro: flicker (B=6.188 deg/h) -> ") == 1  # 3e-5 rad/s
     assert "largest ADEV error" in text
     if fmt == "px4-plugin":
         ET.fromstring(text.split("\n", 1)[1] if text.startswith("<?xml") else text)

@@ -606,7 +606,7 @@ def test_written_names_the_terms_the_format_could_not_hold():
     (line,) = written.lost("gyro", fast)
     assert line in written.report()
     assert line.startswith("projected gyro: ")
-    assert describe_term(fast) in line.split(" -> ")[0]
+    assert describe_term(fast, "gyro") in line.split(" -> ")[0]
     assert written.lost("accel", fast) == []
     held = format_module("px4-plugin").write(
         ImuConfig(gyro=sensor_model([white, slow], "gyro"), rate=100.0), rate=100.0

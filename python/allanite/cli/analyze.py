@@ -9,6 +9,7 @@ from typing import Any
 
 import numpy as np
 
+from allanite.cli.fit import fit_possible
 from allanite.cli.record_options import (
     add_grid_arguments,
     add_record_arguments,
@@ -212,8 +213,13 @@ def summary_lines(result: AllanResult, fit_command: str | None = None) -> list[s
             relation = "<=" if symbol == "B" else "="
             text = _readout_value(result, symbol, value)
             lines.append(f"    {symbol} {relation} {text}  ({how[symbol]})")
-    if fit_command:
+    if fit_command and fit_possible(result):
         lines.append(f"  fitted coefficients with intervals: {fit_command}")
+    elif fit_command:
+        lines.append(
+            f"  fitted coefficients: the record is too short for a fit ({result.n_samples} "
+            "samples; choosing the terms needs about 40 or more): use a longer record"
+        )
     return lines
 
 

@@ -21,7 +21,7 @@ from allanite.errors import ImplausibleInputWarning
 from allanite.io.atomic import atomic_output
 from allanite.variance import AllanResult
 
-__all__ = ["fit_lines", "fit_result", "goodness", "register", "run"]
+__all__ = ["TOO_SHORT", "fit_lines", "fit_possible", "fit_result", "goodness", "register", "run"]
 
 EXAMPLES = """examples:
   allanite fit --example
@@ -91,7 +91,35 @@ def fit_result(result: AllanResult) -> Any:
         # the library's wrong-units warning: the CLI prints the same check with its own
         # spelling of the fix (--units), through warn_coefficients
         warnings.simplefilter("ignore", ImplausibleInputWarning)
-        return fit(result)
+        try:
+            return fit(result)
+        except ValueError as exc:
+            if TOO_SHORT not in str(exc):
+                raise
+            # the library's advice names the API call; on the command line a longer record is
+            # what works (the CLI chooses the terms itself)
+            raise ValueError(
+                str(exc).split("; use a longer record", 1)[0] + "; use a longer record (allanite "
+                "fit chooses the terms itself; it has no option to name them)"
+            ) from None
+
+
+#: the start of the library's error for a record too short for an automatic fit
+TOO_SHORT = "too short for an automatic fit"
+
+
+def fit_possible(result: AllanResult) -> bool:
+    """Whether :func:`fit_result` can choose terms on ``result`` (enough usable taus).
+
+    The taus the fit uses (:func:`allanite.fit.fit_factors` with its defaults) must number
+    at least :data:`allanite.fit.api.AUTO_MIN_POINTS`; False without a fitter.
+    """
+    try:
+        from allanite.fit import fit_factors
+        from allanite.fit.api import AUTO_MIN_POINTS
+    except ImportError:
+        return False
+    return len(fit_factors(result.m, result.n_samples)) >= AUTO_MIN_POINTS
 
 
 def _model_of(fit: Any) -> Any:

@@ -152,6 +152,13 @@ def check_written(
                 continue  # a model JSON holds one sensor by design
             if template is not None and getattr(back, sensor) is not None:
                 continue  # the template's own entries, kept
+            if getattr(back, sensor) is not None:  # the format requires the entries
+                out.append(
+                    f"{path} has {sensor} noise entries of zero: the source holds no {sensor} "
+                    "model and the format needs the entries (for a noisy sensor set them by "
+                    "hand, or convert a config that holds both sensors)"
+                )
+                continue
             out.append(
                 f"{path} has no {sensor} noise entries: the source holds no {sensor} model "
                 "(add them by hand if the simulator or estimator needs them)"

@@ -71,7 +71,7 @@ class Holdout:
         }
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class Diagnosis:
     """Where and why a simulated sensor differs from a real record.
 
@@ -121,6 +121,35 @@ class Diagnosis:
     headline: str = ""
 
     _repr_html_ = diagnosis_html  # Jupyter: a compact table and the plot (allanite.notebook)
+
+    def __repr__(self) -> str:
+        """Compact: the gap's p-value, the headline and the effects (the arrays are attributes).
+
+        Each attributed effect (best first, at most three named) with its parameters in
+        customary units and whether the records agree after it (``consistent after``), then
+        the joint explanation's effects and whether the gap closes with them.
+        """
+        from allanite.diagnosis.verdict import format_params
+
+        units = self.meta.get("units")
+        effects = [
+            f"{a.effect} ({format_params(a, units)}; "
+            + ("consistent after" if a.consistent_after else "gap remains")
+            + ")"
+            for a in self.attribution[:3]
+        ]
+        if len(self.attribution) > 3:
+            effects.append(f"+{len(self.attribution) - 3} more")
+        joint = ""
+        if self.explanation is not None:
+            names = " + ".join(a.effect for a in self.explanation.effects) or "none"
+            after = "consistent after" if self.explanation.consistent_after else "gap remains"
+            joint = f", joint={names} ({after})"
+        return (
+            f"Diagnosis(p_value={self.p_value:.3g}, significant={self.significant}, "
+            f"closed={self.closed}, headline={self.headline!r}, "
+            f"effects=[{'; '.join(effects)}]{joint})"
+        )
 
     @property
     def where(self) -> dict[str, Any]:

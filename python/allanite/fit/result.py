@@ -100,7 +100,7 @@ class Comparison:
         return "\n".join(lines)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class FitResult:
     r"""A fitted noise model with honest uncertainty.
 
@@ -185,6 +185,34 @@ class FitResult:
     exchangeable: dict[str, Coefficient] = field(default_factory=dict, compare=False)
     undetected: dict[str, Coefficient] = field(default_factory=dict, compare=False)
     _repr_html_ = fit_html  # Jupyter: a compact table and the plot (allanite.notebook)
+
+    def __repr__(self) -> str:
+        """Compact: the terms with values, intervals and units, and the goodness of fit.
+
+        E.g. ``FitResult(gls, 24 taus 0.01-1.3e+03 s: N = 0.151 [0.148, 0.154] deg/sqrt(h),
+        K = 0.52 [0.41, 0.63] deg/h/sqrt(h); chi2 = 21.3 for 22 dof, p = 0.5)`` (95 %
+        intervals, customary units as :meth:`format_table`); the arrays are attributes.
+        """
+        taus = (
+            f"{self.tau.size} taus {self.tau[0]:.3g}-{self.tau[-1]:.3g} s"
+            if self.tau.size
+            else "no taus"
+        )
+        try:
+            rows = self.table("customary")
+        except ValueError:  # a model unit without customary units
+            rows = self.table(None)
+        terms = ", ".join(
+            f"{r['name']} = {r['value']:.3g} [{r['low']:.3g}, {r['high']:.3g}] {r['unit']}"
+            for r in rows
+        )
+        fit = (
+            f"; chi2 = {self.chi2:.3g} for {self.dof} dof, p = {self.p_value:.3g}"
+            + (" (rejected)" if self.rejected else "")
+            if self.method == "gls"
+            else ""
+        )
+        return f"FitResult({self.method}, {taus}: {terms or 'no terms'}{fit})"
 
     @property
     def misspecified(self) -> bool:

@@ -15,6 +15,7 @@ from typing import Any
 
 from allanite.model import NoiseModel
 from allanite.terms import Term
+from allanite.units import coefficient_unit, convert, customary_unit
 
 __all__ = [
     "ACCEL_UNIT",
@@ -144,7 +145,7 @@ class Written:
         term : Term
             The term, in the units the config is written in (SI).
         """
-        named = describe_term(term)
+        named = describe_term(term, sensor)
         return [
             line
             for line in self.report()
@@ -152,10 +153,34 @@ class Written:
         ]
 
 
-def describe_term(term: Term) -> str:
-    """A term as the export notes spell it: ``markov (sigma=0.001884, tau_c=0.0238)``."""
-    values = ", ".join(f"{k}={v:.4g}" for k, v in term.to_dict().items() if k != "type")
-    return f"{term.type} ({values})"
+def describe_term(term: Term, sensor: str | None = None) -> str:
+    """A term as the export notes spell it, each value with its unit.
+
+    E.g. ``markov (sigma=388.6 deg/h, tau_c=0.0238 s)``: with ``sensor`` (``"gyro"`` or
+    ``"accel"``: the term is in that sensor's SI unit, :data:`SENSORS`) the coefficients are
+    shown in the customary units ``allanite fit`` prints (a gyro's N in deg/sqrt(h), K in
+    deg/h/sqrt(h); an accelerometer's N in m/s/sqrt(h)); without it the rate unit is not
+    known and only times (s) and frequencies (Hz) carry a unit.
+    """
+    rate = SENSORS.get(sensor) if sensor is not None else None
+    specs = {p.name: p for p in type(term).params + type(term).optional}
+    parts = []
+    for name, value in term.to_dict().items():
+        if name == "type":
+            continue
+        spec = specs.get(name)
+        if spec is None or not isinstance(value, (int, float)):
+            parts.append(f"{name}={value}")
+            continue
+        shown, unit = float(value), ""
+        if spec.rate == 0:
+            unit = {1.0: "s", -1.0: "Hz"}.get(float(spec.time), "")
+        elif rate is not None:
+            model_unit = coefficient_unit(rate, spec.rate, spec.time)
+            unit = customary_unit(rate, name, model_unit)
+            shown = convert(shown, model_unit, unit)
+        parts.append(f"{name}={shown:.4g}" + (f" {unit}" if unit else ""))
+    return f"{term.type} ({', '.join(parts)})"
 
 
 def number(value: Any, where: str) -> float:

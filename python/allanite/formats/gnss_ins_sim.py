@@ -200,6 +200,11 @@ def write(
             values[ck] = 100.0
     lines = ["# IMU error model for gnss-ins-sim, written by allanite", "import numpy as np", ""]
     lines += [f"# dropped: {d}" for d in dropped] + [f"# projected: {p}" for p in projections]
+    lines += [
+        f"# {sensor}: zero noise (the source holds no {sensor} model; gnss-ins-sim needs the keys)"
+        for sensor in KEYS
+        if getattr(config, sensor) is None
+    ]
     lines.append(f"fs = {number_text(rate)}  # Hz, the IMU rate this model was written for")
     lines.append("imu_err = {")
     for key, value in values.items():

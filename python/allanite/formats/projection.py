@@ -162,7 +162,8 @@ def project(
             kept.append(white)
             seen.add("white")
             projected_fast.append(
-                f"{sensor}: {describe_term(term)} -> {describe_term(white)}: the format has no "
+                f"{sensor}: {describe_term(term, sensor)} -> {describe_term(white, sensor)}: "
+                "the format has no "
                 f"sensor filter, so the ADEV below ~{1.0 / term.values()['bandwidth']:.3g} s "
                 "differs"
             )
@@ -172,12 +173,15 @@ def project(
                 total = model.avar(taus, dt)
                 share = float(np.max(np.sqrt(term.avar(taus, dt) / np.maximum(total, 1e-300))))
             dropped.append(
-                f"{sensor}: {describe_term(term)}, up to {100 * share:.0f} % of the ADEV over {rng}"
+                f"{sensor}: {describe_term(term, sensor)}, up to {100 * share:.0f} % of the ADEV "
+                f"over {rng}"
             )
     projections: list[str] = list(projected_fast)
     slot = "markov" if "markov" in holds else "rrw" if "rrw" in holds else None
     if slow and slot is None:
-        dropped.extend(f"{sensor}: {describe_term(t)} (no slow term in the format)" for t in slow)
+        dropped.extend(
+            f"{sensor}: {describe_term(t, sensor)} (no slow term in the format)" for t in slow
+        )
     elif slot is not None and slow:
         replaced = [t for t in kept if t.type == slot]
         fixed = [t for t in kept if t.type != slot and t.stationary]
@@ -201,8 +205,8 @@ def project(
                     worst_joint,
                 )
         kept = [*others, *new]
-        sources = ", ".join(describe_term(t) for t in [*replaced, *slow])
-        result = ", ".join(describe_term(t) for t in new)
+        sources = ", ".join(describe_term(t, sensor) for t in [*replaced, *slow])
+        result = ", ".join(describe_term(t, sensor) for t in new)
         projections.append(
             f"{sensor}: {sources} -> {result} matching the Allan deviation over "
             f"{rng} (largest ADEV error {100 * worst:.1f} %)"
