@@ -110,7 +110,6 @@ SIGNATURE: dict[str, frozenset[str]] = {
     "step": frozenset({"jump"}),
     "warmup": frozenset({"level", "jump"}),
     "spikes": frozenset({"spike"}),
-    "telegraph": frozenset({"kurt_lf"}),
     "bursts": frozenset({"hf"}),
     "white_drift": frozenset({"hf"}),
 }
