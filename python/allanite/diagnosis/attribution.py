@@ -33,7 +33,13 @@ level evidence when the jump/level test, with its own slow noise added to the nu
 is no longer significant, and the low-frequency kurtosis evidence (platykurtic block means:
 a random walk's or a slow Gauss-Markov process's path over one record) when the kurtosis the
 candidate's own process predicts for the block means is consistent with the record's
-(:meth:`~allanite.diagnosis.time_view.TimeView.lf_kurtosis_p_value`). ``consistent_after``
+(:meth:`~allanite.diagnosis.time_view.TimeView.lf_kurtosis_p_value`). A telegraph, whose
+spectrum is a Gauss-Markov process's, is only kept when its two levels are shown: by that
+kurtosis re-test, or by the two-level test of :mod:`allanite.diagnosis.two_level` (a hidden
+two-state chain against the Gaussian twin, calibrated on the model's replicates) below the
+evidence level ``alpha / n_evidence``; then the Gauss-Markov candidate of a correlation time
+within ``DISTINCT_FACTOR`` of it leaves that evidence unexplained and pays ``-2 ln p`` like any
+other (:func:`_refuted_twins`). ``consistent_after``
 is true when the p-value of ``T_after`` (null law with ``k`` fewer degrees of freedom)
 exceeds ``alpha``. Effects whose scores differ by
 less than the penalty of one parameter are listed as each other's ``alternatives``. The gap
