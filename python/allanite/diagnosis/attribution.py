@@ -252,6 +252,8 @@ def _degenerate(
     Gauss-Markov process peaks at ``1.89 tau_c``), so over the measured taus it is a random
     walk with a second parameter the record does not determine (a random walk next to noise
     bursts read as a Gauss-Markov process of ``tau_c`` 27 s with the longest tau 20 s).
+    :func:`fit_candidate` leaves ``extra`` out (keeps the process) when the bend of a
+    Gauss-Markov curve already tells it from that walk (:func:`_bend_identified`).
     """
     if np.any((logp - lo < 0.01) & (lo > -700.0)):
         return True
