@@ -297,6 +297,8 @@ def _bend_identified(
     walk_cls = TERM_TYPES.get("rrw")
     if extra is None or walk_cls is None or "sigma" not in values or "tau_c" not in values:
         return False
+    if extra.size < 2 or extra[-1] < np.max(extra):
+        return False  # it turns over within the grid: nothing to rescue
     walk = Candidate(effect="rrw", term_cls=walk_cls, free=("K",))
     f = _objective(walk, tm)
     k0 = float(np.log(values["sigma"] * np.sqrt(2.0 / values["tau_c"])))
