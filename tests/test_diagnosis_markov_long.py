@@ -14,12 +14,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from allanite.diagnosis.attribution import fit_candidate
+from allanite.diagnosis import diagnose
+from allanite.diagnosis.attribution import Attribution, fit_candidate
 from allanite.diagnosis.candidates import candidate_library
 from allanite.diagnosis.holdout import tau_model_for
 from allanite.diagnosis.inputs import SimSource
 from allanite.model import NoiseModel
-from allanite.terms import TERM_TYPES
+from allanite.terms import TERM_TYPES, Term
 
 T = TERM_TYPES
 FS = 200.0
@@ -32,7 +33,7 @@ ALPHA = 0.01
 N_SIGMA = 3.0
 
 
-def _fits(extra: object) -> dict[str, object]:
+def _fits(extra: Term) -> dict[str, Attribution | None]:
     """Fit every tau-view candidate of the simulated sensor to ``SIM`` + ``extra``."""
     real = NoiseModel((*SIM.terms, extra), UNITS)
     x = np.asarray(real.simulate(N_SAMPLES, fs=FS, output="rate", seed=11), dtype=np.float64)
@@ -40,8 +41,9 @@ def _fits(extra: object) -> dict[str, object]:
     tm = tau_model_for(x, SimSource(fs=FS, model=SIM), n_mc=40, seed=12)
     assert tm.tau[-1] < 1.89 * 100.0  # the turnover lies beyond the grid
     cands, _ = candidate_library({}, duration=N_SAMPLES / FS, model=SIM, effects=["markov", "rrw"])
-    kw = {"alpha": ALPHA, "evidence_p": {}, "significant": {}}
-    return {c.effect: fit_candidate(c, tm, **kw) for c in cands}
+    return {
+        c.effect: fit_candidate(c, tm, alpha=ALPHA, evidence_p={}, significant={}) for c in cands
+    }
 
 
 def test_gauss_markov_bias_turning_over_beyond_the_grid_is_kept_and_beats_the_walk() -> None:
@@ -64,3 +66,24 @@ def test_control_a_random_walk_still_reads_as_a_walk() -> None:
     assert walk is not None
     assert walk.consistent_after
     assert fits["markov"] is None
+
+
+def _diagnosed(extra: Term) -> list[str]:
+    real = NoiseModel((*SIM.terms, extra), UNITS)
+    x = np.asarray(real.simulate(N_SAMPLES, fs=FS, output="rate", seed=11), dtype=np.float64)
+    d = diagnose(x.ravel(), SIM, fs=FS, units="rad/s", n_mc=40, seed=12)
+    assert d.explanation is not None
+    return [a.effect for a in d.explanation.effects]
+
+
+@pytest.mark.slow
+def test_diagnose_names_the_gauss_markov_bias_not_a_walk() -> None:
+    """End to end (~16 s): the named explanation was a random walk of K 313 deg/h/sqrt(h)."""
+    assert _diagnosed(T["markov"](sigma=2e-4, tau_c=100.0)) == ["markov"]
+
+
+@pytest.mark.slow
+def test_diagnose_control_names_the_walk() -> None:
+    named = _diagnosed(T["rrw"](K=2e-4 * np.sqrt(2.0 / 100.0)))
+    assert "rrw" in named
+    assert "markov" not in named
