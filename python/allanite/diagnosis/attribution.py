@@ -81,6 +81,7 @@ from allanite.diagnosis.level_shape import level_misfit
 from allanite.diagnosis.tau_view import TauModel
 from allanite.diagnosis.time_view import TimeView, added_block_kurtosis, added_level_variance
 from allanite.diagnosis.two_level import two_level_p
+from allanite.terms import TERM_TYPES
 
 __all__ = ["LEVEL_NEGLIGIBLE", "Attribution", "fit_candidate", "negligible", "rank", "tau_size"]
 
@@ -260,6 +261,8 @@ def _degenerate(
     Gauss-Markov process peaks at ``1.89 tau_c``), so over the measured taus it is a random
     walk with a second parameter the record does not determine (a random walk next to noise
     bursts read as a Gauss-Markov process of ``tau_c`` 27 s with the longest tau 20 s).
+    :func:`fit_candidate` leaves ``extra`` out (keeps the process) when the bend of a
+    Gauss-Markov curve already tells it from that walk (:func:`_bend_identified`).
     """
     if np.any((logp - lo < 0.01) & (lo > -700.0)):
         return True
@@ -274,6 +277,48 @@ def _degenerate(
             return True
     rising = extra is not None and extra.size > 1 and bool(extra[-1] >= np.max(extra))
     return bool(timed and cand.term_cls.stationary and rising)
+
+
+#: effects with a Lorentzian spectrum whose random-walk limit ``tau_c -> inf`` is ``rrw``, for
+#: which a curve still rising at the longest tau may be identified by its bend
+BENDING = ("markov",)
+
+
+def _bend_identified(
+    cand: Candidate, logp: NDArray[np.float64], tm: TauModel, alpha: float
+) -> bool:
+    """Whether a fitted Gauss-Markov process is told apart from its random-walk limit.
+
+    Below its correlation time a Gauss-Markov process is a rate random walk
+    (``K^2 = 2 sigma^2 / tau_c``); its Allan variance bends away from the walk's ``tau`` slope
+    long before its turnover at ``1.89 tau_c``. The tau grid stops at a tenth of the record, so
+    a process of ``tau_c`` a twelfth of the record (1200 s at 200 Hz, ``tau_c`` 100 s) still
+    rises at the longest tau (82 s) and yet its bend is measured. The bend is identified when
+    the process's statistic lies below that of the best random walk (the one-parameter limit,
+    ``K`` fitted on the same view) by more than the ``chi2_1`` quantile ``1 - alpha``: the
+    likelihood-ratio test of the correlation time. Otherwise the rising curve is a random walk
+    with a parameter the record does not determine (:func:`_degenerate`).
+    """
+    if cand.effect not in BENDING or cand.base is not None or cand.replaces is not None:
+        return False
+    values = _values(cand, logp)
+    extra = _extra(cand, logp, tm)
+    walk_cls = TERM_TYPES.get("rrw")
+    if extra is None or walk_cls is None or "sigma" not in values or "tau_c" not in values:
+        return False
+    if extra.size < 2 or extra[-1] < np.max(extra):
+        return False  # it turns over within the grid: nothing to rescue
+    walk = Candidate(effect="rrw", term_cls=walk_cls, free=("K",))
+    f = _objective(walk, tm)
+    k0 = float(np.log(values["sigma"] * np.sqrt(2.0 / values["tau_c"])))
+    res = optimize.minimize_scalar(
+        lambda v: f(np.array([v])),
+        bounds=(k0 - 5.0, k0 + 5.0),
+        method="bounded",
+        options={"xatol": 1e-4},
+    )
+    t_walk = min(float(res.fun), f(np.array([k0])))
+    return bool(t_walk - tm.statistic(extra) > float(stats.chi2.isf(alpha, 1)))
 
 
 def tau_size(extra: NDArray[np.float64], tm: TauModel) -> float:
@@ -488,7 +533,10 @@ def fit_candidate(
         return None
     logp = np.asarray(best.x if cand.free else [], dtype=np.float64)
     extra = _extra(cand, logp, tm)
-    if cand.base is None and _degenerate(cand, logp, lo, tm.dt, hi, extra):
+    # a Gauss-Markov curve still rising at the longest tau is degenerate unless its bend
+    # towards the turnover already tells it from its random-walk limit
+    curve = None if _bend_identified(cand, logp, tm, alpha) else extra
+    if cand.base is None and _degenerate(cand, logp, lo, tm.dt, hi, curve):
         return None
     if extra is None or negligible(cand, _values(cand, logp), extra, tm):
         return None
