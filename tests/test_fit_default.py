@@ -396,3 +396,30 @@ def test_no_term_added_to_white_noise():
         x = 0.01 * math.sqrt(100.0) * rng.standard_normal(200_000)
         f = fit(allanite.avar(x, fs=100.0, units="deg/s"))
         assert not any("added" in s for s in f.selection), f.selection
+
+
+def test_a_model_whose_noise_amplitudes_are_zero_is_rejected():
+    """White + rate random walk + ramp, 1e6 samples at 10 Hz (validate_fit case 72, seed 5036).
+
+    The reweighted fit of Q + R ended at Q = 0, a ramp alone, whose estimates have no spread;
+    its chi-square was computed under the covariance of an earlier iterate (large Q) and
+    passed the test (6.7 on 14 dof, p = 0.95) with the fitted curve 7e4 times below the
+    first estimate, so "auto" returned Q + R without N and K. A fit without noise now has an
+    infinite chi-square: the subset is rejected, and the true terms are chosen.
+    """
+    model = NoiseModel(
+        (White(N=0.01), RateRandomWalk(K=0.011090076816378342), RateRamp(R=0.0016737575894960955)),
+        UNITS,
+    )
+    x = model.simulate(1_000_000, fs=10.0, output="rate", seed=5036)
+    res = allanite.avar(np.asarray(x).ravel(), fs=10.0, taus="log", units="deg/s")
+    f = fit(res)
+    assert set(f.coefficients) >= {"N", "K"}, f.model
+    for subset in f.meta["subsets"]:
+        if subset["chi2"] == math.inf:
+            assert subset["rejected"]
+    assert all(
+        s["chi2"] < math.inf for s in f.meta["subsets"] if s["terms"] == ["white", "rrw", "ramp"]
+    )
+    # the fitted curve is within the spread of the estimates, unlike the noiseless fit's
+    assert np.max(np.abs(f.var / f.fitted - 1.0)) < 0.5

@@ -61,8 +61,9 @@ class GLSSolution:
     discrepancy: float  # relative model discrepancy delta (0: the terms fit)
     discrepancy_cov: NDArray[np.float64]  # the covariance added by it, cov - model_cov
     fitted: NDArray[np.float64]
-    chi2: float  # generalized chi-square of the terms' own best fit (without discrepancy)
-    chi2_fit: float  # generalized chi-square under cov (what the estimate minimises)
+    chi2: float  # generalized chi-square of the terms' own best fit (without discrepancy);
+    # inf when every noise amplitude is 0 (no covariance of the fitted model exists)
+    chi2_fit: float  # generalized chi-square under cov (what the estimate minimises); inf as chi2
     iterations: int
     jacobian: NDArray[np.float64]
     basis: CovarianceBasis | None
@@ -367,6 +368,12 @@ def solve(
     shape = data.y**2
     g = _design(specs, data, log_phi)
     chi2 = _chi2(model_cov, data.y - g @ theta)
+    if _noiseless(basis, theta, fixed):
+        # every noise amplitude came out 0 (a ramp or a sinusoid alone is left): the model
+        # predicts estimates without spread, and ``current`` is a covariance of an earlier
+        # iteration, under which a curve thousands of times above the fit once passed the
+        # test (chi-square 6.7 on 14 dof): such a model cannot describe a noisy curve
+        chi2 = math.inf
     if not fixed and dof > 0 and misfit_level > 0 and stats.chi2.sf(chi2, dof) < misfit_level:
         shape = _discrepancy_shape(data.y, g @ theta)
         for _ in range(iterations):
@@ -415,13 +422,20 @@ def solve(
         discrepancy_cov=delta2 * np.diag(shape) if delta2 > 0 else np.zeros_like(current),
         fitted=g @ theta,
         chi2=chi2,
-        chi2_fit=_chi2(current, data.y - g @ theta),
+        chi2_fit=math.inf
+        if _noiseless(basis, theta, fixed)
+        else _chi2(current, data.y - g @ theta),
         iterations=done,
         jacobian=jac,
         design=g,
         y=data.y,
         basis=basis,
     )
+
+
+def _noiseless(basis: CovarianceBasis | None, theta: NDArray[np.float64], fixed: bool) -> bool:
+    """Whether the fitted model has no covariance of its own (every noise amplitude 0)."""
+    return not fixed and basis is not None and _covariance(basis, theta) is None
 
 
 def _chi2(cov: NDArray[np.float64], resid: NDArray[np.float64]) -> float:
