@@ -2,8 +2,7 @@
 
 The numeric work runs in :mod:`allanite._core` (compensated prefix sums, then one O(N) pass per
 averaging factor, threaded over factors); this module validates the input, resolves the tau
-grid, identifies the noise type (beside the running kernel, :func:`variances_beside`) and
-attaches equivalent degrees of freedom. Records larger than
+grid, identifies the noise type and attaches equivalent degrees of freedom. Records larger than
 memory (a ``memory_limit``, a file path or a chunked record) go to
 :func:`allanite.variance.outofcore.avar_large`; everything else stays in memory.
 """
@@ -14,7 +13,7 @@ import os
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
 from allanite import _core
 from allanite._deprecation import keyword_only_fs
@@ -31,13 +30,8 @@ from allanite.variance.checks import (
     resolve_source,
 )
 from allanite.variance.chunked import ChunkedRecord
-from allanite.variance.edf import (
-    equivalent_dof,
-    identify_alpha,
-    smooth_isolated_alpha,
-    wants_identification,
-)
-from allanite.variance.kernel import ProgressCallback, fast_q, variances, variances_beside
+from allanite.variance.edf import identify_alpha, smooth_isolated_alpha, wants_identification
+from allanite.variance.kernel import ProgressCallback, fast_q, variances
 from allanite.variance.outofcore import avar_large
 from allanite.variance.result import AllanResult, assemble_result
 from allanite.variance.taus import KERNEL_KIND, TauSpec, averaging_factors
@@ -109,9 +103,7 @@ def avar(
         The EDF follows Greenhall & Riley (2003) for every kind but ``total``, which uses the
         SP1065 formulas (:mod:`allanite.variance.edf`).
     threads : int, optional
-        Worker threads of each compiled pass (default: all cores). With more than one, the
-        noise identification runs on the calling thread while the variance kernel runs (so
-        the two passes may overlap). Results are identical for any thread count.
+        Worker threads (default: all cores). Results are identical for any thread count.
     units : str, optional
         Unit of the record, carried into the result as its rate unit: an angular rate
         (``deg/s``, ``deg/h``, ``dph``, ``rad/s``, ...) or an acceleration (``m/s^2``, ``g``,
@@ -170,9 +162,23 @@ def avar(
     factors = averaging_factors(
         taus, fs=rate, n_samples=arr.shape[0], n_phase=n_phase, kind=kind, m=m, points=points
     )
-    var, alphas, edf = _variances_and_alphas(
-        arr, phase, factors, KERNEL_KIND[kind], what, alpha, nthreads, progress, q, meta
+    kernel_kind = KERNEL_KIND[kind]
+    var = variances(
+        phase, factors, kernel_kind, threads=nthreads, progress=progress, q=q, meta=meta
     )
+    if wants_identification(alpha):
+        # Stable32 identifies phase data on the phase as recorded (its frequency offset makes
+        # the lag-1 method difference at least once); frequency data on the averaged rates
+        if what == "angle":
+            alphas = identify_alpha(
+                arr, factors, kernel_kind, data="phase", detrended=phase, threads=nthreads
+            )
+        else:
+            alphas = identify_alpha(phase, factors, kernel_kind, data="frequency", threads=nthreads)
+        if alpha is None:
+            alphas = smooth_isolated_alpha(alphas, factors)
+    else:
+        alphas = given_alpha(alpha, var.shape)
     return assemble_result(
         var,
         factors,
@@ -185,56 +191,7 @@ def avar(
         units=units,
         was_1d=was_1d,
         meta=meta,
-        edf=edf,
     )
-
-
-def _variances_and_alphas(
-    arr: NDArray[Any],
-    phase: NDArray[np.float64],
-    factors: NDArray[np.int64],
-    kernel_kind: str,
-    what: str,
-    alpha: int | ArrayLike | str | None,
-    nthreads: int,
-    progress: ProgressCallback | None,
-    q: int | None,
-    meta: dict[str, Any],
-) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.float64] | None]:
-    """Variances, exponents and (when computed beside the kernel) the EDF of :func:`avar`.
-
-    With identification on, exact and without progress reports, the identification and the
-    EDF run on the calling thread while the kernel runs (:func:`variances_beside`); the EDF
-    is None where :func:`assemble_result` computes it.
-    """
-
-    def identified() -> NDArray[np.int64]:
-        # Stable32 identifies phase data on the phase as recorded (its frequency offset makes
-        # the lag-1 method difference at least once); frequency data on the averaged rates
-        if what == "angle":
-            found = identify_alpha(
-                arr, factors, kernel_kind, data="phase", detrended=phase, threads=nthreads
-            )
-        else:
-            found = identify_alpha(phase, factors, kernel_kind, data="frequency", threads=nthreads)
-        return smooth_isolated_alpha(found, factors) if alpha is None else found
-
-    if wants_identification(alpha) and progress is None and q is None:
-
-        def identified_edf() -> tuple[NDArray[np.int64], NDArray[np.float64]]:
-            found = identified()
-            return found, equivalent_dof(kernel_kind, found, factors, int(phase.shape[0]))
-
-        var, (alphas, edf) = variances_beside(
-            phase, factors, kernel_kind, threads=nthreads, beside=identified_edf
-        )
-        return var, alphas, edf
-    var = variances(
-        phase, factors, kernel_kind, threads=nthreads, progress=progress, q=q, meta=meta
-    )
-    if wants_identification(alpha):
-        return var, identified(), None
-    return var, given_alpha(alpha, var.shape), None
 
 
 def _named(kind: Kind, arguments: dict[str, Any]) -> AllanResult:

@@ -7,11 +7,8 @@ two give the same variances bit for bit.
 
 from __future__ import annotations
 
-import os
-import threading
 from collections.abc import Callable
-from concurrent.futures import ThreadPoolExecutor
-from typing import Any, TypeVar
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -20,16 +17,7 @@ from allanite import _core
 from allanite.variance.edf import cap_few_point_alpha, identify_alpha
 from allanite.variance.fast import DEFAULT_Q, fast_variance
 
-__all__ = [
-    "ProgressCallback",
-    "fast_q",
-    "identify_bounded",
-    "series_points",
-    "variances",
-    "variances_beside",
-]
-
-_T = TypeVar("_T")
+__all__ = ["ProgressCallback", "fast_q", "identify_bounded", "series_points", "variances"]
 
 #: progress(stage, done, total): stage "phase" counts samples x passes, "variance" counts taus
 ProgressCallback = Callable[[str, int, int], None]
@@ -98,64 +86,6 @@ def variances(
         var[sl] = _core.variance(phase, factors[sl], kernel_kind, threads)
         progress("variance", min(start + group, nt), nt)
     return var
-
-
-class _Worker:
-    """The one thread that runs kernels beside Python work: made on first use, then reused."""
-
-    def __init__(self) -> None:
-        self.reset()
-
-    def reset(self) -> None:
-        """Forget the worker (also in a forked child, see below)."""
-        self.pool: ThreadPoolExecutor | None = None
-        self.busy = threading.Lock()  # held by the call whose kernel the worker runs
-
-
-_WORKER = _Worker()
-if hasattr(os, "register_at_fork"):
-    # the parent's worker thread does not exist in a forked child: a job given to its
-    # executor would never run, so the child makes its own (and a fresh lock, in case another
-    # thread held it at the fork)
-    os.register_at_fork(after_in_child=_WORKER.reset)
-
-
-def variances_beside(
-    phase: NDArray[np.float64],
-    factors: NDArray[np.int64],
-    kernel_kind: str,
-    *,
-    threads: int,
-    beside: Callable[[], _T],
-) -> tuple[NDArray[np.float64], _T]:
-    """Exact :func:`variances` computed while ``beside()`` runs on the calling thread.
-
-    The compiled kernel releases the GIL, so the Python and compiled work of ``beside`` (the
-    noise identification, the EDF) fills the cores the kernel leaves idle: at its serial
-    steps and while its last tasks finish. With ``threads == 1`` (the caller asked for one
-    thread), or while another call's kernel has the worker (calls from several threads keep
-    running side by side), the two run one after the other. The variances are those of
-    :func:`variances` bit for bit (the same call); an exception of either side is raised here.
-
-    Returns
-    -------
-    tuple
-        ``(variances (T, C), beside())``.
-    """
-    if threads == 1 or not _WORKER.busy.acquire(blocking=False):
-        return np.asarray(_core.variance(phase, factors, kernel_kind, threads)), beside()
-    try:
-        if _WORKER.pool is None:
-            _WORKER.pool = ThreadPoolExecutor(1, thread_name_prefix="allanite-kernel")
-        job = _WORKER.pool.submit(_core.variance, phase, factors, kernel_kind, threads)
-        try:
-            other = beside()
-        except BaseException:
-            job.exception()  # the kernel reads the caller's phase: let it end before raising
-            raise
-        return np.asarray(job.result()), other
-    finally:
-        _WORKER.busy.release()
 
 
 def series_points(decimated_rows: int, identify: str) -> int:

@@ -294,14 +294,11 @@ def assemble_result(
     units: str | None,
     was_1d: bool,
     meta: dict[str, Any] | None = None,
-    edf: NDArray[np.float64] | None = None,
 ) -> AllanResult:
     """Scale kernel variances (tau0 = 1, phase units) to rate units and attach the EDF.
 
     Shared by :func:`avar` and the large-record path (:func:`~allanite.variance.avar_large`).
     ``var`` and ``alphas`` are ``(T, C)``; the result is 1-D per field when ``was_1d``.
-    ``edf``, ``(T, C)``: :func:`~allanite.variance.edf.equivalent_dof` of ``alphas`` when
-    the caller computed it already (e.g. beside the kernel), else computed here.
     """
     kernel_kind = KERNEL_KIND[kind]
     tau = factors / rate
@@ -313,8 +310,7 @@ def assemble_result(
     n_terms = np.array(
         [_core.n_terms(kernel_kind, n_phase, int(f)) for f in factors], dtype=np.int64
     )
-    if edf is None:
-        edf = equivalent_dof(kernel_kind, alphas, factors, n_phase)
+    edf = equivalent_dof(kernel_kind, alphas, factors, n_phase)
     if was_1d:
         var, edf, alphas = var[:, 0], edf[:, 0], alphas[:, 0]
     return AllanResult(
