@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+import validate_diagnosis
 from allanite.diagnosis.two_level import two_level_context, two_level_p
 from allanite.model import NoiseModel
 from allanite.terms import TERM_TYPES
@@ -34,11 +35,8 @@ SIZES = (("2x/16x", 0.05695, 0.02518), ("5x/5x", 0.08093, 0.01848), ("16x/2x", 0
 
 
 def base_model() -> NoiseModel:
-    return NoiseModel(
-        (T["white"](N=0.05), T["quantization"](Q=0.2 / FS), T["flicker"](B=0.01),
-         T["rrw"](K=0.0008)),
-        UNITS,
-    )  # fmt: skip
+    """The validation suite's base sensor at ``FS`` (one definition: validate_diagnosis)."""
+    return validate_diagnosis.base_model(FS)
 
 
 def record(slow: Any, white: float, seed: int) -> np.ndarray:

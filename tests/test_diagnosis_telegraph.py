@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
+import benchmark_module
 from allanite.diagnosis import diagnose
 from allanite.diagnosis.attribution import TWIN, _refuted_twins
 from allanite.diagnosis.two_level import (
@@ -31,11 +32,8 @@ LEVEL = 0.05 / 8
 
 def base_model() -> NoiseModel:
     """The validation suite's MEMS-like gyro (white, quantization, flicker, random walk)."""
-    return NoiseModel(
-        (T["white"](N=0.05), T["quantization"](Q=0.2 / FS), T["flicker"](B=0.01),
-         T["rrw"](K=0.0008)),
-        UNITS,
-    )  # fmt: skip
+    model: NoiseModel = benchmark_module.load("validate_diagnosis").base_model(FS)
+    return model
 
 
 def _record(slow: object, seed: int) -> np.ndarray:
