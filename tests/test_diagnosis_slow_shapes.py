@@ -105,9 +105,14 @@ def test_ramp_under_gauss_markov_noise_is_named_with_it() -> None:
 
 @pytest.mark.slow
 def test_ramp_under_gauss_markov_noise_control(monkeypatch) -> None:  # type: ignore[no-untyped-def]
-    """The control: without the measured-shape + partner opening the ramp is not named."""
+    """The control: without the measured-shape + partner opening the ramp is named only by the
+    joint attribution's backfitting sweep (the Gauss-Markov process refitted with the ramp on
+    top, a second route to the same set); without both it is not named."""
     base, x, _, _ = _ramp_markov()
     monkeypatch.setattr(joint, "_shape_and_noise", lambda *args, **kwargs: [])
+    named_backfit = {a.effect for a in diagnose(x, base, **RAMP_KW).explanation.effects}
+    assert {"ramp", "markov"} <= named_backfit
+    monkeypatch.setattr(joint, "_moved", lambda *args, **kwargs: False)  # no refit adopted
     named0 = {a.effect for a in diagnose(x, base, **RAMP_KW).explanation.effects}
     assert "ramp" not in named0
 

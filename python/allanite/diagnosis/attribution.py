@@ -33,13 +33,7 @@ level evidence when the jump/level test, with its own slow noise added to the nu
 is no longer significant, and the low-frequency kurtosis evidence (platykurtic block means:
 a random walk's or a slow Gauss-Markov process's path over one record) when the kurtosis the
 candidate's own process predicts for the block means is consistent with the record's
-(:meth:`~allanite.diagnosis.time_view.TimeView.lf_kurtosis_p_value`). A telegraph, whose
-spectrum is a Gauss-Markov process's, is only kept when its two levels are shown: by that
-kurtosis re-test, or by the two-level test of :mod:`allanite.diagnosis.two_level` (a hidden
-two-state chain against the Gaussian twin, calibrated on the model's replicates) below the
-evidence level ``alpha / n_evidence``; then the Gauss-Markov candidate of a correlation time
-within ``DISTINCT_FACTOR`` of it leaves that evidence unexplained and pays ``-2 ln p`` like any
-other (:func:`_refuted_twins`). ``consistent_after``
+(:meth:`~allanite.diagnosis.time_view.TimeView.lf_kurtosis_p_value`). ``consistent_after``
 is true when the p-value of ``T_after`` (null law with ``k`` fewer degrees of freedom)
 exceeds ``alpha``. Effects whose scores differ by
 less than the penalty of one parameter are listed as each other's ``alternatives``. The gap
@@ -76,11 +70,10 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import optimize, stats
 
-from allanite.diagnosis.candidates import DISTINCT_FACTOR, Candidate
+from allanite.diagnosis.candidates import Candidate
 from allanite.diagnosis.level_shape import level_misfit
 from allanite.diagnosis.tau_view import TauModel
 from allanite.diagnosis.time_view import TimeView, added_block_kurtosis, added_level_variance
-from allanite.diagnosis.two_level import two_level_p
 from allanite.terms import TERM_TYPES
 
 __all__ = ["LEVEL_NEGLIGIBLE", "Attribution", "fit_candidate", "negligible", "rank", "tau_size"]
@@ -89,8 +82,6 @@ __all__ = ["LEVEL_NEGLIGIBLE", "Attribution", "fit_candidate", "negligible", "ra
 #: asks whether a Gaussian process explains the jumps, does not apply to them; one is only an
 #: explanation when its own process reproduces the platykurtic block means (kurt_lf)
 TWO_LEVEL = ("telegraph",)
-#: the Gaussian process with a two-level process's spectrum (its Gaussian twin)
-TWIN = "markov"
 
 #: cap of one piece of evidence on the -2 ln p scale
 EVIDENCE_CAP = 1000.0
@@ -432,62 +423,6 @@ def _lf_kurtosis_p(
     return max((x for x in p if x is not None), default=None)
 
 
-def _two_level(
-    cand: Candidate, values: dict[str, float], time_view: TimeView | None
-) -> dict[str, float]:
-    """The two-level test of a telegraph candidate (:func:`two_level_p`).
-
-    Empty when the time view carries no two-level context (a record longer than
-    :data:`LF_KURTOSIS_MAX_SAMPLES`, a simulated record instead of a model) or the record is
-    too short for the fitted correlation time.
-    """
-    ctx = time_view.lf_kurtosis.get("two_level") if time_view is not None else None
-    added = cand.added_term(values)
-    if ctx is None or added is None:
-        return {}
-    got = two_level_p(added, ctx)
-    if got is None:
-        return {}
-    return {"p_gauss": got[0], "p_own": got[1], "block_samples": float(got[2])}
-
-
-def _refuted_twins(kept: list[Attribution], alpha: float, n_evidence: int) -> list[Attribution]:
-    """The kept attributions, a Gaussian twin of a telegraph with two levels shown penalised.
-
-    A Gauss-Markov process whose correlation time lies within ``DISTINCT_FACTOR`` of a kept
-    telegraph's, when the telegraph's two-level test rejected its Gaussian twin at the
-    evidence level, leaves that evidence unexplained: its score pays
-    ``min(-2 ln p_gauss, EVIDENCE_CAP)`` (unless it already pays for ``kurt_lf``).
-    """
-    level = alpha / max(n_evidence, 1)
-    shown = [
-        a
-        for a in kept
-        if a.effect in TWO_LEVEL and a.evidence.get("two_level", {}).get("p_gauss", 1.0) < level
-    ]
-    if not shown:
-        return kept
-    out = []
-    for a in kept:
-        twin = next(
-            (
-                t
-                for t in shown
-                if a.effect == TWIN
-                and abs(np.log(a.params["tau_c"] / t.params["tau_c"])) < np.log(DISTINCT_FACTOR)
-            ),
-            None,
-        )
-        if twin is None or "kurt_lf" in a.evidence.get("unexplained", []):
-            out.append(a)
-            continue
-        p = max(twin.evidence["two_level"]["p_gauss"], 1e-300)
-        cost = min(-2.0 * np.log(p), EVIDENCE_CAP)
-        evidence = {**a.evidence, "two_level_unexplained": {"p_gauss": p, "cost": cost}}
-        out.append(replace(a, score=a.score + cost, evidence=evidence))
-    return out
-
-
 def _level_p_with(
     cand: Candidate, values: dict[str, float], time_view: TimeView, dt: float, duration: float
 ) -> dict[str, float]:
@@ -540,14 +475,6 @@ def fit_candidate(
         return None
     if extra is None or negligible(cand, _values(cand, logp), extra, tm):
         return None
-    two_level: dict[str, float] = {}
-    shown = False
-    if cand.effect in TWO_LEVEL:
-        two_level = _two_level(cand, _values(cand, logp), time_view)
-        level = alpha / max(len(evidence_p), 1)
-        shown = bool(two_level) and two_level["p_gauss"] < level <= two_level["p_own"]
-        if not shown and not significant.get("kurt_lf", False):
-            return None  # neither test below can show its two levels
     k = len(cand.free)
     t_before, t_after = tm.statistic(), tm.statistic(extra)
     delta = t_before - t_after
@@ -570,9 +497,8 @@ def fit_candidate(
             explained = sorted([*explained, "kurt_lf"])
     if lr_p >= alpha and not explained:
         return None
-    if cand.effect in TWO_LEVEL and "kurt_lf" not in explained and not shown:
-        # neither its own two levels reproduce the platykurtic block means nor do the
-        # record's block means look two-level beyond its Gaussian twin: it is a
+    if cand.effect in TWO_LEVEL and "kurt_lf" not in explained:
+        # its own two levels do not reproduce the platykurtic block means: it is a
         # Gauss-Markov process with the same spectrum, and the simpler term is the answer
         return None
     unexplained = sorted(e for e, s in significant.items() if s and e not in explained)
@@ -615,7 +541,6 @@ def fit_candidate(
             "unexplained": unexplained,
             "level_shape_misfit": shape,
             "level_p_with_effect": level_p,
-            **({"two_level": two_level} if two_level else {}),
         },
         sim_avar_after=np.asarray(tm.sim_avar + extra, dtype=np.float64),
     )
@@ -644,8 +569,7 @@ def rank(
         )
         for c in candidates
     ]
-    kept = _refuted_twins([a for a in fitted if a is not None], alpha, len(evidence_p))
-    kept = sorted(kept, key=lambda a: a.score)
+    kept = sorted((a for a in fitted if a is not None), key=lambda a: a.score)
     margin = float(stats.chi2.isf(alpha, 1))
     return [
         replace(
