@@ -2,7 +2,13 @@
 
 from __future__ import annotations
 
-__all__ = ["ImplausibleInputWarning", "InputError", "MissingExtraError", "choose_one"]
+__all__ = [
+    "ImplausibleInputWarning",
+    "InputError",
+    "MissingExtraError",
+    "RecordTooShortError",
+    "choose_one",
+]
 
 
 class InputError(ValueError):
@@ -22,6 +28,18 @@ class InputError(ValueError):
         super().__init__(where + message)
         self.path = path
         self.line = line
+
+
+class RecordTooShortError(ValueError):
+    """A record too short for an automatic fit (too few usable taus to choose the terms).
+
+    ``reason`` says what is short; the message adds the fix from the Python API (name the
+    terms). The CLI, which chooses the terms itself, gives its own fix after ``reason``.
+    """
+
+    def __init__(self, reason: str, fix: str) -> None:
+        super().__init__(f"{reason}; {fix}")
+        self.reason = reason
 
 
 class ImplausibleInputWarning(UserWarning):

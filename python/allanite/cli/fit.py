@@ -17,11 +17,11 @@ from allanite.cli.record_options import (
     warn_coefficients,
     warn_implausible,
 )
-from allanite.errors import ImplausibleInputWarning
+from allanite.errors import ImplausibleInputWarning, RecordTooShortError
 from allanite.io.atomic import atomic_output
 from allanite.variance import AllanResult
 
-__all__ = ["TOO_SHORT", "fit_lines", "fit_possible", "fit_result", "goodness", "register", "run"]
+__all__ = ["fit_lines", "fit_possible", "fit_result", "goodness", "register", "run"]
 
 EXAMPLES = """examples:
   allanite fit --example
@@ -93,19 +93,13 @@ def fit_result(result: AllanResult) -> Any:
         warnings.simplefilter("ignore", ImplausibleInputWarning)
         try:
             return fit(result)
-        except ValueError as exc:
-            if TOO_SHORT not in str(exc):
-                raise
+        except RecordTooShortError as exc:
             # the library's advice names the API call; on the command line a longer record is
             # what works (the CLI chooses the terms itself)
             raise ValueError(
-                str(exc).split("; use a longer record", 1)[0] + "; use a longer record (allanite "
+                f"{exc.reason}; use a longer record (allanite "
                 "fit chooses the terms itself; it has no option to name them)"
             ) from None
-
-
-#: the start of the library's error for a record too short for an automatic fit
-TOO_SHORT = "too short for an automatic fit"
 
 
 def fit_possible(result: AllanResult) -> bool:

@@ -11,6 +11,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy import stats
 
 from allanite._deprecation import keyword_only_fs
+from allanite.errors import RecordTooShortError
 from allanite.fit.classic import ClassicReadout, classic_readout
 from allanite.fit.covariance import avar_covariance
 from allanite.fit.gls import GLSData, GLSSolution, score_interval, solve
@@ -134,11 +135,11 @@ AUTO_MIN_POINTS = 3
 
 def _check_auto_count(n_points: int, n_samples: int) -> None:
     if n_points < AUTO_MIN_POINTS:
-        raise ValueError(
+        raise RecordTooShortError(
             f"the record is too short for an automatic fit: {n_samples} samples give only "
             f"{n_points} usable taus, and choosing the terms needs at least {AUTO_MIN_POINTS} "
-            "(about 40 samples or more on the default grid); use a longer record, or name the "
-            "terms yourself (allanite.fit(curve, ['N']))"
+            "(about 40 samples or more on the default grid)",
+            "use a longer record, or name the terms yourself (allanite.fit(curve, ['N']))",
         )
 
 
