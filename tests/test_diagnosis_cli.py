@@ -93,6 +93,7 @@ def test_sim_record_and_full_output(files, tmp_path, capsys):
         (["--sim-record", "{sim}", "--sim-fs", "200"], "sample-rate mismatch"),
         (["--sim-record", "{nan}"], "NaN"),
         (["--units", "deg/s", "--sim-model", "{model}", "--holdout", "2"], "holdout"),
+        (["--units", "deg/s", "--sim-model", "{model}", "--seed", "-1"], "--seed must be"),
     ],
 )
 def test_bad_input_is_one_line_and_exit_2(files, capsys, extra, message):
@@ -123,3 +124,21 @@ def test_a_model_in_another_unit_of_the_same_quantity_is_converted(files, tmp_pa
     converted = json.loads(capsys.readouterr().out)
     assert converted["gap"]["p_value"] == pytest.approx(same["gap"]["p_value"], rel=1e-9)
     assert converted["meta"]["units"] == "deg/s"
+
+
+def test_help_describes_every_top_level_json_field(files, capsys):
+    """The --help epilog names every key of the --json object (headline and explanation too)."""
+    with pytest.raises(SystemExit):
+        main(["diagnose", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    code = main(
+        ["diagnose", str(files["real"]), "--fs", "100", "--units", "deg/s", "--sim-model",
+         str(files["model"]), "--n-mc", "20", "--json"]
+    )  # fmt: skip
+    assert code == 0
+    data = json.loads(capsys.readouterr().out)
+    epilog = text[text.index("JSON (--json)") :]
+    for key in data:
+        assert key in epilog, key
+    for key in data["explanation"]:
+        assert key in epilog, key

@@ -21,6 +21,7 @@ noise-level ratio in the flagged windows, the line amplitude, the excess kurtosi
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass
 from typing import Any
 
@@ -40,9 +41,11 @@ __all__ = [
     "Unexplained",
     "Verdict",
     "effect_psd",
+    "explanation_lines",
     "format_params",
     "param_unit",
     "param_units",
+    "percent",
     "shown_param",
     "verdict",
 ]
@@ -66,6 +69,9 @@ TERM_NAMES = {
     "drifting_line": "a vibration line whose frequency drifts",
     "white_drift": "a white-noise level that changes over the record",
 }
+
+#: effects whose plain name is a plural ("spikes are missing")
+PLURAL_EFFECTS = frozenset({"step", "spikes"})
 
 #: what each piece of time/frequency evidence means, in words
 EVIDENCE_TEXT = {
@@ -92,7 +98,7 @@ _NEGLIGIBLE = ": significant on this long record, but negligible in size"
 
 @dataclass(frozen=True)
 class Unexplained:
-    """One part of the gap that the best effect leaves unexplained.
+    """One part of the gap that the effects (the joint explanation) leave unexplained.
 
     Attributes
     ----------
@@ -104,7 +110,9 @@ class Unexplained:
         base (:mod:`allanite.diagnosis.time_base`): ``time base`` (gaps, jitter, doubled
         increments), ``held``.
     where : dict
-        ``tau_bands_s``, ``frequency_bands_hz``, ``frequency_lines_hz`` or ``time_segments_s``.
+        ``tau_bands_s``, ``frequency_bands_hz``, ``frequency_lines_hz`` or ``time_segments_s``;
+        a tau gap spread over the taus, none beyond the simultaneous threshold, adds
+        ``largest_departure_tau_s`` (and ``size["largest_departure_z"]``, signed).
     size : dict
         How large: e.g. ``gap_after``; ``noise_level_ratio`` (rms ratio to the record's typical
         level in the flagged windows); ``amplitude``; ``excess_kurtosis`` (``kurt_hf``: of the
@@ -142,8 +150,8 @@ class Verdict:
     Attributes
     ----------
     closed : bool
-        True when no gap is significant, or when the best effect leaves every view
-        consistent with chance.
+        True when no gap is significant, or when the effects of the joint explanation leave
+        every view consistent with chance.
     unexplained : list of Unexplained
         What remains (empty when closed).
     headline : str
@@ -241,6 +249,61 @@ def format_params(
     return ", ".join(parts)
 
 
+def percent(fraction: float) -> str:
+    """``fraction`` as a percentage that never rounds a part to 0 % or 100 %.
+
+    ``0.9992`` is ``99.9 %`` (not ``100 %``, which would read as the whole gap), ``0.0005``
+    is ``0.05 %``; exactly 0 and 1 stay ``0 %`` and ``100 %``.
+    """
+    value = 100.0 * float(fraction)
+    if not np.isfinite(value):
+        return "n/a"
+    digits = 0
+    while digits < 4 and 0.0 < value < 100.0 and float(f"{value:.{digits}f}") in (0.0, 100.0):
+        digits += 1
+    return f"{value:.{digits}f} %"
+
+
+def explanation_lines(e: Explanation, units: str | None, fs: float | None = None) -> list[str]:
+    """The joint explanation in plain text: the set, its gap, shares, held-out check, terms.
+
+    One line for the set (effects with their parameters in customary units, the gap before
+    and after all of them and whether the rest is consistent with chance in the tau view),
+    one for each effect's share of the gap, one for the held-out check of the whole set (when
+    there is one) and, for a model, the combined term list as the model JSON's ``terms`` (in
+    the model's units, ready to paste).
+    """
+    after = "consistent with chance" if e.consistent_after else "gap remains"
+    lines = [
+        "joint explanation: "
+        + " + ".join(a.effect for a in e.effects)
+        + f"  gap {e.gap_before:.4g} -> {e.gap_after:.4g} (tau view: {after}, "
+        f"p = {e.p_after:.2g})"
+    ]
+    lines.extend(f"  {a.effect:<20} {format_params(a, units, fs=fs)}" for a in e.effects)
+    lines.append(
+        "  share of the gap: " + ", ".join(f"{k} {percent(v)}" for k, v in e.share.items())
+    )
+    hold = e.holdout
+    if hold is not None:
+        if hold.get("gap_before", 0.0) <= 0:
+            shrink = "n/a (no gap in the held-out data)"
+        else:
+            shrink = f"shrinkage {percent(hold['shrinkage'])}, " + (
+                "consistent with chance" if hold.get("consistent_after") else "gap remains"
+            )
+        lines.append(
+            f"  held-out check of the set ({hold.get('source', '')}, "
+            f"{int(hold.get('n_samples', 0)):,} samples): {shrink}"
+        )
+    if e.terms:
+        lines.append(
+            '  model JSON "terms" with the effects added (model units): '
+            + json.dumps(e.terms, allow_nan=False)
+        )
+    return lines
+
+
 def _specs(a: Attribution) -> dict[str, Any]:
     """The parameter specifications of an attribution's term type, by name."""
     cls = _term_class(a)
@@ -265,7 +328,8 @@ def describe_effect(a: Attribution, units: str | None, fs: float | None = None) 
     if a.effect == "white_drift":
         return _describe_drift(a, units)
     name = TERM_NAMES.get(a.effect, a.effect)
-    verb = "is missing" if a.effect != "lowpass" else "is missing in the simulation"
+    verb = "are missing" if a.effect in PLURAL_EFFECTS else "is missing"
+    verb += " in the simulation" if a.effect == "lowpass" else ""
     return f"{name} {verb} ({format_params(a, units, fs=fs)})"
 
 
@@ -404,13 +468,26 @@ def _tau_item(
     gap = tm.gap(extra)
     ratio = float(np.exp(np.max(np.abs(r))))
     text = f"tau view: a gap G = {gap:.4g} remains (chance level T0 = {tm.t0:.3g})"
+    where: dict[str, Any] = {"tau_bands_s": bands}
+    size = {"gap_after": gap, "max_avar_ratio": ratio}
     if bands:
         text += " at tau " + ", ".join(f"{x:.3g}-{y:.3g} s" for x, y in bands[:4])
+    elif z.size:
+        # spread over the taus (no single one beyond the simultaneous threshold): say where
+        # it departs most, and in which direction
+        k = int(np.argmax(np.abs(z)))
+        where["largest_departure_tau_s"] = float(tm.tau[k])
+        size["largest_departure_z"] = float(z[k])
+        text += (
+            f", spread over the taus (none beyond the simultaneous threshold |z| = "
+            f"{tv.z_threshold:.3g}); largest departure at tau = {tm.tau[k]:.3g} s, z = "
+            f"{z[k]:+.2g} (real {'above' if z[k] > 0 else 'below'} simulated)"
+        )
     return Unexplained(
         "tau",
         "tau",
-        {"tau_bands_s": bands},
-        {"gap_after": gap, "max_avar_ratio": ratio},
+        where,
+        size,
         float(p),
         text + f", p = {p:.2g}",
     )
