@@ -614,3 +614,25 @@ def test_written_names_the_terms_the_format_could_not_hold():
     assert held.report() == []
     assert held.lost("gyro", slow) == []
     assert held.lost("gyro", white) == []
+
+
+@pytest.mark.parametrize(("to", "name"), [(None, "imu.yaml"), ("openvins", "chain.yaml")])
+def test_an_accelerometer_only_model_converts_and_is_recognised(tmp_path, capsys, to, name):
+    """``model convert accel.json imu.yaml`` writes the two accelerometer keys only; the file
+    is then recognised (by its content) as what it is, not refused as an unknown config."""
+    from allanite.cli import main
+
+    model = sensor_model([White(N=0.002), RateRandomWalk(K=2e-5)], "accel")
+    src = tmp_path / "accel.json"
+    model.save(src)
+    out = tmp_path / name
+    args = ["model", "convert", str(src), str(out), "--rate", "100"]
+    assert main([*args, "--to", to] if to else args) == 0
+    assert "cannot tell" not in capsys.readouterr().err
+    back = read_config(out)
+    assert back.source_format == (to or "kalibr")
+    assert back.gyro is None
+    assert back.accel is not None
+    white, walk = back.accel.terms_of_type("white")[0], back.accel.terms_of_type("rrw")[0]
+    assert white.values()["N"] == pytest.approx(0.002, rel=1e-9)
+    assert walk.values()["K"] == pytest.approx(2e-5, rel=1e-9)
