@@ -35,7 +35,8 @@ from allanite.diagnosis.joint import Explanation
 from allanite.diagnosis.null import runs
 from allanite.diagnosis.tau_view import TauModel, TauView
 from allanite.diagnosis.time_view import TimeView
-from allanite.units import coefficient_unit, convert, customary_unit
+from allanite.units import coefficient_text as param_unit
+from allanite.units import customary_value as shown_param
 
 __all__ = [
     "Unexplained",
@@ -163,24 +164,6 @@ class Verdict:
     headline: str
 
 
-def param_unit(rate: str | None, rate_power: float, time_power: float) -> str:
-    """Unit ``rate^rate_power * s^time_power`` of a parameter in the model's units.
-
-    The unit the JSON values are in (``N`` of a ``deg/s`` model in ``deg/sqrt(s)``, of a
-    ``rad/s`` model in ``rad/sqrt(s)``; :func:`allanite.units.coefficient_unit`); without a
-    rate unit, ``rate*s^0.5``-style text. Dimensionless parameters give ``""``.
-    """
-    if rate_power == 0:
-        return {1.0: "s", -1.0: "Hz", 0.0: ""}.get(float(time_power), f"s^{time_power:g}")
-    if rate is not None:
-        try:
-            return coefficient_unit(rate, rate_power, time_power).text
-        except ValueError:
-            pass
-    text = (rate or "rate") if rate_power == 1 else f"({rate or 'rate'})^{rate_power:g}"
-    return text if time_power == 0 else f"{text}*s^{time_power:g}"
-
-
 def param_units(a: Attribution, units: str | None) -> dict[str, str]:
     """Unit of each of an attribution's parameters as the JSON holds them (the model's units).
 
@@ -194,23 +177,6 @@ def param_units(a: Attribution, units: str | None) -> dict[str, str]:
     return out
 
 
-def shown_param(name: str, value: float, unit: str, units: str | None) -> tuple[float, str]:
-    """``(value, unit)`` of a parameter in the customary unit ``allanite fit`` shows.
-
-    :func:`allanite.units.customary_unit` of the model's rate unit ``units``: a gyro's N in
-    deg/sqrt(h), B and sigma in deg/h, K in deg/h/sqrt(h) (deg/s and rad/s alike); an
-    accelerometer's N in m/s/sqrt(h); times in s, frequencies in Hz. ``value`` is in
-    ``unit`` (:func:`param_unit`); without ``units`` or a unit it is returned as it is.
-    """
-    if units is None or not unit or unit in ("s", "Hz"):
-        return value, unit
-    try:
-        shown = customary_unit(units, name, unit)
-        return convert(value, unit, shown), shown
-    except ValueError:
-        return value, unit
-
-
 def format_params(
     a: Attribution,
     units: str | None,
@@ -221,7 +187,8 @@ def format_params(
 ) -> str:
     """``N = 0.84 deg/sqrt(h)``-style text of an attribution's parameters.
 
-    Coefficients are shown in the customary units of ``allanite fit`` (:func:`shown_param`),
+    Coefficients are shown in the customary units of ``allanite fit``
+    (:func:`allanite.units.customary_value`),
     with ``sigma`` their one-sigma uncertainty (``± ...``). With the sampling frequency
     ``fs``, a frequency above the Nyquist frequency (a sensor filter's bandwidth can be: it
     acts before sampling) says so.
