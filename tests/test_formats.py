@@ -636,3 +636,25 @@ def test_an_accelerometer_only_model_converts_and_is_recognised(tmp_path, capsys
     white, walk = back.accel.terms_of_type("white")[0], back.accel.terms_of_type("rrw")[0]
     assert white.values()["N"] == pytest.approx(0.002, rel=1e-9)
     assert walk.values()["K"] == pytest.approx(2e-5, rel=1e-9)
+
+
+def test_readme_quotes_the_export_note_the_code_prints():
+    """The README's worked example quotes the PX4 plugin's projection note of round 1 (the
+    stored round-1 config plus the fast Gauss-Markov process the diagnosis folded in): the
+    quote is what the writer prints now, units included."""
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    sdf = root / "benchmarks" / "results" / "sim_loop_adis_round1.sdf"
+    config = read_config(sdf, rate=100.0)
+    assert config.gyro is not None
+    fast = GaussMarkov(sigma=0.10589144721918387 * math.pi / 180, tau_c=0.02317764520343835)
+    written = format_module("px4-plugin").write(
+        config.with_model("gyro", config.gyro.plus(fast)),
+        rate=100.0,
+        template=sdf.read_text(),
+        tau_range=(0.01, 655.36),
+    )
+    (line,) = written.report()
+    readme = " ".join((root / "README.md").read_text(encoding="utf-8").split())
+    assert f'("{line}"' in readme

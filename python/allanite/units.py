@@ -658,7 +658,9 @@ def display_unit(rate: str, name: str | Unit | tuple[float, float]) -> str:
 ACCELEROMETER_CUSTOMARY: dict[str, str] = {
     "N": "m/s/sqrt(h)",  # velocity random walk
     "B": "ug",  # bias instability
-    "K": "m/s/h^1.5",  # acceleration random walk
+    # acceleration random walk: m/s^2/sqrt(s) is m/s^3/sqrt(Hz), Kalibr's
+    # accelerometer_random_walk and the simulators' bias random-walk density
+    "K": "m/s^2/sqrt(s)",
     "Q": "m/s",  # velocity quantization
     "R": "m/s^2/h",  # acceleration ramp
     "sigma": "ug",
@@ -703,7 +705,8 @@ def customary_unit(rate: str, name: str | tuple[float, float], unit: str | Unit)
     (:func:`customary_gyro_rate`: N in deg/√h, B in deg/h, K in deg/h/√h, R in deg/h² for
     deg/s and rad/s alike; the model keeps its own unit, e.g. rad/s/√Hz in the JSON).
     Accelerometers: velocity random walk in m/s/√h, bias instability and Gauss-Markov sigma
-    in µg, acceleration random walk in m/s/h^1.5, velocity quantization in m/s, ramp in
+    in µg, acceleration random walk in m/s²/√s (= m/s³/√Hz, as Kalibr and the simulators take
+    it), velocity quantization in m/s, ramp in
     m/s²/h (:data:`ACCELEROMETER_CUSTOMARY`).
     Anything else (the record unit, a parameter without a customary unit) keeps ``unit``.
 
