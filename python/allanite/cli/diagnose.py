@@ -81,7 +81,8 @@ def register(subparsers: Any) -> None:
         "--holdout",
         metavar="FRACTION|FILE",
         help="fraction of the record held out from the fit (e.g. 0.5), or a second real "
-        "record read with the same options; the best effect's shrinkage is measured there",
+        "record read with the same options; the shrinkage of the best effect and of the "
+        "joint set of effects is measured there",
     )
     diag.add_argument(
         "--effects", help="comma-separated candidate effects (default: all), e.g. white,sine"
