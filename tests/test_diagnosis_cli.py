@@ -80,6 +80,13 @@ def test_sim_record_and_full_output(files, tmp_path, capsys):
     assert "SIGNIFICANT" in text
     assert "sine" in text
     full = json.loads(out_file.read_text())
+    # a simulated record has no model: the term list is the effects' alone, and says so
+    terms = full["explanation"]["terms"]
+    assert [t["type"] for t in terms] == [a["term"]["type"] for a in full["explanation"]["effects"]]
+    (line,) = [x for x in text.splitlines() if '"terms"' in x]
+    assert "the effects as model JSON" in line
+    assert "with the effects added" not in line
+    assert json.loads(line[line.index("[") :]) == terms
     assert set(full["views"]) == {"tau", "frequency", "time"}
     assert full["meta"]["sim"] == "record"
 

@@ -35,10 +35,10 @@ frequency_lines_hz, time_segments_s, frequency_bands_hz}, attribution [{effect, 
 params_units, gap_before, gap_after, shrinkage, consistent_after, ...}, ...] (single effects,
 best first), explanation {effects, gap_before, gap_after, consistent_after, p_after, share,
 explained, terms, holdout} or null (the joint set; terms: the model JSON "terms" with the
-effects added), holdout {shrinkage, ...} or null (the best single effect), meta, warnings.
-The text leads with the headline and what remains unexplained, and shows parameters in the
-customary units of `allanite fit` (N in deg/sqrt(h), ...); the JSON keeps them in the units
-of --units, named in params_units.
+effects added; with --sim-record, the effects' terms alone), holdout {shrinkage, ...} or null
+(the best single effect), meta, warnings. The text leads with the headline and what remains
+unexplained, and shows parameters in the customary units of `allanite fit` (N in
+deg/sqrt(h), ...); the JSON keeps them in the units of --units, named in params_units.
 """
 
 
@@ -195,7 +195,8 @@ def _summary(d: Any) -> str:
         text = "n/a (no gap in the held-out data)" if d.holdout.gap_before <= 0 else percent(shrink)
         lines.append(f"held-out shrinkage of {d.holdout.effect}: {text}")
     if d.explanation is not None and d.attribution:
-        lines.extend(explanation_lines(d.explanation, units, d.meta.get("fs")))
+        model = d.meta.get("sim") != "record"
+        lines.extend(explanation_lines(d.explanation, units, d.meta.get("fs"), model=model))
     return "\n".join(lines)
 
 

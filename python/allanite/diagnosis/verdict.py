@@ -48,6 +48,7 @@ __all__ = [
     "param_units",
     "percent",
     "shown_param",
+    "terms_label",
     "verdict",
 ]
 
@@ -231,14 +232,18 @@ def percent(fraction: float) -> str:
     return f"{value:.{digits}f} %"
 
 
-def explanation_lines(e: Explanation, units: str | None, fs: float | None = None) -> list[str]:
+def explanation_lines(
+    e: Explanation, units: str | None, fs: float | None = None, *, model: bool = True
+) -> list[str]:
     """The joint explanation in plain text: the set, its gap, shares, held-out check, terms.
 
     One line for the set (effects with their parameters in customary units, the gap before
     and after all of them and whether the rest is consistent with chance in the tau view),
     one for each effect's share of the gap, one for the held-out check of the whole set (when
-    there is one) and, for a model, the combined term list as the model JSON's ``terms`` (in
-    the model's units, ready to paste).
+    there is one) and the term list: with ``model`` (the simulated sensor is a noise model)
+    the model's terms with the effects added, as the model JSON's ``terms`` (in the model's
+    units, ready to paste); for a simulated record, the effects' own terms, to add to the
+    simulator's model.
     """
     after = "consistent with chance" if e.consistent_after else "gap remains"
     lines = [
@@ -264,11 +269,15 @@ def explanation_lines(e: Explanation, units: str | None, fs: float | None = None
             f"{int(hold.get('n_samples', 0)):,} samples): {shrink}"
         )
     if e.terms:
-        lines.append(
-            '  model JSON "terms" with the effects added (model units): '
-            + json.dumps(e.terms, allow_nan=False)
-        )
+        lines.append(f"  {terms_label(model)}: " + json.dumps(e.terms, allow_nan=False))
     return lines
+
+
+def terms_label(model: bool) -> str:
+    """What the explanation's term list is: a whole model's terms, or the effects' alone."""
+    if model:
+        return 'model JSON "terms" with the effects added (model units)'
+    return 'the effects as model JSON "terms" (units of the record; add them to your simulator)'
 
 
 def _specs(a: Attribution) -> dict[str, Any]:

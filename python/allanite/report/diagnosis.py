@@ -133,15 +133,16 @@ def diagnosis_html(diagnosis: Any, *, channel: str, model_name: str) -> str:
         )
     explanation = getattr(diagnosis, "explanation", None)
     if explanation is not None and diagnosis.attribution:
-        parts.append(_explanation_html(explanation, units, diagnosis.meta.get("fs")))
+        model = diagnosis.meta.get("sim") != "record"
+        parts.append(_explanation_html(explanation, units, diagnosis.meta.get("fs"), model))
     return "".join(parts)
 
 
-def _explanation_html(e: Any, units: str | None, fs: float | None) -> str:
+def _explanation_html(e: Any, units: str | None, fs: float | None, model: bool) -> str:
     """The joint explanation: the set with shares, its gap, held-out check and term list."""
     import json
 
-    from allanite.diagnosis.verdict import format_params, percent
+    from allanite.diagnosis.verdict import format_params, percent, terms_label
 
     rows = [
         [a.effect, format_params(a, units, fs=fs), percent(e.share.get(a.effect, 0.0))]
@@ -167,8 +168,8 @@ def _explanation_html(e: Any, units: str | None, fs: float | None) -> str:
         )
     if e.terms:
         out.append(
-            '<p>Model JSON <code>"terms"</code> with the effects added (model units, ready to '
-            f"paste):</p><pre>{h.escape(json.dumps(e.terms, allow_nan=False))}</pre>"
+            f"<p>{h.escape(terms_label(model))}, ready to paste:</p>"
+            f"<pre>{h.escape(json.dumps(e.terms, allow_nan=False))}</pre>"
         )
     return "".join(out)
 
