@@ -149,3 +149,22 @@ def test_help_describes_every_top_level_json_field(files, capsys):
         assert key in epilog, key
     for key in data["explanation"]:
         assert key in epilog, key
+
+
+def test_a_model_of_the_other_sensor_is_refused_with_what_to_give(files, tmp_path, capsys):
+    """A gyro record against an accelerometer model JSON: one error naming both sensors (it
+    used to advise --sim-sensor accel, which then failed on a 'unit mismatch')."""
+    accel = NoiseModel((TERM_TYPES["white"](N=0.002),), {"rate": "m/s^2", "time": "s"})
+    path = tmp_path / "accel.json"
+    accel.save(path)
+    common = ["diagnose", str(files["real"]), "--fs", "100", "--units", "deg/s", "--n-mc", "20"]
+    assert main([*common, "--sim-model", str(path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1
+    assert "accel.json is an accelerometer model (m/s^2)" in err
+    assert "the record is a gyro record (--units deg/s)" in err
+    assert "--sim-sensor accel" not in err
+    assert main([*common, "--sim-model", str(path), "--sim-sensor", "accel"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "--sim-sensor accel compares an accelerometer model with a gyro record" in err
+    assert "unit mismatch" not in err

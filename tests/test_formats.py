@@ -658,3 +658,13 @@ def test_readme_quotes_the_export_note_the_code_prints():
     (line,) = written.report()
     readme = " ".join((root / "README.md").read_text(encoding="utf-8").split())
     assert f'("{line}"' in readme
+
+
+def test_a_model_json_without_units_is_named_as_such(tmp_path):
+    """A model JSON that forgot ``units`` is recognised by its ``terms`` and refused with the
+    missing field named (it was 'cannot tell which simulator config this is')."""
+    path = tmp_path / "model.json"
+    path.write_text('{"terms": [{"type": "white", "N": 0.01}]}')
+    assert detect_format(path, path.read_text()) == "allanite"
+    with pytest.raises(ValueError, match=r"missing \['units'\]"):
+        read_config(path)
