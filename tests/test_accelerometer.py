@@ -56,10 +56,10 @@ def test_accelerometer_fit_recovers_the_model_in_any_acceleration_unit(accel_rec
         rows = {r.symbol: r for r in coefficient_table(fit, None)}
         assert rows["N"].unit == "m/s/sqrt(h)"
         assert rows["N"].quantity == "velocity random walk"
-        assert rows["K"].unit == "m/s/h^1.5"
+        assert rows["K"].unit == "m/s^2/sqrt(s)"  # = m/s^3/sqrt(Hz), Kalibr's random walk
         assert rows["K"].quantity == "acceleration random walk"
         assert rows["N"].value == pytest.approx(60 * n.value, rel=1e-9)
-        assert rows["K"].value == pytest.approx(3600 * 60 * k.value, rel=1e-9)
+        assert rows["K"].value == pytest.approx(k.value, rel=1e-9)
         table = {r["name"]: r for r in fit.table(units="ug")}
         assert table["N"]["unit"] == "ug/sqrt(Hz)"
         assert table["N"]["value"] == pytest.approx(n.value / (1e-6 * STANDARD_GRAVITY), rel=1e-9)

@@ -459,3 +459,31 @@ def test_flat_minimum_readout_is_an_upper_bound(
     assert b_line.startswith("    B <= ")
     assert "upper bound" in b_line
     assert not any(line.startswith("    B = ") for line in out.splitlines())
+
+
+def test_too_short_for_a_fit_names_the_fit_rule(tmp_path, capsys):
+    """The summary's advice is the fit's own minimum (min_auto_samples, from AUTO_MIN_POINTS
+    and fit_factors): one sample fewer is refused by the fit, that many is fitted; on a longer
+    record a too sparse grid is named instead."""
+    import allanite
+    from allanite.errors import RecordTooShortError
+    from allanite.fit.api import AUTO_MIN_POINTS, min_auto_samples
+
+    need = min_auto_samples()
+    x = np.random.default_rng(3).standard_normal(4000) * 0.01
+    path = tmp_path / "rec.npy"
+    np.save(path, x[: need - 1])
+    assert main(["analyze", str(path), "--fs", "100", "--units", "deg/s"]) == 0
+    out = capsys.readouterr().out
+    assert f"too short for a fit ({need - 1} samples" in out
+    assert f"{AUTO_MIN_POINTS} usable taus, {need} samples or more" in out
+    with pytest.raises(RecordTooShortError):
+        allanite.fit(x[: need - 1], fs=100.0)
+    np.save(path, x[:need])
+    assert main(["analyze", str(path), "--fs", "100", "--units", "deg/s"]) == 0
+    assert "fitted coefficients with intervals: allanite fit " in capsys.readouterr().out
+    assert allanite.fit(x[:need], fs=100.0).model.terms
+    np.save(path, x)
+    assert main(["analyze", str(path), "--fs", "100", "--units", "deg/s", "--points", "2"]) == 0
+    out = capsys.readouterr().out
+    assert "the tau grid gives only 1 usable tau for a fit (choosing the terms needs 3)" in out

@@ -80,6 +80,13 @@ def test_sim_record_and_full_output(files, tmp_path, capsys):
     assert "SIGNIFICANT" in text
     assert "sine" in text
     full = json.loads(out_file.read_text())
+    # a simulated record has no model: the term list is the effects' alone, and says so
+    terms = full["explanation"]["terms"]
+    assert [t["type"] for t in terms] == [a["term"]["type"] for a in full["explanation"]["effects"]]
+    (line,) = [x for x in text.splitlines() if '"terms"' in x]
+    assert "the effects as model JSON" in line
+    assert "with the effects added" not in line
+    assert json.loads(line[line.index("[") :]) == terms
     assert set(full["views"]) == {"tau", "frequency", "time"}
     assert full["meta"]["sim"] == "record"
 
@@ -93,6 +100,7 @@ def test_sim_record_and_full_output(files, tmp_path, capsys):
         (["--sim-record", "{sim}", "--sim-fs", "200"], "sample-rate mismatch"),
         (["--sim-record", "{nan}"], "NaN"),
         (["--units", "deg/s", "--sim-model", "{model}", "--holdout", "2"], "holdout"),
+        (["--units", "deg/s", "--sim-model", "{model}", "--seed", "-1"], "--seed must be"),
     ],
 )
 def test_bad_input_is_one_line_and_exit_2(files, capsys, extra, message):
@@ -123,3 +131,40 @@ def test_a_model_in_another_unit_of_the_same_quantity_is_converted(files, tmp_pa
     converted = json.loads(capsys.readouterr().out)
     assert converted["gap"]["p_value"] == pytest.approx(same["gap"]["p_value"], rel=1e-9)
     assert converted["meta"]["units"] == "deg/s"
+
+
+def test_help_describes_every_top_level_json_field(files, capsys):
+    """The --help epilog names every key of the --json object (headline and explanation too)."""
+    with pytest.raises(SystemExit):
+        main(["diagnose", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    code = main(
+        ["diagnose", str(files["real"]), "--fs", "100", "--units", "deg/s", "--sim-model",
+         str(files["model"]), "--n-mc", "20", "--json"]
+    )  # fmt: skip
+    assert code == 0
+    data = json.loads(capsys.readouterr().out)
+    epilog = text[text.index("JSON (--json)") :]
+    for key in data:
+        assert key in epilog, key
+    for key in data["explanation"]:
+        assert key in epilog, key
+
+
+def test_a_model_of_the_other_sensor_is_refused_with_what_to_give(files, tmp_path, capsys):
+    """A gyro record against an accelerometer model JSON: one error naming both sensors (it
+    used to advise --sim-sensor accel, which then failed on a 'unit mismatch')."""
+    accel = NoiseModel((TERM_TYPES["white"](N=0.002),), {"rate": "m/s^2", "time": "s"})
+    path = tmp_path / "accel.json"
+    accel.save(path)
+    common = ["diagnose", str(files["real"]), "--fs", "100", "--units", "deg/s", "--n-mc", "20"]
+    assert main([*common, "--sim-model", str(path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1
+    assert "accel.json is an accelerometer model (m/s^2)" in err
+    assert "the record is a gyro record (--units deg/s)" in err
+    assert "--sim-sensor accel" not in err
+    assert main([*common, "--sim-model", str(path), "--sim-sensor", "accel"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "--sim-sensor accel compares an accelerometer model with a gyro record" in err
+    assert "unit mismatch" not in err

@@ -245,3 +245,85 @@ def test_white_bursts_term_simulates_its_allan_variance():
     assert term_from_dict(term.to_dict()) == term
     with pytest.raises(ValueError, match="duty must lie in"):
         WhiteBursts(N=0.02, duty=1.5, burst_s=1.0)
+
+
+def test_cli_text_and_report_show_the_joint_explanation_ready_to_paste(bursty):
+    """The text and the report give the set, its shares, the held-out check and the term list;
+    the pasted term list is the explanation's (a model JSON loads it)."""
+    from allanite.cli.diagnose import _summary
+    from allanite.diagnosis.verdict import percent
+    from allanite.report.diagnosis import diagnosis_html
+
+    e = bursty.explanation
+    assert e is not None
+    assert e.terms
+    lines = _summary(bursty).splitlines()
+    first = next(i for i, line in enumerate(lines) if line.startswith("joint explanation: "))
+    assert " + ".join(a.effect for a in e.effects) in lines[first]
+    share = next(line for line in lines[first:] if "share of the gap:" in line)
+    for name, value in e.share.items():
+        assert f"{name} {percent(value)}" in share
+    pasted = next(line for line in lines[first:] if 'model JSON "terms"' in line)
+    terms = json.loads(pasted[pasted.index("[") :])
+    assert terms == json.loads(json.dumps(e.terms))
+    model = NoiseModel.from_dict({"units": MODEL.units, "terms": terms})
+    assert [t.type for t in model.terms][:2] == ["white", "rrw"]
+    html = diagnosis_html(bursty, channel="gyro x", model_name="model.json")
+    assert "joint explanation" in html
+    assert json.dumps(e.terms).replace('"', "&quot;") in html
+
+
+def test_shrinkage_text_never_rounds_a_part_to_the_whole():
+    from allanite.diagnosis.verdict import percent
+
+    assert percent(0.9992) == "99.9 %"
+    assert percent(0.99999) == "99.999 %"
+    assert percent(1.0) == "100 %"
+    assert percent(0.0004) == "0.04 %"
+    assert percent(0.0) == "0 %"
+    assert percent(0.5) == "50 %"
+    assert percent(-0.25) == "-25 %"
+
+
+@pytest.mark.parametrize(
+    ("effect", "term", "params", "verb"),
+    [
+        ("spikes", {"type": "spikes", "amplitude": 1.0, "rate": 0.1}, {"amplitude": 1.0}, "are"),
+        ("step", {"type": "bias_steps"}, {}, "are"),
+        ("markov", {"type": "markov"}, {"sigma": 0.01, "tau_c": 1.0}, "is"),
+    ],
+)
+def test_effect_names_agree_with_their_verb(effect, term, params, verb):
+    from allanite.diagnosis.attribution import Attribution
+    from allanite.diagnosis.verdict import TERM_NAMES, describe_effect
+
+    a = Attribution(effect, term, params, {}, 1.0, 0.0, 1.0, True, 1.0, 0.0, {}, np.zeros(1))
+    assert describe_effect(a, "deg/s").startswith(f"{TERM_NAMES[effect]} {verb} missing")
+
+
+class _SpreadGap:
+    """A tau model whose residual departs everywhere a little, nowhere beyond the threshold."""
+
+    tau = np.array([0.01, 0.1, 1.0, 10.0])
+    null_sd = np.ones(4)
+    t0 = 4.0
+
+    def residual(self, extra=None):
+        return np.array([1.2, -0.5, 2.1, 1.0])
+
+    def gap(self, extra=None):
+        return 9.0
+
+
+def test_a_tau_gap_spread_over_the_taus_still_says_where():
+    """No tau beyond the simultaneous threshold: the item names the largest departure."""
+    from types import SimpleNamespace
+
+    from allanite.diagnosis.verdict import _tau_item
+
+    item = _tau_item(_SpreadGap(), SimpleNamespace(z_threshold=3.0), None, 0.01)
+    assert item.where["tau_bands_s"] == []
+    assert item.where["largest_departure_tau_s"] == 1.0
+    assert item.size["largest_departure_z"] == pytest.approx(2.1)
+    assert "largest departure at tau = 1 s" in item.text
+    assert "real above simulated" in item.text

@@ -218,7 +218,10 @@ def test_a_config_without_the_sensor_names_the_other_one(
     argv = ["diagnose", str(real), "--fs", "100", "--units", "rad/s", "--sim-model", str(config)]
     assert main(argv) == 2
     line = _one_line_error(capsys, "diagnose")
-    assert line.endswith("choose it with --sim-sensor accel")  # the CLI's spelling only
+    # the record is a gyro (rad/s): the CLI names both sensors rather than advising
+    # --sim-sensor accel, which would then fail on the units
+    assert "holds no gyro noise model: imu.sdf is an accelerometer model (m/s^2)" in line
+    assert line.endswith("compare it with an accelerometer record, or give a gyro model")
     # a file that is no simulator config: the option that names the format, once
     (tmp_path / "log.csv").write_text("t,gz\n0,1\n")
     argv[-1] = str(tmp_path / "log.csv")

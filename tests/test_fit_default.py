@@ -217,9 +217,9 @@ def test_six_axis_newcomer_record_keeps_the_random_walks(tmp_path, capsys):
     argv += ["--units", "deg/s,m/s^2", "--json", "--level", "0.997"]
     assert main(argv) == 0
     channels = json.loads(capsys.readouterr().out)["channels"]
-    # truths in the displayed units: deg/sqrt(h), deg/h/sqrt(h); m/s/sqrt(h), m/s/h^1.5
+    # truths in the displayed units: deg/sqrt(h), deg/h/sqrt(h); m/s/sqrt(h), m/s^2/sqrt(s)
     truth = {"gyro": {"N": 0.01 * 60, "K": 1e-4 * 3600 * 60}}
-    truth["accel"] = {"N": 0.002 * 60, "K": 5e-5 * 3600 * 60}
+    truth["accel"] = {"N": 0.002 * 60, "K": 5e-5}
     for j, channel in enumerate(channels):
         coef = {c["symbol"]: c for c in channel["coefficients"]}
         sensor = "gyro" if j < 3 else "accel"

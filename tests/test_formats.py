@@ -614,3 +614,57 @@ def test_written_names_the_terms_the_format_could_not_hold():
     assert held.report() == []
     assert held.lost("gyro", slow) == []
     assert held.lost("gyro", white) == []
+
+
+@pytest.mark.parametrize(("to", "name"), [(None, "imu.yaml"), ("openvins", "chain.yaml")])
+def test_an_accelerometer_only_model_converts_and_is_recognised(tmp_path, capsys, to, name):
+    """``model convert accel.json imu.yaml`` writes the two accelerometer keys only; the file
+    is then recognised (by its content) as what it is, not refused as an unknown config."""
+    from allanite.cli import main
+
+    model = sensor_model([White(N=0.002), RateRandomWalk(K=2e-5)], "accel")
+    src = tmp_path / "accel.json"
+    model.save(src)
+    out = tmp_path / name
+    args = ["model", "convert", str(src), str(out), "--rate", "100"]
+    assert main([*args, "--to", to] if to else args) == 0
+    assert "cannot tell" not in capsys.readouterr().err
+    back = read_config(out)
+    assert back.source_format == (to or "kalibr")
+    assert back.gyro is None
+    assert back.accel is not None
+    white, walk = back.accel.terms_of_type("white")[0], back.accel.terms_of_type("rrw")[0]
+    assert white.values()["N"] == pytest.approx(0.002, rel=1e-9)
+    assert walk.values()["K"] == pytest.approx(2e-5, rel=1e-9)
+
+
+def test_readme_quotes_the_export_note_the_code_prints():
+    """The README's worked example quotes the PX4 plugin's projection note of round 1 (the
+    stored round-1 config plus the fast Gauss-Markov process the diagnosis folded in): the
+    quote is what the writer prints now, units included."""
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    sdf = root / "benchmarks" / "results" / "sim_loop_adis_round1.sdf"
+    config = read_config(sdf, rate=100.0)
+    assert config.gyro is not None
+    fast = GaussMarkov(sigma=0.10589144721918387 * math.pi / 180, tau_c=0.02317764520343835)
+    written = format_module("px4-plugin").write(
+        config.with_model("gyro", config.gyro.plus(fast)),
+        rate=100.0,
+        template=sdf.read_text(),
+        tau_range=(0.01, 655.36),
+    )
+    (line,) = written.report()
+    readme = " ".join((root / "README.md").read_text(encoding="utf-8").split())
+    assert f'("{line}"' in readme
+
+
+def test_a_model_json_without_units_is_named_as_such(tmp_path):
+    """A model JSON that forgot ``units`` is recognised by its ``terms`` and refused with the
+    missing field named (it was 'cannot tell which simulator config this is')."""
+    path = tmp_path / "model.json"
+    path.write_text('{"terms": [{"type": "white", "N": 0.01}]}')
+    assert detect_format(path, path.read_text()) == "allanite"
+    with pytest.raises(ValueError, match=r"missing \['units'\]"):
+        read_config(path)

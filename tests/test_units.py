@@ -296,7 +296,7 @@ def test_accelerometer_display_and_customary_units():
     assert display_unit("mg", "B") == "mg"
     assert display_unit("m/s^2", "K") == "m/s^2/sqrt(s)"
     assert display_unit("m/s^2", "Q") == "m/s"
-    expected = {"N": "m/s/sqrt(h)", "B": "ug", "K": "m/s/h^1.5", "Q": "m/s", "R": "m/s^2/h"}
+    expected = {"N": "m/s/sqrt(h)", "B": "ug", "K": "m/s^2/sqrt(s)", "Q": "m/s", "R": "m/s^2/h"}
     for name, unit in expected.items():
         own = coefficient_unit("g", *_powers(name))
         assert customary_unit("g", name, own) == unit
@@ -393,3 +393,25 @@ def test_rad_per_second_gyros_show_degrees_and_keep_si_in_the_model():
     model = json.loads(fitted.model.to_json())  # the SI value, as fitted
     assert model["units"]["rate"] == "rad/s"
     assert model["terms"][0]["N"] == si.value
+
+
+def test_export_notes_and_diagnosis_text_share_one_conversion():
+    """describe_term (export notes) and format_params (diagnosis text) both show a term's
+    coefficient through customary_value: a rad/s Gauss-Markov sigma in deg/h."""
+    from allanite.diagnosis.verdict import param_unit, shown_param
+    from allanite.formats.base import describe_term
+    from allanite.terms import GaussMarkov
+    from allanite.units import coefficient_text, customary_value
+
+    assert param_unit is coefficient_text
+    assert shown_param is customary_value
+    own = coefficient_text("rad/s", 1, 0)
+    assert own == "rad/s"
+    value, unit = customary_value("sigma", 1.9e-3, own, "rad/s")
+    assert unit == "deg/h"
+    assert value == pytest.approx(1.9e-3 * 180 / math.pi * 3600, rel=1e-12)
+    term = GaussMarkov(sigma=1.9e-3, tau_c=0.024)
+    assert describe_term(term, "gyro") == f"markov (sigma={value:.4g} deg/h, tau_c=0.024 s)"
+    assert describe_term(term) == "markov (sigma=0.0019, tau_c=0.024 s)"
+    assert coefficient_text(None, 1, 0.5) == "rate*s^0.5"
+    assert customary_value("N", 2.0, "unit*sqrt(s)", "unit") == (2.0, "unit*sqrt(s)")

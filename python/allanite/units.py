@@ -61,10 +61,12 @@ __all__ = [
     "SYMBOL_POWERS",
     "TIME_UNITS",
     "Unit",
+    "coefficient_text",
     "coefficient_unit",
     "convert",
     "customary_gyro_rate",
     "customary_unit",
+    "customary_value",
     "display_unit",
     "integral_unit",
     "integrated_unit",
@@ -656,7 +658,9 @@ def display_unit(rate: str, name: str | Unit | tuple[float, float]) -> str:
 ACCELEROMETER_CUSTOMARY: dict[str, str] = {
     "N": "m/s/sqrt(h)",  # velocity random walk
     "B": "ug",  # bias instability
-    "K": "m/s/h^1.5",  # acceleration random walk
+    # acceleration random walk: m/s^2/sqrt(s) is m/s^3/sqrt(Hz), Kalibr's
+    # accelerometer_random_walk and the simulators' bias random-walk density
+    "K": "m/s^2/sqrt(s)",
     "Q": "m/s",  # velocity quantization
     "R": "m/s^2/h",  # acceleration ramp
     "sigma": "ug",
@@ -701,7 +705,8 @@ def customary_unit(rate: str, name: str | tuple[float, float], unit: str | Unit)
     (:func:`customary_gyro_rate`: N in deg/√h, B in deg/h, K in deg/h/√h, R in deg/h² for
     deg/s and rad/s alike; the model keeps its own unit, e.g. rad/s/√Hz in the JSON).
     Accelerometers: velocity random walk in m/s/√h, bias instability and Gauss-Markov sigma
-    in µg, acceleration random walk in m/s/h^1.5, velocity quantization in m/s, ramp in
+    in µg, acceleration random walk in m/s²/√s (= m/s³/√Hz, as Kalibr and the simulators take
+    it), velocity quantization in m/s, ramp in
     m/s²/h (:data:`ACCELEROMETER_CUSTOMARY`).
     Anything else (the record unit, a parameter without a customary unit) keeps ``unit``.
 
@@ -735,3 +740,62 @@ def customary_unit(rate: str, name: str | tuple[float, float], unit: str | Unit)
             return "s" if own.quantity == "time" else "Hz"
         return own.text
     return candidate
+
+
+def coefficient_text(rate: str | None, rate_power: float, time_power: float) -> str:
+    """Text of the unit ``rate^rate_power * s^time_power`` of a coefficient in a model's units.
+
+    The unit a model JSON (and the diagnosis JSON's ``params``) holds a value in: ``N`` of a
+    ``deg/s`` model in ``deg/sqrt(s)``, of a ``rad/s`` model in ``rad/sqrt(s)``
+    (:func:`coefficient_unit`). Parameters without a rate power are times (``s``),
+    frequencies (``Hz``) or dimensionless (``""``). Without a rate unit (or one that is not a
+    rate), a symbolic ``rate*s^0.5``-style text.
+
+    Parameters
+    ----------
+    rate : str or None
+        The model's rate unit, or None when it is not known.
+    rate_power, time_power : float
+        The coefficient's powers of the rate and of seconds
+        (:class:`~allanite.terms.base.ParamSpec` ``rate`` and ``time``).
+    """
+    if rate_power == 0:
+        return {1.0: "s", -1.0: "Hz", 0.0: ""}.get(float(time_power), f"s^{time_power:g}")
+    if rate is not None:
+        try:
+            return coefficient_unit(rate, rate_power, time_power).text
+        except ValueError:
+            pass
+    text = (rate or "rate") if rate_power == 1 else f"({rate or 'rate'})^{rate_power:g}"
+    return text if time_power == 0 else f"{text}*s^{time_power:g}"
+
+
+def customary_value(name: str, value: float, unit: str, rate: str | None) -> tuple[float, str]:
+    """``(value, unit)`` of a coefficient in the customary unit ``allanite fit`` shows.
+
+    The one conversion of a term's coefficient for display, shared by the diagnosis text
+    (:func:`allanite.diagnosis.verdict.format_params`) and the export notes of the simulator
+    formats (:func:`allanite.formats.base.describe_term`): :func:`customary_unit` of
+    the model's rate unit ``rate`` (a gyro's N in deg/sqrt(h), B and sigma in deg/h, K in
+    deg/h/sqrt(h), deg/s and rad/s alike; an accelerometer's N in m/s/sqrt(h), B in ug, ...),
+    the value converted to it. Times stay in s, frequencies in Hz; without ``rate``, without
+    a ``unit`` or when the unit cannot be converted, the value and unit are returned as given.
+
+    Parameters
+    ----------
+    name : str
+        The coefficient's symbol (``N``, ``sigma``, ``tau_c``, ``sigma_2``).
+    value : float
+        Its value in ``unit``.
+    unit : str
+        Its unit in the model (:func:`coefficient_text`).
+    rate : str or None
+        The model's rate unit.
+    """
+    if rate is None or not unit or unit in ("s", "Hz"):
+        return value, unit
+    try:
+        shown = customary_unit(rate, name, unit)
+        return convert(value, unit, shown), shown
+    except ValueError:
+        return value, unit

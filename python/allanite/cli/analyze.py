@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from allanite.cli.fit import fit_possible
+from allanite.cli.fit import fit_impossible_reason, fit_possible
 from allanite.cli.record_options import (
     add_grid_arguments,
     add_record_arguments,
@@ -216,10 +216,7 @@ def summary_lines(result: AllanResult, fit_command: str | None = None) -> list[s
     if fit_command and fit_possible(result):
         lines.append(f"  fitted coefficients with intervals: {fit_command}")
     elif fit_command:
-        lines.append(
-            f"  fitted coefficients: the record is too short for a fit ({result.n_samples} "
-            "samples; choosing the terms needs about 40 or more): use a longer record"
-        )
+        lines.append(f"  fitted coefficients: {fit_impossible_reason(result)}")
     return lines
 
 

@@ -28,11 +28,17 @@ EXAMPLES = """examples:
       --fs 100 --sim-model run1_model.json --holdout 0.5 --report gap.html
   allanite diagnose real.csv --fs 2000 --sim-record sim.npy --input angle --json
 
-JSON (--json) is one object: gap {statistic, p_value, significant}, where {tau_bands_s,
-frequency_lines_hz, time_segments_s}, attribution [{effect, params, params_units, gap_before,
-gap_after, shrinkage, consistent_after}, ...] (best first) and holdout {shrinkage} or null.
-The text shows parameters in the customary units of `allanite fit` (N in deg/sqrt(h), ...);
-the JSON keeps them in the units of --units, named in params_units.
+JSON (--json) is one object: headline, closed (true only when the tau, frequency and time
+views all agree after the effects), unexplained [{view, evidence, where, size, p_value,
+text}, ...], gap {statistic, p_value, significant, T, T0, view_p_values}, where {tau_bands_s,
+frequency_lines_hz, time_segments_s, frequency_bands_hz}, attribution [{effect, params,
+params_units, gap_before, gap_after, shrinkage, consistent_after, ...}, ...] (single effects,
+best first), explanation {effects, gap_before, gap_after, consistent_after, p_after, share,
+explained, terms, holdout} or null (the joint set; terms: the model JSON "terms" with the
+effects added; with --sim-record, the effects' terms alone), holdout {shrinkage, ...} or null
+(the best single effect), meta, warnings. The text leads with the headline and what remains
+unexplained, and shows parameters in the customary units of `allanite fit` (N in
+deg/sqrt(h), ...); the JSON keeps them in the units of --units, named in params_units.
 """
 
 
@@ -75,7 +81,8 @@ def register(subparsers: Any) -> None:
         "--holdout",
         metavar="FRACTION|FILE",
         help="fraction of the record held out from the fit (e.g. 0.5), or a second real "
-        "record read with the same options; the best effect's shrinkage is measured there",
+        "record read with the same options; the shrinkage of the best effect and of the "
+        "joint set of effects is measured there",
     )
     diag.add_argument(
         "--effects", help="comma-separated candidate effects (default: all), e.g. white,sine"
@@ -139,7 +146,7 @@ def _holdout(args: argparse.Namespace) -> Any:
 
 
 def _summary(d: Any) -> str:
-    from allanite.diagnosis.verdict import format_params
+    from allanite.diagnosis.verdict import explanation_lines, format_params, percent
 
     units = d.meta.get("units")
     status = "CLOSED" if d.closed else "NOT FULLY EXPLAINED"
@@ -174,7 +181,7 @@ def _summary(d: Any) -> str:
             params = format_params(a, units, fs=d.meta.get("fs"))
             lines.append(
                 f"  {a.effect:<22} {params}  gap {a.gap_before:.4g} -> {a.gap_after:.4g} "
-                f"(shrinkage {100 * a.shrinkage:.0f} %, "
+                f"(shrinkage {percent(a.shrinkage)}, "
                 + ("consistent after" if a.consistent_after else "gap remains")
                 + ")"
                 + (
@@ -185,12 +192,11 @@ def _summary(d: Any) -> str:
             )
     if d.holdout is not None:
         shrink = d.holdout.shrinkage
-        text = (
-            "n/a (no gap in the held-out data)"
-            if d.holdout.gap_before <= 0
-            else f"{100 * shrink:.0f} %"
-        )
+        text = "n/a (no gap in the held-out data)" if d.holdout.gap_before <= 0 else percent(shrink)
         lines.append(f"held-out shrinkage of {d.holdout.effect}: {text}")
+    if d.explanation is not None and d.attribution:
+        model = d.meta.get("sim") != "record"
+        lines.extend(explanation_lines(d.explanation, units, d.meta.get("fs"), model=model))
     return "\n".join(lines)
 
 
@@ -213,6 +219,8 @@ def run(args: argparse.Namespace) -> int:
     """Run ``allanite diagnose``."""
     from allanite.diagnosis import diagnose
 
+    if args.seed < 0:
+        raise ValueError(f"--seed must be a non-negative integer, got {args.seed}")
     record = read_from_args(args.real, args)
     print_reader_notes([record], args)
     real, part = _one_channel(record, "real")

@@ -116,6 +116,32 @@ def fit_possible(result: AllanResult) -> bool:
     return len(fit_factors(result.m, result.n_samples)) >= AUTO_MIN_POINTS
 
 
+def fit_impossible_reason(result: AllanResult) -> str:
+    """Why :func:`fit_possible` is False, with the fit's own numbers and what to do.
+
+    A record shorter than :func:`allanite.fit.api.min_auto_samples` is too short on any grid;
+    a longer one has a grid too sparse for :data:`~allanite.fit.api.AUTO_MIN_POINTS` fitted
+    taus.
+    """
+    try:
+        from allanite.fit import fit_factors
+        from allanite.fit.api import AUTO_MIN_POINTS, min_auto_samples
+    except ImportError:
+        return "this installation has no fitter"
+    n, need = result.n_samples, min_auto_samples()
+    if n < need:
+        return (
+            f"the record is too short for a fit ({n} samples; choosing the terms needs "
+            f"{AUTO_MIN_POINTS} usable taus, {need} samples or more): use a longer record"
+        )
+    usable = len(fit_factors(result.m, n))
+    return (
+        f"the tau grid gives only {usable} usable tau{'s' if usable != 1 else ''} for a fit "
+        f"(choosing the terms needs {AUTO_MIN_POINTS}): use a denser grid (--taus log, "
+        "default --points)"
+    )
+
+
 def _model_of(fit: Any) -> Any:
     return getattr(fit, "model", fit)
 

@@ -92,6 +92,7 @@ def load_sim_model(args: argparse.Namespace, fs: float, units: str | None) -> Lo
     elif config.rate is None and rate is None and fmt != "allanite":
         config = read_config(path, format=fmt, rate=fs)  # rate-dependent laws (AirSim > 1 kHz)
     sensor = args.sim_sensor or _sensor_of(units)
+    _check_sensor(config, sensor, units, path.name, chosen=args.sim_sensor is not None)
     model = config.model(sensor)
     if fmt == "allanite":
         model = NoiseModel.from_json(path.read_text(encoding="utf-8"))
@@ -112,6 +113,36 @@ def load_sim_model(args: argparse.Namespace, fs: float, units: str | None) -> Lo
         if not note.startswith(f"{other}:"):  # notes on the other sensor are beside the point
             print(f"note: {note}", file=sys.stderr)
     return LoadedSim(model, config, fmt, float(config.rate or fs), sensor)
+
+
+_NAMES = {"gyro": "a gyro", "accel": "an accelerometer"}
+
+
+def _check_sensor(config: Any, sensor: str, units: str | None, name: str, *, chosen: bool) -> None:
+    """A clear error when the record and the model are of different sensors.
+
+    A gyro record (``--units deg/s``) against an accelerometer model, or the reverse, cannot
+    be compared whatever ``--sim-sensor`` says: the error names both sides and what to give,
+    instead of advising a ``--sim-sensor`` that then fails on the units.
+    """
+    if units is None or sensor_kind(units) not in ("gyro", "accelerometer"):
+        return
+    record = _sensor_of(units)
+    if chosen and sensor != record:
+        raise ValueError(
+            f"--sim-sensor {sensor} compares {_NAMES[sensor]} model with {_NAMES[record]} "
+            f"record (--units {units}); use --sim-sensor {record}, or give the record's own "
+            "unit with --units"
+        )
+    other = "accel" if sensor == "gyro" else "gyro"
+    if getattr(config, sensor) is None and getattr(config, other) is not None:
+        unit = getattr(config, other).units["rate"]
+        raise ValueError(
+            f"the {config.source_format or 'given'} config holds no {sensor} noise model: "
+            f"{name} is {_NAMES[other]} model ({unit}) and the record is {_NAMES[record]} "
+            f"record (--units {units}); compare it with {_NAMES[other]} record, or give "
+            f"{_NAMES[sensor]} model"
+        )
 
 
 def _sensor_of(units: str | None) -> str:

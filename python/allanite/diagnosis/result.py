@@ -98,9 +98,10 @@ class Diagnosis:
         check.
     closed : bool
         True only when the tau, frequency and time views are all consistent with chance after
-        the best effect is added (or no gap is significant).
+        the effects of the joint explanation are added (or no gap is significant).
     unexplained : list of Unexplained
-        What the best effect leaves unexplained: view, evidence, where and how large.
+        What the joint explanation's effects leave unexplained: view, evidence, where and how
+        large.
     headline : str
         One plain sentence: the effect with its parameters and units, and whether the records
         then agree in all three views or what remains.

@@ -21,6 +21,7 @@ noise-level ratio in the flagged windows, the line amplitude, the excess kurtosi
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass
 from typing import Any
 
@@ -34,16 +35,20 @@ from allanite.diagnosis.joint import Explanation
 from allanite.diagnosis.null import runs
 from allanite.diagnosis.tau_view import TauModel, TauView
 from allanite.diagnosis.time_view import TimeView
-from allanite.units import coefficient_unit, convert, customary_unit
+from allanite.units import coefficient_text as param_unit
+from allanite.units import customary_value as shown_param
 
 __all__ = [
     "Unexplained",
     "Verdict",
     "effect_psd",
+    "explanation_lines",
     "format_params",
     "param_unit",
     "param_units",
+    "percent",
     "shown_param",
+    "terms_label",
     "verdict",
 ]
 
@@ -66,6 +71,9 @@ TERM_NAMES = {
     "drifting_line": "a vibration line whose frequency drifts",
     "white_drift": "a white-noise level that changes over the record",
 }
+
+#: effects whose plain name is a plural ("spikes are missing")
+PLURAL_EFFECTS = frozenset({"step", "spikes"})
 
 #: what each piece of time/frequency evidence means, in words
 EVIDENCE_TEXT = {
@@ -92,7 +100,7 @@ _NEGLIGIBLE = ": significant on this long record, but negligible in size"
 
 @dataclass(frozen=True)
 class Unexplained:
-    """One part of the gap that the best effect leaves unexplained.
+    """One part of the gap that the effects (the joint explanation) leave unexplained.
 
     Attributes
     ----------
@@ -104,7 +112,9 @@ class Unexplained:
         base (:mod:`allanite.diagnosis.time_base`): ``time base`` (gaps, jitter, doubled
         increments), ``held``.
     where : dict
-        ``tau_bands_s``, ``frequency_bands_hz``, ``frequency_lines_hz`` or ``time_segments_s``.
+        ``tau_bands_s``, ``frequency_bands_hz``, ``frequency_lines_hz`` or ``time_segments_s``;
+        a tau gap spread over the taus, none beyond the simultaneous threshold, adds
+        ``largest_departure_tau_s`` (and ``size["largest_departure_z"]``, signed).
     size : dict
         How large: e.g. ``gap_after``; ``noise_level_ratio`` (rms ratio to the record's typical
         level in the flagged windows); ``amplitude``; ``excess_kurtosis`` (``kurt_hf``: of the
@@ -142,8 +152,8 @@ class Verdict:
     Attributes
     ----------
     closed : bool
-        True when no gap is significant, or when the best effect leaves every view
-        consistent with chance.
+        True when no gap is significant, or when the effects of the joint explanation leave
+        every view consistent with chance.
     unexplained : list of Unexplained
         What remains (empty when closed).
     headline : str
@@ -153,24 +163,6 @@ class Verdict:
     closed: bool
     unexplained: list[Unexplained]
     headline: str
-
-
-def param_unit(rate: str | None, rate_power: float, time_power: float) -> str:
-    """Unit ``rate^rate_power * s^time_power`` of a parameter in the model's units.
-
-    The unit the JSON values are in (``N`` of a ``deg/s`` model in ``deg/sqrt(s)``, of a
-    ``rad/s`` model in ``rad/sqrt(s)``; :func:`allanite.units.coefficient_unit`); without a
-    rate unit, ``rate*s^0.5``-style text. Dimensionless parameters give ``""``.
-    """
-    if rate_power == 0:
-        return {1.0: "s", -1.0: "Hz", 0.0: ""}.get(float(time_power), f"s^{time_power:g}")
-    if rate is not None:
-        try:
-            return coefficient_unit(rate, rate_power, time_power).text
-        except ValueError:
-            pass
-    text = (rate or "rate") if rate_power == 1 else f"({rate or 'rate'})^{rate_power:g}"
-    return text if time_power == 0 else f"{text}*s^{time_power:g}"
 
 
 def param_units(a: Attribution, units: str | None) -> dict[str, str]:
@@ -186,23 +178,6 @@ def param_units(a: Attribution, units: str | None) -> dict[str, str]:
     return out
 
 
-def shown_param(name: str, value: float, unit: str, units: str | None) -> tuple[float, str]:
-    """``(value, unit)`` of a parameter in the customary unit ``allanite fit`` shows.
-
-    :func:`allanite.units.customary_unit` of the model's rate unit ``units``: a gyro's N in
-    deg/sqrt(h), B and sigma in deg/h, K in deg/h/sqrt(h) (deg/s and rad/s alike); an
-    accelerometer's N in m/s/sqrt(h); times in s, frequencies in Hz. ``value`` is in
-    ``unit`` (:func:`param_unit`); without ``units`` or a unit it is returned as it is.
-    """
-    if units is None or not unit or unit in ("s", "Hz"):
-        return value, unit
-    try:
-        shown = customary_unit(units, name, unit)
-        return convert(value, unit, shown), shown
-    except ValueError:
-        return value, unit
-
-
 def format_params(
     a: Attribution,
     units: str | None,
@@ -213,7 +188,8 @@ def format_params(
 ) -> str:
     """``N = 0.84 deg/sqrt(h)``-style text of an attribution's parameters.
 
-    Coefficients are shown in the customary units of ``allanite fit`` (:func:`shown_param`),
+    Coefficients are shown in the customary units of ``allanite fit``
+    (:func:`allanite.units.customary_value`),
     with ``sigma`` their one-sigma uncertainty (``± ...``). With the sampling frequency
     ``fs``, a frequency above the Nyquist frequency (a sensor filter's bandwidth can be: it
     acts before sampling) says so.
@@ -241,6 +217,69 @@ def format_params(
     return ", ".join(parts)
 
 
+def percent(fraction: float) -> str:
+    """``fraction`` as a percentage that never rounds a part to 0 % or 100 %.
+
+    ``0.9992`` is ``99.9 %`` (not ``100 %``, which would read as the whole gap), ``0.0005``
+    is ``0.05 %``; exactly 0 and 1 stay ``0 %`` and ``100 %``.
+    """
+    value = 100.0 * float(fraction)
+    if not np.isfinite(value):
+        return "n/a"
+    digits = 0
+    while digits < 4 and 0.0 < value < 100.0 and float(f"{value:.{digits}f}") in (0.0, 100.0):
+        digits += 1
+    return f"{value:.{digits}f} %"
+
+
+def explanation_lines(
+    e: Explanation, units: str | None, fs: float | None = None, *, model: bool = True
+) -> list[str]:
+    """The joint explanation in plain text: the set, its gap, shares, held-out check, terms.
+
+    One line for the set (effects with their parameters in customary units, the gap before
+    and after all of them and whether the rest is consistent with chance in the tau view),
+    one for each effect's share of the gap, one for the held-out check of the whole set (when
+    there is one) and the term list: with ``model`` (the simulated sensor is a noise model)
+    the model's terms with the effects added, as the model JSON's ``terms`` (in the model's
+    units, ready to paste); for a simulated record, the effects' own terms, to add to the
+    simulator's model.
+    """
+    after = "consistent with chance" if e.consistent_after else "gap remains"
+    lines = [
+        "joint explanation: "
+        + " + ".join(a.effect for a in e.effects)
+        + f"  gap {e.gap_before:.4g} -> {e.gap_after:.4g} (tau view: {after}, "
+        f"p = {e.p_after:.2g})"
+    ]
+    lines.extend(f"  {a.effect:<20} {format_params(a, units, fs=fs)}" for a in e.effects)
+    lines.append(
+        "  share of the gap: " + ", ".join(f"{k} {percent(v)}" for k, v in e.share.items())
+    )
+    hold = e.holdout
+    if hold is not None:
+        if hold.get("gap_before", 0.0) <= 0:
+            shrink = "n/a (no gap in the held-out data)"
+        else:
+            shrink = f"shrinkage {percent(hold['shrinkage'])}, " + (
+                "consistent with chance" if hold.get("consistent_after") else "gap remains"
+            )
+        lines.append(
+            f"  held-out check of the set ({hold.get('source', '')}, "
+            f"{int(hold.get('n_samples', 0)):,} samples): {shrink}"
+        )
+    if e.terms:
+        lines.append(f"  {terms_label(model)}: " + json.dumps(e.terms, allow_nan=False))
+    return lines
+
+
+def terms_label(model: bool) -> str:
+    """What the explanation's term list is: a whole model's terms, or the effects' alone."""
+    if model:
+        return 'model JSON "terms" with the effects added (model units)'
+    return 'the effects as model JSON "terms" (units of the record; add them to your simulator)'
+
+
 def _specs(a: Attribution) -> dict[str, Any]:
     """The parameter specifications of an attribution's term type, by name."""
     cls = _term_class(a)
@@ -265,7 +304,8 @@ def describe_effect(a: Attribution, units: str | None, fs: float | None = None) 
     if a.effect == "white_drift":
         return _describe_drift(a, units)
     name = TERM_NAMES.get(a.effect, a.effect)
-    verb = "is missing" if a.effect != "lowpass" else "is missing in the simulation"
+    verb = "are missing" if a.effect in PLURAL_EFFECTS else "is missing"
+    verb += " in the simulation" if a.effect == "lowpass" else ""
     return f"{name} {verb} ({format_params(a, units, fs=fs)})"
 
 
@@ -404,13 +444,26 @@ def _tau_item(
     gap = tm.gap(extra)
     ratio = float(np.exp(np.max(np.abs(r))))
     text = f"tau view: a gap G = {gap:.4g} remains (chance level T0 = {tm.t0:.3g})"
+    where: dict[str, Any] = {"tau_bands_s": bands}
+    size = {"gap_after": gap, "max_avar_ratio": ratio}
     if bands:
         text += " at tau " + ", ".join(f"{x:.3g}-{y:.3g} s" for x, y in bands[:4])
+    elif z.size:
+        # spread over the taus (no single one beyond the simultaneous threshold): say where
+        # it departs most, and in which direction
+        k = int(np.argmax(np.abs(z)))
+        where["largest_departure_tau_s"] = float(tm.tau[k])
+        size["largest_departure_z"] = float(z[k])
+        text += (
+            f", spread over the taus (none beyond the simultaneous threshold |z| = "
+            f"{tv.z_threshold:.3g}); largest departure at tau = {tm.tau[k]:.3g} s, z = "
+            f"{z[k]:+.2g} (real {'above' if z[k] > 0 else 'below'} simulated)"
+        )
     return Unexplained(
         "tau",
         "tau",
-        {"tau_bands_s": bands},
-        {"gap_after": gap, "max_avar_ratio": ratio},
+        where,
+        size,
         float(p),
         text + f", p = {p:.2g}",
     )

@@ -133,12 +133,25 @@ def fit_factors(
 AUTO_MIN_POINTS = 3
 
 
+def min_auto_samples() -> int:
+    """The shortest record on which an automatic fit can choose terms.
+
+    The smallest ``n`` whose fitted factors (:func:`fit_factors` with the fit's defaults) on
+    a grid holding every factor number :data:`AUTO_MIN_POINTS`; the default log grid holds
+    every short factor, so it needs exactly this many samples (sparser grids need more).
+    """
+    n = 1
+    while len(fit_factors(np.arange(1, n + 1), n)) < AUTO_MIN_POINTS:
+        n += 1
+    return n
+
+
 def _check_auto_count(n_points: int, n_samples: int) -> None:
     if n_points < AUTO_MIN_POINTS:
         raise RecordTooShortError(
             f"the record is too short for an automatic fit: {n_samples} samples give only "
             f"{n_points} usable taus, and choosing the terms needs at least {AUTO_MIN_POINTS} "
-            "(about 40 samples or more on the default grid)",
+            f"({min_auto_samples()} samples or more on the default grid)",
             "use a longer record, or name the terms yourself (allanite.fit(curve, ['N']))",
         )
 

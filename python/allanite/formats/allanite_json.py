@@ -19,8 +19,12 @@ HOLDS = frozenset(TERM_TYPES)
 
 
 def sniff(text: str) -> bool:
-    """A JSON object with ``terms`` and ``units``."""
-    return '"terms"' in text and '"units"' in text
+    """A JSON object with ``terms``.
+
+    A model JSON without ``units`` is still one: reading it says which field is missing,
+    instead of "cannot tell which config this is".
+    """
+    return '"terms"' in text
 
 
 def read(text: str, *, rate: float | None = None) -> ImuConfig:

@@ -15,7 +15,7 @@ from typing import Any
 
 from allanite.model import NoiseModel
 from allanite.terms import Term
-from allanite.units import coefficient_unit, convert, customary_unit
+from allanite.units import coefficient_text, customary_value
 
 __all__ = [
     "ACCEL_UNIT",
@@ -172,13 +172,9 @@ def describe_term(term: Term, sensor: str | None = None) -> str:
         if spec is None or not isinstance(value, (int, float)):
             parts.append(f"{name}={value}")
             continue
-        shown, unit = float(value), ""
-        if spec.rate == 0:
-            unit = {1.0: "s", -1.0: "Hz"}.get(float(spec.time), "")
-        elif rate is not None:
-            model_unit = coefficient_unit(rate, spec.rate, spec.time)
-            unit = customary_unit(rate, name, model_unit)
-            shown = convert(shown, model_unit, unit)
+        # without the sensor the rate unit is not known: only times and frequencies have one
+        own = coefficient_text(rate, spec.rate, spec.time) if rate or spec.rate == 0 else ""
+        shown, unit = customary_value(name, float(value), own, rate)
         parts.append(f"{name}={shown:.4g}" + (f" {unit}" if unit else ""))
     return f"{term.type} ({', '.join(parts)})"
 

@@ -42,9 +42,14 @@ UNITS = {
 }
 
 
+def has_keys(text: str) -> bool:
+    """Whether ``text`` names any of the four density keys (a one-sensor file holds two)."""
+    return any(key in text for pair in KEYS.values() for key in pair)
+
+
 def sniff(text: str) -> bool:
     """Top-level Kalibr keys (OpenVINS nests them under ``imu0:``)."""
-    return "gyroscope_noise_density" in text and "imu0:" not in text
+    return has_keys(text) and "imu0:" not in text
 
 
 def read(text: str, *, rate: float | None = None) -> ImuConfig:

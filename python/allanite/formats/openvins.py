@@ -22,7 +22,7 @@ __all__ = ["HOLDS", "read", "sniff", "write"]
 
 def sniff(text: str) -> bool:
     """Kalibr keys nested under ``imu0:``."""
-    return "imu0:" in text and "gyroscope_noise_density" in text
+    return "imu0:" in text and kalibr.has_keys(text)
 
 
 def read(text: str, *, rate: float | None = None) -> ImuConfig:

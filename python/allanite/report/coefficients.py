@@ -3,7 +3,8 @@
 Gyro datasheets quote angle random walk in deg/√h, bias instability in deg/h, rate random
 walk in deg/h/√h, quantization in the angle unit and rate ramp in deg/h² (IEEE Std 952);
 accelerometer datasheets quote velocity random walk in m/s/√h, bias instability in µg,
-acceleration random walk in m/s/h^1.5, velocity quantization in m/s. The choice is
+acceleration random walk in m/s²/√s (= m/s³/√Hz, the simulators' bias random-walk density),
+velocity quantization in m/s. The choice is
 :func:`allanite.units.customary_unit`, the names come from each parameter's
 :class:`~allanite.terms.base.ParamSpec` for the model's sensor; the values and intervals come
 from :meth:`allanite.fit.FitResult.table` (or, for a bare :class:`~allanite.model.NoiseModel`,

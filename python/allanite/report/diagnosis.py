@@ -96,15 +96,15 @@ def diagnosis_html(diagnosis: Any, *, channel: str, model_name: str) -> str:
         f"gap G = {h.fmt(diagnosis.statistic, 3)}).</p>",
         h.table(["view", "p-value", "where the gap is"], views, text_columns=1),
     ]
+    units = diagnosis.meta.get("units")
     if diagnosis.attribution:
-        from allanite.diagnosis.verdict import format_params
+        from allanite.diagnosis.verdict import format_params, percent
 
-        units = diagnosis.meta.get("units")
         rows = [
             [
                 a.effect,
                 format_params(a, units, fs=diagnosis.meta.get("fs"), sigma=True),
-                f"{100 * a.shrinkage:.0f} %",
+                percent(a.shrinkage),
                 "yes" if a.consistent_after else "no",
                 ", ".join(a.alternatives) or "–",
             ]
@@ -126,12 +126,52 @@ def diagnosis_html(diagnosis: Any, *, channel: str, model_name: str) -> str:
         )
     if diagnosis.holdout is not None:
         hold = diagnosis.holdout
-        share = "–" if hold.gap_before <= 0 else f"{100 * hold.shrinkage:.0f} %"
+        share = "–" if hold.gap_before <= 0 else percent(hold.shrinkage)
         parts.append(
             f"<p>Held-out check ({h.escape(hold.source)}, {hold.n_samples:,} samples): "
             f"{h.escape(hold.effect)} explains {share} of the gap there.</p>"
         )
+    explanation = getattr(diagnosis, "explanation", None)
+    if explanation is not None and diagnosis.attribution:
+        model = diagnosis.meta.get("sim") != "record"
+        parts.append(_explanation_html(explanation, units, diagnosis.meta.get("fs"), model))
     return "".join(parts)
+
+
+def _explanation_html(e: Any, units: str | None, fs: float | None, model: bool) -> str:
+    """The joint explanation: the set with shares, its gap, held-out check and term list."""
+    import json
+
+    from allanite.diagnosis.verdict import format_params, percent, terms_label
+
+    rows = [
+        [a.effect, format_params(a, units, fs=fs), percent(e.share.get(a.effect, 0.0))]
+        for a in e.effects
+    ]
+    after = "consistent with chance" if e.consistent_after else "a gap remains"
+    out = [
+        "<h3>The effects together (joint explanation)</h3>",
+        h.table(["effect", "fitted parameters", "share of the gap"], rows, text_columns=2),
+        f"<p>Gap G {h.fmt(e.gap_before, 4)} → {h.fmt(e.gap_after, 4)} with all of them "
+        f"(tau view: {after}, p = {h.fmt(e.p_after, 2)}; remainder "
+        f"{percent(e.share.get('remainder', 0.0))}).</p>",
+    ]
+    hold = e.holdout
+    if hold is not None:
+        shrink = "–" if hold.get("gap_before", 0.0) <= 0 else percent(hold["shrinkage"])
+        out.append(
+            f"<p>Held-out check of the set ({h.escape(hold.get('source', ''))}, "
+            f"{int(hold.get('n_samples', 0)):,} samples): the effects explain {shrink} of the "
+            "gap there"
+            + (", consistent with chance" if hold.get("consistent_after") else "")
+            + ".</p>"
+        )
+    if e.terms:
+        out.append(
+            f"<p>{h.escape(terms_label(model))}, ready to paste:</p>"
+            f"<pre>{h.escape(json.dumps(e.terms, allow_nan=False))}</pre>"
+        )
+    return "".join(out)
 
 
 def diagnosis_section(
