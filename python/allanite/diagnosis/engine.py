@@ -23,8 +23,7 @@ from allanite.diagnosis.inputs import (
 )
 from allanite.diagnosis.joint import Explanation, combined_terms, explain
 from allanite.diagnosis.level_shape import warmup_time_constant
-from allanite.diagnosis.noise_level import drift_shape
-from allanite.diagnosis.null import runs
+from allanite.diagnosis.noise_level import burst_spans, drift_shape
 from allanite.diagnosis.result import Diagnosis, Holdout
 from allanite.diagnosis.scaled_null import ADDED_SEED, ReplicateStore, uses_scaled_null
 from allanite.diagnosis.time_base import time_base_evidence, with_time_base
@@ -63,17 +62,24 @@ def _split(
     return x, as_rate(holdout, fs, input, name="held-out"), "record"
 
 
-def _bursts(tv: Any) -> tuple[float, float] | None:
-    """Duty and mean length (s) of the windows whose short-term noise level is raised."""
+def _bursts(tv: Any, x: NDArray[np.float64], fs: float) -> tuple[float, float] | None:
+    """Duty and mean length (s) of the bursts of raised short-term noise level.
+
+    The time view flags the windows; :func:`~allanite.diagnosis.noise_level.burst_spans`
+    measures each burst's ends on the record's first differences.
+    """
     z = tv.z.get("hf")
     if z is None or z.size == 0:
         return None
     raised = z > tv.thresholds["hf"]
-    spans = runs(raised)
-    if not spans or raised.all():
+    if not raised.any() or raised.all():
         return None
-    duty = float(raised.mean())
-    length = float(np.mean([b - a + 1 for a, b in spans])) * tv.window_s
+    spans = burst_spans(x, fs, tv, raised)
+    if not spans:
+        return None
+    covered = raised.size * round(tv.window_s * fs)  # the samples the windows cover
+    duty = min(float(sum(e - s for s, e in spans)) / float(covered), 1.0 - 1e-9)
+    length = float(np.mean([e - s for s, e in spans])) / fs
     return duty, length
 
 
@@ -344,7 +350,7 @@ def _attribute(
         lines=[(ln.frequency_hz, ln.amplitude) for ln in analysis.frequency.lines],
         spikes=spikes,
         effects=effects,
-        bursts=_bursts(analysis.time),
+        bursts=_bursts(analysis.time, run.x_fit, run.fs),
         band=bands,
         drift=drift_shape(run.x_fit, run.fs, analysis.time, run.source.model),
     )

@@ -30,6 +30,14 @@ itself: the per-window white-noise variance is ``(D_w - D_o) / (2 fs)`` with ``D
 window's mean square of first differences and ``D_o = 2 A_sim(dt) - 2 fs N_sim^2`` the part
 of the simulated sensor's that is not white noise (quantization, ...), and ``a + b g_w`` is
 fitted to it; ``ratio = sqrt((a + b) / a)``.
+
+The bursts' duty and mean length are then measured on the record too (:func:`burst_spans`):
+each run of raised windows, widened by a window on either side, is searched for the span
+``[s, e)`` of first differences whose mean square ``v`` departs most from the quiet windows'
+``v_0``: the variance-change likelihood ratio ``n (v / v_0 - 1 - log(v / v_0))``, ``n = e -
+s``, is maximised over ``s`` and ``e`` on a grid of at most :data:`SPAN_POSITIONS` positions
+per run (a sixteenth of a window or finer), so a burst that covers windows partly is measured
+to the sample scale rather than counted in whole windows.
 """
 
 from __future__ import annotations
@@ -45,7 +53,7 @@ from scipy import stats
 from allanite.diagnosis.time_view import TimePlan, TimeView
 from allanite.terms.white_drift import ramp_window_mean
 
-__all__ = ["DriftShape", "drift_shape", "noise_misfit"]
+__all__ = ["DriftShape", "burst_spans", "drift_shape", "noise_misfit"]
 
 #: grid of the variance ratio (final / initial) of the drift shape
 BETA_GRID = np.concatenate([np.geomspace(1.0 / 64.0, 0.95, 40), np.geomspace(1.05, 64.0, 48)]) - 1
@@ -53,6 +61,8 @@ BETA_GRID = np.concatenate([np.geomspace(1.0 / 64.0, 0.95, 40), np.geomspace(1.0
 DRIFT_PARAMS = 4
 #: positions per window at which the ends of the change are refined
 SUBSTEPS = 16
+#: at most this many candidate positions of a burst's start and end per run of raised windows
+SPAN_POSITIONS = 1024
 
 
 @dataclass(frozen=True)
@@ -327,3 +337,60 @@ def drift_shape(
         chi2=chi2,
         n_windows=w,
     )
+
+
+def _best_span(d2: NDArray[np.float64], v0: float, step: int) -> tuple[int, int]:
+    """``[s, e)`` (multiples of ``step``) maximising the variance-change likelihood ratio.
+
+    ``n (v / v0 - 1 - log(v / v0))`` with ``v`` the mean of ``d2[s:e]``, ``n = e - s``; only
+    raised spans (``v > v0``) count.
+    """
+    edges = np.arange(0, d2.size + 1, step)
+    if edges[-1] != d2.size:
+        edges = np.append(edges, d2.size)
+    cum = np.concatenate([[0.0], np.cumsum(d2)])[edges]
+    n = (edges[None, :] - edges[:, None]).astype(np.float64)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = (cum[None, :] - cum[:, None]) / (n * v0)
+        gain = n * (ratio - 1.0 - np.log(ratio))
+    gain[~(ratio > 1.0) | (n <= 0)] = -np.inf
+    i, j = np.unravel_index(int(np.argmax(gain)), gain.shape)
+    return int(edges[i]), int(edges[j])
+
+
+def burst_spans(
+    x: NDArray[np.float64], fs: float, view: TimeView, raised: NDArray[np.bool_]
+) -> list[tuple[int, int]]:
+    """Sample spans ``[start, stop)`` of the bursts in the runs of ``raised`` windows.
+
+    Each run of raised windows, widened by one window on either side, holds one burst; its
+    ends are where the mean square of the first differences departs most from the quiet
+    windows' (module docstring). ``x`` is the analysed record (the time view's windows start at
+    its first sample).
+    """
+    length = round(view.window_s * fs)
+    d2 = np.square(np.diff(np.asarray(x, dtype=np.float64)))
+    w = raised.size
+    per_window = np.array(
+        [
+            np.mean(d2[k * length : (k + 1) * length])
+            for k in range(w)
+            if (k + 1) * length <= d2.size
+        ]
+    )
+    quiet = ~raised[: per_window.size]
+    if per_window.size == 0 or not quiet.any():
+        return []
+    v0 = float(np.median(per_window[quiet]))
+    spans: list[tuple[int, int]] = []
+    idx = np.flatnonzero(np.diff(np.concatenate([[0], raised.astype(np.int8), [0]])))
+    for a, b in zip(idx[::2], idx[1::2], strict=True):
+        lo = max(0, (int(a) - 1) * length)
+        hi = min(d2.size, (int(b) + 1) * length)
+        if hi - lo < 2:
+            continue
+        step = max(1, min(length // SUBSTEPS, -(-(hi - lo) // SPAN_POSITIONS)))
+        s, e = _best_span(d2[lo:hi], v0, step)
+        if e > s:
+            spans.append((lo + s, lo + e))
+    return spans
