@@ -198,3 +198,46 @@ def test_null_record_1544_is_judged_by_its_measured_tail(base) -> None:
     count = float(big.pooled["spike_tail"][i] * big.n_pooled)
     assert count >= TAIL_MIN_COUNT  # the reference law measures the tail at the record
     assert p60 >= p_ref * (1.0 - 3.0 * 2.0 / np.sqrt(count))
+
+
+def test_tail_floor_keeps_the_rate_at_a_records_own() -> None:
+    """A floor (one record's own counts) raises the rate where that record has more peaks, and
+    the inverse follows the combined rate."""
+    levels = np.arange(3.0, 12.0, 0.05)
+    samples = 1e9
+    own = np.where(levels <= 8.0, 100.0, 0.0)  # 100 peaks of 8 spreads in 1e5 samples
+    tail = ExceedanceTail.from_counts(levels, samples * np.exp(-levels), samples, floor=(own, 1e5))
+    assert tail.rate(7.9) == pytest.approx(1e-3)  # the floor 100 / 1e5 (exp(-7.9) = 3.7e-4)
+    assert tail.rate(8.2) == pytest.approx(np.exp(-8.2), rel=1e-9)  # beyond the record's peaks
+    assert tail.level(5e-4) == pytest.approx(8.05, abs=1e-9)  # the first level above them
+    assert tail.level(1e-2) == pytest.approx(-np.log(1e-2), rel=1e-9)
+    with pytest.raises(ValueError, match="floor"):
+        ExceedanceTail.from_counts(levels, samples * np.exp(-levels), samples, floor=(own[:3], 1e5))
+
+
+def test_spikes_in_both_records_are_not_evidence_in_record_mode(base) -> None:
+    """Against a simulated record that has the same kind of spikes (its Gaussian surrogates do
+    not), the real record's spikes are not significant; against a spike-free simulated record
+    they are (control)."""
+    from allanite.diagnosis.analysis import Plan, ensemble, record_features
+    from allanite.diagnosis.inputs import SimSource
+
+    n = 2**15
+    height = 8.0 * 0.05 * np.sqrt(FS)
+    rng = np.random.default_rng(12)
+
+    def spiky(seed: int) -> np.ndarray:
+        x = np.asarray(base.simulate(n, fs=FS, seed=seed)).ravel()
+        at = rng.choice(n, 10, replace=False)
+        x[at] += height * rng.choice([-1.0, 1.0], size=at.size)
+        return x
+
+    real = record_features(spiky(31), Plan.for_length(n, FS))
+    plan = Plan.for_length(n, FS)
+    for sim, expect in (
+        (spiky(32), False),
+        (np.asarray(base.simulate(n, fs=FS, seed=33)).ravel(), True),
+    ):
+        ens = ensemble(SimSource(fs=FS, record=sim), plan, 20, seed=5)
+        p, _ = spike_test(real, ens, STAT_ALPHA)
+        assert (p < STAT_ALPHA) == expect, p

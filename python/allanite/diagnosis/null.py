@@ -87,6 +87,8 @@ class NullEnsemble:
         of the spike statistic's tail.
     n_pooled : int
         Number of replicates behind ``pooled``.
+    sim_record : bool
+        ``ref`` holds the features of a simulated record (:meth:`from_record`), not a mean.
     """
 
     ref: Features
@@ -95,6 +97,7 @@ class NullEnsemble:
     exact_tau: bool = False
     pooled: Features = field(default_factory=dict)
     n_pooled: int = 0
+    sim_record: bool = False
 
     @property
     def n_null(self) -> int:
@@ -131,7 +134,10 @@ class NullEnsemble:
         pooled = {
             name: np.mean([r[name] for r in replicates[: 2 * n]], axis=0) for name in sim_features
         }
-        return cls(ref=dict(sim_features), null=null, real_scale=1.0, pooled=pooled, n_pooled=2 * n)
+        return cls(
+            ref=dict(sim_features), null=null, real_scale=1.0, pooled=pooled, n_pooled=2 * n,
+            sim_record=True,
+        )  # fmt: skip
 
     def residual(self, real: Features, name: str) -> NDArray[np.float64]:
         """Real residual of one feature, scaled to the variance of a null residual."""
@@ -307,17 +313,26 @@ class ExceedanceTail:
     levels: NDArray[np.float64]
     log_rate: NDArray[np.float64]
     slope: float
+    floor_levels: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
+    floor_rate: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
 
     @classmethod
     def from_counts(
-        cls, levels: NDArray[np.float64], counts: NDArray[np.float64], samples: float
+        cls,
+        levels: NDArray[np.float64],
+        counts: NDArray[np.float64],
+        samples: float,
+        floor: tuple[NDArray[np.float64], float] | None = None,
     ) -> ExceedanceTail:
         """Tail from the pooled ``counts`` of peaks at or above ``levels`` in ``samples`` samples.
 
         ``counts`` are non-increasing along the increasing ``levels``. With fewer than
         :data:`TAIL_MIN_COUNT` peaks above the lowest level, that level's rate is taken as
         ``TAIL_MIN_COUNT / samples`` (an upper bound) and the decay beyond it as
-        :data:`TAIL_FALLBACK_SLOPE`.
+        :data:`TAIL_FALLBACK_SLOPE`. ``floor = (counts_1, samples_1)``, the counts of one more
+        record on the same levels, keeps the rate at or above that record's own
+        ``counts_1 / samples_1`` (a simulated record whose own tail the replicates, Gaussian
+        surrogates, do not carry).
         """
         levels = np.asarray(levels, dtype=np.float64)
         counts = np.asarray(counts, dtype=np.float64)
@@ -328,6 +343,21 @@ class ExceedanceTail:
             )
         if samples <= 0:
             raise ValueError(f"samples (the pooled record length) must be > 0, got {samples}")
+        if floor is not None:
+            tail = cls.from_counts(levels, counts, samples)
+            own = np.asarray(floor[0], dtype=np.float64)
+            if own.shape != levels.shape or floor[1] <= 0:
+                raise ValueError(
+                    "floor must be (counts on the same levels, samples > 0), got shape "
+                    f"{own.shape} and {floor[1]} samples"
+                )
+            return cls(
+                levels=tail.levels,
+                log_rate=tail.log_rate,
+                slope=tail.slope,
+                floor_levels=levels,
+                floor_rate=own / floor[1],
+            )
         measured = np.flatnonzero(counts >= TAIL_MIN_COUNT)
         if measured.size == 0:
             return cls(
@@ -352,16 +382,29 @@ class ExceedanceTail:
     def rate(self, x: float) -> float:
         """Per-sample rate of peaks at or above ``x`` (the lowest level's below it)."""
         if x >= self.levels[-1]:
-            return float(np.exp(self.log_rate[-1] + self.slope * (x - self.levels[-1])))
-        return float(np.exp(np.interp(x, self.levels, self.log_rate)))
+            out = float(np.exp(self.log_rate[-1] + self.slope * (x - self.levels[-1])))
+        else:
+            out = float(np.exp(np.interp(x, self.levels, self.log_rate)))
+        i = int(np.searchsorted(self.floor_levels, x, side="right")) - 1
+        return max(out, float(self.floor_rate[i])) if i >= 0 else out
 
     def level(self, rate: float) -> float:
-        """The level whose rate is ``rate`` (inverse of :meth:`rate`; the lowest level at most)."""
+        """The level whose rate is ``rate`` (inverse of :meth:`rate`; the lowest level at most).
+
+        With a floor: the level where both the tail and the floor are at or below ``rate``
+        (infinite when the floor stays above it over all its levels).
+        """
         target = float(np.log(rate))
         if target <= self.log_rate[-1]:
-            return float(self.levels[-1] + (target - self.log_rate[-1]) / self.slope)
-        # log_rate is non-increasing: interpolate on the reversed arrays
-        return float(np.interp(target, self.log_rate[::-1], self.levels[::-1]))
+            x = float(self.levels[-1] + (target - self.log_rate[-1]) / self.slope)
+        else:  # log_rate is non-increasing: interpolate on the reversed arrays
+            x = float(np.interp(target, self.log_rate[::-1], self.levels[::-1]))
+        above = np.flatnonzero(self.floor_rate > rate)
+        if above.size:
+            j = int(above[-1])  # the floor's rate is non-increasing along its levels
+            last = j + 1 >= self.floor_levels.size
+            x = max(x, np.inf if last else float(self.floor_levels[j + 1]))
+        return x
 
     def kth_sf(self, value: float, n: float, k: int) -> float:
         """``P(k-th largest of n samples >= value) = P(Poisson(n q(value)) >= k)``.

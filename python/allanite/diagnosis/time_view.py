@@ -15,10 +15,10 @@ the noise level belongs to the tau view, the time view looks for changes in time
 
 plus three record-wide statistics: the largest deviations from a 9-sample running median in
 units of their robust spread (``|h| / (1.4826 MAD(h))``, spikes: the 1st, 2nd, 4th and 8th
-largest, :data:`SPIKE_ORDERS`, each tested against the law of the k-th largest of many
-values, Bonferroni over the four: a few spikes of 5 sample sigmas are not much larger than
-the largest of 2^15 Gaussian samples, but two or four of them are far beyond the null's 2nd
-or 4th largest),
+largest peaks, :data:`SPIKE_ORDERS`, each tested against the Poisson law of the k-th largest
+with the replicates' pooled exceedance rate (:func:`spike_test`), Bonferroni over the four: a
+few spikes of 5 sample sigmas are not much larger than the largest of 2^15 Gaussian samples,
+but two or four of them are far beyond the null's 2nd or 4th largest),
 the excess kurtosis at the
 sample scale (two-sided: bursts, outliers, clipping; ``kurt_hf``, two statistics, Bonferroni
 over both: of the first differences, and of the samples minus their 9-sample running mean,
@@ -729,11 +729,12 @@ def spike_test(
     (:class:`~allanite.diagnosis.null.ExceedanceTail`, measured where the pooled samples reach
     and extrapolated exponentially beyond); the real record's k-th largest peak ``r_k`` of
     ``n`` samples has ``p_k = P(Poisson(n q(r_k)) >= k)`` for each k of :data:`SPIKE_ORDERS`,
-    and the p-value is ``min(1, 4 min p_k)``. The thresholds (units of the robust spread) are
-    those of the significant orders: order ``k`` is significant when ``r_k`` exceeds the
-    level the k-th largest exceeds with probability ``alpha / len(orders)``: then at least
-    ``k`` peaks lie above it. Listed by order (the first is the lowest significant order's,
-    the level the spikes are located at).
+    and the p-value is ``min(1, 4 min p_k)``. Against a simulated record (its replicates are
+    Gaussian surrogates) the rate is at least the record's own, level by level. The
+    thresholds (units of the robust spread) are those of the significant orders: order ``k``
+    is significant when ``r_k`` exceeds the level the k-th largest exceeds with probability
+    ``alpha / len(orders)``: then at least ``k`` peaks lie above it. Listed by order (the
+    first is the lowest significant order's, the level the spikes are located at).
     """
     if any(name not in ens.pooled for name in SPIKE_POOLED) or ens.n_pooled < 1:
         raise ValueError(
@@ -741,8 +742,10 @@ def spike_test(
             "NullEnsemble.from_model / from_record from time_features of the replicates"
         )
     n_rep = float(ens.pooled["spike_n"][0])
+    # a simulated record's own tail counts too: its Gaussian surrogates do not carry it
+    own = (ens.ref["spike_tail"], float(ens.ref["spike_n"][0])) if ens.sim_record else None
     tail = ExceedanceTail.from_counts(
-        SPIKE_GRID, ens.pooled["spike_tail"] * ens.n_pooled, ens.n_pooled * n_rep
+        SPIKE_GRID, ens.pooled["spike_tail"] * ens.n_pooled, ens.n_pooled * n_rep, own
     )
     n = float(real["spike_n"][0])
     values = real["spike"]
