@@ -183,21 +183,28 @@ def test_spikes_of_seven_sigma_are_found(base) -> None:
 @pytest.mark.slow
 def test_null_record_1544_is_judged_by_its_measured_tail(base) -> None:
     """The quick suite's ``null-1`` record (the base itself, seed 1544; 2nd and 4th largest
-    peaks 6.02 and 5.45 robust spreads). Its spike p from the suite's 60 replicates, whose
-    pooled counts end near 5.5 and are extrapolated beyond, is not below the p of 1500
-    replicates that measure the tail out to the record's values, beyond that law's own
-    counting error (``p ~ lambda^k``: relative error ``k / sqrt(C)`` for ``C`` pooled
-    counts at the record's 2nd largest). The old moment-matched Gamma law gave 2.4e-4."""
+    peaks 6.02 and 5.45 robust spreads). The suite's 60 replicates measure the pooled tail only
+    to about 5.5 and extrapolate beyond; 1500 replicates measure it out to the record's
+    values. Over 8 ensembles of 60, the spike p is not systematically below the measured
+    tail's: the mean of ``log(p_60 / p_1500)`` is not below zero by more than 2.5 of its
+    standard errors. (The old moment-matched Gamma law gave 2.4e-4 per order; the record is
+    rare under the model itself: p_1500 ~ 1e-3 after the Bonferroni over the orders.)"""
     n = 2**16
     x = np.asarray(base.simulate(n, fs=FS, seed=1544)).ravel()
     real = spike_features(x)
-    p60, _ = spike_test(real, NullEnsemble.from_model(features(base, n, 60, seed=9100)), 0.05)
     big = NullEnsemble.from_model(features(base, n, 1500, seed=9200))
-    p_ref, _ = spike_test(real, big, 0.05)
     i = int(np.searchsorted(SPIKE_GRID, real["spike"][1], side="right")) - 1
-    count = float(big.pooled["spike_tail"][i] * big.n_pooled)
-    assert count >= TAIL_MIN_COUNT  # the reference law measures the tail at the record
-    assert p60 >= p_ref * (1.0 - 3.0 * 2.0 / np.sqrt(count))
+    assert big.pooled["spike_tail"][i] * big.n_pooled >= TAIL_MIN_COUNT  # measured there
+    p_ref, _ = spike_test(real, big, 0.05)
+    pool = features(base, n, 8 * 60, seed=9100)
+    ratio = np.log(
+        [
+            spike_test(real, NullEnsemble.from_model(pool[60 * j : 60 * (j + 1)]), 0.05)[0]
+            for j in range(8)
+        ]
+    ) - np.log(p_ref)
+    assert ratio.mean() >= -2.5 * ratio.std(ddof=1) / np.sqrt(ratio.size)
+    assert 1e-4 < p_ref < 1e-2  # the record's tail is measured, not an outlier of the law
 
 
 def test_tail_floor_keeps_the_rate_at_a_records_own() -> None:
