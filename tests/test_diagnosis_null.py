@@ -11,7 +11,7 @@ import pytest
 from scipy import stats
 
 from allanite.diagnosis.decimation import COARSE_LENGTH, decimation
-from allanite.diagnosis.null import NullEnsemble, max_shift, rescaled, rescaled_log_gamma
+from allanite.diagnosis.null import NullEnsemble, rescaled, rescaled_log_gamma
 from allanite.diagnosis.scaled_null import FULL_REPLICATES_MAX, uses_scaled_null
 from allanite.diagnosis.tau_view import (
     build_tau_model,
@@ -88,18 +88,6 @@ def test_rescaled_rejects_bad_ratio() -> None:
     ens = NullEnsemble.from_model([{"f": np.zeros(3) + j} for j in range(20)])
     with pytest.raises(ValueError, match="ratio"):
         rescaled(ens, "f", 1.5, log_mean=False)
-
-
-def test_max_shift_is_the_maximum_over_more_values() -> None:
-    """Gumbel maxima: the maximum of k short maxima sits ``beta ln k`` higher."""
-    rng = np.random.default_rng(8)
-    short = rng.gumbel(2.0, 0.5, size=400)
-    k = 50
-    long = rng.gumbel(2.0, 0.5, size=(400, k)).max(axis=1)
-    se = np.sqrt(short.var(ddof=1) / 400 + long.var(ddof=1) / 400 + (0.5 * np.log(k)) ** 2 / 400)
-    assert abs(long.mean() - (short.mean() + max_shift(short, k))) < 3.0 * se
-    with pytest.raises(ValueError, match="k must be"):
-        max_shift(short, 0.5)
 
 
 def test_decimation_factor_respects_time_scales() -> None:

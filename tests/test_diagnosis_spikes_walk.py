@@ -3,8 +3,8 @@
 A few spikes of 5 sample sigmas of the white noise are hardly larger than the largest of
 2^15 Gaussian samples, so the largest deviation alone does not find them; the k-th largest
 deviations (:data:`allanite.diagnosis.time_view.SPIKE_ORDERS`) against the law of a k-th
-largest do. Each case has a control without the spikes. Fixed seeds; the law's calibration
-is checked with a tolerance of 3 standard errors of the exceedance rate over 25 fits.
+largest do. Each case has a control without the spikes. Fixed seeds; the law itself and its
+calibration are tested in ``test_diagnosis_spike_null.py``.
 """
 
 from __future__ import annotations
@@ -16,7 +16,6 @@ import benchmark_module
 from allanite.diagnosis import diagnose
 from allanite.diagnosis.analysis import Plan, analyze
 from allanite.diagnosis.inputs import SimSource
-from allanite.diagnosis.null import gumbel_isf, gumbel_sf, kth_max_isf, kth_max_sf
 from allanite.model import NoiseModel
 from allanite.terms import TERM_TYPES
 
@@ -54,41 +53,6 @@ def with_spikes(x: np.ndarray) -> np.ndarray:
     return y
 
 
-def test_kth_max_law_is_the_gumbel_law_for_the_maximum() -> None:
-    null = np.random.default_rng(1).gumbel(size=200)
-    for v in (-1.0, 0.5, 3.0):
-        assert kth_max_sf(v, null, 1) == gumbel_sf(v, null)
-    assert kth_max_isf(0.01, null, 1) == gumbel_isf(0.01, null)
-    for k in (2, 3, 8):
-        v = kth_max_isf(0.003, null, k)
-        assert kth_max_sf(v, null, k) == pytest.approx(0.003, rel=1e-9)
-    with pytest.raises(ValueError, match="k must be >= 1"):
-        kth_max_sf(1.0, null, 0)
-
-
-@pytest.mark.parametrize("k", [1, 3, 8])
-def test_kth_max_law_is_calibrated_on_gaussian_samples(k: int) -> None:
-    """The k-th largest of 2^14 Gaussian values exceeds the level fitted on 60 other draws
-    with the nominal probability: 25 fits, 60 trials each; the tolerance is 3 standard
-    errors of the mean rate over the fits (their spread holds the fits' own error)."""
-    rng = np.random.default_rng(100 + k)
-
-    def kth(reps: int) -> np.ndarray:
-        return np.array(
-            [np.partition(rng.standard_normal(2**14), 2**14 - k)[2**14 - k] for _ in range(reps)]
-        )
-
-    p = 0.05
-    rates = np.array([np.mean(kth(60) > kth_max_isf(p, kth(60), k)) for _ in range(25)])
-    assert abs(rates.mean() - p) <= 3.0 * rates.std(ddof=1) / np.sqrt(rates.size)
-    # the law of the k-th largest, not a Gumbel law of the same spread: lighter upper tail
-    fit = kth(60)
-    if k > 1:
-        assert kth_max_isf(1e-3, fit, k) < gumbel_isf(1e-3, fit)
-    else:
-        assert kth_max_isf(1e-3, fit, k) == gumbel_isf(1e-3, fit)
-
-
 def test_spikes_of_five_sigma_next_to_a_walk_are_found(base, walk) -> None:
     real = with_spikes(walk)
     source = SimSource(fs=FS, model=base)
@@ -104,8 +68,12 @@ def test_spikes_of_five_sigma_next_to_a_walk_are_found(base, walk) -> None:
     assert c.time.spike_times_s == []
 
 
-def test_spike_statistic_is_the_orders_of_the_deviations(base) -> None:
-    from allanite.diagnosis.time_view import SPIKE_ORDERS, highpass, time_features
+def test_spike_statistic_is_the_orders_of_the_peak_deviations(base) -> None:
+    """The k-th largest deviations among the peaks (the largest within the running median's
+    window), in units of the robust spread."""
+    from scipy import ndimage
+
+    from allanite.diagnosis.time_view import SPIKE_MEDIAN, SPIKE_ORDERS, highpass, time_features
 
     x = base.simulate(N, fs=FS, seed=3)
     f = time_features(x, Plan.for_length(N, FS).time)
@@ -114,8 +82,9 @@ def test_spike_statistic_is_the_orders_of_the_deviations(base) -> None:
     hp = np.abs(highpass(x))
     mad = 1.4826 * np.median(np.abs(highpass(x) - np.median(highpass(x))))
     assert f["spike"][0] == pytest.approx(hp.max() / mad, rel=1e-12)
+    peaks = np.sort(hp[hp == ndimage.maximum_filter1d(hp, SPIKE_MEDIAN, mode="nearest")])
     for value, k in zip(f["spike"], SPIKE_ORDERS, strict=True):
-        assert value == pytest.approx(np.sort(hp)[-k] / mad, rel=1e-12)
+        assert value == pytest.approx(peaks[-k] / mad, rel=1e-12)
 
 
 def test_spikes_and_walk_are_both_named(base, walk) -> None:

@@ -14,7 +14,9 @@ by chance, taken from replicates of the simulated sensor:
 
 Tail probabilities of the scalar statistics built on these residuals come from distributions
 fitted to the null values (scaled chi-square for quadratic forms, Gumbel for maxima), so
-p-values below ``1/n`` remain meaningful.
+p-values below ``1/n`` remain meaningful. The k-th largest of many samples (spikes) is judged
+against the exceedance rate of the replicates' pooled samples (:class:`ExceedanceTail`, from
+the replicates' mean counts, :attr:`NullEnsemble.pooled`).
 
 Long records (cost that does not grow with ``n_mc x N``)
 --------------------------------------------------------
@@ -22,14 +24,14 @@ A feature that is a mean over ``k`` nearly independent pieces (Welch segments, f
 differences) has a null residual whose variance scales as ``1/k``; the null of a record of
 ``N`` samples is then the null of shorter replicates (``k_s`` pieces) scaled by
 ``sqrt(k_s / k)`` (:func:`rescaled`). The mean of the log of such a mean carries the bias
-``-var/2`` (delta method), so the reference moves by ``(var_s - var_N) / 2``. A maximum over
-``N`` samples is the maximum over ``N / N_s`` independent short records: for a Gumbel law with
-scale ``beta`` the location moves by ``beta ln(N / N_s)`` (max-stability, :func:`gumbel_scale`).
+``-var/2`` (delta method), so the reference moves by ``(var_s - var_N) / 2``. The k-th largest
+of ``N`` samples needs no rescaling: the per-sample exceedance rate of the short replicates
+times ``N`` is the Poisson mean of the long record's exceedances (:class:`ExceedanceTail`).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -37,16 +39,13 @@ from numpy.typing import NDArray
 from scipy import special, stats
 
 __all__ = [
+    "ExceedanceTail",
     "NullEnsemble",
     "chi2_like_sf",
     "empirical_sf",
     "gumbel_isf",
-    "gumbel_scale",
     "gumbel_sf",
-    "kth_max_isf",
-    "kth_max_sf",
     "level_profiled",
-    "max_shift",
     "rescaled",
     "rescaled_log_gamma",
     "runs",
@@ -82,12 +81,23 @@ class NullEnsemble:
     exact_tau : bool
         The tau residuals are draws from a known law
         (:func:`allanite.diagnosis.tau_view.gaussian_tau_null`), not replicates.
+    pooled : dict
+        Mean of each feature over all ``n_pooled`` replicates (for a model: ``ref``; for a
+        record: the replicates', not the simulated record's), e.g. the mean exceedance counts
+        of the spike statistic's tail.
+    n_pooled : int
+        Number of replicates behind ``pooled``.
+    sim_record : bool
+        ``ref`` holds the features of a simulated record (:meth:`from_record`), not a mean.
     """
 
     ref: Features
     null: dict[str, NDArray[np.float64]]
     real_scale: float
     exact_tau: bool = False
+    pooled: Features = field(default_factory=dict)
+    n_pooled: int = 0
+    sim_record: bool = False
 
     @property
     def n_null(self) -> int:
@@ -107,7 +117,7 @@ class NullEnsemble:
             mean = stack.mean(axis=0)
             ref[name] = mean
             null[name] = (stack - mean) * (n / (n - 1.0))
-        return cls(ref=ref, null=null, real_scale=1.0)
+        return cls(ref=ref, null=null, real_scale=1.0, pooled=ref, n_pooled=n)
 
     @classmethod
     def from_record(cls, sim_features: Features, replicates: list[Features]) -> NullEnsemble:
@@ -121,7 +131,13 @@ class NullEnsemble:
             )
             for name in sim_features
         }
-        return cls(ref=dict(sim_features), null=null, real_scale=1.0)
+        pooled = {
+            name: np.mean([r[name] for r in replicates[: 2 * n]], axis=0) for name in sim_features
+        }
+        return cls(
+            ref=dict(sim_features), null=null, real_scale=1.0, pooled=pooled, n_pooled=2 * n,
+            sim_record=True,
+        )  # fmt: skip
 
     def residual(self, real: Features, name: str) -> NDArray[np.float64]:
         """Real residual of one feature, scaled to the variance of a null residual."""
@@ -222,23 +238,6 @@ def rescaled(
     return np.asarray(ref, dtype=np.float64), np.asarray(resid * scale, dtype=np.float64)
 
 
-def gumbel_scale(null: NDArray[np.float64]) -> float:
-    """Scale ``beta = s sqrt(6) / pi`` of the moment-matched Gumbel law of a maximum."""
-    return float(np.std(null, ddof=1) * np.sqrt(6.0) / np.pi)
-
-
-def max_shift(null: NDArray[np.float64], k: float) -> float:
-    """Location shift ``beta ln k`` of a maximum taken over ``k`` times as many values.
-
-    The maximum of ``k`` independent Gumbel(``mu``, ``beta``) variables is Gumbel(``mu + beta
-    ln k``, ``beta``) (max-stability). For maxima of lighter-than-exponential tails (Gaussian
-    samples) the true shift and scale are smaller, so the extrapolated test is conservative.
-    """
-    if k < 1.0:
-        raise ValueError(f"k must be >= 1 (a maximum over more values), got {k}")
-    return gumbel_scale(null) * float(np.log(k))
-
-
 def empirical_sf(value: float, null: NDArray[np.float64]) -> float:
     """Monte Carlo p-value ``(1 + #{null >= value}) / (n + 1)``."""
     null = np.asarray(null)
@@ -279,45 +278,152 @@ def gumbel_isf(p: float, null: NDArray[np.float64]) -> float:
     return float(mu - beta * np.log(-np.log1p(-p)))
 
 
-def _kth_max_law(null: NDArray[np.float64], k: int) -> tuple[float, float]:
-    """Location ``mu`` and scale ``beta`` of the k-th largest's law, moment-matched to ``null``.
+#: pooled exceedances that make a level's rate measured; beyond it the tail is extrapolated
+TAIL_MIN_COUNT = 25
+#: the extrapolation's decay is the secant over the last measured decade of counts
+TAIL_DECADE = 10.0
+#: decay of the log rate per unit level when the replicates measure no slope (a light tail)
+TAIL_FALLBACK_SLOPE = -2.0
 
-    The ``k`` largest of many values from a Gumbel-domain tail are the first points of a
-    Poisson process of intensity ``exp(-(x - mu) / beta)``, so the k-th largest is ``mu - beta
-    log G`` with ``G ~ Gamma(k, 1)``: mean ``mu - beta psi(k)``, variance ``beta^2 psi'(k)``.
+
+@dataclass(frozen=True)
+class ExceedanceTail:
+    r"""Per-sample rate ``q(x)`` at which a statistic's declustered peaks exceed a level ``x``.
+
+    Measured from the pooled counts of ``n_pooled`` replicate records (:meth:`from_counts`):
+    ``q(x) = C(x) / M`` on the grid levels whose pooled count ``C`` is at least
+    :data:`TAIL_MIN_COUNT` (``M`` pooled samples; log-linear between grid levels). Beyond the
+    last measured level ``x_1`` the log rate decays linearly, with the secant slope over the
+    last measured decade of counts (``C(x_0) = TAIL_DECADE C(x_1)``): an exponential tail.
+    Gaussian-like tails are log-concave, so this extrapolation over-states the rate (the test
+    is conservative there) and needs no shape assumption inside the data.
+
+    For ``n`` samples the peaks above ``x`` are a Poisson process of mean ``n q(x)`` (rare,
+    declustered exceedances), so the k-th largest exceeds ``x`` with probability
+    ``P(Poisson(n q(x)) >= k)`` (:meth:`kth_sf`), whatever the replicates' length: the law of a
+    long record comes from short replicates with no other change.
+
+    References
+    ----------
+    M. R. Leadbetter, G. Lindgren, H. Rootzen, "Extremes and related properties of random
+    sequences and processes", Springer (1983), ch. 2 and 5 (Poisson limit of exceedances,
+    the k-th largest).
     """
-    mean, sd = float(np.mean(null)), float(np.std(null, ddof=1))
-    beta = sd / float(np.sqrt(special.polygamma(1, k)))
-    return mean + beta * float(special.digamma(k)), beta
 
+    levels: NDArray[np.float64]
+    log_rate: NDArray[np.float64]
+    slope: float
+    floor_levels: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
+    floor_rate: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
 
-def kth_max_sf(value: float, null: NDArray[np.float64], k: int) -> float:
-    """Tail probability of the ``k``-th largest of many values (``k = 1``: :func:`gumbel_sf`).
+    @classmethod
+    def from_counts(
+        cls,
+        levels: NDArray[np.float64],
+        counts: NDArray[np.float64],
+        samples: float,
+        floor: tuple[NDArray[np.float64], float] | None = None,
+    ) -> ExceedanceTail:
+        """Tail from the pooled ``counts`` of peaks at or above ``levels`` in ``samples`` samples.
 
-    ``P(X >= x) = P(G <= exp(-(x - mu) / beta))`` for ``G ~ Gamma(k, 1)`` (the regularised
-    lower incomplete gamma function), ``mu`` and ``beta`` matched to the null's mean and
-    spread (:func:`_kth_max_law`). The tail of the k-th largest is lighter than a Gumbel law
-    of the same spread (``~ exp(-k z) / k!``): several moderate outliers are far less likely
-    by chance than one.
-    """
-    if k < 1:
-        raise ValueError(f"k must be >= 1 (1 = the maximum), got {k}")
-    if k == 1:
-        return gumbel_sf(value, null)
-    if float(np.std(null, ddof=1)) <= 0:
-        return empirical_sf(value, null)
-    mu, beta = _kth_max_law(null, k)
-    return float(special.gammainc(k, np.exp(-(value - mu) / beta)))
+        ``counts`` are non-increasing along the increasing ``levels``. With fewer than
+        :data:`TAIL_MIN_COUNT` peaks above the lowest level, that level's rate is taken as
+        ``TAIL_MIN_COUNT / samples`` (an upper bound) and the decay beyond it as
+        :data:`TAIL_FALLBACK_SLOPE`. ``floor = (counts_1, samples_1)``, the counts of one more
+        record on the same levels, keeps the rate at or above that record's own
+        ``counts_1 / samples_1`` (a simulated record whose own tail the replicates, Gaussian
+        surrogates, do not carry).
+        """
+        levels = np.asarray(levels, dtype=np.float64)
+        counts = np.asarray(counts, dtype=np.float64)
+        if levels.ndim != 1 or counts.shape != levels.shape or levels.size < 2:
+            raise ValueError(
+                "levels and counts must be 1-D arrays of the same length (>= 2), got shapes "
+                f"{levels.shape} and {counts.shape}"
+            )
+        if samples <= 0:
+            raise ValueError(f"samples (the pooled record length) must be > 0, got {samples}")
+        if floor is not None:
+            tail = cls.from_counts(levels, counts, samples)
+            own = np.asarray(floor[0], dtype=np.float64)
+            if own.shape != levels.shape or floor[1] <= 0:
+                raise ValueError(
+                    "floor must be (counts on the same levels, samples > 0), got shape "
+                    f"{own.shape} and {floor[1]} samples"
+                )
+            return cls(
+                levels=tail.levels,
+                log_rate=tail.log_rate,
+                slope=tail.slope,
+                floor_levels=levels,
+                floor_rate=own / floor[1],
+            )
+        measured = np.flatnonzero(counts >= TAIL_MIN_COUNT)
+        if measured.size == 0:
+            return cls(
+                levels=levels[:1],
+                log_rate=np.array([np.log(TAIL_MIN_COUNT / samples)]),
+                slope=TAIL_FALLBACK_SLOPE,
+            )
+        hi = int(measured[-1])
+        lo = np.flatnonzero(counts >= TAIL_DECADE * counts[hi])
+        slope = TAIL_FALLBACK_SLOPE
+        if lo.size and levels[hi] > levels[int(lo[-1])]:
+            j = int(lo[-1])
+            slope = float(np.log(counts[hi] / counts[j]) / (levels[hi] - levels[j]))
+        elif hi > 0:
+            slope = float(np.log(counts[hi] / counts[0]) / (levels[hi] - levels[0]))
+        return cls(
+            levels=levels[: hi + 1],
+            log_rate=np.log(counts[: hi + 1] / samples),
+            slope=min(slope, -1e-6),
+        )
 
+    def rate(self, x: float) -> float:
+        """Per-sample rate of peaks at or above ``x`` (the lowest level's below it)."""
+        if x >= self.levels[-1]:
+            out = float(np.exp(self.log_rate[-1] + self.slope * (x - self.levels[-1])))
+        else:
+            out = float(np.exp(np.interp(x, self.levels, self.log_rate)))
+        i = int(np.searchsorted(self.floor_levels, x, side="right")) - 1
+        return max(out, float(self.floor_rate[i])) if i >= 0 else out
 
-def kth_max_isf(p: float, null: NDArray[np.float64], k: int) -> float:
-    """Inverse of :func:`kth_max_sf`: the value the k-th largest exceeds with probability ``p``."""
-    if k < 1:
-        raise ValueError(f"k must be >= 1 (1 = the maximum), got {k}")
-    if k == 1:
-        return gumbel_isf(p, null)
-    mu, beta = _kth_max_law(null, k)
-    return float(mu - beta * np.log(special.gammaincinv(k, p)))
+    def level(self, rate: float) -> float:
+        """The level whose rate is ``rate`` (inverse of :meth:`rate`; the lowest level at most).
+
+        With a floor: the level where both the tail and the floor are at or below ``rate``
+        (infinite when the floor stays above it over all its levels).
+        """
+        target = float(np.log(rate))
+        if target <= self.log_rate[-1]:
+            x = float(self.levels[-1] + (target - self.log_rate[-1]) / self.slope)
+        else:  # log_rate is non-increasing: interpolate on the reversed arrays
+            x = float(np.interp(target, self.log_rate[::-1], self.levels[::-1]))
+        above = np.flatnonzero(self.floor_rate > rate)
+        if above.size:
+            j = int(above[-1])  # the floor's rate is non-increasing along its levels
+            last = j + 1 >= self.floor_levels.size
+            x = max(x, np.inf if last else float(self.floor_levels[j + 1]))
+        return x
+
+    def kth_sf(self, value: float, n: float, k: int) -> float:
+        """``P(k-th largest of n samples >= value) = P(Poisson(n q(value)) >= k)``.
+
+        Values below the lowest level (no evidence of anything rare) get 1.
+        """
+        if k < 1:
+            raise ValueError(f"k must be >= 1 (1 = the maximum), got {k}")
+        if value < self.levels[0]:
+            return 1.0
+        return float(special.gammainc(k, n * self.rate(value)))
+
+    def kth_isf(self, p: float, n: float, k: int) -> float:
+        """Inverse of :meth:`kth_sf`: the level the k-th largest exceeds with probability ``p``."""
+        if k < 1:
+            raise ValueError(f"k must be >= 1 (1 = the maximum), got {k}")
+        if not 0.0 < p < 1.0:
+            raise ValueError(f"p must lie in (0, 1), got {p}")
+        return self.level(float(special.gammaincinv(k, p)) / n)
 
 
 def runs(mask: NDArray[np.bool_]) -> list[tuple[int, int]]:

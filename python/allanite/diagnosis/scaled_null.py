@@ -14,9 +14,9 @@ than :data:`FULL_REPLICATES_MAX` samples, each view gets a null whose cost does 
   ``sqrt(k_short / k)`` and its log-of-mean bias moved (:func:`allanite.diagnosis.null.rescaled`;
   the Welch log PSD is mapped quantile by quantile between log-gamma laws, which also moves
   its skewness: :func:`allanite.diagnosis.null.rescaled_log_gamma`);
-  the spike maximum over ``N`` samples is the maximum of ``N / N_short`` short records (Gumbel
-  location ``+ beta ln(N / N_short)``), and the k-th largest deviations move by the same
-  shift (the first points of a Poisson process whose intensity grows ``N / N_short``-fold);
+  the spike statistic needs no rescaling: the short replicates' pooled per-sample exceedance
+  rate, times ``N``, is the Poisson mean of the long record's exceedances
+  (:class:`allanite.diagnosis.null.ExceedanceTail`);
 * the reference of the Welch features (``log_psd``, ``log_line_psd``): the mean over the
   ``n_mc`` short replicates has an error that adds ``var_s / (n_mc var_N) ~ (N / N_short) /
   n_mc`` to the variance of a long record's log-PSD bin (40 % at 1e7 samples with
@@ -71,12 +71,17 @@ from allanite.diagnosis.inputs import simulate_model
 from allanite.diagnosis.null import (
     NullEnsemble,
     level_profiled,
-    max_shift,
     rescaled,
     rescaled_log_gamma,
 )
 from allanite.diagnosis.tau_view import gaussian_tau_null
-from allanite.diagnosis.time_view import TimePlan, kurtosis_blocks, time_features, time_plan
+from allanite.diagnosis.time_view import (
+    SPIKE_POOLED,
+    TimePlan,
+    kurtosis_blocks,
+    time_features,
+    time_plan,
+)
 
 __all__ = [
     "FULL_REPLICATES_MAX",
@@ -397,13 +402,15 @@ def scaled_ensemble(
     ref_k8, null_k8 = rescaled(ens_s, "kurt_lf", k8, log_mean=False)
     ref["kurt_lf"] = np.concatenate([ref_k8, ens_d.ref["kurt_lf"]])
     null["kurt_lf"] = np.concatenate([null_k8, ens_d.null["kurt_lf"]], axis=1)
-    spike = ens_s.null["spike"][:, 0]
-    ref["spike"] = ens_s.ref["spike"] + max_shift(spike, n / n_s)
-    null["spike"] = ens_s.null["spike"]
     for name in ("level", "jump", "dyn"):
         ref[name], null[name] = ens_d.ref[name], ens_d.null[name]
     log_ref, avar, tau_null = gaussian_tau_null(
         model, m, fs, n, n_draw=max(4000, 20 * n_mc), seed=seed + 104_729
     )
     ref["log_avar"], ref["avar_lin"], null["log_avar"] = log_ref, avar, tau_null
-    return NullEnsemble(ref=ref, null=null, real_scale=1.0, exact_tau=True)
+    # the spike law takes the short replicates' pooled exceedance counts as they are
+    pooled = {name: ens_s.pooled[name] for name in SPIKE_POOLED}
+    return NullEnsemble(
+        ref=ref, null=null, real_scale=1.0, exact_tau=True, pooled=pooled,
+        n_pooled=ens_s.n_pooled,
+    )  # fmt: skip

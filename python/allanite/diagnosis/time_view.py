@@ -15,10 +15,10 @@ the noise level belongs to the tau view, the time view looks for changes in time
 
 plus three record-wide statistics: the largest deviations from a 9-sample running median in
 units of their robust spread (``|h| / (1.4826 MAD(h))``, spikes: the 1st, 2nd, 4th and 8th
-largest, :data:`SPIKE_ORDERS`, each tested against the law of the k-th largest of many
-values, Bonferroni over the four: a few spikes of 5 sample sigmas are not much larger than
-the largest of 2^15 Gaussian samples, but two or four of them are far beyond the null's 2nd
-or 4th largest),
+largest peaks, :data:`SPIKE_ORDERS`, each tested against the Poisson law of the k-th largest
+with the replicates' pooled exceedance rate (:func:`spike_test`), Bonferroni over the four: a
+few spikes of 5 sample sigmas are not much larger than the largest of 2^15 Gaussian samples,
+but two or four of them are far beyond the null's 2nd or 4th largest),
 the excess kurtosis at the
 sample scale (two-sided: bursts, outliers, clipping; ``kurt_hf``, two statistics, Bonferroni
 over both: of the first differences, and of the samples minus their 9-sample running mean,
@@ -56,11 +56,10 @@ from numpy.typing import NDArray
 from scipy import ndimage, stats
 
 from allanite.diagnosis.null import (
+    ExceedanceTail,
     NullEnsemble,
     gumbel_isf,
     gumbel_sf,
-    kth_max_isf,
-    kth_max_sf,
     runs,
 )
 
@@ -70,6 +69,8 @@ __all__ = [
     "added_level_variance",
     "kurtosis_blocks",
     "sparse_jump_p",
+    "spike_features",
+    "spike_test",
     "time_features",
     "time_plan",
     "time_view",
@@ -82,6 +83,10 @@ MAX_SPIKES = 200
 SPIKE_MEDIAN = 9
 #: which largest deviations from the running median the spike statistic tests (k-th largest)
 SPIKE_ORDERS = (1, 2, 4, 8)
+#: levels (units of the robust spread) at which the spike null counts its exceedances
+SPIKE_GRID = np.round(np.arange(3.0, 12.0 + 1e-9, 0.05), 2)
+#: the features whose replicate means (:attr:`NullEnsemble.pooled`) the spike law needs
+SPIKE_POOLED = ("spike_tail", "spike_n")
 #: window of the running mean removed before the sample-level kurtosis (``kurt_hf``'s second)
 KURT_MEAN = 9
 
@@ -152,15 +157,44 @@ def time_features(
         d = np.diff(used, axis=1)
         out["hf"] = np.log(np.maximum(np.mean(d * d, axis=1), 1e-300))
         del d
-        hp = highpass(x)
-        out["spike"] = _largest(np.abs(hp), SPIKE_ORDERS) / _robust_spread(hp)
-        del hp
+        out.update(spike_features(x))
         d1 = _kurtosis(np.diff(x))
         hp = ndimage.uniform_filter1d(x, KURT_MEAN, mode="nearest")
         np.subtract(x, hp, out=hp)
         out["kurt_hf"] = np.array([d1, _kurtosis(hp)])
         del hp
     return out
+
+
+def spike_features(x: NDArray[np.float64]) -> dict[str, NDArray[np.float64]]:
+    """The spike statistic of a rate record and the counts its null pools.
+
+    ``a = |hp| / spread``, with ``hp`` the record minus its running median (:func:`highpass`)
+    and ``spread`` its robust spread (``1.4826 MAD``); a *peak* is a sample whose ``a`` is the
+    largest within :data:`SPIKE_MEDIAN` samples (a spike and its running-median neighbours are
+    one event). Returns ``spike``, the :data:`SPIKE_ORDERS` largest peaks; ``spike_tail``, the
+    number of peaks at or above each level of :data:`SPIKE_GRID`; ``spike_n``, the number of
+    samples.
+    """
+    hp = highpass(x)
+    a = np.abs(hp)
+    a /= _robust_spread(hp)
+    del hp
+    # the peaks at or above the grid: each candidate against its +-4 neighbours (cheap: few
+    # candidates); all peaks only when fewer than the orders reach the grid
+    cand = np.flatnonzero(a >= SPIKE_GRID[0])
+    half = SPIKE_MEDIAN // 2
+    near = np.clip(cand[:, None] + np.arange(-half, half + 1), 0, a.size - 1)
+    top = np.sort(a[cand][a[cand] >= a[near].max(axis=1, initial=0.0)])
+    if top.size >= max(SPIKE_ORDERS):
+        peak = top
+    else:
+        peak = a[a >= ndimage.maximum_filter1d(a, SPIKE_MEDIAN, mode="nearest")]
+    return {
+        "spike": _largest(peak, SPIKE_ORDERS),
+        "spike_tail": (top.size - np.searchsorted(top, SPIKE_GRID, side="left")).astype(float),
+        "spike_n": np.array([float(x.size)]),
+    }
 
 
 def _largest(a: NDArray[np.float64], orders: tuple[int, ...]) -> NDArray[np.float64]:
@@ -633,8 +667,7 @@ def time_view(
         flagged[fam] = np.abs(zf) > thr[fam]
         residual[fam], spread[fam], null_max[fam] = r, sd, zmax_null
     # record-wide statistics
-    spike_thr = _spike_thresholds(real, ens, alpha)
-    fam_p["spike"] = _spike_p(real, ens)
+    fam_p["spike"], spike_thr = spike_test(real, ens, alpha)
     lf = _kurtosis_checks(x, real, ens, plan, fam_p)
     # localisation
     segments: list[tuple[float, float]] = []
@@ -686,38 +719,45 @@ def time_view(
     )
 
 
-def _spike_p(real: dict[str, NDArray[np.float64]], ens: NullEnsemble) -> float:
-    """p-value of the spike statistic, Bonferroni over the orders.
-
-    The k-th largest deviations (:data:`SPIKE_ORDERS`), each against the law of a k-th
-    largest (:func:`~allanite.diagnosis.null.kth_max_sf`).
-    """
-    r = ens.residual(real, "spike")
-    null = ens.null["spike"]
-    orders = SPIKE_ORDERS[: r.size]
-    p = min(kth_max_sf(float(r[i]), null[:, i], k) for i, k in enumerate(orders))
-    return float(min(1.0, len(orders) * p))
-
-
-def _spike_thresholds(
+def spike_test(
     real: dict[str, NDArray[np.float64]], ens: NullEnsemble, alpha: float
-) -> list[float]:
-    """Deviation thresholds (units of the robust spread) of the orders that are significant.
+) -> tuple[float, list[float]]:
+    """p-value of the spike statistic (Bonferroni over the orders) and the spike thresholds.
 
-    Order ``k`` is significant when the real record's k-th largest deviation exceeds the
-    level the null's k-th largest exceeds with probability ``alpha / len(orders)``: then at
-    least ``k`` samples lie above that level. Listed by order (the first is the lowest
-    significant order's, the level the spikes are located at).
+    The replicates' pooled peak counts (:func:`spike_features`, :attr:`NullEnsemble.pooled`)
+    give the per-sample rate ``q(x)`` of peaks above ``x``
+    (:class:`~allanite.diagnosis.null.ExceedanceTail`, measured where the pooled samples reach
+    and extrapolated exponentially beyond); the real record's k-th largest peak ``r_k`` of
+    ``n`` samples has ``p_k = P(Poisson(n q(r_k)) >= k)`` for each k of :data:`SPIKE_ORDERS`,
+    and the p-value is ``min(1, 4 min p_k)``. Against a simulated record (its replicates are
+    Gaussian surrogates) the rate is at least the record's own, level by level. The
+    thresholds (units of the robust spread) are those of the significant orders: order ``k``
+    is significant when ``r_k`` exceeds the level the k-th largest exceeds with probability
+    ``alpha / len(orders)``: then at least ``k`` peaks lie above it. Listed by order (the
+    first is the lowest significant order's, the level the spikes are located at).
     """
-    r = ens.residual(real, "spike")
-    null = ens.null["spike"]
-    orders = SPIKE_ORDERS[: r.size]
+    if any(name not in ens.pooled for name in SPIKE_POOLED) or ens.n_pooled < 1:
+        raise ValueError(
+            "the null ensemble has no pooled spike counts: build it with "
+            "NullEnsemble.from_model / from_record from time_features of the replicates"
+        )
+    n_rep = float(ens.pooled["spike_n"][0])
+    # a simulated record's own tail counts too: its Gaussian surrogates do not carry it
+    own = (ens.ref["spike_tail"], float(ens.ref["spike_n"][0])) if ens.sim_record else None
+    tail = ExceedanceTail.from_counts(
+        SPIKE_GRID, ens.pooled["spike_tail"] * ens.n_pooled, ens.n_pooled * n_rep, own
+    )
+    n = float(real["spike_n"][0])
+    values = real["spike"]
+    orders = SPIKE_ORDERS[: values.size]
+    level = alpha / len(orders)
+    p = min(tail.kth_sf(float(v), n, k) for v, k in zip(values, orders, strict=True))
     out = []
-    for i, k in enumerate(orders):
-        thr = kth_max_isf(alpha / len(orders), null[:, i], k)
-        if r[i] > thr:
-            out.append(float(ens.ref["spike"][i]) + thr)
-    return out
+    for v, k in zip(values, orders, strict=True):
+        thr = tail.kth_isf(level, n, k)
+        if v > thr:
+            out.append(thr)
+    return float(min(1.0, len(orders) * p)), out
 
 
 def _spike_raise(
