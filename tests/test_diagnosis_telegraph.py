@@ -1,15 +1,19 @@
 """The telegraph's two-level test: two levels against the Gaussian twin of the same spectrum.
 
 Fixed seeds; each test has a control (the Gaussian twin, a Gauss-Markov process of the same
-standard deviation and correlation time, in place of the telegraph).
+standard deviation and correlation time, in place of the telegraph; the null without the
+effects already chosen; the twin at the fit alone instead of every plausible twin).
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 import pytest
 from scipy import stats
 
+import allanite.diagnosis.attribution as attribution
 import benchmark_module
 from allanite.diagnosis import diagnose
 from allanite.diagnosis.attribution import TWIN, _refuted_twins
@@ -19,6 +23,7 @@ from allanite.diagnosis.two_level import (
     matched_block,
     two_level_context,
     two_level_p,
+    with_set,
 )
 from allanite.model import NoiseModel
 from allanite.terms import TERM_TYPES
@@ -148,6 +153,7 @@ def _diagnosed(slow: object) -> set[str]:
     return {a.effect for a in d.explanation.effects}
 
 
+@pytest.mark.slow
 def test_diagnosis_names_a_diluted_telegraph() -> None:
     """The designed telegraph + white case whose block-mean kurtosis missed the evidence level
     (p 0.0063 > 0.05 / 8): the set names the telegraph, not its Gaussian twin."""
@@ -156,7 +162,109 @@ def test_diagnosis_names_a_diluted_telegraph() -> None:
     assert "markov" not in tele
 
 
+@pytest.mark.slow
 def test_diagnosis_names_no_telegraph_for_its_gaussian_twin() -> None:
     """Control: the same record with the Gaussian twin in the telegraph's place."""
     twin = _diagnosed(T["markov"](sigma=AMPLITUDE, tau_c=3.0))
     assert "telegraph" not in twin
+
+
+def _twin_p_values(background: tuple[object, ...]) -> np.ndarray:
+    """p_gauss of 12 records: base + white + the Gaussian twin + a slow Gauss-Markov process
+    (30 s, sigma 0.1: an effect the set already has), with ``background`` in the null."""
+    slow = T["markov"](sigma=0.1, tau_c=30.0)
+    ctx = {**two_level_context(np.zeros(N), base_model(), FS, seed=5), "background": background}
+    p = []
+    for k in range(12):
+        x = base_model().simulate(N, fs=FS, seed=200 + k)
+        for j, term in enumerate((T["white"](N=0.0185), T["markov"](sigma=0.08, tau_c=3.0), slow)):
+            one = NoiseModel((term,), UNITS).simulate(N, fs=FS, seed=300 + 7 * k + j,
+                                                      allow_aliasing=True)  # fmt: skip
+            x = x + one
+        got = two_level_p(
+            T["telegraph"](amplitude=0.08, tau_c=3.0),
+            {**ctx, "means": np.ravel(x).reshape(-1, 8).mean(axis=1)},
+        )
+        assert got is not None
+        p.append(got[0])
+    return np.array(p)
+
+
+def test_the_null_holds_the_effects_already_chosen() -> None:
+    """Next to a slow Gauss-Markov process the set already has, the twin's p-values are uniform
+    only when the null holds that process too (:func:`with_set`); control: with the null of
+    the sensor alone (the process taken for white noise) they pile up near 1."""
+    slow = T["markov"](sigma=0.1, tau_c=30.0)
+    with_it = _twin_p_values((slow,))
+    assert stats.kstest(with_it, "uniform").pvalue > 1e-3
+    without = _twin_p_values(())
+    assert stats.kstest(without, "uniform").pvalue < 1e-3
+    assert np.median(without) > np.median(with_it)
+
+
+@dataclass(frozen=True)
+class _View:
+    """A stand-in for the time view: the only field :func:`with_set` reads."""
+
+    lf_kurtosis: dict[str, object]
+
+
+def test_with_set_adds_the_chosen_processes_to_the_context(context) -> None:  # type: ignore[no-untyped-def]
+    view = _View({"two_level": context})
+    slow = T["markov"](sigma=0.1, tau_c=30.0)
+    got = with_set(view, [slow])
+    assert got.lf_kurtosis["two_level"]["background"] == (slow,)
+    assert "background" not in context  # a copy, not a change
+    bare = _View({})
+    assert with_set(bare, [slow]) is bare  # no two-level context: unchanged
+    assert with_set(None, [slow]) is None
+
+
+def _two_markov() -> set[str]:
+    """The two-process record of tests/test_diagnosis_repeat.py: white-noise model, a fast
+    (0.02 s) and a slow (5 s) Gauss-Markov process; the effects named."""
+    model = NoiseModel((T["white"](N=0.05),), UNITS)
+    fast = T["markov"](sigma=0.25, tau_c=0.02)
+    slow = T["markov"](sigma=0.05, tau_c=5.0)
+    x = np.asarray(model.plus(fast, slow).simulate(2**16, fs=FS, seed=11), dtype=np.float64)
+    d = diagnose(np.ravel(x), model, fs=FS, units="deg/s", holdout=0.5, n_mc=60, seed=12)
+    assert d.explanation is not None
+    return {a.effect for a in d.explanation.effects}
+
+
+@pytest.mark.slow
+def test_two_gauss_markov_processes_are_not_read_as_a_telegraph() -> None:
+    """On top of the fast process, the slow one's telegraph fit is rejected against its Gaussian
+    twin at the fit (p 0.0014: this record's slow path is flat-topped) but not against every
+    twin the fit's uncertainty allows: both processes are named, no telegraph."""
+    assert _two_markov() == {"markov"}
+
+
+@pytest.mark.slow
+def test_two_gauss_markov_processes_control(monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """Control: with the plausible twins collapsed on the fit (the reverted test's null), a
+    telegraph is named in place of the slow process."""
+    monkeypatch.setattr(attribution, "TWIN_SIGMAS", 0.0)
+    assert "telegraph" in _two_markov()
+
+
+def _pure(slow: object) -> set[str]:
+    """Base sensor + one slow process (no extra white noise), 2 x 2^15 samples, half held out."""
+    x = base_model().simulate(2 * N, fs=FS, seed=41)
+    x = x + NoiseModel((slow,), UNITS).simulate(2 * N, fs=FS, seed=48, allow_aliasing=True)
+    d = diagnose(np.ravel(x), base_model(), fs=FS, units="deg/s", holdout=0.5, n_mc=60, seed=42)
+    assert d.explanation is not None
+    return {a.effect for a in d.explanation.effects}
+
+
+@pytest.mark.slow
+def test_a_pure_gauss_markov_record_is_not_read_as_a_telegraph() -> None:
+    assert "telegraph" not in _pure(T["markov"](sigma=0.08, tau_c=3.0))
+
+
+@pytest.mark.slow
+def test_a_pure_telegraph_record_is_named() -> None:
+    """Control of the pure Gauss-Markov record: a telegraph in its place is named."""
+    named = _pure(T["telegraph"](amplitude=0.08, tau_c=3.0))
+    assert "telegraph" in named
+    assert "markov" not in named

@@ -477,7 +477,9 @@ def _two_level(
     """
     ctx = time_view.lf_kurtosis.get("two_level") if time_view is not None else None
     added = cand.added_term(_values(cand, logp))
-    got = two_level_p(added, ctx) if ctx is not None and added is not None else None
+    if ctx is None or added is None:
+        return {}
+    got = two_level_p(added, ctx)
     if got is None:
         return {}
     out = {"p_gauss": got[0], "p_gauss_fit": got[0], "p_own": got[1], "block_samples": got[2]}

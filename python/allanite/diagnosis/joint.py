@@ -226,7 +226,8 @@ def _own_extra(a: Attribution, c: Candidate, tm: TauModel) -> NDArray[np.float64
 def _on_set(tv: TimeView | None, on: list[Attribution], on_c: list[Candidate]) -> TimeView | None:
     """The time view whose two-level test holds the processes of ``on`` in its null."""
     terms = [c.added_term({k: a.params[k] for k in c.free}) for a, c in zip(on, on_c, strict=True)]
-    return with_set(tv, [t for t in terms if t is not None])
+    out: TimeView | None = with_set(tv, [t for t in terms if t is not None])
+    return out
 
 
 def _pair_starts(
@@ -404,8 +405,9 @@ def _shape_and_noise(
     tm_shape = with_background(tm, e_shape)
     gain = float(stats.chi2.isf(alpha, len(measured_params)))
     out = []
+    view_shape = _on_set(view, [shape], [measured])  # the shape in the two-level null
     for c in partners:
-        a = fit_candidate(c, tm_shape, **{**fit_kw, "significant": rest})
+        a = fit_candidate(c, tm_shape, **{**fit_kw, "significant": rest, "time_view": view_shape})
         if a is None:
             continue
         view_bg = with_level_background(view, [a], [c], tm, duration, cache)

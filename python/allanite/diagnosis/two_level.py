@@ -19,12 +19,18 @@ independent noise of the record's remaining block-mean variance. Within a dwell 
 on average) the telegraph's level is constant, which the chain exploits and a marginal
 statistic cannot.
 
-The null law of the ratio is that of the simulated sensor plus the Gaussian twin: each of
-``n_rep`` replicates of the sensor's model (simulated once per diagnosis at the fitted length,
-kept as 8-sample block means) plus :data:`PAIRINGS` replicates of a unit Gauss-Markov process
-of the candidate's ``T_c`` scaled to ``a`` (cached per ``T_c``), plus white noise making up
-the record's own block-mean variance (its excess over the sensor and the process); the
-one-sided p-value is the normal tail of ``(LR_real - mean) / sd`` over these sums. A telegraph
+The null law of the ratio is that of the simulated sensor, plus the effects the joint
+attribution has already chosen, plus the Gaussian twin: each of ``n_rep`` replicates of the
+sensor's model (simulated once per diagnosis at the fitted length, kept as 8-sample block
+means) plus one replicate of each chosen effect's process (``ctx["background"]``, set by
+:func:`with_set`; simulated at :data:`SET_SEED`, cached per term) plus :data:`PAIRINGS`
+replicates of a unit Gauss-Markov process of the twin's ``T_c`` scaled to its ``sigma``
+(cached per ``T_c``), plus white noise making up the record's own block-mean variance (its
+excess over all of these); the one-sided p-value is the normal tail of
+``(LR_real - mean) / sd`` over these sums. Without the chosen effects the null is wrong inside
+the joint attribution: a slow process already in the set is taken for white noise. The twin
+is itself an estimate, so the caller may pass several plausible twins (``twins``): the
+largest p-value counts. A telegraph
 is shown when it is below the evidence level. The same construction with the twin replaced
 by a unit telegraph at its most favourable level (all the record's block-mean variance beyond
 the sensor) gives the ratio the candidate itself predicts: a record with much more of a
@@ -202,9 +208,9 @@ def with_set(view: Any, terms: list[Any]) -> Any:
     ctx = view.lf_kurtosis.get("two_level") if view is not None else None
     if ctx is None:
         return view
-    return replace(
-        view, lf_kurtosis={**view.lf_kurtosis, "two_level": {**ctx, "background": tuple(terms)}}
-    )
+    ctx = {**ctx, "background": tuple(terms)}
+    out: Any = replace(view, lf_kurtosis={**view.lf_kurtosis, "two_level": ctx})
+    return out
 
 
 def _term_means(term: Any, fs: float, n: int, n_rep: int) -> NDArray[np.float64]:
