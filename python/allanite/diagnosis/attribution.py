@@ -459,6 +459,14 @@ def _plausible_twins(
     ]  # fmt: skip
 
 
+def _context(time_view: TimeView | None) -> dict[str, Any] | None:
+    """The two-level context of the time view (None: the test does not run on this record)."""
+    if time_view is None:
+        return None
+    ctx: dict[str, Any] | None = time_view.lf_kurtosis.get("two_level")
+    return ctx
+
+
 def _two_level(
     cand: Candidate,
     logp: NDArray[np.float64],
@@ -475,7 +483,7 @@ def _two_level(
     (a record longer than :data:`LF_KURTOSIS_MAX_SAMPLES`, a simulated record instead of a
     model) or the record is too short for the fitted correlation time.
     """
-    ctx = time_view.lf_kurtosis.get("two_level") if time_view is not None else None
+    ctx = _context(time_view)
     added = cand.added_term(_values(cand, logp))
     if ctx is None or added is None:
         return {}
@@ -572,6 +580,8 @@ def fit_candidate(
     duration: float = 0.0,
 ) -> Attribution | None:
     """Fit one candidate; None when it neither improves the tau view nor explains evidence."""
+    if cand.effect in TWO_LEVEL and not significant.get("kurt_lf") and not _context(time_view):
+        return None  # no test can show its two levels (not fitted: the cost on long records)
     f = _objective(cand, tm)
     lo, hi = _bounds(cand, tm)
     inside = [np.clip(x0, lo + 1e-6, hi - 1e-6) for x0 in _starts(cand, tm)]
@@ -596,8 +606,8 @@ def fit_candidate(
         return None
     if extra is None or negligible(cand, _values(cand, logp), extra, tm):
         return None
-    level = alpha / max(len(evidence_p), 1)
-    two_level, shown = _two_levels_shown(cand, logp, tm, time_view, level)
+    n_ev = max(len(evidence_p), 1)
+    two_level, shown = _two_levels_shown(cand, logp, tm, time_view, alpha / n_ev)
     if cand.effect in TWO_LEVEL and not shown and not significant.get("kurt_lf", False):
         return None  # neither test below can show its two levels
     k = len(cand.free)
@@ -610,7 +620,6 @@ def fit_candidate(
     pending = [e for e in ("jump", "level") if significant.get(e, False) and e not in explained]
     if time_view is not None and pending:
         level_p = _level_p_with(cand, _values(cand, logp), time_view, tm.dt, duration)
-        n_ev = max(len(evidence_p), 1)
         for e, p in level_p.items():
             if significant.get(e, False) and p >= alpha / n_ev and e not in explained:
                 explained.append(e)
@@ -618,7 +627,7 @@ def fit_candidate(
     # slow stationary noise makes block means platykurtic too: re-test kurt_lf with it
     if time_view is not None and significant.get("kurt_lf", False) and "kurt_lf" not in explained:
         p_lf = _lf_kurtosis_p(cand, _values(cand, logp), time_view, tm.dt, duration)
-        if p_lf is not None and p_lf >= alpha / max(len(evidence_p), 1):
+        if p_lf is not None and p_lf >= alpha / n_ev:
             explained = sorted([*explained, "kurt_lf"])
     if lr_p >= alpha and not explained:
         return None
