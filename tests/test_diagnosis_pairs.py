@@ -467,4 +467,10 @@ def test_telegraph_next_to_white_noise_is_named_despite_its_fitted_variance(monk
     kw = {k: v for k, v in seen["kw"].items() if k != "frequency"}  # type: ignore[attr-defined]
     by = {c.effect: c for c in seen["cands"]}  # type: ignore[attr-defined]
     monkeypatch.setattr(attribution, "LF_VARIANCE_FACTOR", 1.0)
+    # the two-level test (HMM against the Gaussian twin) shows its two levels without the
+    # allowance; with that test off, the re-test at the fitted variance alone drops it
+    shown = fit_candidate(by["telegraph"], seen["tm"], **kw)  # type: ignore[arg-type]
+    assert shown is not None
+    assert shown.evidence["two_level"]["p_gauss"] < 0.05 / len(kw["evidence_p"])  # type: ignore[arg-type]
+    monkeypatch.setattr(attribution, "_two_level", lambda *args: {})
     assert fit_candidate(by["telegraph"], seen["tm"], **kw) is None  # type: ignore[arg-type]

@@ -33,7 +33,13 @@ level evidence when the jump/level test, with its own slow noise added to the nu
 is no longer significant, and the low-frequency kurtosis evidence (platykurtic block means:
 a random walk's or a slow Gauss-Markov process's path over one record) when the kurtosis the
 candidate's own process predicts for the block means is consistent with the record's
-(:meth:`~allanite.diagnosis.time_view.TimeView.lf_kurtosis_p_value`). ``consistent_after``
+(:meth:`~allanite.diagnosis.time_view.TimeView.lf_kurtosis_p_value`). A telegraph, whose
+spectrum is a Gauss-Markov process's, is only kept when its two levels are shown: by that
+kurtosis re-test, or by the two-level test of :mod:`allanite.diagnosis.two_level` (a hidden
+two-state chain against the Gaussian twin, calibrated on the model's replicates) below the
+evidence level ``alpha / n_evidence``; then the Gauss-Markov candidate of a correlation time
+within ``DISTINCT_FACTOR`` of it leaves that evidence unexplained and pays ``-2 ln p`` like any
+other (:func:`_refuted_twins`). ``consistent_after``
 is true when the p-value of ``T_after`` (null law with ``k`` fewer degrees of freedom)
 exceeds ``alpha``. Effects whose scores differ by
 less than the penalty of one parameter are listed as each other's ``alternatives``. The gap
@@ -70,10 +76,11 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import optimize, stats
 
-from allanite.diagnosis.candidates import Candidate
+from allanite.diagnosis.candidates import DISTINCT_FACTOR, Candidate
 from allanite.diagnosis.level_shape import level_misfit
 from allanite.diagnosis.tau_view import TauModel
 from allanite.diagnosis.time_view import TimeView, added_block_kurtosis, added_level_variance
+from allanite.diagnosis.two_level import two_level_p
 from allanite.terms import TERM_TYPES
 
 __all__ = ["LEVEL_NEGLIGIBLE", "Attribution", "fit_candidate", "negligible", "rank", "tau_size"]
@@ -82,6 +89,8 @@ __all__ = ["LEVEL_NEGLIGIBLE", "Attribution", "fit_candidate", "negligible", "ra
 #: asks whether a Gaussian process explains the jumps, does not apply to them; one is only an
 #: explanation when its own process reproduces the platykurtic block means (kurt_lf)
 TWO_LEVEL = ("telegraph",)
+#: the Gaussian process with a two-level process's spectrum (its Gaussian twin)
+TWIN = "markov"
 
 #: cap of one piece of evidence on the -2 ln p scale
 EVIDENCE_CAP = 1000.0
@@ -423,6 +432,126 @@ def _lf_kurtosis_p(
     return max((x for x in p if x is not None), default=None)
 
 
+#: the Gaussian twins a telegraph must be told from: its fit's corners at this many of the
+#: fit's own (Fisher) standard errors of the amplitude and the correlation time, log scale
+TWIN_SIGMAS = 2.0
+
+
+def _plausible_twins(
+    cand: Candidate, logp: NDArray[np.float64], tm: TauModel
+) -> list[tuple[float, float]] | None:
+    """Gauss-Markov processes the tau view cannot tell from the fitted telegraph.
+
+    The four corners ``(a e^{+-z s_a}, T_c e^{+-z s_T})`` with ``z`` = :data:`TWIN_SIGMAS`
+    and ``s`` the fit's Fisher standard errors (log scale); None when they are not finite.
+    """
+    values = _values(cand, logp)
+    sig = dict.fromkeys(("amplitude", "tau_c"), 0.0)
+    sig.update(zip(cand.free, _fisher_sigma(cand, tm, logp), strict=True))
+    if not all(np.isfinite(v) for v in sig.values()):
+        return None
+    z = TWIN_SIGMAS
+    return [
+        (values["amplitude"] * np.exp(i * z * sig["amplitude"]),
+         values["tau_c"] * np.exp(j * z * sig["tau_c"]))
+        for i in (-1, 1)
+        for j in (-1, 1)
+    ]  # fmt: skip
+
+
+def _context(time_view: TimeView | None) -> dict[str, Any] | None:
+    """The two-level context of the time view (None: the test does not run on this record)."""
+    if time_view is None:
+        return None
+    ctx: dict[str, Any] | None = time_view.lf_kurtosis.get("two_level")
+    return ctx
+
+
+def _two_level(
+    cand: Candidate,
+    logp: NDArray[np.float64],
+    tm: TauModel,
+    time_view: TimeView | None,
+    level: float,
+) -> dict[str, float]:
+    """The two-level test of a telegraph candidate (:func:`two_level_p`).
+
+    ``p_gauss`` is the test against the Gaussian twin of the fit (``p_gauss_fit``) and, when
+    that is below ``level``, against every twin the fit's uncertainty allows
+    (:func:`_plausible_twins`): the largest of their p-values (two levels are shown only when
+    every plausible twin is rejected). Empty when the time view carries no two-level context
+    (a record longer than :data:`LF_KURTOSIS_MAX_SAMPLES`, a simulated record instead of a
+    model) or the record is too short for the fitted correlation time.
+    """
+    ctx = _context(time_view)
+    added = cand.added_term(_values(cand, logp))
+    if ctx is None or added is None:
+        return {}
+    got = two_level_p(added, ctx)
+    if got is None:
+        return {}
+    out = {"p_gauss": got[0], "p_gauss_fit": got[0], "p_own": got[1], "block_samples": got[2]}
+    if got[0] < level:
+        twins = _plausible_twins(cand, logp, tm)
+        wide = two_level_p(added, ctx, twins) if twins is not None else None
+        out["p_gauss"] = max(got[0], wide[0]) if wide is not None else 1.0
+    return {k: float(v) for k, v in out.items()}
+
+
+def _two_levels_shown(
+    cand: Candidate,
+    logp: NDArray[np.float64],
+    tm: TauModel,
+    time_view: TimeView | None,
+    level: float,
+) -> tuple[dict[str, float], bool]:
+    """The two-level test of a telegraph and whether it shows two levels at ``level``.
+
+    Shown: every plausible Gaussian twin rejected, the telegraph itself not.
+    """
+    if cand.effect not in TWO_LEVEL:
+        return {}, False
+    two_level = _two_level(cand, logp, tm, time_view, level)
+    return two_level, bool(two_level) and two_level["p_gauss"] < level <= two_level["p_own"]
+
+
+def _refuted_twins(kept: list[Attribution], alpha: float, n_evidence: int) -> list[Attribution]:
+    """The kept attributions, a Gaussian twin of a telegraph with two levels shown penalised.
+
+    A Gauss-Markov process whose correlation time lies within ``DISTINCT_FACTOR`` of a kept
+    telegraph's, when the telegraph's two-level test rejected its Gaussian twin at the
+    evidence level, leaves that evidence unexplained: its score pays
+    ``min(-2 ln p_gauss, EVIDENCE_CAP)`` (unless it already pays for ``kurt_lf``).
+    """
+    level = alpha / max(n_evidence, 1)
+    shown = [
+        a
+        for a in kept
+        if a.effect in TWO_LEVEL and a.evidence.get("two_level", {}).get("p_gauss", 1.0) < level
+    ]
+    if not shown:
+        return kept
+    out = []
+    for a in kept:
+        twin = next(
+            (
+                t
+                for t in shown
+                if a.effect == TWIN
+                and abs(np.log(a.params["tau_c"] / t.params["tau_c"])) < np.log(DISTINCT_FACTOR)
+            ),
+            None,
+        )
+        if twin is None or "kurt_lf" in a.evidence.get("unexplained", []):
+            out.append(a)
+            continue
+        p = max(twin.evidence["two_level"]["p_gauss"], 1e-300)
+        cost = min(-2.0 * np.log(p), EVIDENCE_CAP)
+        evidence = {**a.evidence, "two_level_unexplained": {"p_gauss": p, "cost": cost}}
+        out.append(replace(a, score=a.score + cost, evidence=evidence))
+    return out
+
+
 def _level_p_with(
     cand: Candidate, values: dict[str, float], time_view: TimeView, dt: float, duration: float
 ) -> dict[str, float]:
@@ -451,6 +580,8 @@ def fit_candidate(
     duration: float = 0.0,
 ) -> Attribution | None:
     """Fit one candidate; None when it neither improves the tau view nor explains evidence."""
+    if cand.effect in TWO_LEVEL and not significant.get("kurt_lf") and not _context(time_view):
+        return None  # no test can show its two levels (not fitted: the cost on long records)
     f = _objective(cand, tm)
     lo, hi = _bounds(cand, tm)
     inside = [np.clip(x0, lo + 1e-6, hi - 1e-6) for x0 in _starts(cand, tm)]
@@ -475,6 +606,10 @@ def fit_candidate(
         return None
     if extra is None or negligible(cand, _values(cand, logp), extra, tm):
         return None
+    n_ev = max(len(evidence_p), 1)
+    two_level, shown = _two_levels_shown(cand, logp, tm, time_view, alpha / n_ev)
+    if cand.effect in TWO_LEVEL and not shown and not significant.get("kurt_lf", False):
+        return None  # neither test below can show its two levels
     k = len(cand.free)
     t_before, t_after = tm.statistic(), tm.statistic(extra)
     delta = t_before - t_after
@@ -485,7 +620,6 @@ def fit_candidate(
     pending = [e for e in ("jump", "level") if significant.get(e, False) and e not in explained]
     if time_view is not None and pending:
         level_p = _level_p_with(cand, _values(cand, logp), time_view, tm.dt, duration)
-        n_ev = max(len(evidence_p), 1)
         for e, p in level_p.items():
             if significant.get(e, False) and p >= alpha / n_ev and e not in explained:
                 explained.append(e)
@@ -493,12 +627,13 @@ def fit_candidate(
     # slow stationary noise makes block means platykurtic too: re-test kurt_lf with it
     if time_view is not None and significant.get("kurt_lf", False) and "kurt_lf" not in explained:
         p_lf = _lf_kurtosis_p(cand, _values(cand, logp), time_view, tm.dt, duration)
-        if p_lf is not None and p_lf >= alpha / max(len(evidence_p), 1):
+        if p_lf is not None and p_lf >= alpha / n_ev:
             explained = sorted([*explained, "kurt_lf"])
     if lr_p >= alpha and not explained:
         return None
-    if cand.effect in TWO_LEVEL and "kurt_lf" not in explained:
-        # its own two levels do not reproduce the platykurtic block means: it is a
+    if cand.effect in TWO_LEVEL and "kurt_lf" not in explained and not shown:
+        # neither its own two levels reproduce the platykurtic block means nor do the
+        # record's block means look two-level beyond its Gaussian twin: it is a
         # Gauss-Markov process with the same spectrum, and the simpler term is the answer
         return None
     unexplained = sorted(e for e, s in significant.items() if s and e not in explained)
@@ -541,6 +676,7 @@ def fit_candidate(
             "unexplained": unexplained,
             "level_shape_misfit": shape,
             "level_p_with_effect": level_p,
+            **({"two_level": two_level} if two_level else {}),
         },
         sim_avar_after=np.asarray(tm.sim_avar + extra, dtype=np.float64),
     )
@@ -569,7 +705,8 @@ def rank(
         )
         for c in candidates
     ]
-    kept = sorted((a for a in fitted if a is not None), key=lambda a: a.score)
+    kept = _refuted_twins([a for a in fitted if a is not None], alpha, len(evidence_p))
+    kept = sorted(kept, key=lambda a: a.score)
     margin = float(stats.chi2.isf(alpha, 1))
     return [
         replace(

@@ -16,9 +16,10 @@ ramp           level, level jump, kurtosis of block means      --
 step           level jump, level, kurtosis of block means      a level jump
 warmup         level, level jump, kurtosis of block means      level or jump
 spikes         spike statistic, kurtosis of differences, hf    the spike statistic
-telegraph      dyn; kurtosis of block means, jump and level    kurtosis of block means
-               when its own process reproduces them (the
-               re-tests of the slow candidates)
+telegraph      dyn; kurtosis of block means, jump and level    -- (named only when two
+               when its own process reproduces them (the      levels are shown: the
+               re-tests of the slow candidates)                kurtosis re-test or the
+                                                               two-level test)
 bursts         hf, kurtosis of differences, spike statistic    hf (noise-level changes)
 resonance      --                                              a band-pass shaped excess
                                                                whose peak stays put
@@ -39,8 +40,11 @@ than :data:`DISTINCT_FACTOR` apart, or resonances whose half-power bands do not 
 so a second one exists only where the frequency view shows a second band-pass excess
 (:attr:`Candidate.others`, :meth:`Candidate.repeats`).
 
-An effect whose signature is absent is not proposed (a telegraph without a non-Gaussian
-amplitude distribution is a Gauss-Markov process; the simpler term is the answer).
+An effect whose signature is absent is not proposed. A telegraph is always fitted, but named
+only when its two levels are shown, by the block-mean kurtosis its own process reproduces or by
+the likelihood ratio of two levels against its Gaussian twin
+(:mod:`allanite.diagnosis.two_level`): without them it is a Gauss-Markov process, and the
+simpler term is the answer.
 """
 
 from __future__ import annotations
@@ -110,7 +114,6 @@ SIGNATURE: dict[str, frozenset[str]] = {
     "step": frozenset({"jump"}),
     "warmup": frozenset({"level", "jump"}),
     "spikes": frozenset({"spike"}),
-    "telegraph": frozenset({"kurt_lf"}),
     "bursts": frozenset({"hf"}),
     "white_drift": frozenset({"hf"}),
 }

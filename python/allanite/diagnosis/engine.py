@@ -10,7 +10,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from allanite._deprecation import keyword_only_fs, renamed
 from allanite.diagnosis.analysis import Analysis, Progress, analyze
-from allanite.diagnosis.attribution import Attribution, rank
+from allanite.diagnosis.attribution import LF_KURTOSIS_MAX_SAMPLES, TWO_LEVEL, Attribution, rank
 from allanite.diagnosis.band_shape import band_shapes
 from allanite.diagnosis.candidates import candidate_library, check_effects
 from allanite.diagnosis.holdout import holdout_check, holdout_set, tau_model_for
@@ -27,6 +27,7 @@ from allanite.diagnosis.noise_level import burst_spans, drift_shape
 from allanite.diagnosis.result import Diagnosis, Holdout
 from allanite.diagnosis.scaled_null import ADDED_SEED, ReplicateStore, uses_scaled_null
 from allanite.diagnosis.time_base import time_base_evidence, with_time_base
+from allanite.diagnosis.two_level import two_level_context
 from allanite.diagnosis.verdict import verdict
 from allanite.io.record import Record
 from allanite.terms import Resonance, term_from_dict
@@ -37,6 +38,9 @@ __all__ = ["diagnose"]
 
 #: effects tied to the start of a record: a held-out end of the record cannot show them
 START_EFFECTS = ("warmup",)
+
+#: seed offset of the sensor replicates of the telegraph's two-level test
+TWO_LEVEL_SEED = 7_000_001
 
 #: statistics of the frequency and time views that count as evidence for an effect
 EVIDENCE = ("line", "jump", "level", "spike", "kurt_hf", "kurt_lf", "hf", "dyn")
@@ -359,7 +363,7 @@ def _attribute(
         "alpha": run.significance,
         "evidence_p": ev_p,
         "significant": sig,
-        "time_view": analysis.time,
+        "time_view": _with_two_level(run, analysis.time, cands),
         "duration": run.duration,
     }
     attribution = rank(cands, analysis.tau_model, **test)
@@ -369,6 +373,22 @@ def _attribute(
             attribution[0], cands, analysis.tau_model, frequency=analysis.frequency, **test
         )
     return _Found(attribution, explanation, {c.effect: c for c in cands}, sig, unavailable)
+
+
+def _with_two_level(run: _Run, view: Any, cands: list[Any]) -> Any:
+    """The time view with the context of the telegraph's two-level test (:mod:`two_level`).
+
+    Only when a telegraph is a candidate, the sensor is a model and the fitted part is at most
+    :data:`~allanite.diagnosis.attribution.LF_KURTOSIS_MAX_SAMPLES` samples.
+    """
+    if (
+        run.source.model is None
+        or run.x_fit.size > LF_KURTOSIS_MAX_SAMPLES
+        or not any(c.effect in TWO_LEVEL for c in cands)
+    ):
+        return view
+    ctx = two_level_context(run.x_fit, run.source.model, run.fs, seed=run.seed + TWO_LEVEL_SEED)
+    return replace(view, lf_kurtosis={**view.lf_kurtosis, "two_level": ctx})
 
 
 def _reanalysis(run: _Run, explanation: Explanation | None) -> Analysis | None:

@@ -71,6 +71,7 @@ from allanite.diagnosis.frequency_view import FrequencyView
 from allanite.diagnosis.level_shape import level_misfit, ramp_shape, warmup_shape
 from allanite.diagnosis.tau_view import TauModel
 from allanite.diagnosis.time_view import TimeView, added_level_variance
+from allanite.diagnosis.two_level import with_set
 
 __all__ = [
     "LEVEL_SHAPES",
@@ -220,6 +221,13 @@ def _own_extra(a: Attribution, c: Candidate, tm: TauModel) -> NDArray[np.float64
     with np.errstate(all="ignore"):
         extra = c.extra_avar({k: a.params[k] for k in c.free}, tm.tau, tm.dt)
     return np.asarray(extra, dtype=np.float64)
+
+
+def _on_set(tv: TimeView | None, on: list[Attribution], on_c: list[Candidate]) -> TimeView | None:
+    """The time view whose two-level test holds the processes of ``on`` in its null."""
+    terms = [c.added_term({k: a.params[k] for k in c.free}) for a, c in zip(on, on_c, strict=True)]
+    out: TimeView | None = with_set(tv, [t for t in terms if t is not None])
+    return out
 
 
 def _pair_starts(
@@ -397,8 +405,9 @@ def _shape_and_noise(
     tm_shape = with_background(tm, e_shape)
     gain = float(stats.chi2.isf(alpha, len(measured_params)))
     out = []
+    view_shape = _on_set(view, [shape], [measured])  # the shape in the two-level null
     for c in partners:
-        a = fit_candidate(c, tm_shape, **{**fit_kw, "significant": rest})
+        a = fit_candidate(c, tm_shape, **{**fit_kw, "significant": rest, "time_view": view_shape})
         if a is None:
             continue
         view_bg = with_level_background(view, [a], [c], tm, duration, cache)
@@ -541,6 +550,7 @@ def _backfit(
     """
     extras = [_own_extra(b, d, tm) for b, d in zip(on, on_c, strict=True)]
     e_a = _own_extra(a, c, tm)
+    view = fit_kw["time_view"]
     t_old = tm.statistic(np.sum(extras, axis=0) + e_a)
     new = list(on)
     changed = False
@@ -553,17 +563,18 @@ def _backfit(
         )
         left = {e: s and e not in told for e, s in significant.items()}
         start = {k: b.params[k] for k in d.free} if d.base is None else {}
+        rest = [x for i, x in enumerate(new) if i != j] + [a]
+        rest_c = [x for i, x in enumerate(on_c) if i != j] + [c]
         refit = fit_candidate(
             replace(d, start={**d.start, **start}),
             with_background(tm, np.sum(others, axis=0) + e_a),
-            **{**fit_kw, "significant": left},
+            **{**fit_kw, "significant": left, "time_view": _on_set(view, rest, rest_c)},
         )
         if (
             refit is None
             or not set(b.evidence.get("explained", [])) <= set(refit.evidence.get("explained", []))
-            or not _distinct(refit, d, [x for i, x in enumerate(new) if i != j] + [a],
-                             [x for i, x in enumerate(on_c) if i != j] + [c])
-        ):  # fmt: skip
+            or not _distinct(refit, d, rest, rest_c)
+        ):
             continue
         if not _moved(refit, b, d):
             continue
@@ -575,7 +586,7 @@ def _backfit(
     again = fit_candidate(
         replace(c, start={**c.start, **start}),
         with_background(tm, np.sum(extras, axis=0)),
-        **fit_kw,
+        **{**fit_kw, "time_view": _on_set(view, new, on_c)},
     )
     if again is not None and not _distinct(again, c, new, on_c):
         again = None
@@ -643,7 +654,9 @@ def explain(
             "alpha": alpha,
             "evidence_p": evidence_p,
             "significant": left,
-            "time_view": with_level_background(time_view, on, on_c, tm, duration, cache),
+            "time_view": _on_set(
+                with_level_background(time_view, on, on_c, tm, duration, cache), on, on_c
+            ),
             "duration": duration,
         }
         if singles is not None:
