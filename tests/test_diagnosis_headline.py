@@ -96,6 +96,16 @@ def test_bursts_candidate_explains_the_noise_level_changes(bursty):
     assert {u.view for u in d.unexplained} <= {"time"}
 
 
+@pytest.mark.parametrize("name", ["bursty", "bursty_no_vocab"])
+def test_explained_and_unexplained_never_name_the_same_evidence(name, request):
+    """The JSON once listed spikes and kurtosis both as explained by the set and unexplained."""
+    d = request.getfixturevalue(name)
+    data = json.loads(d.to_json(views=False))
+    left = {u["evidence"] for u in data["unexplained"]}
+    assert data["explanation"] is not None
+    assert not set(data["explanation"]["explained"]) & left
+
+
 def test_no_spurious_lines_in_bursty_records(bursty):
     assert bursty.frequency.lines == []
     for seed in (21, 22, 23):
@@ -330,3 +340,17 @@ def test_a_tau_gap_spread_over_the_taus_still_says_where():
     assert item.size["largest_departure_z"] == pytest.approx(2.1)
     assert "largest departure at tau = 1 s" in item.text
     assert "real above simulated" in item.text
+
+
+def test_a_misfitted_effect_does_not_claim_the_evidence_it_leaves(monkeypatch):
+    """Bursts fitted with a wrong duty (window counting read 0.28 for 0.18) leave spikes and
+    kurtosis in the re-analysis: they are unexplained, and the set no longer claims them."""
+    import allanite.diagnosis.engine as engine
+
+    monkeypatch.setattr(engine, "_bursts", lambda *args: (0.28, 92.16))
+    d = diagnose(bursty_record(7), MODEL, fs=FS, units="deg/s", n_mc=60, seed=1)
+    assert d.explanation is not None
+    assert any(a.effect == "bursts" for a in d.explanation.effects)
+    left = {u.evidence for u in d.unexplained}
+    assert left & {"spike", "kurt_hf", "hf"}  # the misfit shows (else the test shows nothing)
+    assert not set(d.explanation.explained) & left

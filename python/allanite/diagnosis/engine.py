@@ -252,6 +252,12 @@ def diagnose(
     )
     head = with_time_base(head, base_items)
     explanation, held = _held_out(run, found, x_hold, hold_kind)
+    if explanation is not None:
+        # evidence the re-analysis still finds is not explained, whatever the effects claim
+        left = {u.evidence for u in head.unexplained}
+        explanation = replace(
+            explanation, explained=[e for e in explanation.explained if e not in left]
+        )
     return Diagnosis(
         statistic=analysis.tau.gap,
         p_value=p,

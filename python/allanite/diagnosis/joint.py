@@ -109,7 +109,8 @@ class Explanation:
     share : dict
         Fraction of the gap per effect and ``"remainder"``.
     explained : list of str
-        Evidence of the frequency/time views the set explains.
+        Evidence of the frequency/time views the set explains (:func:`allanite.diagnose`
+        drops what its re-analysis with the effects still finds, which is ``unexplained``).
     extra_avar : numpy.ndarray
         Combined Allan variance the effects add on the tau grid.
     terms : list of dict
