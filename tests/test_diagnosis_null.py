@@ -223,3 +223,44 @@ def test_shared_replicates_with_added_effects_are_replicates_of_the_augmented_mo
     assert none.kept_bytes == 0
     with pytest.raises(ValueError, match="budget"):
         ReplicateStore(base, budget=-1)
+
+
+def test_long_record_block_kurtosis_is_judged_piece_by_piece(monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """White noise + a rate ramp, 300 000 samples, against its own model (a null record).
+
+    Over the whole record the 8-sample block means follow the ramp (the uniform law's excess
+    kurtosis -1.2) while the short replicates of the scaled null hold a ramp's short stretch:
+    judged whole, p was 1e-140 and the record a false alarm (the false-alarm study's smallest
+    reproducer); judged piece by piece, as the replicates are, it is a null record.
+    """
+    import allanite
+    import allanite.diagnosis.analysis as analysis
+    from allanite.diagnosis.scaled_null import piecewise_block_kurtosis
+
+    mod = NoiseModel((TERM_TYPES["white"](N=0.01), TERM_TYPES["ramp"](R=4.5e-4)), UNITS)
+    x = mod.simulate(300_000, fs=100.0, seed=900)
+    assert uses_scaled_null(mod, x.size)
+    d = allanite.diagnose(x, mod, fs=100.0, units="deg/s", n_mc=60)
+    # a null record: the family at its own level (alpha / 3 / number of time statistics)
+    assert d.time.family_p["kurt_lf"] > 0.05 / 3 / 7
+    assert not d.significant
+    # the whole-record statistic is the uniform law of the ramp's whole span; the pieces' is
+    # that of the short replicates (mean of two pieces: within 5 of its standard errors)
+    from allanite.diagnosis.scaled_null import SHORT_LENGTH
+    from allanite.diagnosis.time_view import block_kurtosis
+
+    n_used = (x.size // 32) * 32
+    whole_k = block_kurtosis(x[:n_used].reshape(32, -1), 8)
+    reps = mod.simulate(SHORT_LENGTH, fs=100.0, n_channels=16, seed=5)
+    k = np.array([piecewise_block_kurtosis(reps[:, i], 8) for i in range(16)])
+    piece_k = piecewise_block_kurtosis(x, 8)
+    assert abs(piece_k - k.mean()) < 5 * k.std(ddof=1) / np.sqrt(2)
+    assert whole_k < k.mean() - 10 * k.std(ddof=1)  # 15 of them: the p of 1e-140
+    # control: judged whole (the piecewise statistic replaced by the whole record's), p collapses
+    monkeypatch.setattr(
+        analysis,
+        "piecewise_block_kurtosis",
+        lambda y, b: block_kurtosis(y[:n_used].reshape(32, -1), b),
+    )
+    whole = allanite.diagnose(x, mod, fs=100.0, units="deg/s", n_mc=60)
+    assert whole.time.family_p["kurt_lf"] < 1e-6

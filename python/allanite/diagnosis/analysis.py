@@ -23,7 +23,13 @@ from allanite.diagnosis.frequency_view import (
 )
 from allanite.diagnosis.inputs import SimSource
 from allanite.diagnosis.null import NullEnsemble
-from allanite.diagnosis.scaled_null import ReplicateStore, scaled_ensemble, uses_scaled_null
+from allanite.diagnosis.scaled_null import (
+    ReplicateStore,
+    piecewise_block_kurtosis,
+    piecewise_kurtosis_model,
+    scaled_ensemble,
+    uses_scaled_null,
+)
 from allanite.diagnosis.tau_view import (
     TauModel,
     TauView,
@@ -32,7 +38,14 @@ from allanite.diagnosis.tau_view import (
     tau_features,
     tau_view,
 )
-from allanite.diagnosis.time_view import TimePlan, TimeView, time_features, time_plan, time_view
+from allanite.diagnosis.time_view import (
+    TimePlan,
+    TimeView,
+    kurtosis_blocks,
+    time_features,
+    time_plan,
+    time_view,
+)
 
 __all__ = ["Analysis", "Plan", "Progress", "analyze", "record_features"]
 
@@ -115,7 +128,11 @@ def ensemble(
     exact tau covariance instead (:mod:`allanite.diagnosis.scaled_null`); ``store`` keeps
     or shares their blocks (:class:`~allanite.diagnosis.scaled_null.ReplicateStore`).
     """
-    if source.kind == "model" and uses_scaled_null(source.model, plan.n):
+    if (
+        source.kind == "model"
+        and uses_scaled_null(source.model, plan.n)
+        and piecewise_kurtosis_model(source.model)
+    ):
         return scaled_ensemble(
             source.model, plan.n, plan.fs, plan.m, plan.nperseg, plan.time, n_mc, seed,
             progress, stage, store,
@@ -150,6 +167,15 @@ def analyze(
     if progress is not None:
         progress("features of the record", 0, 1)
     real = record_features(x, plan)
+    if (
+        source.kind == "model"
+        and uses_scaled_null(source.model, plan.n)
+        and piecewise_kurtosis_model(source.model)
+    ):
+        # the short replicates' 8-sample block kurtosis is matched piece by piece
+        blocks = kurtosis_blocks(plan.time)
+        real["kurt_lf"] = real["kurt_lf"].copy()
+        real["kurt_lf"][0] = piecewise_block_kurtosis(x, blocks[0])
     if progress is not None:
         progress("features of the record", 1, 1)
     tau = plan.m / plan.fs

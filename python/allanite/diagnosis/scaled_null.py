@@ -13,7 +13,11 @@ than :data:`FULL_REPLICATES_MAX` samples, each view gets a null whose cost does 
   that is a mean over ``k`` pieces (segments, differences) has its null residuals scaled by
   ``sqrt(k_short / k)`` and its log-of-mean bias moved (:func:`allanite.diagnosis.null.rescaled`;
   the Welch log PSD is mapped quantile by quantile between log-gamma laws, which also moves
-  its skewness: :func:`allanite.diagnosis.null.rescaled_log_gamma`);
+  its skewness: :func:`allanite.diagnosis.null.rescaled_log_gamma`); the 8-sample block
+  kurtosis of the record is taken piece by piece, pieces of a short replicate's length
+  (:func:`piecewise_block_kurtosis`: over the whole record the block means carry a ramp's or a
+  random walk's whole span, which no short replicate holds), unless the model has a level
+  profile, which the short replicates hold compressed whole;
   the spike statistic needs no rescaling: the short replicates' pooled per-sample exceedance
   rate, times ``N``, is the Poisson mean of the long record's exceedances
   (:class:`allanite.diagnosis.null.ExceedanceTail`);
@@ -78,6 +82,7 @@ from allanite.diagnosis.tau_view import gaussian_tau_null
 from allanite.diagnosis.time_view import (
     SPIKE_POOLED,
     TimePlan,
+    block_kurtosis,
     kurtosis_blocks,
     time_features,
     time_plan,
@@ -89,6 +94,8 @@ __all__ = [
     "SHARED_BYTES",
     "SHORT_LENGTH",
     "ReplicateStore",
+    "piecewise_block_kurtosis",
+    "piecewise_kurtosis_model",
     "reference_replicates",
     "scaled_ensemble",
     "short_model",
@@ -398,7 +405,12 @@ def scaled_ensemble(
     )
     # the excess kurtosis of k Gaussian values has mean -6 / (k + 1)
     ref["kurt_hf"] = ref["kurt_hf"] + 6.0 / n_s - 6.0 / n
-    k8 = (plan_s.length // blocks[0]) / (plan.length // blocks[0])
+    # the record's 8-sample block kurtosis is the mean over its pieces of a short replicate's
+    # length (piecewise_kurtosis_model): slow terms shape each piece as they shape a replicate
+    if piecewise_kurtosis_model(model):
+        k8 = 1.0 / max(n // n_s, 1)
+    else:  # a level profile is compressed whole into every short replicate
+        k8 = (plan_s.length // blocks[0]) / (plan.length // blocks[0])
     ref_k8, null_k8 = rescaled(ens_s, "kurt_lf", k8, log_mean=False)
     ref["kurt_lf"] = np.concatenate([ref_k8, ens_d.ref["kurt_lf"]])
     null["kurt_lf"] = np.concatenate([null_k8, ens_d.null["kurt_lf"]], axis=1)
@@ -414,3 +426,36 @@ def scaled_ensemble(
         ref=ref, null=null, real_scale=1.0, exact_tau=True, pooled=pooled,
         n_pooled=ens_s.n_pooled,
     )  # fmt: skip
+
+
+def piecewise_kurtosis_model(model: Any) -> bool:
+    """Whether the scaled null of ``model`` judges the 8-sample block kurtosis piece by piece.
+
+    Yes unless a term's noise level follows a profile over the record: the short replicates
+    hold that profile compressed whole (:func:`short_model`), so the record is judged whole.
+    """
+    return not any(level_profiled(t) for t in model.terms)
+
+
+def piecewise_block_kurtosis(x: NDArray[np.float64], b: int) -> float:
+    """Excess kurtosis of ``b``-sample block means, averaged over pieces of a short replicate.
+
+    The pieces hold :data:`SHORT_LENGTH` samples each, laid out as a short replicate's windows.
+
+    A long record's block means over its whole length carry the full span of its slow terms (a
+    ramp's range, a random walk's wander), which a short replicate cannot hold: the whole-record
+    kurtosis of a white + ramp record is the uniform law's -1.2 while a short replicate's is
+    near 0. Piece by piece, a slow term shapes the long record as it shapes the short
+    replicates, so their law is the null of the mean over the pieces (residuals scaled by one
+    over the number of pieces, :func:`~allanite.diagnosis.null.rescaled`).
+    """
+    plan_s = time_plan(SHORT_LENGTH)
+    used = plan_s.n_windows * plan_s.length
+    pieces = max(x.size // SHORT_LENGTH, 1)
+    values = [
+        block_kurtosis(
+            x[i * SHORT_LENGTH : i * SHORT_LENGTH + used].reshape(plan_s.n_windows, -1), b
+        )
+        for i in range(pieces)
+    ]
+    return float(np.mean(values))

@@ -67,6 +67,7 @@ __all__ = [
     "TimePlan",
     "TimeView",
     "added_level_variance",
+    "block_kurtosis",
     "kurtosis_blocks",
     "sparse_jump_p",
     "spike_features",
@@ -151,7 +152,7 @@ def time_features(
         "level": means - x.mean(),
         "jump": np.diff(means),
         "dyn": dyn,
-        "kurt_lf": np.array([_block_kurtosis(used, b) for b in kurt_blocks]),
+        "kurt_lf": np.array([block_kurtosis(used, b) for b in kurt_blocks]),
     }
     if sample_scale:
         d = np.diff(used, axis=1)
@@ -216,7 +217,8 @@ def kurtosis_blocks(plan: TimePlan) -> tuple[int, ...]:
     return tuple(sorted({8, plan.m, max(plan.length // 4, 2)}))
 
 
-def _block_kurtosis(used: NDArray[np.float64], b: int) -> float:
+def block_kurtosis(used: NDArray[np.float64], b: int) -> float:
+    """Excess kurtosis of the means of ``b``-sample blocks (windows in rows)."""
     return _block_moments(used, b)[1]
 
 
