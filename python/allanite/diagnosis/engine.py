@@ -87,6 +87,16 @@ def _bursts(tv: Any, x: NDArray[np.float64], fs: float) -> tuple[float, float] |
     return duty, length
 
 
+def _claiming_only_what_is_left_explained(
+    explanation: Explanation | None, unexplained: list[Any]
+) -> Explanation | None:
+    """The explanation without the evidence its re-analysis still finds (``unexplained``)."""
+    if explanation is None:
+        return None
+    left = {u.evidence for u in unexplained}
+    return replace(explanation, explained=[e for e in explanation.explained if e not in left])
+
+
 def _evidence(analysis: Analysis) -> dict[str, float]:
     fam = analysis.time.family_p
     out = {"line": analysis.frequency.line_p_value}
@@ -252,12 +262,7 @@ def diagnose(
     )
     head = with_time_base(head, base_items)
     explanation, held = _held_out(run, found, x_hold, hold_kind)
-    if explanation is not None:
-        # evidence the re-analysis still finds is not explained, whatever the effects claim
-        left = {u.evidence for u in head.unexplained}
-        explanation = replace(
-            explanation, explained=[e for e in explanation.explained if e not in left]
-        )
+    explanation = _claiming_only_what_is_left_explained(explanation, head.unexplained)
     return Diagnosis(
         statistic=analysis.tau.gap,
         p_value=p,
