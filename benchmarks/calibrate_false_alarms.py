@@ -124,11 +124,15 @@ class Record:
     seed: int
 
 
-def draw(index: int, grid_seed: int = 14) -> Record:
-    """The ``index``-th record of the draw ``grid_seed`` (deterministic)."""
+def draw(index: int, grid_seed: int = 14, length: int | None = None) -> Record:
+    """The ``index``-th record of the draw ``grid_seed`` (deterministic).
+
+    ``length`` fixes the number of samples (the other draws stay those of the index).
+    """
     rng = np.random.default_rng([grid_seed, index])
     sensor = str(rng.choice(CLASSES))
     n = LONG_LENGTH if rng.uniform() < LONG_SHARE else int(rng.choice(LENGTHS))
+    n = n if length is None else int(length)
     fs = float(rng.choice(RATES))
     unit = str(rng.choice(UNITS))
     seed = int(rng.integers(1 << 31))
@@ -414,16 +418,26 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--stop-after", type=float, default=math.inf, help="draw no new record after S seconds"
     )
+    parser.add_argument(
+        "--length", type=int, help="every record this many samples (e.g. 1000000: long records)"
+    )
     parser.add_argument("--tag", default="run", help="results: false_alarms_<tag>.{json,md}")
     parser.add_argument(
-        "--summarize", metavar="JSON", help="rewrite the summary of a results file's rows"
+        "--summarize",
+        metavar="JSON",
+        nargs="+",
+        help="rewrite the summary of a results file's rows; of several files, pooled into <tag>",
     )
     args = parser.parse_args(argv)
     if args.summarize:
-        path = Path(args.summarize)
-        stored = json.loads(path.read_text())
-        write(path.with_suffix(""), stored["rows"], stored["command"])
-        print(path.with_suffix(".md").read_text())
+        paths = [Path(p) for p in args.summarize]
+        stored = [json.loads(p.read_text()) for p in paths]
+        pooled = [r for st in stored for r in st["rows"]]
+        if len({(r["index"], r["n"]) for r in pooled}) < len(pooled):
+            raise ValueError("the files share records (same index and length): pool distinct runs")
+        stem = paths[0].with_suffix("") if len(paths) == 1 else RESULTS / f"false_alarms_{args.tag}"
+        write(stem, pooled, " + ".join(st["command"] for st in stored))
+        print(stem.with_suffix(".md").read_text())
         return 0
     command = "python benchmarks/calibrate_false_alarms.py " + " ".join(
         sys.argv[1:] if argv is None else argv
@@ -435,7 +449,7 @@ def main(argv: list[str] | None = None) -> int:
         if time.perf_counter() - start > args.stop_after:
             print(f"stopped after {len(rows)} records (--stop-after {args.stop_after:g} s)")
             break
-        record = draw(i, args.grid_seed)
+        record = draw(i, args.grid_seed, args.length)
         row = evaluate(record)
         rows.append(row)
         summary = write(stem, rows, command)

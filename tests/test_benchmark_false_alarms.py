@@ -172,3 +172,34 @@ def test_tiny_records_run_end_to_end(tmp_path: Path) -> None:
     assert again == stored["summary"]
     assert math.isfinite(summary["seconds"]["total"])
     assert np.isfinite(summary["calibration"]["tau"]["min_p"])
+
+
+def test_fixed_length_keeps_the_other_draws() -> None:
+    for i in range(20):
+        free, long = fa.draw(i), fa.draw(i, length=fa.LONG_LENGTH)
+        assert long.n == fa.LONG_LENGTH
+        assert (long.sensor, long.fs, long.unit, long.seed) == (
+            free.sensor,
+            free.fs,
+            free.unit,
+            free.seed,
+        )
+
+
+def test_summarize_pools_distinct_runs_and_refuses_shared_records(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    first = [_row(i, n=2**15, significant=i == 0, spike_p=0.5, unit="deg/s") for i in range(10)]
+    second = [_row(i, n=10**6, significant=False, spike_p=0.5, unit="rad/s") for i in range(10)]
+    fa.write(tmp_path / "a", first, "run a")
+    fa.write(tmp_path / "b", second, "run b")
+    paths = [str(tmp_path / "a.json"), str(tmp_path / "b.json")]
+    monkeypatch.setattr(fa, "RESULTS", tmp_path)
+    assert fa.main(["--summarize", *paths, "--tag", "pooled"]) == 0
+    pooled = json.loads((tmp_path / "false_alarms_pooled.json").read_text())
+    assert pooled["summary"]["false_alarms"]["k"] == 1
+    assert pooled["summary"]["false_alarms"]["n"] == 20
+    assert pooled["summary"]["cells"]["length"]["1e6"]["n"] == 10
+    assert pooled["command"] == "run a + run b"
+    with pytest.raises(ValueError, match="share records"):
+        fa.main(["--summarize", paths[0], paths[0], "--tag", "twice"])
