@@ -58,6 +58,9 @@ RESULTS = Path(__file__).resolve().parent / "results"
 SIGNIFICANCE = 0.05
 #: the p-value calibration levels
 LEVELS = (0.01, 0.05)
+#: a p-value this small is out of reach of a calibrated test on a few hundred records (the
+#: chance that any of n records shows one is at most n times it)
+EXTREME_P = 1e-6
 #: the worst cell is taken among cells of at least this many records
 MIN_CELL = 10
 
@@ -283,6 +286,17 @@ def reproducer(rows: list[dict[str, Any]], statistic: str, level: float) -> dict
     return {**{k: r[k] for k in keys}, "p": _p_of(r, statistic)}
 
 
+def calibration(rows: list[dict[str, Any]]) -> dict[str, Any]:
+    """Per view and family: the fraction of records with ``p`` below each level, the least p."""
+    out: dict[str, Any] = {}
+    for kind in ("views", "families"):
+        for name in sorted({k for r in rows for k in r[kind]}):
+            ps = [r[kind][name] for r in rows if name in r[kind]]
+            out[name] = {f"p<{a:g}": rate(sum(p < a for p in ps), len(ps)) for a in LEVELS}
+            out[name]["min_p"] = float(min(ps))
+    return out
+
+
 def summarize(rows: list[dict[str, Any]], significance: float = SIGNIFICANCE) -> dict[str, Any]:
     """False-alarm rates (overall, per cell, the worst cell) and p-value calibration."""
     n = len(rows)
@@ -313,20 +327,38 @@ def summarize(rows: list[dict[str, Any]], significance: float = SIGNIFICANCE) ->
     out["cells_above_goal"] = [
         {"grouping": g, "cell": lab, **v} for g, lab, v in flat if v["low"] > significance
     ]
-    calib: dict[str, Any] = {}
-    for kind in ("views", "families"):
-        names = sorted({k for r in rows for k in r[kind]})
-        for name in names:
-            ps = [r[kind][name] for r in rows if name in r[kind]]
-            calib[name] = {f"p<{a:g}": rate(sum(p < a for p in ps), len(ps)) for a in LEVELS} | {
-                "min_p": float(min(ps))
-            }
-    out["calibration"] = calib
+    out["calibration"] = calibration(rows)
+    # the full-length and the long-record (scaled) null apart: one can hide the other
+    by_null = {k: [r for r in rows if r["null"] == k] for k in sorted({r["null"] for r in rows})}
+    out["calibration_by_null"] = {k: calibration(sel) for k, sel in by_null.items()}
     out["anti_conservative"] = [
-        {"statistic": name, "level": a, **v[f"p<{a:g}"], "reproducer": reproducer(rows, name, a)}
-        for name, v in calib.items()
+        {
+            "statistic": name,
+            "null": null,
+            "level": a,
+            **v[f"p<{a:g}"],
+            "reproducer": reproducer(sel, name, a),
+        }
+        for null, sel in (("all", rows), *by_null.items())
+        for name, v in (
+            out["calibration"] if null == "all" else out["calibration_by_null"][null]
+        ).items()
         for a in LEVELS
         if v[f"p<{a:g}"]["low"] > a
+    ]
+    # a calibrated p falls below EXTREME_P in any of n records with probability <= n EXTREME_P
+    out["extreme_p"] = [
+        {
+            "statistic": name,
+            "null": null,
+            "count": sum(_p_of(r, name) < EXTREME_P for r in sel),
+            "of": len(sel),
+            "chance": len(sel) * EXTREME_P,
+            "reproducer": reproducer(sel, name, EXTREME_P),
+        }
+        for null, sel in by_null.items()
+        for name in out["calibration_by_null"][null]
+        if out["calibration_by_null"][null][name]["min_p"] < EXTREME_P
     ]
     seconds = [r["seconds"] for r in rows]
     out["seconds"] = {
@@ -369,9 +401,22 @@ def markdown(rows: list[dict[str, Any]], summary: dict[str, Any], command: str) 
     for a in s["anti_conservative"]:
         r = a["reproducer"]
         lines.append(
-            f"  - {a['statistic']} p < {a['level']:g}: {_pct(a)}; shortest record: #{r['index']} "
+            f"  - {a['statistic']} p < {a['level']:g} ({a['null']} null): {_pct(a)}; shortest "
+            f"record: #{r['index']} "
             f"({r['sensor']}, n {r['n']}, fs {r['fs']:g}, {r['unit']}, seed {r['seed']}) p "
             f"{r['p']:.3g}, model `{json.dumps(r['model']['terms'])}`"
+        )
+    lines.append(
+        f"- p-values below {EXTREME_P:g} (chance: records x {EXTREME_P:g}): "
+        + ("none" if not s["extreme_p"] else "")
+    )
+    for e in s["extreme_p"]:
+        r = e["reproducer"]
+        lines.append(
+            f"  - {e['statistic']} ({e['null']} null): {e['count']} of {e['of']} records "
+            f"(chance {e['chance']:.1g}); shortest record: #{r['index']} ({r['sensor']}, n "
+            f"{r['n']}, fs {r['fs']:g}, {r['unit']}, seed {r['seed']}) p {r['p']:.3g}, model "
+            f"`{json.dumps(r['model']['terms'])}`"
         )
     sec = s["seconds"]
     if sec["median"] is not None:
@@ -388,6 +433,12 @@ def markdown(rows: list[dict[str, Any]], summary: dict[str, Any], command: str) 
     lines += ["| statistic | p < 0.01 | p < 0.05 | min p |", "|---|---|---|---|"]
     for name, v in s["calibration"].items():
         lines.append(f"| {name} | {_pct(v['p<0.01'])} | {_pct(v['p<0.05'])} | {v['min_p']:.2g} |")
+    by_null = s["calibration_by_null"]
+    lines += ["", "## p < 0.01 by null (full-length replicates; long-record scaled null)", ""]
+    lines += ["| statistic | " + " | ".join(by_null) + " |", "|---|" + "---|" * len(by_null)]
+    for name in s["calibration"]:
+        cols = [_pct(c[name]["p<0.01"]) if name in c else "-" for c in by_null.values()]
+        lines.append(f"| {name} | " + " | ".join(cols) + " |")
     alarms = [r for r in rows if r["significant"]]
     lines += ["", f"## False alarms ({len(alarms)})", ""]
     for r in alarms:

@@ -103,7 +103,7 @@ def test_summary_flags_an_anti_conservative_family_and_the_worst_cell() -> None:
             i,
             n=2**16 if i != 5 else 2**14,
             significant=i < 12,
-            spike_p=0.001 if i < 12 else 0.6,
+            spike_p=(1e-9 if i == 5 else 0.001) if i < 12 else 0.6,
             unit="deg/h" if i < 20 else "deg/s",
         )
         for i in range(40)
@@ -120,11 +120,18 @@ def test_summary_flags_an_anti_conservative_family_and_the_worst_cell() -> None:
     assert ("time:spike", 0.01) in flagged
     assert ("time:spike", 0.05) in flagged
     assert not any(name in ("tau", "tau:T", "time:level") for name, _ in flagged)
+    assert {a["null"] for a in s["anti_conservative"]} == {"all", "full"}
+    assert s["calibration_by_null"]["full"] == s["calibration"]
     spike = next(a for a in s["anti_conservative"] if a["statistic"] == "time:spike")
     assert spike["reproducer"]["index"] == 5
     assert spike["reproducer"]["n"] == 2**14
     assert s["calibration"]["time:level"]["p<0.05"]["k"] == 0
-    assert s["calibration"]["time:spike"]["min_p"] == 0.001
+    assert s["calibration"]["time:spike"]["min_p"] == 1e-9
+    # one p of 1e-9 in 40 records: out of reach of a calibrated test (chance 4e-5)
+    extreme = {(e["statistic"], e["null"]): e for e in s["extreme_p"]}
+    assert set(extreme) == {("time:spike", "full"), ("time", "full")}  # the view holds it
+    assert extreme["time:spike", "full"]["count"] == 1
+    assert extreme["time:spike", "full"]["reproducer"]["index"] == 5
 
 
 def test_tiny_records_run_end_to_end(tmp_path: Path) -> None:
