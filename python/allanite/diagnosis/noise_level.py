@@ -50,6 +50,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import stats
 
+from allanite.diagnosis.null import runs
 from allanite.diagnosis.time_view import TimePlan, TimeView
 from allanite.terms.white_drift import ramp_window_mean
 
@@ -370,23 +371,16 @@ def burst_spans(
     """
     length = round(view.window_s * fs)
     d2 = np.square(np.diff(np.asarray(x, dtype=np.float64)))
-    w = raised.size
-    per_window = np.array(
-        [
-            np.mean(d2[k * length : (k + 1) * length])
-            for k in range(w)
-            if (k + 1) * length <= d2.size
-        ]
-    )
+    w = min(raised.size, d2.size // length)
+    per_window = d2[: w * length].reshape(w, length).mean(axis=1)
     quiet = ~raised[: per_window.size]
     if per_window.size == 0 or not quiet.any():
         return []
     v0 = float(np.median(per_window[quiet]))
     spans: list[tuple[int, int]] = []
-    idx = np.flatnonzero(np.diff(np.concatenate([[0], raised.astype(np.int8), [0]])))
-    for a, b in zip(idx[::2], idx[1::2], strict=True):
-        lo = max(0, (int(a) - 1) * length)
-        hi = min(d2.size, (int(b) + 1) * length)
+    for a, b in runs(raised):
+        lo = max(0, (a - 1) * length)
+        hi = min(d2.size, (b + 2) * length)
         if hi - lo < 2:
             continue
         step = max(1, min(length // SUBSTEPS, -(-(hi - lo) // SPAN_POSITIONS)))
