@@ -435,6 +435,37 @@ def test_template_keeps_the_users_other_lines(tmp_path):
     assert "gyr_w: 0.0003" in text
 
 
+@pytest.mark.parametrize("fmt", sorted(set(FORMATS) - {"allanite"}))
+def test_gyro_then_accel_into_one_file_keeps_both_and_their_notes(fmt, tmp_path):
+    """The README's two-step export: the gyro model, then the accel model into it.
+
+    Formats rewritten whole (MATLAB, gnss-ins-sim) wrote the accel alone and zeroed or dropped
+    the gyro; the SDF and AirSim writers dropped the gyro's projection note.
+    """
+    gyro = sensor_model([White(N=8e-5), Flicker(B=2.4e-5)], "gyro")
+    accel = sensor_model([White(N=1e-3), Flicker(B=5e-4)], "accel")
+    path = tmp_path / f"imu{FORMATS[fmt].SUFFIXES[0]}"
+    first = write_config(ImuConfig(gyro=gyro), path, format=fmt, rate=400.0)
+    write_config(ImuConfig(accel=accel), path, format=fmt, rate=400.0, template=path)
+    both = write_config(
+        ImuConfig(gyro=gyro, accel=accel), tmp_path / f"both{path.suffix}", format=fmt, rate=400.0
+    )
+    back = read_config(path, format=fmt, rate=400.0)
+    expected = read_config(tmp_path / f"both{path.suffix}", format=fmt, rate=400.0)
+    taus = np.geomspace(0.01, 1000.0, 25)
+    for sensor in ("gyro", "accel"):
+        np.testing.assert_allclose(
+            back.model(sensor).avar(taus, 1 / 400.0),
+            expected.model(sensor).avar(taus, 1 / 400.0),
+            rtol=1e-6,
+            err_msg=sensor,
+        )
+    text = path.read_text()
+    for line in first.report():  # the gyro's note, written by the first step, is still there
+        assert line.split(" ", 1)[1] in text
+    assert len(both.report()) == 2
+
+
 def test_sdf_template_with_precision_keeps_precision(tmp_path):
     user = tmp_path / "m.sdf"
     user.write_text(_gz_text(GZ, 100.0))
