@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 import re
+import sys
 
 import numpy as np
 import pytest
@@ -667,6 +668,25 @@ def test_an_accelerometer_only_model_converts_and_is_recognised(tmp_path, capsys
     white, walk = back.accel.terms_of_type("white")[0], back.accel.terms_of_type("rrw")[0]
     assert white.values()["N"] == pytest.approx(0.002, rel=1e-9)
     assert walk.values()["K"] == pytest.approx(2e-5, rel=1e-9)
+
+
+@pytest.mark.parametrize("fmt", ["kalibr", "openvins", "orbslam3", "vins"])
+def test_model_convert_to_yaml_without_pyyaml_writes_nothing_and_names_the_extra(
+    tmp_path, capsys, monkeypatch, fmt
+):
+    """``[bags,ulog]`` installs no pyyaml: convert wrote the file, then failed reading it back
+    (exit 2 with the file left, and a template already overwritten)."""
+    from allanite.cli import main
+
+    src = tmp_path / "gyro.json"
+    sensor_model([White(N=8e-5), RateRandomWalk(K=1e-6)], "gyro").save(src)
+    out = tmp_path / "imu.yaml"
+    monkeypatch.setitem(sys.modules, "yaml", None)  # import yaml -> ImportError
+    assert main(["model", "convert", str(src), str(out), "--to", fmt, "--rate", "400"]) == 2
+    err = capsys.readouterr().err
+    assert "was not written" in err
+    assert 'pip install "allanite[yaml]"' in err
+    assert not out.exists()
 
 
 def test_readme_quotes_the_export_note_the_code_prints():

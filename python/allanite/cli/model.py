@@ -108,6 +108,7 @@ def run(args: argparse.Namespace) -> int:
         rate=rate,
         template=args.template,
         tau_range=tuple(args.tau_range) if args.tau_range else None,
+        read_back=True,  # check_written reads it: a missing reader extra fails before writing
     )
     for line in written.report():
         print(line, file=sys.stderr)
