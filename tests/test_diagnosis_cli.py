@@ -168,3 +168,37 @@ def test_a_model_of_the_other_sensor_is_refused_with_what_to_give(files, tmp_pat
     err = capsys.readouterr().err.strip()
     assert "--sim-sensor accel compares an accelerometer model with a gyro record" in err
     assert "unit mismatch" not in err
+
+
+def test_progress_is_shown_on_a_terminal_for_a_short_record(files, capsys, monkeypatch):
+    """A 480 000-sample ROS bag took 30-160 s to diagnose in silence: auto showed progress
+    only from 2^20 samples. On a terminal it is shown whatever the length."""
+    argv = [
+        "diagnose", str(files["real"]), "--fs", "100", "--units", "deg/s",
+        "--sim-model", str(files["model"]), "--n-mc", "20", "--effects", "sine",
+    ]  # fmt: skip
+    assert main(argv) == 0
+    assert "diagnose: " not in capsys.readouterr().err  # not a terminal: quiet below 2^20
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
+    assert main(argv) == 0
+    lines = [ln for ln in capsys.readouterr().err.splitlines() if ln.startswith("diagnose: ")]
+    assert lines, "no progress line on a terminal"
+
+
+def test_a_config_with_zero_noise_is_refused_before_the_diagnosis(files, tmp_path, capsys):
+    """A gnss-ins-sim file whose gyro entries are zero failed late with 'the model has no
+    terms', naming neither the file nor the sensor."""
+    from allanite.formats import ImuConfig, write_config
+    from allanite.formats.base import sensor_model
+
+    config = tmp_path / "imu_err.py"
+    accel = sensor_model([TERM_TYPES["white"](N=1e-3)], "accel")
+    write_config(ImuConfig(accel=accel), config, format="gnss-ins-sim", rate=100.0)
+    argv = [
+        "diagnose", str(files["real"]), "--fs", "100", "--units", "deg/s",
+        "--sim-model", str(config), "--n-mc", "20",
+    ]  # fmt: skip
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "imu_err.py (gnss-ins-sim) gives the gyro no noise" in err
+    assert "set its gyro noise" in err

@@ -94,6 +94,13 @@ def load_sim_model(args: argparse.Namespace, fs: float, units: str | None) -> Lo
     sensor = args.sim_sensor or _sensor_of(units)
     _check_sensor(config, sensor, units, path.name, chosen=args.sim_sensor is not None)
     model = config.model(sensor)
+    if not model.terms:  # a simulator config with every noise entry zero: a noiseless sensor
+        raise ValueError(
+            f"{path.name} ({fmt}) gives the {sensor} no noise: every {sensor} noise entry is "
+            f"zero, so there is no simulated sensor to compare; set its {sensor} noise, or "
+            "give a config that holds it (allanite model convert FITTED.json CONFIG --template "
+            "CONFIG writes a fitted model into it)"
+        )
     if fmt == "allanite":
         model = NoiseModel.from_json(path.read_text(encoding="utf-8"))
     model_unit = model.units["rate"]
