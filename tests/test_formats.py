@@ -689,6 +689,25 @@ def test_model_convert_to_yaml_without_pyyaml_writes_nothing_and_names_the_extra
     assert not out.exists()
 
 
+def test_convert_warning_points_at_the_dropped_lines_when_nothing_was_projected(tmp_path, capsys):
+    """Gazebo classic has no slow term: flicker is dropped, and the warning said "see the
+    'projected' lines" when there were none."""
+    from allanite.cli import main
+
+    src = tmp_path / "gyro.json"
+    sensor_model([White(N=8e-5), Flicker(B=2.4e-5)], "gyro").save(src)
+    out = tmp_path / "classic.sdf"
+    assert (
+        main(["model", "convert", str(src), str(out), "--to", "gazebo-classic", "--rate", "400"])
+        == 0
+    )
+    err = capsys.readouterr().err
+    assert "dropped gyro: flicker" in err
+    assert "(see the 'dropped' lines)" in err
+    assert main(["model", "convert", str(src), str(tmp_path / "gz.sdf"), "--rate", "400"]) == 0
+    assert "(see the 'projected' lines)" in capsys.readouterr().err
+
+
 def test_readme_quotes_the_export_note_the_code_prints():
     """The README's worked example quotes the PX4 plugin's projection note of round 1 (the
     stored round-1 config plus the fast Gauss-Markov process the diagnosis folded in): the
