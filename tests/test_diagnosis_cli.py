@@ -202,3 +202,48 @@ def test_a_config_with_zero_noise_is_refused_before_the_diagnosis(files, tmp_pat
     err = capsys.readouterr().err
     assert "imu_err.py (gnss-ins-sim) gives the gyro no noise" in err
     assert "set its gyro noise" in err
+
+
+def test_a_wrong_config_is_told_what_to_change_in_its_own_names_and_units(tmp_path, capsys):
+    """Against a Kalibr file with 3x the gyro noise density the diagnosis said N = ... deg/√h
+    and gave model-JSON terms; the user edits gyroscope_noise_density in rad/s/√Hz (SDF: the
+    per-sample stddev of each axis). The change is listed in those names; untouched keys
+    (the accelerometer's, rewritten as 0.002 for 2e-3) are not."""
+    import re
+
+    white = NoiseModel((TERM_TYPES["white"](N=1e-3),), {"rate": "rad/s", "time": "s"})
+    real = tmp_path / "real.npy"
+    np.save(real, white.simulate(2**15, fs=100.0, seed=1))
+    kalibr = tmp_path / "imu.yaml"
+    kalibr.write_text(
+        "gyroscope_noise_density: 3e-3\ngyroscope_random_walk: 1e-7\n"
+        "accelerometer_noise_density: 2e-3\naccelerometer_random_walk: 3e-5\nupdate_rate: 100\n"
+    )
+    sdf = tmp_path / "imu.sdf"
+    axes = "".join(
+        f"<{a}><noise type='gaussian'><stddev>0.03</stddev></noise></{a}>" for a in "xyz"
+    )
+    sdf.write_text(
+        f"<sensor type='imu'><update_rate>100</update_rate><imu><angular_velocity>{axes}"
+        "</angular_velocity></imu></sensor>"
+    )
+    base = ["diagnose", str(real), "--fs", "100", "--units", "rad/s", "--sim-model"]
+    assert main([*base, str(kalibr)]) == 0
+    out = capsys.readouterr().out
+    fitted = float(re.search(r'"white", "N": ([0-9.e+-]+)', out).group(1))
+    assert "change in imu.yaml (kalibr; --write-corrected OUT writes it):" in out
+    changes = out.split("--write-corrected OUT writes it):\n", 1)[1].splitlines()
+    assert len(changes) == 1, changes
+    old, new = changes[0].split("  ->  ")
+    assert old.split(":")[0].strip() == "gyroscope_noise_density"
+    assert float(old.split(":")[1]) == 3e-3
+    assert new.startswith("gyroscope_noise_density: ")
+    assert new.endswith("[rad/s/sqrt(Hz)]")
+    assert float(new.split()[1]) == pytest.approx(fitted, rel=1e-9)
+    assert main([*base, str(sdf)]) == 0
+    out = capsys.readouterr().out
+    fitted = float(re.search(r'"white", "N": ([0-9.e+-]+)', out).group(1))
+    line = next(ln for ln in out.splitlines() if "<stddev>0.03</stddev>  ->" in ln)
+    assert line.endswith("[per sample: rad/s | m/s^2]  (x3)")  # the x, y and z blocks
+    stddev = float(re.search(r"->\s+<stddev>([0-9.e+-]+)</stddev>", line).group(1))
+    assert stddev == pytest.approx(fitted * 10.0, rel=1e-9)  # stddev = N / sqrt(dt)

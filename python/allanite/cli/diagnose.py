@@ -15,7 +15,12 @@ from allanite.cli.record_options import (
     read_from_args,
     warn_implausible,
 )
-from allanite.cli.sim_config import add_sim_config_arguments, load_sim_model, write_corrected
+from allanite.cli.sim_config import (
+    add_sim_config_arguments,
+    config_changes,
+    load_sim_model,
+    write_corrected,
+)
 from allanite.io.atomic import atomic_output
 from allanite.io.readers import read_record
 from allanite.io.record import INPUT_KINDS, Record
@@ -270,6 +275,13 @@ def run(args: argparse.Namespace) -> int:
         sys.stdout.write(json.dumps(data) + "\n")
     else:
         print(_summary(result))
+        changes = config_changes(args, loaded, result) if loaded is not None else []
+        if changes and loaded is not None:
+            print(
+                f"to close the gap, change in {Path(args.sim_model).name} ({loaded.format}; "
+                "--write-corrected OUT writes it):"
+            )
+            print("\n".join(f"  {line}" for line in changes))
     return 0
 
 

@@ -37,6 +37,15 @@ KEYS = {
     "AccelBiasStability": (G * 1e-6, 36.0),
     "AccelBiasStabilityTau": (1.0, 800.0),
 }
+#: unit of each key, as AirSim reads it
+UNITS = {
+    "AngularRandomWalk": "deg/sqrt(h)",
+    "GyroBiasStabilityTau": "s",
+    "GyroBiasStability": "deg/h",
+    "VelocityRandomWalk": "mg*sqrt(s)",
+    "AccelBiasStabilityTau": "s",
+    "AccelBiasStability": "ug",
+}
 SENSOR_KEYS = {
     "gyro": ("AngularRandomWalk", "GyroBiasStability", "GyroBiasStabilityTau"),
     "accel": ("VelocityRandomWalk", "AccelBiasStability", "AccelBiasStabilityTau"),

@@ -43,6 +43,17 @@ from allanite.terms import GaussMarkov, Term, TurnOnBias, White
 
 NAME = "gz-sdf"
 TITLE = "gz-sensors SDF <imu> noise"
+
+#: unit of each noise element (gyro | accelerometer), as gz-sensors applies it per sample
+UNITS = {
+    "dynamic_bias_correlation_time": "s",
+    "dynamic_bias_stddev": "rad/s/sqrt(s) | m/s^2/sqrt(s), a driving density",
+    "bias_stddev": "rad/s | m/s^2",
+    "bias_mean": "rad/s | m/s^2",
+    "stddev": "per sample: rad/s | m/s^2",
+    "mean": "rad/s | m/s^2",
+    "precision": "rad/s | m/s^2",
+}
 SUFFIXES = (".sdf", ".world", ".xml", ".urdf", ".xacro")
 HOLDS = frozenset({"white", "turn_on_bias", "markov"})
 BLOCKS = {"gyro": "angular_velocity", "accel": "linear_acceleration"}

@@ -41,6 +41,18 @@ DEFAULTS = {
     "accelerometerTurnOnBiasSigma": 20.0e-3 * 9.8,  # the header's literal 9.8
 }
 
+#: unit of each parameter (the plugin's header comments)
+UNITS = {
+    "gyroscopeNoiseDensity": "rad/s/sqrt(Hz)",
+    "gyroscopeRandomWalk": "rad/s^2/sqrt(Hz)",
+    "gyroscopeBiasCorrelationTime": "s",
+    "gyroscopeTurnOnBiasSigma": "rad/s",
+    "accelerometerNoiseDensity": "m/s^2/sqrt(Hz)",
+    "accelerometerRandomWalk": "m/s^3/sqrt(Hz)",
+    "accelerometerBiasCorrelationTime": "s",
+    "accelerometerTurnOnBiasSigma": "m/s^2",
+}
+
 
 def sniff(text: str) -> bool:
     """The plugin's parameter names."""
