@@ -13,6 +13,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -21,47 +22,14 @@ import numpy as np
 
 import allanite
 
-
-def _imu(ts, t: float, row: np.ndarray):  # type: ignore[no-untyped-def]
-    types = ts.types
-    sec = int(t)
-    stamp = types["builtin_interfaces/msg/Time"](sec=sec, nanosec=int((t - sec) * 1e9))
-    vec = types["geometry_msgs/msg/Vector3"]
-    seq = {"seq": 0} if "seq" in types["std_msgs/msg/Header"].__dataclass_fields__ else {}
-    return types["sensor_msgs/msg/Imu"](
-        header=types["std_msgs/msg/Header"](stamp=stamp, frame_id="imu_link", **seq),
-        orientation=types["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=0.0, w=1.0),
-        orientation_covariance=np.zeros(9),
-        angular_velocity=vec(x=row[0], y=row[1], z=row[2]),
-        angular_velocity_covariance=np.zeros(9),
-        linear_acceleration=vec(x=row[3], y=row[4], z=row[5]),
-        linear_acceleration_covariance=np.zeros(9),
-    )
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+from test_io_robot_logs import write_bag  # the bag writer lives with the tests
 
 
 def write(path: Path, kind: str, n: int, fs: float) -> None:
-    """Write ``n`` IMU messages at ``fs`` Hz as a ROS 1 bag or a ROS 2 bag (sqlite3 / mcap)."""
-    from rosbags.typesys import Stores, get_typestore
-
+    """Write ``n`` IMU messages at ``fs`` Hz with the tests' bag writer (ROS 1, sqlite3, mcap)."""
     rows = np.random.default_rng(1).normal(0.0, 1e-3, (n, 6))
-    times = 1.7e9 + np.arange(n) / fs
-    if kind == "ros1":
-        from rosbags.rosbag1 import Writer
-
-        ts = get_typestore(Stores.ROS1_NOETIC)
-        with Writer(path) as w:
-            c = w.add_connection("/imu0", "sensor_msgs/msg/Imu", typestore=ts)
-            for t, r in zip(times, rows, strict=True):
-                w.write(c, int(t * 1e9), ts.serialize_ros1(_imu(ts, t, r), "sensor_msgs/msg/Imu"))
-        return
-    from rosbags.rosbag2 import StoragePlugin, Writer
-
-    ts = get_typestore(Stores.ROS2_HUMBLE)
-    plugin = StoragePlugin.MCAP if kind == "mcap" else StoragePlugin.SQLITE3
-    with Writer(path, version=9, storage_plugin=plugin) as w:
-        c = w.add_connection("/imu0", "sensor_msgs/msg/Imu", typestore=ts)
-        for t, r in zip(times, rows, strict=True):
-            w.write(c, int(t * 1e9), ts.serialize_cdr(_imu(ts, t, r), "sensor_msgs/msg/Imu"))
+    write_bag(path, kind, rows, np.arange(n) / fs, topics=("/imu0",))
 
 
 def main() -> None:
