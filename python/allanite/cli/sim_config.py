@@ -218,10 +218,13 @@ def config_changes(args: argparse.Namespace, loaded: LoadedSim, diagnosis: Any) 
     # both sides written by the format's writer into the user's file, so the writer's own
     # layout (a one-line SDF indented, 2e-3 written as 0.002) is no change
     text = Path(args.sim_model).read_text(encoding="utf-8")
-    before, after = (
-        module.write(c, rate=loaded.rate, template=text, tau_range=_tau_range(diagnosis)).text
-        for c in (loaded.config, config)
-    )
+    try:
+        before, after = (
+            module.write(c, rate=loaded.rate, template=text, tau_range=_tau_range(diagnosis)).text
+            for c in (loaded.config, config)
+        )
+    except ValueError as exc:  # the diagnosis stands; only this listing is not possible
+        return [f"(the changes cannot be listed: {exc}; --write-corrected OUT says why)"]
     old = [ln.strip() for ln in before.splitlines()]
     new = [ln.strip() for ln in after.splitlines()]
     pairs: list[tuple[str, str]] = []
