@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 import subprocess
 import sys
 from pathlib import Path
@@ -228,9 +229,14 @@ def test_a_wrong_config_is_told_what_to_change_in_its_own_names_and_units(tmp_pa
         "</angular_velocity></imu></sensor>"
     )
     base = ["diagnose", str(real), "--fs", "100", "--units", "rad/s", "--sim-model"]
+
+    def white_n(out: str) -> float:  # the white noise of the corrected model (whites add)
+        found = re.findall(r'"white", "N": ([0-9.e+-]+)', out.split('"terms" with', 1)[1])
+        return math.hypot(*map(float, found))
+
     assert main([*base, str(kalibr)]) == 0
     out = capsys.readouterr().out
-    fitted = float(re.search(r'"white", "N": ([0-9.e+-]+)', out).group(1))
+    fitted = white_n(out)
     assert "change in imu.yaml (kalibr; --write-corrected OUT writes it):" in out
     changes = out.split("--write-corrected OUT writes it):\n", 1)[1].splitlines()
     assert len(changes) == 1, changes
@@ -242,8 +248,19 @@ def test_a_wrong_config_is_told_what_to_change_in_its_own_names_and_units(tmp_pa
     assert float(new.split()[1]) == pytest.approx(fitted, rel=1e-9)
     assert main([*base, str(sdf)]) == 0
     out = capsys.readouterr().out
-    fitted = float(re.search(r'"white", "N": ([0-9.e+-]+)', out).group(1))
+    fitted = white_n(out)
     line = next(ln for ln in out.splitlines() if "<stddev>0.03</stddev>  ->" in ln)
     assert line.endswith("[per sample: rad/s | m/s^2]  (x3)")  # the x, y and z blocks
     stddev = float(re.search(r"->\s+<stddev>([0-9.e+-]+)</stddev>", line).group(1))
     assert stddev == pytest.approx(fitted * 10.0, rel=1e-9)  # stddev = N / sqrt(dt)
+    plugin = tmp_path / "px4.sdf"  # the PX4 plugin's defaults: N 3.39e-4, bias tau 1000 s
+    plugin.write_text('<plugin name="imu_plugin" filename="libgazebo_imu_plugin.so"></plugin>')
+    assert main([*base, str(plugin)]) == 0
+    out = capsys.readouterr().out
+    fitted = white_n(out)
+    line = next(ln for ln in out.splitlines() if "<gyroscopeNoiseDensity>0.000339" in ln)
+    assert line.endswith("</gyroscopeNoiseDensity>  [rad/s/sqrt(Hz)]")
+    new_density = re.search(r"->\s+<gyroscopeNoiseDensity>([0-9.e+-]+)<", line).group(1)
+    assert float(new_density) == pytest.approx(fitted, rel=1e-9)
+    for line in out.split("writes it):\n", 1)[1].splitlines():  # every changed line: a unit
+        assert re.search(r"\[(rad/s\S*|s)\]$", line), line

@@ -708,6 +708,23 @@ def test_convert_warning_points_at_the_dropped_lines_when_nothing_was_projected(
     assert "(see the 'projected' lines)" in capsys.readouterr().err
 
 
+def test_px4_plugin_written_into_a_one_line_plugin_element(tmp_path):
+    """``<plugin ... filename="libgazebo_imu_plugin.so"></plugin>`` reads as the plugin's
+    defaults; writing into it said it had no IMU plugin block (the closing tag was looked for
+    at the start of a line only)."""
+    user = tmp_path / "px4.sdf"
+    user.write_text(
+        '<model><plugin name="imu_plugin" filename="libgazebo_imu_plugin.so">'
+        "<robotNamespace/></plugin></model>\n"
+    )
+    assert read_config(user).source_format == "px4-plugin"
+    gyro = sensor_model([White(N=8e-5), GaussMarkov(sigma=3e-5, tau_c=300.0)], "gyro")
+    write_config(ImuConfig(gyro=gyro), tmp_path / "out.sdf", rate=400.0, template=user)
+    text = (tmp_path / "out.sdf").read_text()
+    assert text.count("</plugin></model>") == 1  # the user's layout, elements added inline
+    _same(read_config(tmp_path / "out.sdf").model("gyro").without("turn_on_bias"), gyro)
+
+
 def test_readme_quotes_the_export_note_the_code_prints():
     """The README's worked example quotes the PX4 plugin's projection note of round 1 (the
     stored round-1 config plus the fast Gauss-Markov process the diagnosis folded in): the

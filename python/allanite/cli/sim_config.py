@@ -187,6 +187,7 @@ def _tau_range(diagnosis: Any) -> tuple[float, float]:
 _NOTE_LINE = re.compile(r"(projected|dropped|not representable[^:]*):")
 
 
+_ELEMENTS = re.compile(r">[ \t]*<")
 _NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
 
 
@@ -225,8 +226,10 @@ def config_changes(args: argparse.Namespace, loaded: LoadedSim, diagnosis: Any) 
         )
     except ValueError as exc:  # the diagnosis stands; only this listing is not possible
         return [f"(the changes cannot be listed: {exc}; --write-corrected OUT says why)"]
-    old = [ln.strip() for ln in before.splitlines()]
-    new = [ln.strip() for ln in after.splitlines()]
+    # one XML element per line, so a one-line SDF or plugin block diffs element by element
+    old, new = (
+        [ln.strip() for ln in _ELEMENTS.sub(">\n<", t).splitlines()] for t in (before, after)
+    )
     pairs: list[tuple[str, str]] = []
     matcher = difflib.SequenceMatcher(a=old, b=new, autojunk=False)
     for op, a0, a1, b0, b1 in matcher.get_opcodes():
@@ -246,7 +249,7 @@ def config_changes(args: argparse.Namespace, loaded: LoadedSim, diagnosis: Any) 
         was, now = pair
         unit = next((u for k, u in units.items() if isinstance(u, str) and k in now), "")
         shown = f"{was or '(absent)'}  ->  {now or '(removed)'}"
-        if unit and unit not in now:
+        if unit and f"# {unit}" not in now:  # Kalibr files written by allanite say it
             shown += f"  [{unit}]"
         count = pairs.count(pair)
         out.append(shown + (f"  (x{count})" if count > 1 else ""))
