@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 import subprocess
 import sys
 from pathlib import Path
@@ -168,3 +169,98 @@ def test_a_model_of_the_other_sensor_is_refused_with_what_to_give(files, tmp_pat
     err = capsys.readouterr().err.strip()
     assert "--sim-sensor accel compares an accelerometer model with a gyro record" in err
     assert "unit mismatch" not in err
+
+
+def test_progress_is_shown_on_a_terminal_for_a_short_record(files, capsys, monkeypatch):
+    """A 480 000-sample ROS bag took 30-160 s to diagnose in silence: auto showed progress
+    only from 2^20 samples. On a terminal it is shown whatever the length."""
+    argv = [
+        "diagnose", str(files["real"]), "--fs", "100", "--units", "deg/s",
+        "--sim-model", str(files["model"]), "--n-mc", "20", "--effects", "sine",
+    ]  # fmt: skip
+    assert main(argv) == 0
+    assert "diagnose: " not in capsys.readouterr().err  # not a terminal: quiet below 2^20
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
+    assert main(argv) == 0
+    lines = [ln for ln in capsys.readouterr().err.splitlines() if ln.startswith("diagnose: ")]
+    assert lines, "no progress line on a terminal"
+
+
+def test_a_config_with_zero_noise_is_refused_before_the_diagnosis(files, tmp_path, capsys):
+    """A gnss-ins-sim file whose gyro entries are zero failed late with 'the model has no
+    terms', naming neither the file nor the sensor."""
+    from allanite.formats import ImuConfig, write_config
+    from allanite.formats.base import sensor_model
+
+    config = tmp_path / "imu_err.py"
+    accel = sensor_model([TERM_TYPES["white"](N=1e-3)], "accel")
+    write_config(ImuConfig(accel=accel), config, format="gnss-ins-sim", rate=100.0)
+    argv = [
+        "diagnose", str(files["real"]), "--fs", "100", "--units", "deg/s",
+        "--sim-model", str(config), "--n-mc", "20",
+    ]  # fmt: skip
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "imu_err.py (gnss-ins-sim) gives the gyro no noise" in err
+    assert "set its gyro noise" in err
+
+
+def test_a_wrong_config_is_told_what_to_change_in_its_own_names_and_units(tmp_path, capsys):
+    """Against a Kalibr file with 3x the gyro noise density the diagnosis said N = ... deg/√h
+    and gave model-JSON terms; the user edits gyroscope_noise_density in rad/s/√Hz (SDF: the
+    per-sample stddev of each axis). The change is listed in those names; untouched keys
+    (the accelerometer's, rewritten as 0.002 for 2e-3) are not."""
+    import re
+
+    white = NoiseModel((TERM_TYPES["white"](N=1e-3),), {"rate": "rad/s", "time": "s"})
+    real = tmp_path / "real.npy"
+    np.save(real, white.simulate(2**15, fs=100.0, seed=1))
+    kalibr = tmp_path / "imu.yaml"
+    kalibr.write_text(
+        "gyroscope_noise_density: 3e-3\ngyroscope_random_walk: 1e-7\n"
+        "accelerometer_noise_density: 2e-3\naccelerometer_random_walk: 3e-5\nupdate_rate: 100\n"
+    )
+    sdf = tmp_path / "imu.sdf"
+    axes = "".join(
+        f"<{a}><noise type='gaussian'><stddev>0.03</stddev></noise></{a}>" for a in "xyz"
+    )
+    sdf.write_text(
+        f"<sensor type='imu'><update_rate>100</update_rate><imu><angular_velocity>{axes}"
+        "</angular_velocity></imu></sensor>"
+    )
+    base = ["diagnose", str(real), "--fs", "100", "--units", "rad/s", "--sim-model"]
+
+    def white_n(out: str) -> float:  # the white noise of the corrected model (whites add)
+        found = re.findall(r'"white", "N": ([0-9.e+-]+)', out.split('"terms" with', 1)[1])
+        return math.hypot(*map(float, found))
+
+    assert main([*base, str(kalibr)]) == 0
+    out = capsys.readouterr().out
+    fitted = white_n(out)
+    assert "change in imu.yaml (kalibr; --write-corrected OUT writes it):" in out
+    changes = out.split("--write-corrected OUT writes it):\n", 1)[1].splitlines()
+    assert len(changes) == 1, changes
+    old, new = changes[0].split("  ->  ")
+    assert old.split(":")[0].strip() == "gyroscope_noise_density"
+    assert float(old.split(":")[1]) == 3e-3
+    assert new.startswith("gyroscope_noise_density: ")
+    assert new.endswith("[rad/s/sqrt(Hz)]")
+    assert float(new.split()[1]) == pytest.approx(fitted, rel=1e-9)
+    assert main([*base, str(sdf)]) == 0
+    out = capsys.readouterr().out
+    fitted = white_n(out)
+    line = next(ln for ln in out.splitlines() if "<stddev>0.03</stddev>  ->" in ln)
+    assert line.endswith("[per sample: rad/s | m/s^2]  (x3)")  # the x, y and z blocks
+    stddev = float(re.search(r"->\s+<stddev>([0-9.e+-]+)</stddev>", line).group(1))
+    assert stddev == pytest.approx(fitted * 10.0, rel=1e-9)  # stddev = N / sqrt(dt)
+    plugin = tmp_path / "px4.sdf"  # the PX4 plugin's defaults: N 3.39e-4, bias tau 1000 s
+    plugin.write_text('<plugin name="imu_plugin" filename="libgazebo_imu_plugin.so"></plugin>')
+    assert main([*base, str(plugin)]) == 0
+    out = capsys.readouterr().out
+    fitted = white_n(out)
+    line = next(ln for ln in out.splitlines() if "<gyroscopeNoiseDensity>0.000339" in ln)
+    assert line.endswith("</gyroscopeNoiseDensity>  [rad/s/sqrt(Hz)]")
+    new_density = re.search(r"->\s+<gyroscopeNoiseDensity>([0-9.e+-]+)<", line).group(1)
+    assert float(new_density) == pytest.approx(fitted, rel=1e-9)
+    for line in out.split("writes it):\n", 1)[1].splitlines():  # every changed line: a unit
+        assert re.search(r"\[(rad/s\S*|s)\]$", line), line

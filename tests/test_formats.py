@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 import re
+import sys
 
 import numpy as np
 import pytest
@@ -435,6 +436,37 @@ def test_template_keeps_the_users_other_lines(tmp_path):
     assert "gyr_w: 0.0003" in text
 
 
+@pytest.mark.parametrize("fmt", sorted(set(FORMATS) - {"allanite"}))
+def test_gyro_then_accel_into_one_file_keeps_both_and_their_notes(fmt, tmp_path):
+    """The README's two-step export: the gyro model, then the accel model into it.
+
+    Formats rewritten whole (MATLAB, gnss-ins-sim) wrote the accel alone and zeroed or dropped
+    the gyro; the SDF and AirSim writers dropped the gyro's projection note.
+    """
+    gyro = sensor_model([White(N=8e-5), Flicker(B=2.4e-5)], "gyro")
+    accel = sensor_model([White(N=1e-3), Flicker(B=5e-4)], "accel")
+    path = tmp_path / f"imu{FORMATS[fmt].SUFFIXES[0]}"
+    first = write_config(ImuConfig(gyro=gyro), path, format=fmt, rate=400.0)
+    write_config(ImuConfig(accel=accel), path, format=fmt, rate=400.0, template=path)
+    both = write_config(
+        ImuConfig(gyro=gyro, accel=accel), tmp_path / f"both{path.suffix}", format=fmt, rate=400.0
+    )
+    back = read_config(path, format=fmt, rate=400.0)
+    expected = read_config(tmp_path / f"both{path.suffix}", format=fmt, rate=400.0)
+    taus = np.geomspace(0.01, 1000.0, 25)
+    for sensor in ("gyro", "accel"):
+        np.testing.assert_allclose(
+            back.model(sensor).avar(taus, 1 / 400.0),
+            expected.model(sensor).avar(taus, 1 / 400.0),
+            rtol=1e-6,
+            err_msg=sensor,
+        )
+    text = path.read_text()
+    for line in first.report():  # the gyro's note, written by the first step, is still there
+        assert line.split(" ", 1)[1] in text
+    assert len(both.report()) == 2
+
+
 def test_sdf_template_with_precision_keeps_precision(tmp_path):
     user = tmp_path / "m.sdf"
     user.write_text(_gz_text(GZ, 100.0))
@@ -636,6 +668,61 @@ def test_an_accelerometer_only_model_converts_and_is_recognised(tmp_path, capsys
     white, walk = back.accel.terms_of_type("white")[0], back.accel.terms_of_type("rrw")[0]
     assert white.values()["N"] == pytest.approx(0.002, rel=1e-9)
     assert walk.values()["K"] == pytest.approx(2e-5, rel=1e-9)
+
+
+@pytest.mark.parametrize("fmt", ["kalibr", "openvins", "orbslam3", "vins"])
+def test_model_convert_to_yaml_without_pyyaml_writes_nothing_and_names_the_extra(
+    tmp_path, capsys, monkeypatch, fmt
+):
+    """``[bags,ulog]`` installs no pyyaml: convert wrote the file, then failed reading it back
+    (exit 2 with the file left, and a template already overwritten)."""
+    from allanite.cli import main
+
+    src = tmp_path / "gyro.json"
+    sensor_model([White(N=8e-5), RateRandomWalk(K=1e-6)], "gyro").save(src)
+    out = tmp_path / "imu.yaml"
+    monkeypatch.setitem(sys.modules, "yaml", None)  # import yaml -> ImportError
+    assert main(["model", "convert", str(src), str(out), "--to", fmt, "--rate", "400"]) == 2
+    err = capsys.readouterr().err
+    assert "was not written" in err
+    assert 'pip install "allanite[yaml]"' in err
+    assert not out.exists()
+
+
+def test_convert_warning_points_at_the_dropped_lines_when_nothing_was_projected(tmp_path, capsys):
+    """Gazebo classic has no slow term: flicker is dropped, and the warning said "see the
+    'projected' lines" when there were none."""
+    from allanite.cli import main
+
+    src = tmp_path / "gyro.json"
+    sensor_model([White(N=8e-5), Flicker(B=2.4e-5)], "gyro").save(src)
+    out = tmp_path / "classic.sdf"
+    assert (
+        main(["model", "convert", str(src), str(out), "--to", "gazebo-classic", "--rate", "400"])
+        == 0
+    )
+    err = capsys.readouterr().err
+    assert "dropped gyro: flicker" in err
+    assert "(see the 'dropped' lines)" in err
+    assert main(["model", "convert", str(src), str(tmp_path / "gz.sdf"), "--rate", "400"]) == 0
+    assert "(see the 'projected' lines)" in capsys.readouterr().err
+
+
+def test_px4_plugin_written_into_a_one_line_plugin_element(tmp_path):
+    """``<plugin ... filename="libgazebo_imu_plugin.so"></plugin>`` reads as the plugin's
+    defaults; writing into it said it had no IMU plugin block (the closing tag was looked for
+    at the start of a line only)."""
+    user = tmp_path / "px4.sdf"
+    user.write_text(
+        '<model><plugin name="imu_plugin" filename="libgazebo_imu_plugin.so">'
+        "<robotNamespace/></plugin></model>\n"
+    )
+    assert read_config(user).source_format == "px4-plugin"
+    gyro = sensor_model([White(N=8e-5), GaussMarkov(sigma=3e-5, tau_c=300.0)], "gyro")
+    write_config(ImuConfig(gyro=gyro), tmp_path / "out.sdf", rate=400.0, template=user)
+    text = (tmp_path / "out.sdf").read_text()
+    assert text.count("</plugin></model>") == 1  # the user's layout, elements added inline
+    _same(read_config(tmp_path / "out.sdf").model("gyro").without("turn_on_bias"), gyro)
 
 
 def test_readme_quotes_the_export_note_the_code_prints():

@@ -30,13 +30,13 @@ def _signals(n: int = N, seed: int = 0) -> np.ndarray:
     return out
 
 
-def _imu(ts, t: float, row: np.ndarray):
+def _imu(ts, t: float, row: np.ndarray, frame: str = "imu"):
     types = ts.types
     time = types["builtin_interfaces/msg/Time"](sec=int(t), nanosec=int(np.round((t % 1) * 1e9)))
     vec = types["geometry_msgs/msg/Vector3"]
     seq = {"seq": 0} if "seq" in types["std_msgs/msg/Header"].__dataclass_fields__ else {}
     return types["sensor_msgs/msg/Imu"](
-        header=types["std_msgs/msg/Header"](stamp=time, frame_id="imu", **seq),
+        header=types["std_msgs/msg/Header"](stamp=time, frame_id=frame, **seq),
         orientation=types["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=0.0, w=1.0),
         orientation_covariance=np.zeros(9),
         angular_velocity=vec(x=row[0], y=row[1], z=row[2]),
@@ -46,11 +46,15 @@ def _imu(ts, t: float, row: np.ndarray):
     )
 
 
-def write_bag(path, kind: str, data: np.ndarray, times: np.ndarray, topics=("/imu",), order=None):
-    """Write ``data`` as sensor_msgs/Imu on ``topics`` (``order``: arrival order of messages)."""
+def write_bag(
+    path, kind: str, data: np.ndarray, times: np.ndarray, topics=("/imu",), order=None, frames=None
+):
+    """Write ``data`` as sensor_msgs/Imu on ``topics`` (``order``: arrival order of messages;
+    ``frames``: a frame_id per message, default ``imu``)."""
     from rosbags.typesys import Stores, get_typestore
 
     order = np.arange(len(times)) if order is None else order
+    frames = ["imu"] * len(times) if frames is None else frames
     if kind == "ros1":
         from rosbags.rosbag1 import Writer
 
@@ -58,7 +62,8 @@ def write_bag(path, kind: str, data: np.ndarray, times: np.ndarray, topics=("/im
         with Writer(path) as writer:
             conns = [writer.add_connection(t, "sensor_msgs/msg/Imu", typestore=ts) for t in topics]
             for k, i in enumerate(order):
-                raw = ts.serialize_ros1(_imu(ts, 1000.0 + times[i], data[i]), "sensor_msgs/msg/Imu")
+                msg = _imu(ts, 1000.0 + times[i], data[i], frames[i])
+                raw = ts.serialize_ros1(msg, "sensor_msgs/msg/Imu")
                 for c in conns:
                     writer.write(c, int((1000.0 + times[k]) * 1e9), raw)
         return
@@ -69,7 +74,8 @@ def write_bag(path, kind: str, data: np.ndarray, times: np.ndarray, topics=("/im
     with Writer(path, version=9, storage_plugin=plugin) as writer:
         conns = [writer.add_connection(t, "sensor_msgs/msg/Imu", typestore=ts) for t in topics]
         for k, i in enumerate(order):
-            raw = ts.serialize_cdr(_imu(ts, 1000.0 + times[i], data[i]), "sensor_msgs/msg/Imu")
+            msg = _imu(ts, 1000.0 + times[i], data[i], frames[i])
+            raw = ts.serialize_cdr(msg, "sensor_msgs/msg/Imu")
             for c in conns:
                 writer.write(c, int((1000.0 + times[k]) * 1e9), raw)
 
@@ -92,6 +98,34 @@ def test_bag_gives_six_axes_with_time_stamps_and_units(tmp_path, kind):
     if kind != "ros1":  # the storage file itself works too
         storage = next(p for p in path.iterdir() if p.suffix in (".mcap", ".db3"))
         np.testing.assert_allclose(read_record(storage).samples, data)
+
+
+@pytest.mark.parametrize("kind", ["ros1", "sqlite3", "mcap"])
+def test_messages_read_from_their_bytes_equal_the_deserialized_ones(tmp_path, kind, monkeypatch):
+    """The IMU values are read straight from the message bytes when a batch shares one layout
+    (several times faster than deserializing each message); frame_ids of other lengths
+    (ROS 2: other CDR padding) and batch boundaries fall back or split cleanly, with the
+    same samples and stamps."""
+    from allanite.io import robot_logs
+
+    monkeypatch.setattr(robot_logs, "BATCH", 128)  # several batches, the last one partial
+    data = _signals()
+    times = np.arange(N) / FS + 0.123456789
+    frames = ["imu"] * N
+    frames[300:310] = ["imu_link_long_name"] * 10  # batch 3 falls back to deserializing
+    frames[500:505] = ["imu1", "imu22", "imu333", "i", "imu4444"]
+    path = tmp_path / ("b.bag" if kind == "ros1" else "b")
+    write_bag(path, kind, data, times, frames=frames)
+    calls = []
+    real_rows = robot_logs._imu_row
+    monkeypatch.setattr(robot_logs, "_imu_row", lambda *a: calls.append(1) or real_rows(*a))
+    table, names, _ = robot_logs.load_rosbag(path)
+    assert names == ("t", *robot_logs.CHANNELS)
+    np.testing.assert_array_equal(table[:, 1:], data)
+    expected = (1000.0 + times) - (1000.0 + times[0])
+    np.testing.assert_allclose(table[:, 0], expected, atol=2e-9)  # stamps in whole ns
+    assert len(calls) < N  # most batches were read from the bytes
+    assert len(calls) >= 2 * 128  # the two batches with other frame_id lengths were not
 
 
 def test_messages_in_arrival_order_are_sorted_by_stamp(tmp_path):

@@ -15,7 +15,12 @@ from allanite.cli.record_options import (
     read_from_args,
     warn_implausible,
 )
-from allanite.cli.sim_config import add_sim_config_arguments, load_sim_model, write_corrected
+from allanite.cli.sim_config import (
+    add_sim_config_arguments,
+    config_changes,
+    load_sim_model,
+    write_corrected,
+)
 from allanite.io.atomic import atomic_output
 from allanite.io.readers import read_record
 from allanite.io.record import INPUT_KINDS, Record
@@ -103,7 +108,7 @@ def register(subparsers: Any) -> None:
         "--progress",
         choices=("auto", "on", "off"),
         default="auto",
-        help="progress on stderr (auto: for records of 2^20 samples or more)",
+        help="progress on stderr (auto: on a terminal, and for records of 2^20 samples or more)",
     )
     out = parser.add_argument_group("output")
     out.add_argument("--json", action="store_true", help="print one JSON object to stdout")
@@ -234,7 +239,11 @@ def run(args: argparse.Namespace) -> int:
     loaded = load_sim_model(args, fs, rate_unit(part)) if args.sim_model else None
     sim: Any = loaded.model if loaded is not None else _sim_record(args, fs)
     effects = [e.strip() for e in args.effects.split(",") if e.strip()] if args.effects else None
-    show = args.progress == "on" or (args.progress == "auto" and real.size >= 2**20)
+    # auto: on a terminal (a diagnosis takes tens of seconds from 1e5 samples on), and in
+    # logs for records of 2^20 samples or more
+    show = args.progress == "on" or (
+        args.progress == "auto" and (real.size >= 2**20 or sys.stderr.isatty())
+    )
     result = diagnose(
         record if record.timing is not None else real,  # its time base is evidence too
         sim,
@@ -266,6 +275,13 @@ def run(args: argparse.Namespace) -> int:
         sys.stdout.write(json.dumps(data) + "\n")
     else:
         print(_summary(result))
+        changes = config_changes(args, loaded, result) if loaded is not None else []
+        if changes and loaded is not None:
+            print(
+                f"to close the gap, change in {Path(args.sim_model).name} ({loaded.format}; "
+                "--write-corrected OUT writes it):"
+            )
+            print("\n".join(f"  {line}" for line in changes))
     return 0
 
 

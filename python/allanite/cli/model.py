@@ -108,11 +108,18 @@ def run(args: argparse.Namespace) -> int:
         rate=rate,
         template=args.template,
         tau_range=tuple(args.tau_range) if args.tau_range else None,
+        read_back=True,  # check_written reads it: a missing reader extra fails before writing
     )
     for line in written.report():
         print(line, file=sys.stderr)
     checks = check_written(
-        config, args.output, args.to_format, rate, args.tau_range, template=args.template
+        config,
+        args.output,
+        args.to_format,
+        rate,
+        args.tau_range,
+        template=args.template,
+        report=tuple(written.report()),
     )
     for line in checks:
         print(f"allanite model convert: warning: {line}", file=sys.stderr)
@@ -132,13 +139,16 @@ def check_written(
     tau_range: list[float] | None,
     *,
     template: str | None = None,
+    report: tuple[str, ...] = (),
 ) -> list[str]:
     """What a user must know about the written file, read back as the simulator reads it.
 
     A sensor of the source missing from the output (unless the ``template`` written into
     holds it: its entries are kept), and a sensor whose read-back Allan
     deviation departs from the source's by more than :data:`POOR_ADEV_ERROR` anywhere over
-    the tau range (default: 10 samples to one hour; at 100 Hz without a rate).
+    the tau range (default: 10 samples to one hour; at 100 Hz without a rate). ``report``
+    (the writer's :meth:`~allanite.formats.Written.report` lines) lets the warning point at
+    the lines that say why: ``projected`` or ``dropped``.
     """
     back = read_config(path, format=format, rate=rate)
     dt = 1.0 / (rate or back.rate or 100.0)
@@ -171,9 +181,11 @@ def check_written(
             continue
         worst = adev_error(written, model.avar(taus, dt), taus, dt)
         if worst > POOR_ADEV_ERROR:
+            kinds = [k for k in ("projected", "dropped") if f"{k} {sensor}" in "\n".join(report)]
+            seen = "/".join(f"'{k}'" for k in kinds) or "'projected' or 'dropped'"
             out.append(
                 f"the written {sensor} model departs from the source by up to {100 * worst:.0f} % "
                 f"in Allan deviation over {lo:.3g}-{hi:.3g} s: the format cannot hold the "
-                "source's terms (see the 'projected' lines); check it before use"
+                f"source's terms (see the {seen} lines); check it before use"
             )
     return out

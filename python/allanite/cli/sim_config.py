@@ -11,6 +11,8 @@ its own format with the user's other settings kept (the input config is the temp
 from __future__ import annotations
 
 import argparse
+import difflib
+import re
 import sys
 from dataclasses import dataclass
 from typing import Any
@@ -26,7 +28,13 @@ from allanite.formats import (
 from allanite.model import NoiseModel, read_text_file
 from allanite.units import RECORD_UNIT, sensor_kind
 
-__all__ = ["LoadedSim", "add_sim_config_arguments", "load_sim_model", "write_corrected"]
+__all__ = [
+    "LoadedSim",
+    "add_sim_config_arguments",
+    "config_changes",
+    "load_sim_model",
+    "write_corrected",
+]
 
 
 def add_sim_config_arguments(group: Any, *, corrected: bool = True) -> None:
@@ -94,6 +102,13 @@ def load_sim_model(args: argparse.Namespace, fs: float, units: str | None) -> Lo
     sensor = args.sim_sensor or _sensor_of(units)
     _check_sensor(config, sensor, units, path.name, chosen=args.sim_sensor is not None)
     model = config.model(sensor)
+    if not model.terms:  # a simulator config with every noise entry zero: a noiseless sensor
+        raise ValueError(
+            f"{path.name} ({fmt}) gives the {sensor} no noise: every {sensor} noise entry is "
+            f"zero, so there is no simulated sensor to compare; set its {sensor} noise, or "
+            "give a config that holds it (allanite model convert FITTED.json CONFIG --template "
+            "CONFIG writes a fitted model into it)"
+        )
     if fmt == "allanite":
         model = NoiseModel.from_json(path.read_text(encoding="utf-8"))
     model_unit = model.units["rate"]
@@ -153,22 +168,104 @@ def _sensor_of(units: str | None) -> str:
     return "accel" if sensor_kind(units) == "accelerometer" else "gyro"
 
 
-def write_corrected(args: argparse.Namespace, loaded: LoadedSim, diagnosis: Any) -> None:
-    """Write the corrected config and list what was folded in, dropped and projected."""
+def _corrected(loaded: LoadedSim, diagnosis: Any) -> tuple[ImuConfig, str]:
+    """The config with the diagnosed effects folded in, and what was folded in."""
     from allanite.formats import format_module
     from allanite.formats.corrected import corrected_model
 
     holds = format_module(loaded.format).HOLDS
     model, what = corrected_model(loaded.model, diagnosis, holds)
-    config = loaded.config.with_model(loaded.sensor, model)
+    return loaded.config.with_model(loaded.sensor, model), what
+
+
+def _tau_range(diagnosis: Any) -> tuple[float, float]:
     tau = diagnosis.tau.tau
+    return float(tau[0]), float(tau[-1])
+
+
+#: lines of an export note (``# projected: ...``), not parameters
+_NOTE_LINE = re.compile(r"(projected|dropped|not representable[^:]*):")
+
+
+_ELEMENTS = re.compile(r">[ \t]*<")
+_NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
+
+
+def _same_values(a: str, b: str) -> bool:
+    """Whether two config lines say the same: the same text around equal numbers."""
+    if _NUMBER.sub("#", a) != _NUMBER.sub("#", b):
+        return False
+    x = [float(v) for v in _NUMBER.findall(a)]
+    y = [float(v) for v in _NUMBER.findall(b)]
+    return all(abs(u - v) <= 1e-9 * max(abs(u), abs(v)) for u, v in zip(x, y, strict=True))
+
+
+def config_changes(args: argparse.Namespace, loaded: LoadedSim, diagnosis: Any) -> list[str]:
+    """What to change in the ``--sim-model`` config, in its own parameter names and units.
+
+    The parameter lines of the config that the correction ``--write-corrected`` would write
+    changes, ``old  ->  new``, with the unit where the format names one (identical changes,
+    such as the x, y and z blocks of an SDF, are shown once with a count). Empty for a model
+    JSON, or when the gap is not significant.
+    """
+    from pathlib import Path
+
+    from allanite.formats import format_module
+
+    if loaded.format == "allanite" or not diagnosis.significant:
+        return []
+    module = format_module(loaded.format)
+    config, _ = _corrected(loaded, diagnosis)
+    # both sides written by the format's writer into the user's file, so the writer's own
+    # layout (a one-line SDF indented, 2e-3 written as 0.002) is no change
+    text = Path(args.sim_model).read_text(encoding="utf-8")
+    try:
+        before, after = (
+            module.write(c, rate=loaded.rate, template=text, tau_range=_tau_range(diagnosis)).text
+            for c in (loaded.config, config)
+        )
+    except ValueError as exc:  # the diagnosis stands; only this listing is not possible
+        return [f"(the changes cannot be listed: {exc}; --write-corrected OUT says why)"]
+    # one XML element per line, so a one-line SDF or plugin block diffs element by element
+    old, new = (
+        [ln.strip() for ln in _ELEMENTS.sub(">\n<", t).splitlines()] for t in (before, after)
+    )
+    pairs: list[tuple[str, str]] = []
+    matcher = difflib.SequenceMatcher(a=old, b=new, autojunk=False)
+    for op, a0, a1, b0, b1 in matcher.get_opcodes():
+        if op == "equal":
+            continue
+        gone = [ln for ln in old[a0:a1] if ln and not _NOTE_LINE.search(ln)]
+        came = [ln for ln in new[b0:b1] if ln and not _NOTE_LINE.search(ln)]
+        for i in range(max(len(gone), len(came))):
+            pair = (gone[i] if i < len(gone) else "", came[i] if i < len(came) else "")
+            if not _same_values(*pair):  # 2e-3 rewritten as 0.002 is no change
+                pairs.append(pair)
+    named: dict[str, Any] = getattr(module, "UNITS", {})
+    # longest name first: gnss-ins-sim's gyro_b_stability before gyro_b
+    units = {k: named[k] for k in sorted(named, key=len, reverse=True)}
+    out: list[str] = []
+    for pair in dict.fromkeys(pairs):
+        was, now = pair
+        unit = next((u for k, u in units.items() if isinstance(u, str) and k in now), "")
+        shown = f"{was or '(absent)'}  ->  {now or '(removed)'}"
+        if unit and f"# {unit}" not in now:  # Kalibr files written by allanite say it
+            shown += f"  [{unit}]"
+        count = pairs.count(pair)
+        out.append(shown + (f"  (x{count})" if count > 1 else ""))
+    return out
+
+
+def write_corrected(args: argparse.Namespace, loaded: LoadedSim, diagnosis: Any) -> None:
+    """Write the corrected config and list what was folded in, dropped and projected."""
+    config, what = _corrected(loaded, diagnosis)
     written = write_config(
         config,
         args.write_corrected,
         format=loaded.format,
         rate=loaded.rate,
         template=args.sim_model,
-        tau_range=(float(tau[0]), float(tau[-1])),
+        tau_range=_tau_range(diagnosis),
     )
     print(f"corrected config {args.write_corrected}: {what}", file=sys.stderr)
     for line in written.report():

@@ -17,6 +17,7 @@ from __future__ import annotations
 from pathlib import Path
 from types import ModuleType
 
+from allanite.errors import MissingExtraError
 from allanite.formats import (
     airsim,
     allanite_json,
@@ -153,11 +154,15 @@ def write_config(
     rate: float | None = None,
     template: str | Path | None = None,
     tau_range: tuple[float, float] | None = None,
+    read_back: bool = False,
 ) -> Written:
     """Write ``config`` to ``path`` atomically; return what was written, dropped, projected.
 
     The format is ``format``, else the template's content, else the suffix of ``path`` (the
-    config's own format when it shares the suffix).
+    config's own format when it shares the suffix). With ``read_back`` the text is first read
+    with the format's reader, so a reader's missing extra (pyyaml for the YAML formats) is
+    raised before anything is written, not after (``allanite model convert`` reads every
+    file it writes back to check it).
     """
     from allanite.io.atomic import atomic_output
 
@@ -177,6 +182,14 @@ def write_config(
     if rate is None and config.rate is None and template_text is not None:
         rate = _template_rate(module, template_text)
     written: Written = module.write(config, rate=rate, template=template_text, tau_range=tau_range)
+    if read_back:
+        try:
+            module.read(written.text, rate=rate)
+        except MissingExtraError as exc:
+            raise MissingExtraError(
+                f"{path} was not written: checking it means reading it back, and {exc}",
+                extra=exc.extra,
+            ) from None
     with atomic_output(path) as tmp:
         Path(tmp).write_text(written.text, encoding="utf-8")
     return written

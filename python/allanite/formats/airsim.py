@@ -17,7 +17,7 @@ import math
 from typing import Any
 
 from allanite.formats._densities import HOLDS
-from allanite.formats.base import ImuConfig, Written, number, sensor_model
+from allanite.formats.base import ImuConfig, Written, notes_of_others, number, sensor_model
 from allanite.formats.projection import project_config
 from allanite.terms import RateRandomWalk, Term, White
 from allanite.units import STANDARD_GRAVITY
@@ -36,6 +36,15 @@ KEYS = {
     "VelocityRandomWalk": (G * 1e-3, 0.24),
     "AccelBiasStability": (G * 1e-6, 36.0),
     "AccelBiasStabilityTau": (1.0, 800.0),
+}
+#: unit of each key, as AirSim reads it
+UNITS = {
+    "AngularRandomWalk": "deg/sqrt(h)",
+    "GyroBiasStabilityTau": "s",
+    "GyroBiasStability": "deg/h",
+    "VelocityRandomWalk": "mg*sqrt(s)",
+    "AccelBiasStabilityTau": "s",
+    "AccelBiasStability": "ug",
 }
 SENSOR_KEYS = {
     "gyro": ("AngularRandomWalk", "GyroBiasStability", "GyroBiasStabilityTau"),
@@ -141,8 +150,12 @@ def write(
         block[white_key] = n * s / math.sqrt(dt) / KEYS[white_key][0]
         block[bias_key] = k * math.sqrt(tau) * math.sqrt(dt) / s / KEYS[bias_key][0]
         block[tau_key] = tau
-    if dropped or projections:
-        data["_allanite_notes"] = [f"dropped: {d}" for d in dropped] + [
-            f"projected: {p}" for p in projections
-        ]
+    earlier = data.get("_allanite_notes", [])
+    kept = notes_of_others(earlier if isinstance(earlier, list) else [], config.sensors)
+    if dropped or projections or kept:
+        data["_allanite_notes"] = (
+            [f"dropped: {d}" for d in dropped] + [f"projected: {p}" for p in projections] + kept
+        )
+    else:
+        data.pop("_allanite_notes", None)
     return Written(json.dumps(data, indent=2) + "\n", dropped, projections)

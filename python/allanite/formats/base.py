@@ -10,6 +10,8 @@ what the format could not hold and the projections made instead.
 from __future__ import annotations
 
 import math
+import re
+from collections.abc import Collection, Iterable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -26,6 +28,7 @@ __all__ = [
     "describe_term",
     "merge_same",
     "need_rate",
+    "notes_of_others",
     "number",
     "sensor_model",
     "single",
@@ -106,6 +109,53 @@ class ImuConfig:
             source_format=self.source_format,
             notes=self.notes,
         )
+
+    def filled_from(self, template: ImuConfig) -> ImuConfig:
+        """A copy that takes the sensors it has no model of from ``template``.
+
+        For formats rewritten whole (a MATLAB script, a gnss-ins-sim dict): writing the
+        accelerometer model into a template that holds the gyro's must keep the gyro's
+        entries, as the formats edited in place do. A template sensor without any term (the
+        zero entries a format needs) is not taken. The rate is this config's, else the
+        template's.
+        """
+        models: dict[str, NoiseModel | None] = {}
+        offsets = dict(self.offsets)
+        for sensor in SENSORS:
+            own: NoiseModel | None = getattr(self, sensor)
+            other: NoiseModel | None = getattr(template, sensor)
+            if own is None and other is not None and other.terms:
+                models[sensor] = other
+                if sensor in template.offsets:
+                    offsets[sensor] = template.offsets[sensor]
+            else:
+                models[sensor] = own
+        return ImuConfig(
+            gyro=models["gyro"],
+            accel=models["accel"],
+            rate=self.rate if self.rate is not None else template.rate,
+            offsets=offsets,
+            source_format=self.source_format,
+            notes=self.notes,
+        )
+
+
+#: the sensor an export note is about: ``projected: gyro: ...``, ``dropped: accel/x: ...``
+_NOTE_SENSOR = re.compile(r"^\s*(?:projected|dropped)\s*:\s*(gyro|accel)\b")
+
+
+def notes_of_others(notes: Iterable[str], sensors: Collection[str]) -> list[str]:
+    """The notes of an earlier write (``"projected: gyro: ..."``) about sensors not in ``sensors``.
+
+    A write that sets one sensor (``model convert accel.json imu.m --template imu.m``) keeps
+    what the template's notes said of the other sensor, whose entries it keeps too.
+    """
+    out = []
+    for note in notes:
+        match = _NOTE_SENSOR.match(note)
+        if match is not None and match.group(1) not in sensors:
+            out.append(note.strip())
+    return out
 
 
 @dataclass(frozen=True)

@@ -19,6 +19,7 @@ NAME = "gazebo-classic"
 TITLE = "Gazebo classic SDF <imu> noise (no dynamic bias)"
 SUFFIXES = gz_sdf.SUFFIXES
 HOLDS = frozenset({"white", "turn_on_bias"})
+UNITS = gz_sdf.UNITS
 
 
 def sniff(text: str) -> bool:

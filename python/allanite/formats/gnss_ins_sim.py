@@ -20,7 +20,14 @@ from collections.abc import Callable
 from typing import Any
 
 from allanite.formats._text import number_text
-from allanite.formats.base import ImuConfig, Written, need_rate, number, sensor_model
+from allanite.formats.base import (
+    ImuConfig,
+    Written,
+    need_rate,
+    notes_of_others,
+    number,
+    sensor_model,
+)
 from allanite.formats.projection import project_config
 from allanite.terms import GaussMarkov, Term, White
 
@@ -177,7 +184,17 @@ def write(
     template: str | None = None,
     tau_range: tuple[float, float] | None = None,
 ) -> Written:
-    """A Python file defining ``imu_err`` (``template`` is not used: the dict is rewritten)."""
+    """A Python file defining ``imu_err``; the dict is rewritten whole.
+
+    With ``template`` (an earlier gnss-ins-sim file), a sensor ``config`` has no model of
+    keeps the template's values and notes, so the gyro and the accelerometer can be written
+    one after the other into one file.
+    """
+    kept: list[str] = []
+    if template is not None:
+        comments = [line.strip()[1:] for line in template.splitlines() if line.strip()[:1] == "#"]
+        kept = notes_of_others(comments, config.sensors)
+        config = config.filled_from(read(template, rate=rate))
     rate = need_rate(rate or config.rate, "gnss-ins-sim's Gauss-Markov drift (phi = 1 - dt/T)")
     dt = 1.0 / rate
     models, dropped, projections = project_config(config, HOLDS, rate=rate, tau_range=tau_range)
@@ -200,6 +217,7 @@ def write(
             values[ck] = 100.0
     lines = ["# IMU error model for gnss-ins-sim, written by allanite", "import numpy as np", ""]
     lines += [f"# dropped: {d}" for d in dropped] + [f"# projected: {p}" for p in projections]
+    lines += [f"# {note}" for note in kept]
     lines += [
         f"# {sensor}: zero noise (the source holds no {sensor} model; gnss-ins-sim needs the keys)"
         for sensor in KEYS

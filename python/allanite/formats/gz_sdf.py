@@ -25,16 +25,35 @@ Gazebo classic implements the same names without the dynamic bias.
 from __future__ import annotations
 
 import math
+import re
 import xml.etree.ElementTree as ET
 
 from allanite.formats._text import number_text
-from allanite.formats.base import ImuConfig, Written, need_rate, number, sensor_model
+from allanite.formats.base import (
+    ImuConfig,
+    Written,
+    need_rate,
+    notes_of_others,
+    number,
+    sensor_model,
+)
 from allanite.formats.projection import project_config
 from allanite.model import NoiseModel
 from allanite.terms import GaussMarkov, Term, TurnOnBias, White
 
 NAME = "gz-sdf"
 TITLE = "gz-sensors SDF <imu> noise"
+
+#: unit of each noise element (gyro | accelerometer), as gz-sensors applies it per sample
+UNITS = {
+    "dynamic_bias_correlation_time": "s",
+    "dynamic_bias_stddev": "rad/s/sqrt(s) | m/s^2/sqrt(s), a driving density",
+    "bias_stddev": "rad/s | m/s^2",
+    "bias_mean": "rad/s | m/s^2",
+    "stddev": "per sample: rad/s | m/s^2",
+    "mean": "rad/s | m/s^2",
+    "precision": "rad/s | m/s^2",
+}
 SUFFIXES = (".sdf", ".world", ".xml", ".urdf", ".xacro")
 HOLDS = frozenset({"white", "turn_on_bias", "markov"})
 BLOCKS = {"gyro": "angular_velocity", "accel": "linear_acceleration"}
@@ -262,4 +281,7 @@ def write(
         head = template.lstrip().split("?>", 1)[0] + "?>\n"
     comments = [f"<!-- dropped: {_safe(d)} -->" for d in dropped]
     comments += [f"<!-- projected: {_safe(p)} -->" for p in projections]
+    if template is not None:  # the notes of an earlier write on the sensor this one leaves
+        earlier = re.findall(r"<!--(.*?)-->", template.split("<" + _local(root.tag), 1)[0], re.S)
+        comments += [f"<!-- {n} -->" for n in notes_of_others(earlier, config.sensors)]
     return Written(head + "\n".join([*comments, text]) + "\n", dropped, projections)

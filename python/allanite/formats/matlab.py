@@ -122,6 +122,8 @@ UNITS = {
     },
 }
 FUNCTION = {"gyro": "gyroparams", "accel": "accelparams"}
+#: the imuSensor property that takes each sensor's parameter object
+ROLE = {"gyro": "Gyroscope", "accel": "Accelerometer"}
 _NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
 COEFFICIENTS = "BiasInstabilityCoefficients"
 
@@ -452,11 +454,29 @@ def write(
     tau_range: tuple[float, float] | None = None,
     names: dict[str, str] | None = None,
 ) -> Written:
-    """MATLAB code building the ``gyroparams``/``accelparams`` objects (``template`` unused)."""
+    """MATLAB code building the ``gyroparams``/``accelparams`` objects and the ``imuSensor``.
+
+    The script ends with ``imu = imuSensor('accel-gyro', 'SampleRate', fs, ...)``, so the
+    rate the parameters were written for is read back with them. With ``template`` (an
+    earlier script), a sensor ``config`` has no model of keeps the template's parameters and
+    notes: the gyro and the accelerometer can be written one after the other into one script.
+    """
     names = {"gyro": "gyro", "accel": "accel", **(names or {})}
     for name in names.values():
         if not name.isidentifier():
             raise ValueError(f"name must be a MATLAB identifier, got {name!r}")
+    kept: list[str] = []
+    if template is not None:
+        prefix = "% not representable in gyroparams/accelparams: "
+        earlier = [
+            part
+            for line in template.splitlines()
+            if line.startswith(prefix)
+            for part in line[len(prefix) :].split("; ")
+        ]
+        others = [s for s in FUNCTION if s not in config.sensors]
+        kept = [n for n in earlier if re.match(rf"({'|'.join(others) or '$^'})\b", n)]
+        config = config.filled_from(read(template, rate=rate))
     used = rate or config.rate or DEFAULT_RATE
     table, dropped, projections = fields(config, rate=used, tau_range=tau_range)
     lines: list[str] = []
@@ -473,7 +493,13 @@ def write(
             end = ");" if i == len(keys) - 1 else ", ..."
             unit = UNITS[sensor].get(key, "")
             lines.append(f"    '{key}', {values[key]}{end}" + (f"  % {unit}" if unit else ""))
-    skipped = dropped + projections
+    args = [f"'SampleRate', {number_text(used)}"]
+    args += [f"'{ROLE[s]}', {names[s]}" for s in table]
+    lines.append(
+        "% the IMU these parameters were written for (its SampleRate is part of the model)"
+    )
+    lines.append(f"imu = imuSensor('accel-gyro', {', '.join(args)});")
+    skipped = dropped + projections + kept
     if skipped:
         lines.append(f"% not representable in gyroparams/accelparams: {'; '.join(skipped)}")
     return Written("\n".join(lines) + "\n", dropped, projections)

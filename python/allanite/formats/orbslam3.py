@@ -15,6 +15,13 @@ NAME = "orbslam3"
 TITLE = "ORB-SLAM3 settings (IMU.*)"
 SUFFIXES = (".yaml", ".yml")
 KEYS = {"gyro": ("IMU.NoiseGyro", "IMU.GyroWalk"), "accel": ("IMU.NoiseAcc", "IMU.AccWalk")}
+#: unit of each key (continuous-time densities, SI, as Kalibr's)
+UNITS = {
+    KEYS["gyro"][0]: "rad/s/sqrt(Hz)",
+    KEYS["gyro"][1]: "rad/s^2/sqrt(Hz)",
+    KEYS["accel"][0]: "m/s^2/sqrt(Hz)",
+    KEYS["accel"][1]: "m/s^3/sqrt(Hz)",
+}
 
 
 def sniff(text: str) -> bool:

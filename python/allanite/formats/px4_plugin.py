@@ -41,6 +41,18 @@ DEFAULTS = {
     "accelerometerTurnOnBiasSigma": 20.0e-3 * 9.8,  # the header's literal 9.8
 }
 
+#: unit of each parameter (the plugin's header comments)
+UNITS = {
+    "gyroscopeNoiseDensity": "rad/s/sqrt(Hz)",
+    "gyroscopeRandomWalk": "rad/s^2/sqrt(Hz)",
+    "gyroscopeBiasCorrelationTime": "s",
+    "gyroscopeTurnOnBiasSigma": "rad/s",
+    "accelerometerNoiseDensity": "m/s^2/sqrt(Hz)",
+    "accelerometerRandomWalk": "m/s^3/sqrt(Hz)",
+    "accelerometerBiasCorrelationTime": "s",
+    "accelerometerTurnOnBiasSigma": "m/s^2",
+}
+
 
 def sniff(text: str) -> bool:
     """The plugin's parameter names."""
@@ -140,7 +152,8 @@ def write(
     return Written("\n".join(lines) + "\n", dropped, projections)
 
 
-_PLUGIN_END = re.compile(r"^([ \t]*)</plugin>", re.M)
+#: the closing tag, with its indentation when it starts a line (group 1 None: inline)
+_PLUGIN_END = re.compile(r"(^[ \t]*)?</plugin>", re.M)
 _FIRST_CHILD = re.compile(r"<plugin\b[^>]*imu_plugin[^>]*>\s*?\n([ \t]*)<")
 
 
@@ -159,15 +172,19 @@ def _insert_element(text: str, key: str, value: str) -> str:
             '(<plugin ... filename="libgazebo_imu_plugin.so"> ... </plugin>) to add it to; add '
             "it by hand or write without a template"
         )
+    element = f"<{key}>{value}</{key}>"
+    if end.group(1) is None:  # a one-line block, <plugin ...></plugin>: the element goes inline
+        at = end.start()
+        return text[:at] + element + text[at:]
     child = _FIRST_CHILD.search(text, start.start())
     inside = child is not None and child.end() < end.start()
     indent = child.group(1) if child is not None and inside else end.group(1) + "  "
-    line = f"{indent}<{key}>{value}</{key}>\n"
-    return text[: end.start()] + line + text[end.start() :]
+    return text[: end.start()] + f"{indent}{element}\n" + text[end.start() :]
 
 
 _NOTE = re.compile(r"[ \t]*<!-- (dropped|projected): (\w+).*? -->\n?")
-_PLUGIN = re.compile(r"^([ \t]*)<plugin\b[^>]*imu_plugin", re.M)
+#: the IMU plugin's opening tag, with its indentation when it starts a line
+_PLUGIN = re.compile(r"(^[ \t]*)?<plugin\b[^>]*imu_plugin", re.M)
 
 
 def _with_notes(text: str, notes: list[str], sensors: tuple[str, ...]) -> str:
@@ -182,6 +199,6 @@ def _with_notes(text: str, notes: list[str], sensors: tuple[str, ...]) -> str:
     found = _PLUGIN.search(text)
     if found is None:
         return text.rstrip("\n") + "\n" + "\n".join(notes) + "\n"
-    indent = found.group(1)
+    indent = found.group(1) or ""
     block = "".join(f"{indent}{n}\n" for n in notes)
     return text[: found.start()] + block + text[found.start() :]

@@ -16,6 +16,13 @@ NAME = "vins"
 TITLE = "VINS-Mono / VINS-Fusion config (gyr_n, ...)"
 SUFFIXES = (".yaml", ".yml")
 KEYS = {"gyro": ("gyr_n", "gyr_w"), "accel": ("acc_n", "acc_w")}
+#: unit of each key (continuous-time densities, SI, as Kalibr's)
+UNITS = {
+    KEYS["gyro"][0]: "rad/s/sqrt(Hz)",
+    KEYS["gyro"][1]: "rad/s^2/sqrt(Hz)",
+    KEYS["accel"][0]: "m/s^2/sqrt(Hz)",
+    KEYS["accel"][1]: "m/s^3/sqrt(Hz)",
+}
 
 
 def sniff(text: str) -> bool:

@@ -86,25 +86,89 @@ def load_rosbag(
             topic, topics, what="IMU topic", option="topic= (CLI: --topic NAME)", path=str(path)
         )
         chosen = [c for c in imu if c.topic == topic]
-        stamps: list[float] = []
-        rows: list[tuple[float, ...]] = []
+        parts: list[NDArray[np.float64]] = []
+        batch: list[tuple[Any, bytes]] = []
         for conn, _, raw in reader.messages(connections=chosen):
-            msg: Any = reader.deserialize(raw, conn.msgtype)
-            stamp = msg.header.stamp
-            stamps.append(stamp.sec + stamp.nanosec * 1e-9)
-            w, a = msg.angular_velocity, msg.linear_acceleration
-            rows.append((w.x, w.y, w.z, a.x, a.y, a.z))
+            batch.append((conn, raw))
+            if len(batch) == BATCH:
+                parts.append(_imu_table(reader, batch))
+                batch = []
+        if batch:
+            parts.append(_imu_table(reader, batch))
     finally:
         reader.close()
-    if not stamps:
+    if not parts:
         raise InputError(
             f"the IMU topic {topic} holds no messages; record the IMU into the bag (check the "
             "recorder's topic list), or choose another topic with --topic",
             path=str(path),
         )
+    table = np.concatenate(parts)
     warnings: list[str] = []
-    t, data = _sorted(np.asarray(stamps), np.asarray(rows, dtype=np.float64), warnings)
+    t, data = _sorted(table[:, 0], table[:, 1:], warnings)
     return np.column_stack([t - t[0], data]), ("t", *CHANNELS), warnings
+
+
+#: messages parsed at a time (bounded memory for long bags)
+BATCH = 65536
+
+
+def _imu_table(reader: Any, batch: list[tuple[Any, bytes]]) -> NDArray[np.float64]:
+    """Rows ``(stamp s, wx, wy, wz, ax, ay, az)`` of serialized ``sensor_msgs/Imu`` messages.
+
+    The messages of one IMU topic have one layout: a header (stamp at bytes 4-12, then the
+    ``frame_id`` string, its length at bytes 12-16), the orientation and its covariance, the
+    angular velocity, its covariance and the linear acceleration, as doubles. When every
+    message of the batch has the same length and ``frame_id`` length (ROS 1, or little-endian
+    CDR for ROS 2, whose doubles are aligned to 8 bytes after the 4-byte encapsulation
+    header), the values are read straight from the bytes, which is several times faster than
+    deserializing each message; the first and last messages are checked against the
+    deserializer, and anything else (other lengths, big-endian CDR) is deserialized.
+    """
+    raws = [raw for _, raw in batch]
+    fast = _imu_bytes(raws, bool(getattr(reader, "is2", False)))
+    if fast is not None:
+        check = [0, len(raws) - 1]
+        if all(np.array_equal(fast[i], _imu_row(reader, *batch[i])) for i in check):
+            return fast
+    return np.array([_imu_row(reader, conn, raw) for conn, raw in batch], dtype=np.float64)
+
+
+def _imu_row(reader: Any, conn: Any, raw: bytes) -> NDArray[np.float64]:
+    msg: Any = reader.deserialize(raw, conn.msgtype)
+    stamp = msg.header.stamp
+    w, a = msg.angular_velocity, msg.linear_acceleration
+    return np.array([stamp.sec + stamp.nanosec * 1e-9, w.x, w.y, w.z, a.x, a.y, a.z])
+
+
+def _imu_bytes(raws: list[bytes], ros2: bool) -> NDArray[np.float64] | None:
+    """The rows read straight from equal-layout messages, or None (see :func:`_imu_table`)."""
+    size = len(raws[0])
+    if size < 16 or any(len(r) != size for r in raws):
+        return None
+    buf = np.frombuffer(b"".join(raws), dtype=np.uint8).reshape(len(raws), size)
+
+    def field(start: int, dtype: str) -> NDArray[Any]:
+        width = np.dtype(dtype).itemsize
+        return np.ascontiguousarray(buf[:, start : start + width]).view(dtype)[:, 0]
+
+    name_len = field(12, "<u4")
+    if np.any(name_len != name_len[0]):
+        return None
+    if ros2:
+        if np.any(buf[:, 0] != 0) or np.any(buf[:, 1] != 1):  # little-endian CDR only
+            return None
+        start = 4 + -(-(12 + int(name_len[0])) // 8) * 8  # aligned to 8 after the header
+    else:
+        start = 16 + int(name_len[0])
+    if start + 224 > size:
+        return None
+    sec = field(4, "<i4" if ros2 else "<u4").astype(np.float64)
+    out = np.empty((len(raws), 7))
+    out[:, 0] = sec + field(8, "<u4") * 1e-9
+    for i, offset in enumerate((104, 112, 120, 200, 208, 216)):  # w x,y,z then a x,y,z
+        out[:, 1 + i] = field(start + offset, "<f8")
+    return out
 
 
 def load_ulog(
