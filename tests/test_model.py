@@ -152,3 +152,15 @@ def test_load_names_the_file_and_what_a_model_is(tmp_path, capsys):
     assert err.count("\n") == 1
     assert "not a noise model; a noise model is JSON text, as written by 'allanite fit" in err
     assert not (tmp_path / "s.npy").exists()
+
+
+def test_units_as_the_rate_unit_alone():
+    """Regression: ``units="deg/s"`` failed with dict()'s "update sequence element #0"."""
+    data = {"units": "deg/h", "terms": [{"type": "white", "N": 0.1}]}
+    model = NoiseModel.from_dict(data)
+    assert model.units == {"rate": "deg/h", "time": "s"}
+    assert NoiseModel(model.terms, "rad/s").units == {"rate": "rad/s", "time": "s"}
+    with pytest.raises(ValueError, match="unknown unit"):
+        NoiseModel.from_dict({"units": "furlong/s", "terms": []})
+    with pytest.raises(TypeError, match="a rate unit such as 'deg/s' or a dict"):
+        NoiseModel(model.terms, 3)  # type: ignore[arg-type]

@@ -82,10 +82,13 @@ def read_text_file(path: str | Path, what: str) -> str:
         raise InputError(f"not a text file, so not a noise model; {what}", path=str(p)) from None
 
 
-def _check_units(units: dict[str, str]) -> dict[str, str]:
+def _check_units(units: dict[str, str] | str) -> dict[str, str]:
+    if isinstance(units, str):  # the rate unit alone: coefficients are per second
+        units = {"rate": units, "time": "s"}
     if not isinstance(units, dict):
         raise TypeError(
-            f"units must be a dict like {{'rate': 'deg/s', 'time': 's'}}, got {units!r}"
+            f"units must be a rate unit such as 'deg/s' or a dict like "
+            f"{{'rate': 'deg/s', 'time': 's'}}, got {units!r}"
         )
     missing = [k for k in ("rate", "time") if k not in units]
     extra = [k for k in units if k not in ("rate", "time")]
@@ -110,8 +113,9 @@ class NoiseModel:
     ----------
     terms : sequence of Term
         The effects; their Allan variances and PSDs add.
-    units : dict
-        ``{"rate": <rate unit>, "time": "s"}``; the rate unit of every coefficient.
+    units : dict or str
+        ``{"rate": <rate unit>, "time": "s"}``; the rate unit of every coefficient. A
+        string is the rate unit alone (``"deg/s"`` is ``{"rate": "deg/s", "time": "s"}``).
     """
 
     terms: tuple[Term, ...]
@@ -123,7 +127,7 @@ class NoiseModel:
             if not isinstance(term, Term):
                 raise TypeError(f"NoiseModel terms must be Term instances, got {term!r}")
         object.__setattr__(self, "terms", terms)
-        object.__setattr__(self, "units", _check_units(dict(self.units)))
+        object.__setattr__(self, "units", _check_units(self.units))
 
     # --- statistics -------------------------------------------------------------------------
     def avar(self, tau: ArrayLike, dt: float) -> NDArray[np.float64]:
