@@ -59,10 +59,58 @@ def test_jittered_time_stamps_are_reported():
     t = np.arange(n) / FS + np.random.default_rng(1).uniform(-0.2, 0.2, n) / FS
     rec = make_record(np.column_stack([t, _noise(n, 2)]), ["t", "gyro"], source="test",
                       time_column="t", units="deg/s")  # fmt: skip
-    items = time_base_items(rec)
+    items = time_base_items(rec)  # without the rates: any jitter above the reader's level
     assert [i.evidence for i in items] == ["time base"]
     # uniform +-0.2 periods on each stamp: intervals have rms 0.2 * sqrt(2/3) = 0.163 periods
     assert items[0].size["jitter_rms_relative"] == pytest.approx(0.163, rel=0.05)
+
+
+def _jittered_angle(n: int, table: float, jitter: float, seed: int) -> tuple[np.ndarray, ...]:
+    """Angle samples taken at jittered instants of a turntable at ``table`` deg/s."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(n + 1) / FS + rng.normal(0.0, jitter / FS, n + 1)
+    rate = _noise(n + 1, seed)
+    angle = np.concatenate([[0.0], np.cumsum(rate[:-1]) / FS]) + table * t
+    return t, angle
+
+
+def test_a_jitter_the_record_cannot_show_is_not_a_gap():
+    """Regression: a ROS bag's ordinary 1 % jitter kept every diagnosis from "closed".
+
+    At rest a sample off its instant by 1 % of the period changes by the slope times that,
+    about 1e-7 of the noise variance; the reader's note stays, the item goes.
+    """
+    n = 2**14
+    rng = np.random.default_rng(5)
+    t = np.arange(n) / FS + rng.normal(0.0, 0.011 / FS, n)
+    x = _noise(n, 6)
+    rec = make_record(np.column_stack([t, x]), ["t", "gyro"], source="test", time_column="t",
+                      units="deg/s")  # fmt: skip
+    assert any("jitter" in w for w in rec.warnings)  # the reader still says so
+    assert time_base_items(rec, rec.samples[:, 0], "rate") == []
+    d = diagnose(rec, MODEL, n_mc=40, seed=1)
+    assert not any(u.evidence == "time base" for u in d.unexplained)
+
+
+def test_a_jitter_on_a_turntable_is_reported_with_its_share():
+    """Angle samples at jittered instants (0.02 periods rms per stamp) on a 20 deg/s table:
+    each rate sample is off by 20 * 100 * (d_k+1 - d_k); half its mean squared first
+    difference is 3 (20 * 0.02)^2 = 0.48 (deg/s)^2 against the white noise's 0.05^2 * 100 =
+    0.25: the jitter's share of the short-term variance is 0.48 / 0.73 = 0.66."""
+    n = 2**14
+    t, angle = _jittered_angle(n, 20.0, 0.02, 7)
+    rec = make_record(np.column_stack([t, angle]), ["t", "gyro"], source="test",
+                      time_column="t", units="deg", input="angle")  # fmt: skip
+    rate = np.diff(rec.samples[:, 0]) * rec.fs
+    items = time_base_items(rec, rate, "angle")
+    assert [i.evidence for i in items] == ["time base"]
+    share = items[0].size["extra_variance_share"]
+    short = 0.5 * np.mean(np.diff(rate) ** 2)
+    measured = 1.0 - 0.05**2 * FS / short  # the part of the short-term variance not white
+    # the interval rms is measured from the stamps (sd ~ 1 %), the local rate is the table's
+    assert share == pytest.approx(0.48 / 0.73, rel=0.05)
+    assert share == pytest.approx(measured, rel=0.05)
+    assert "accounts for about 66 % of the short-term noise variance" in items[0].text
 
 
 def test_a_raw_array_and_an_even_record_have_no_time_base_item():

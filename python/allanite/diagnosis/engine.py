@@ -257,7 +257,7 @@ def diagnose(
         rate,
         significance / 10.0,
         input_kind=input_kind,
-        mean_rate=float(x.mean()),
+        samples_rate=x,
         view=analysis.time,
     )
     head = with_time_base(head, base_items)

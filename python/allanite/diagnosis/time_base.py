@@ -8,8 +8,14 @@ analysis. So the diagnosis reports what the time base itself says, next to the t
   (an interval of at least 1.5 nominal periods, :data:`allanite.io.timebase.GAP_FACTOR`)
   with its time and length, the samples missing in all, how the reader handled them (filled
   by interpolation, or split and the longest segment analysed), and a time-stamp jitter above
-  :data:`allanite.io.timebase.JITTER_WARN` of the period. Repeated or backward time stamps
-  never get this far: the readers refuse them with the row to repair.
+  :data:`allanite.io.timebase.JITTER_WARN` of the period *that the record can show*
+  (:func:`jitter_share`): sampling instants off by ``delta`` change a rate sample by its slope
+  times ``delta``, and an angle or increment by the rate times the interval's error. At rest
+  that is far below the noise (an ordinary ROS bag's 1 % jitter changes nothing), so the item
+  is raised only when the predicted extra variance exceeds :data:`JITTER_SE` standard errors
+  of the record's short-term variance; below that the reader's note stays the only mention.
+  Repeated or backward time stamps never get this far: the readers refuse them with the row
+  to repair.
 * **held samples** (any record): a sensor or logger that repeats the previous value when a
   sample is missing leaves runs of exactly equal consecutive samples. Their number ``n_0`` is
   compared with what the record's own resolution explains. With ``q`` the smallest non-zero
@@ -56,6 +62,11 @@ __all__ = [
 MAX_SEGMENTS = 50
 #: steps of one resolution unit (per sign) above which the samples count as quantized
 RESOLVED = 5
+#: a jitter is evidence when its predicted extra short-term variance exceeds this many
+#: standard errors (``sqrt(3 / n)`` relative, first differences of white noise) of that variance
+JITTER_SE = 3.0
+#: samples per block of the local rate (and its slope) that the jitter acts on
+JITTER_BLOCK = 16
 
 
 def _segments_text(segs: list[list[float]], limit: int = 4) -> str:
@@ -63,8 +74,86 @@ def _segments_text(segs: list[list[float]], limit: int = 4) -> str:
     return text + (f" (+{len(segs) - limit} more)" if len(segs) > limit else "")
 
 
-def time_base_items(record: Any) -> list[Unexplained]:
-    """Gaps and jitter of a Record's time column as unexplained items (none without one)."""
+def jitter_share(rate: NDArray[np.float64], jitter_rms: float, fs: float, input_kind: str) -> float:
+    """Predicted extra variance of the rate samples from a time-stamp jitter, relative.
+
+    Parameters
+    ----------
+    rate : ndarray
+        The record as rate samples.
+    jitter_rms : float
+        RMS error of the intervals between time stamps (s), as
+        :class:`allanite.io.record.Timing` measures it.
+    fs : float
+        Sampling frequency (Hz).
+    input_kind : str
+        ``"rate"``: a sample taken ``delta`` off its instant is off by the local slope times
+        ``delta`` (each stamp carries ``1/sqrt(2)`` of the interval's error, a white error
+        that adds ``slope^2 jitter_rms^2 / 2``); ``"angle"`` or ``"increment"``: a rate sample
+        is the angle over an interval whose length is off by the difference of two stamps'
+        errors, so it is off by the local rate times that; the error is a first difference
+        and adds ``1.5 rate^2 (jitter_rms fs)^2`` to half the mean squared first difference.
+
+    Returns
+    -------
+    float
+        The jitter's share of the record's short-term variance ``mean(diff(rate)^2) / 2``,
+        if the samples were taken at the stamped instants; the local rate and slope are block
+        means of :data:`JITTER_BLOCK` samples (their own noise adds a negligible ``~1e-7`` at
+        rest).
+    """
+    x = np.asarray(rate, dtype=np.float64)
+    n = x.size // JITTER_BLOCK * JITTER_BLOCK
+    short = 0.5 * float(np.mean(np.diff(x) ** 2)) if x.size > 1 else 0.0
+    if n < 2 * JITTER_BLOCK or short <= 0.0:
+        return 0.0
+    local = x[:n].reshape(-1, JITTER_BLOCK).mean(axis=1)
+    if input_kind == "rate":
+        slope = np.diff(local) * fs / JITTER_BLOCK
+        extra = float(np.mean(slope**2)) * jitter_rms**2 / 2.0
+    else:
+        extra = 1.5 * float(np.mean(local**2)) * (jitter_rms * fs) ** 2
+    return extra / short
+
+
+def _jitter_item(
+    timing: Any, rate: NDArray[np.float64] | None, fs: float, input_kind: str
+) -> Unexplained | None:
+    """The jitter as an item when the record can show it (always without the rates)."""
+    dt = timing.dt_nominal
+    if timing.jitter_rms <= JITTER_WARN * dt:
+        return None
+    rel = timing.jitter_rms / dt
+    size = {"jitter_rms_relative": rel, "jitter_max_s": timing.jitter_max}
+    effect = ""
+    if rate is not None:
+        share = jitter_share(rate, timing.jitter_rms, fs, input_kind)
+        if share <= JITTER_SE * np.sqrt(3.0 / max(rate.size, 1)):
+            return None
+        size["extra_variance_share"] = share
+        effect = (
+            f"; sampled at those instants, it accounts for about {100 * min(share, 1.0):.2g} % "
+            "of the short-term noise variance"
+        )
+    return Unexplained(
+        "time",
+        "time base",
+        {"time_segments_s": []},
+        size,
+        0.0,
+        f"time view: the time stamps are uneven: jitter {100 * rel:.2g} % rms of the period "
+        f"(largest {timing.jitter_max:.3g} s){effect}; the analysis assumes even sampling",
+    )
+
+
+def time_base_items(
+    record: Any, rate: NDArray[np.float64] | None = None, input_kind: str = "rate"
+) -> list[Unexplained]:
+    """Gaps and jitter of a Record's time column as unexplained items (none without one).
+
+    With the record's ``rate`` samples the jitter is an item only when it changes them
+    measurably (:func:`jitter_share`); without, any jitter above the reader's warning level is.
+    """
     timing = getattr(record, "timing", None) if isinstance(record, Record) else None
     if timing is None:
         return []
@@ -107,19 +196,9 @@ def time_base_items(record: Any) -> list[Unexplained]:
                 text,
             )
         )
-    if timing.jitter_rms > JITTER_WARN * dt:
-        rel = timing.jitter_rms / dt
-        items.append(
-            Unexplained(
-                "time",
-                "time base",
-                {"time_segments_s": []},
-                {"jitter_rms_relative": rel, "jitter_max_s": timing.jitter_max},
-                0.0,
-                f"time view: the time stamps are uneven: jitter {100 * rel:.2g} % rms of the "
-                f"period (largest {timing.jitter_max:.3g} s); the analysis assumes even sampling",
-            )
-        )
+    jitter = _jitter_item(timing, rate, 1.0 / dt, input_kind)
+    if jitter is not None:
+        items.append(jitter)
     return items
 
 
@@ -233,15 +312,18 @@ def time_base_evidence(
     level: float,
     *,
     input_kind: str = "rate",
-    mean_rate: float = 0.0,
+    samples_rate: NDArray[np.float64] | None = None,
     view: Any = None,
 ) -> list[Unexplained]:
     """Every time-base item: time stamps, held samples, doubled increments.
 
-    Time stamps of ``record`` (a Record), held samples of ``samples`` (as given), doubled
-    increments among the spikes of the time ``view`` (angle or increment input).
+    Time stamps of ``record`` (a Record; its jitter judged on ``samples_rate``, the record as
+    rates), held samples of ``samples`` (as given), doubled increments among the spikes of
+    the time ``view`` (angle or increment input).
     """
-    items = time_base_items(record)
+    rate = np.asarray(samples_rate, dtype=np.float64) if samples_rate is not None else None
+    mean_rate = float(rate.mean()) if rate is not None and rate.size else 0.0
+    items = time_base_items(record, rate, input_kind)
     for item in (
         held_samples_item(samples, fs, level),
         doubled_increments_item(input_kind, mean_rate, view),
