@@ -14,13 +14,13 @@ from dataclasses import replace
 import numpy as np
 import pytest
 from scipy import stats
-from test_diagnosis_headline import BURSTS_S, FS, MODEL, bursty_record
 
 from allanite.diagnosis.analysis import analyze
 from allanite.diagnosis.inputs import SimSource
 from allanite.diagnosis.noise_level import burst_spans
 from allanite.diagnosis.tau_view import burst_factor, octave_factors, tau_covariance, tau_features
 from allanite.terms import White, WhiteBursts
+from test_diagnosis_headline import BURSTS_S, FS, MODEL, bursty_record
 
 N = 2**17
 SPANS = [(int(a * FS), int(b * FS)) for a, b in BURSTS_S if int(b * FS) <= N]
