@@ -73,31 +73,39 @@ def test_burst_covariance_matches_monte_carlo():
     np.testing.assert_array_less(np.abs(adj - adj_h), tol_r)
 
 
-def _held_p(seed: int, term: WhiteBursts) -> tuple[float, float]:
-    """Tau-view p after ``term`` with the steady null and with the null holding it.
+@pytest.fixture(scope="module")
+def burst_records():
+    """Tau models of 48 issue-14 records (seeds 20..67) knowing their measured burst spans.
 
     The spans are measured from the record as :func:`allanite.diagnose` does (the time view
-    flags the windows, :func:`burst_spans` finds the ends); the null has the record's seed.
+    flags the windows, :func:`burst_spans` finds the ends); each null has the record's seed.
     """
-    x = bursty_record(seed)
-    an = analyze(x, SimSource(fs=FS, model=MODEL), n_mc=40, seed=seed, alpha=0.05)
-    tv = an.time
-    spans = burst_spans(x, FS, tv, tv.z["hf"] > tv.thresholds["hf"])
-    tm = an.tau_model.with_bursts(MODEL, spans)
+    out = {}
+    for seed in range(20, 68):
+        x = bursty_record(seed)
+        an = analyze(x, SimSource(fs=FS, model=MODEL), n_mc=40, seed=seed, alpha=0.05)
+        tv = an.time
+        spans = burst_spans(x, FS, tv, tv.z["hf"] > tv.thresholds["hf"])
+        out[seed] = an.tau_model.with_bursts(MODEL, spans)
+    return out
+
+
+def _p(tm, term: WhiteBursts) -> tuple[float, float]:
+    """Tau-view p after ``term`` with the steady null and with the null holding it."""
     extra = term.avar(tm.tau, tm.dt)
     return tm.p_value(extra, 1), tm.holding([term]).p_value(extra, 1)
 
 
 @pytest.mark.slow
-def test_tau_view_after_the_correct_bursts_is_calibrated():
-    """48 issue-14 records (seeds 20..67), the correct bursts term: the held p is below 0.05
-    in a binomial share of 5 % (one-sided 0.1 % bound) and not piled up near 1 (the lead's
-    diagonal widening gave 0/24 below 0.05 and mean T 13.9 vs T0 19.2): the share below 0.5
-    lies in the two-sided 0.1 % binomial interval of one half. The steady null fails."""
+def test_tau_view_after_the_correct_bursts_is_calibrated(burst_records):
+    """48 issue-14 records, the correct bursts term: the held p is below 0.05 in a binomial
+    share of 5 % (one-sided 0.1 % bound) and not piled up near 1 (the lead's diagonal
+    widening gave 0/24 below 0.05 and mean T 13.9 vs T0 19.2): the share below 0.5 lies in
+    the two-sided 0.1 % binomial interval of one half. The steady null fails."""
     term = WhiteBursts(N=0.0229, duty=0.183, burst_s=60.0)
-    seeds = range(20, 68)
-    p = np.array([_held_p(s, term) for s in seeds])
-    n = len(seeds)
+    p = np.array([_p(tm, term) for tm in burst_records.values()])
+    n = len(p)
+    assert all(len(tm.bursts) == len(SPANS) for tm in burst_records.values())
     below = int(np.sum(p[:, 1] < 0.05))
     assert below <= stats.binom.isf(0.001, n, 0.05), np.sort(p[:, 1])
     lo, hi = stats.binom.interval(0.999, n, 0.5)
@@ -111,10 +119,10 @@ def test_tau_view_after_the_correct_bursts_is_calibrated():
     [{"N": 2 * 0.0229, "duty": 0.183}, {"N": 0.0229, "duty": 2 * 0.183}],
     ids=["N_x2", "duty_x2"],
 )
-def test_tau_view_after_wrong_bursts_stays_inconsistent(wrong):
+def test_tau_view_after_wrong_bursts_stays_inconsistent(burst_records, wrong):
     """Bursts of twice the level or twice the duty leave a gap the held null still sees."""
     term = WhiteBursts(burst_s=60.0, **wrong)
-    p = np.array([_held_p(s, term)[1] for s in range(20, 32)])
+    p = np.array([_p(burst_records[s], term)[1] for s in range(20, 32)])
     assert np.all(p < 0.05), p
 
 
