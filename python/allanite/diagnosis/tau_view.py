@@ -219,9 +219,9 @@ def burst_factor(
     .. math:: F_{ab} = \frac{(w^2 + 2 w b d) \sum_l g_a g_b (n - |l|)
               + b^2 \sum_l g_a g_b |B \cap (B + l)|}{\bar v^2 \sum_l g_a g_b (n - |l|)},
 
-    exact at every ``tau`` (short: ``E[v^2]/E[v]^2``; comparable to the burst length: the
-    bursts' overlap with themselves at the lags of the filters; long: it tends to 1 as the
-    lags leave the bursts) up to the edges of the record. The lags are summed on at most
+    exact at every ``tau`` up to the edges of the record (short taus: ``E[v^2]/E[v]^2``; taus
+    comparable to the burst length and longer: the bursts' overlap with themselves at the
+    filters' lags, which falls as the filters span whole bursts). The lags are summed on at most
     :data:`BURST_LAGS` points per pair (midpoints; the terms are piecewise linear in ``l``).
     """
     sp = np.asarray(spans, dtype=np.float64).reshape(-1, 2)
