@@ -658,7 +658,7 @@ def fit_candidate(
             params[name] = float(value)
             sigma.setdefault(name, 0.0)
     g_before, g_after = tm.gap(), tm.gap(extra)
-    p_after = tm.p_value(extra, n_params=k)
+    p_after = tm.holding([cand.added_term(values)]).p_value(extra, n_params=k)
     return Attribution(
         effect=cand.effect,
         term=term.to_dict(),

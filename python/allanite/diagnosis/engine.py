@@ -66,8 +66,10 @@ def _split(
     return x, as_rate(holdout, fs, input, name="held-out"), "record"
 
 
-def _bursts(tv: Any, x: NDArray[np.float64], fs: float) -> tuple[float, float] | None:
-    """Duty and mean length (s) of the bursts of raised short-term noise level.
+def _bursts(
+    tv: Any, x: NDArray[np.float64], fs: float
+) -> tuple[float, float, list[tuple[int, int]]] | None:
+    """Duty, mean length (s) and sample spans of the bursts of raised short-term noise level.
 
     The time view flags the windows; :func:`~allanite.diagnosis.noise_level.burst_spans`
     measures each burst's ends on the record's first differences.
@@ -84,7 +86,7 @@ def _bursts(tv: Any, x: NDArray[np.float64], fs: float) -> tuple[float, float] |
     covered = raised.size * round(tv.window_s * fs)  # the samples the windows cover
     duty = min(float(sum(e - s for s, e in spans)) / float(covered), 1.0 - 1e-9)
     length = float(np.mean([e - s for s, e in spans])) / fs
-    return duty, length
+    return duty, length, spans
 
 
 def _claiming_only_what_is_left_explained(
@@ -356,6 +358,9 @@ def _attribute(
         spikes = (len(analysis.time.spike_times_s) / run.duration, height)
     if run.progress is not None:
         run.progress("fitting candidate effects", 0, 1)
+    bursts = _bursts(analysis.time, run.x_fit, run.fs)
+    # the set's tau view is judged on a null that holds the bursts where the record has them
+    tm = analysis.tau_model.with_bursts(run.source.model, bursts[2] if bursts else ())
     cands, unavailable = candidate_library(
         sig,
         duration=run.duration,
@@ -365,7 +370,7 @@ def _attribute(
         lines=[(ln.frequency_hz, ln.amplitude) for ln in analysis.frequency.lines],
         spikes=spikes,
         effects=effects,
-        bursts=_bursts(analysis.time, run.x_fit, run.fs),
+        bursts=bursts[:2] if bursts else None,
         band=bands,
         drift=drift_shape(run.x_fit, run.fs, analysis.time, run.source.model),
     )
@@ -377,12 +382,10 @@ def _attribute(
         "time_view": _with_two_level(run, analysis.time, cands),
         "duration": run.duration,
     }
-    attribution = rank(cands, analysis.tau_model, **test)
+    attribution = rank(cands, tm, **test)
     explanation = None
     if attribution:
-        explanation = explain(
-            attribution[0], cands, analysis.tau_model, frequency=analysis.frequency, **test
-        )
+        explanation = explain(attribution[0], cands, tm, frequency=analysis.frequency, **test)
     return _Found(attribution, explanation, {c.effect: c for c in cands}, sig, unavailable)
 
 

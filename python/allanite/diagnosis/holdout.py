@@ -94,18 +94,18 @@ def holdout_set(
 ) -> dict[str, float | bool | str | int | list[str]]:
     """Held-out check of a set of effects: their Allan variances add on the held-out data."""
     extra = np.zeros_like(tm.tau)
-    k = 0
+    added = []
     for a, c in effects:
         values = {n: a.params[n] for n in c.free}
         extra = extra + np.asarray(c.extra_avar(values, tm.tau, tm.dt), dtype=np.float64)
-        k += len(c.free)
+        added.append(c.added_term(values))
     g_before, g_after = tm.gap(), tm.gap(extra)
     return {
         "effects": [a.effect for a, _ in effects],
         "shrinkage": float(1.0 - g_after / g_before) if g_before > 0 else 0.0,
         "gap_before": g_before,
         "gap_after": g_after,
-        "consistent_after": bool(tm.p_value(extra) > alpha),
+        "consistent_after": bool(tm.holding(added).p_value(extra) > alpha),
         "n_samples": round(tm.duration / tm.dt),
         "source": kind,
     }

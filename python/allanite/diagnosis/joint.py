@@ -224,10 +224,14 @@ def _own_extra(a: Attribution, c: Candidate, tm: TauModel) -> NDArray[np.float64
     return np.asarray(extra, dtype=np.float64)
 
 
+def _added(on: list[Attribution], on_c: list[Candidate]) -> list[Any]:
+    """The processes the fitted effects ``on`` add to the sensor (None: none of its own)."""
+    return [c.added_term({k: a.params[k] for k in c.free}) for a, c in zip(on, on_c, strict=True)]
+
+
 def _on_set(tv: TimeView | None, on: list[Attribution], on_c: list[Candidate]) -> TimeView | None:
     """The time view whose two-level test holds the processes of ``on`` in its null."""
-    terms = [c.added_term({k: a.params[k] for k in c.free}) for a, c in zip(on, on_c, strict=True)]
-    out: TimeView | None = with_set(tv, [t for t in terms if t is not None])
+    out: TimeView | None = with_set(tv, [t for t in _added(on, on_c) if t is not None])
     return out
 
 
@@ -754,7 +758,8 @@ def explain(
         total = np.sum(extras, axis=0)
         k_total = sum(len(c.free) for c in chosen_c)
         left = {e: bool(s) and e not in explained for e, s in significant.items()}
-        if tm.p_value(total, n_params=k_total) > alpha and not any(left.values()):
+        held = tm.holding(_added(chosen, chosen_c))
+        if held.p_value(total, n_params=k_total) > alpha and not any(left.values()):
             break
         tm_bg = with_background(tm, total)
         groups = on_top(chosen, chosen_c, tm_bg, left, room=MAX_EFFECTS - len(chosen))
@@ -815,7 +820,8 @@ def explain(
         i += 1
     total = np.asarray(np.sum(extras, axis=0), dtype=np.float64)
     k_total = sum(len(c.free) for c in chosen_c)
-    p_after = tm.p_value(total, n_params=k_total)
+    # judged against a null that holds the set (bursts change the covariance, not only the mean)
+    p_after = tm.holding(_added(chosen, chosen_c)).p_value(total, n_params=k_total)
     g0 = gaps[0]
     share: dict[str, float] = {}
     for j, a in enumerate(chosen):

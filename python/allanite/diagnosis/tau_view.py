@@ -43,7 +43,7 @@ differences", 35th PTTI (2003): the correlation between AVAR estimates at differ
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any, ClassVar, cast
 
 import numpy as np
@@ -162,7 +162,106 @@ def _profile_moment(term: Any, n: int, dt: float) -> float:
     return float(np.mean(v * v) / np.mean(v) ** 2)
 
 
-def tau_covariance(model: Any, m: NDArray[np.int64], dt: float, n: int) -> NDArray[np.float64]:
+#: at most this many lags per pair of taus in the sums over the bursts' overlap
+BURST_LAGS = 2048
+
+
+def _haar_acf(m: int, lag: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Autocorrelation of the Allan difference filter at factor ``m`` (``g_m(l)``, ``l >= 0``).
+
+    The filter is ``-1/m`` on ``m`` samples, then ``+1/m`` on the next ``m``:
+    ``g(l) = (2m - 3l) / m^2`` for ``l <= m``, ``-(2m - l) / m^2`` for ``m <= l <= 2m``, 0 beyond.
+    """
+    a = np.abs(lag)
+    return np.asarray(
+        np.where(a <= m, (2.0 * m - 3.0 * a), np.where(a <= 2 * m, -(2.0 * m - a), 0.0)) / m**2
+    )
+
+
+def _span_overlap(spans: NDArray[np.float64], lag: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``|B ∩ (B + l)|``: samples inside a span whose ``l``-th successor is in one too.
+
+    The overlap of two boxes shifted by ``l`` is a trapezoid in ``l``, a sum of four ramps
+    ``max(l - c, 0)`` (corners ``c`` at the differences of their ends); all pairs' ramps are
+    summed at once by sorting the corners (``O(K^2 log K + L log K)`` for ``K`` spans).
+    """
+    s, e = spans[:, 0], spans[:, 1]
+    corners = np.concatenate(
+        [
+            (s[:, None] - e[None, :]).ravel(),
+            (s[:, None] - s[None, :]).ravel(),
+            (e[:, None] - e[None, :]).ravel(),
+            (e[:, None] - s[None, :]).ravel(),
+        ]
+    )
+    k2 = s.size * s.size
+    weight = np.repeat([1.0, -1.0, -1.0, 1.0], k2)
+    order = np.argsort(corners, kind="stable")
+    c, w = corners[order], weight[order]
+    cw = np.concatenate([[0.0], np.cumsum(w)])
+    cwc = np.concatenate([[0.0], np.cumsum(w * c)])
+    i = np.searchsorted(c, lag, side="right")
+    return np.asarray(np.maximum(lag * cw[i] - cwc[i], 0.0))
+
+
+def burst_factor(
+    m: NDArray[np.int64], spans: Any, n: int, white: float, burst: float
+) -> NDArray[np.float64]:
+    r"""Factor of the white block of the AVAR covariance when white noise comes in bursts.
+
+    White noise of variance ``white`` everywhere and ``white + burst`` inside the sample
+    ``spans`` (``[start, stop)``, duty ``d``). The overlapping estimate at factor ``m`` is a
+    quadratic form ``x^T Q_m x`` with ``Q_m[t, u] ~ g_m(t - u) / 2M`` (:func:`_haar_acf`), so the
+    covariance of white noise with a variance profile ``v_t`` is
+    ``2 sum_{t,u} Q_a[t,u] Q_b[t,u] v_t v_u = sum_l g_a(l) g_b(l) sum_t v_t v_{t+l} / 2 M_a M_b``:
+    against a steady level ``v`` (the record mean) the factor is
+
+    .. math:: F_{ab} = \frac{(w^2 + 2 w b d) \sum_l g_a g_b (n - |l|)
+              + b^2 \sum_l g_a g_b |B \cap (B + l)|}{\bar v^2 \sum_l g_a g_b (n - |l|)},
+
+    exact at every ``tau`` up to the edges of the record (short taus: ``E[v^2]/E[v]^2``; taus
+    comparable to the burst length and longer: the bursts' overlap with themselves at the
+    filters' lags, which falls as the filters span whole bursts). The lags are summed on at most
+    :data:`BURST_LAGS` points per pair (midpoints; the terms are piecewise linear in ``l``).
+    """
+    sp = np.asarray(spans, dtype=np.float64).reshape(-1, 2)
+    mm = np.asarray(m, dtype=np.int64)
+    k = mm.size
+    out = np.ones((k, k))
+    if sp.size == 0 or burst <= 0:
+        return out
+    d = float(np.sum(sp[:, 1] - sp[:, 0])) / n
+    mean = white + burst * d
+    grids: dict[int, tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]] = {}
+    for i in range(k):
+        for j in range(i, k):
+            lo = int(min(mm[i], mm[j]))
+            if lo not in grids:
+                step = max(1, -(-2 * lo // BURST_LAGS))
+                lag = np.concatenate([[0.0], np.arange(1, 2 * lo, step) + 0.5 * (step - 1)])
+                wt = np.concatenate([[1.0], np.full(lag.size - 1, 2.0 * step)])
+                grids[lo] = (lag, wt, _span_overlap(sp, lag))
+            lag, wt, ov = grids[lo]
+            gg = wt * _haar_acf(int(mm[i]), lag) * _haar_acf(int(mm[j]), lag)
+            steady = float(np.sum(gg * (n - lag)))
+            if steady <= 0:
+                continue
+            own = float(np.sum(gg * ov)) / steady
+            out[i, j] = out[j, i] = (white**2 + 2.0 * white * burst * d + burst**2 * own) / mean**2
+    return out
+
+
+def _is_white(term: Any) -> bool:
+    return getattr(term, "type", "") in ("white", "white_bursts")
+
+
+def _is_burst(term: Any) -> bool:
+    return getattr(term, "type", "") == "white_bursts"
+
+
+def tau_covariance(
+    model: Any, m: NDArray[np.int64], dt: float, n: int, *, bursts: Any = ()
+) -> NDArray[np.float64]:
     r"""Covariance of the overlapping AVAR estimates at factors ``m`` under ``model``.
 
     The Gaussian (Whittle) covariance :func:`allanite.fit.covariance.avar_covariance` of the
@@ -174,7 +273,24 @@ def tau_covariance(model: Any, m: NDArray[np.int64], dt: float, n: int) -> NDArr
     the profile; its products with the other terms by :math:`\bar v = 1`). Exact for a
     profile that is slow against ``tau``; a model without such a term gets
     ``avar_covariance`` unchanged.
+
+    ``bursts``: the sample spans ``[start, stop)`` where the record's white noise is raised
+    (:func:`allanite.diagnosis.noise_level.burst_spans`). Then a
+    :class:`allanite.terms.WhiteBursts` term is on in those spans only, and the whole white
+    block (the model's white noise and the bursts' together) carries that variance profile:
+    it is scaled per pair of taus by :func:`burst_factor` (about ``E[v^2]/E[v]^2`` at short
+    taus, less once the filters span the bursts).
     """
+    cov, block, white, burst = _covariance_parts(model, m, dt, n)
+    if len(bursts) and burst > 0:
+        cov = cov + (burst_factor(m, bursts, n, white, burst) - 1.0) * block
+    return cov
+
+
+def _covariance_parts(
+    model: Any, m: NDArray[np.int64], dt: float, n: int
+) -> tuple[NDArray[np.float64], NDArray[np.float64], float, float]:
+    """Steady covariance, the white block in it, the white and burst variances per sample."""
     from allanite.fit.covariance import CovarianceBasis
 
     profiled = [level_profiled(t) for t in model.terms]
@@ -184,7 +300,27 @@ def tau_covariance(model: Any, m: NDArray[np.int64], dt: float, n: int) -> NDArr
     for a, p in enumerate(profiled):
         if p:
             cov = cov + (_profile_moment(model.terms[a], n, dt) - 1.0) * basis.basis[a, a]
-    return np.array(cov, dtype=np.float64)
+    whites = [a for a, t in enumerate(model.terms) if _is_white(t) and not profiled[a]]
+    block = np.zeros_like(cov)
+    for a in whites:
+        for b in whites:
+            block = block + basis.basis[a, b]
+    # white noise as a variance per sample, N^2 / dt (the bursts': inside them)
+    burst = sum(float(model.terms[a].N) ** 2 for a in whites if _is_burst(model.terms[a]))
+    white = sum(float(model.terms[a].N) ** 2 for a in whites) - burst
+    return np.array(cov, dtype=np.float64), block, white / dt, burst / dt
+
+
+def _root(c: NDArray[np.float64], power: float) -> NDArray[np.float64]:
+    """Symmetric power of a covariance (eigenvalues clipped at a relative 1e-12)."""
+    w, v = np.linalg.eigh(0.5 * (c + c.T))
+    w = np.maximum(w, 1e-12 * float(np.max(w)))
+    return np.asarray((v * w**power) @ v.T, dtype=np.float64)
+
+
+def _mean_log(nu: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Mean of ``log(chi2_nu / nu)``."""
+    return np.asarray(special.digamma(nu / 2.0) - np.log(nu / 2.0))
 
 
 def _shrunk_inverse(null: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -201,6 +337,10 @@ class TauModel:
     ``statistic(extra)`` is ``T`` for the simulated sensor plus an effect whose Allan variance
     is ``extra``: the reference log AVAR becomes ``ref + log(1 + extra / S)`` with ``S`` the
     mean simulated Allan variance.
+
+    ``model`` and ``bursts`` (the simulated sensor, when a model, and the sample spans of the
+    record's bursts, :func:`allanite.diagnosis.noise_level.burst_spans`) let :meth:`holding`
+    judge a set of effects against a null that holds them where they change the covariance.
     """
 
     tau: NDArray[np.float64]
@@ -213,6 +353,48 @@ class TauModel:
     real_scale: float
     null_t: NDArray[np.float64]
     null_sd: NDArray[np.float64] | None = None
+    model: Any = None
+    bursts: tuple[tuple[int, int], ...] = ()
+
+    def with_bursts(self, model: Any, spans: Any) -> TauModel:
+        """Return the tau model knowing the simulated sensor (a model or None) and burst spans."""
+        return replace(self, model=model, bursts=tuple((int(a), int(b)) for a, b in spans))
+
+    def holding(self, added: Any) -> TauModel:
+        r"""The tau model whose null holds the effects ``added`` (terms; None entries skipped).
+
+        An effect that only adds Allan variance moves the reference (:meth:`reference`); one
+        that changes the noise level over the record changes the covariance too. Bursts
+        (:class:`allanite.terms.WhiteBursts`, on in the record's :attr:`bursts` spans) make
+        the white block a scale mixture: :func:`tau_covariance` with the spans gives the
+        covariance ``V_1`` of the sensor plus the effects, against ``V_0`` the same with a
+        steady level. The null's covariance ``C`` (replicates or exact draws of the sensor)
+        is carried over by ``A = L_1^{1/2} L_0^{-1/2}`` (``L = V / mu mu^T``, the log scale):
+        the real residual is judged with ``(A C A^T)^{-1}``, and since ``T`` is invariant
+        under a common linear map of the residuals, the null ``T`` values stay calibrated.
+        The reference moves by the change of the mean log of a scaled chi-square with
+        ``nu = 2 / L_ii``. Without bursts among ``added`` (or no spans, no model) this is
+        ``self``.
+        """
+        terms = tuple(t for t in added if t is not None)
+        if self.model is None or not self.bursts or not any(_is_burst(t) for t in terms):
+            return self
+        n = round(self.duration / self.dt)
+        m = np.rint(self.tau / self.dt).astype(np.int64)
+        full = replace(self.model, terms=(*self.model.terms, *terms))
+        mu = np.asarray(full.avar(self.tau, self.dt), dtype=np.float64)
+        steady, block, white, burst = _covariance_parts(full, m, self.dt, n)
+        steady[np.diag_indices_from(steady)] += np.asarray(
+            full.avar_excess_variance(self.tau, self.dt, n)
+        )
+        held = steady + (burst_factor(m, self.bursts, n, white, burst) - 1.0) * block
+        scale = np.outer(mu, mu)
+        l0, l1 = steady / scale, held / scale
+        a_inv = _root(l0, 0.5) @ _root(l1, -0.5)
+        shift = _mean_log(2.0 / np.diag(l1)) - _mean_log(2.0 / np.diag(l0))
+        return replace(
+            self, cov_inv=a_inv.T @ self.cov_inv @ a_inv, ref=self.ref + shift, bursts=()
+        )
 
     @property
     def t0(self) -> float:
