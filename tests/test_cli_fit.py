@@ -183,3 +183,35 @@ def test_fit_text_short_on_a_six_axis_white_noise_file(
         # the JSON keeps every alternative with its note
         assert len(f.alternatives_dict()) == len(f.alternatives)
     assert weak >= 3  # the case this test is about occurs on this record
+
+
+def test_fit_json_gives_the_upper_limits_the_text_prints(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--json`` carries the text's "not detected (95 % upper limits)" line as
+    ``"undetected"``: every left-out candidate with its upper limit in the same customary
+    unit (a user scripting the CLI can tell "not detected, <= u" from "not reported")."""
+    data = tmp_path / "rate.npy"
+    np.save(data, RATE[:20_000])
+    common = ["fit", str(data), "--fs", "100", "--units", "deg/s", "--points", "30"]
+    assert main(common) == 0
+    text = capsys.readouterr().out
+    (line,) = [x for x in text.splitlines() if "not detected (95 % upper limits): " in x]
+    shown = dict(
+        part.split(" <= ") for part in line.split("upper limits): ")[1].strip().split(", ")
+    )
+    assert main([*common, "--json"]) == 0
+    (channel,) = json.loads(capsys.readouterr().out)["channels"]
+    got = {u["symbol"]: u for u in channel["undetected"]}
+    assert list(got) == list(shown)  # the same terms, in the same order (Q N B K R)
+    f = fit_module.fit(allanite.avar(RATE[:20_000], fs=FS, points=30, units="deg/s"))
+    for symbol, printed in shown.items():
+        assert f"{got[symbol]['high']:.3g} {got[symbol]['unit']}" == printed
+        assert symbol not in f.coefficients
+        high, unit = f.upper_limits()[symbol]
+        assert got[symbol]["high"] == pytest.approx(high, rel=1e-12)
+        assert got[symbol]["unit"] == unit
+    # the gyro's customary units (deg, deg/h, deg/h/sqrt(h), deg/h^2), not the model's
+    units = {"Q": "deg", "B": "deg/h", "K": "deg/h/sqrt(h)", "R": "deg/h^2"}
+    assert {s: u["unit"] for s, u in got.items()} == {s: units[s] for s in got}
+    assert got["K"]["high"] > 0
