@@ -215,3 +215,31 @@ def test_fit_json_gives_the_upper_limits_the_text_prints(
     units = {"Q": "deg", "B": "deg/h", "K": "deg/h/sqrt(h)", "R": "deg/h^2"}
     assert {s: u["unit"] for s, u in got.items()} == {s: units[s] for s in got}
     assert got["K"]["high"] > 0
+
+
+def test_fit_csv_with_a_time_column_the_error_names_a_fix_that_works(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``allanite fit imu.csv`` on a CSV whose header names the time column ``t [s]`` (units
+    in brackets, as users and ``allanite simulate`` write them): the error names the time
+    column, and its fix pasted into a shell (split as a shell splits it) fits the record."""
+    import shlex
+
+    path = tmp_path / "imu.csv"
+    t = np.arange(20_000) / FS
+    np.savetxt(
+        path,
+        np.column_stack([t, RATE[:20_000]]),
+        delimiter=",",
+        header="t [s],gz [deg/s]",
+        comments="",
+    )
+    assert main(["fit", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert "column 't [s]' looks like the time: --time-column " in err
+    fix = shlex.split(err.strip().splitlines()[-1].split("looks like the time: ")[1])
+    assert main(["fit", str(path), *fix, "--json"]) == 0
+    (channel,) = json.loads(capsys.readouterr().out)["channels"]
+    assert channel["units"] == "deg/s"  # from the header
+    rows = {r["symbol"]: r for r in channel["coefficients"]}
+    assert rows["N"]["low"] <= 60 * N_TRUE <= rows["N"]["high"]
