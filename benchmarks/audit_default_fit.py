@@ -195,20 +195,27 @@ def user_flags(d: Draw) -> list[str]:
     return flags
 
 
-def exact_dominance(model: NoiseModel, d: Draw) -> dict[str, bool]:
-    """Whether each true term carries more than half of the exact Allan variance at a fitted tau.
+def exact_dominance(model: NoiseModel, d: Draw) -> tuple[dict[str, bool], dict[str, float]]:
+    """Where each true term carries more than half of the exact Allan variance of the sum.
 
-    The fitted taus are those of the CLI's default grid (log, 100 points) for this record
-    (:func:`validate_fit.fitted_factors`).
+    Returns whether it does at some fitted tau, and over how many decades of a dense set of
+    taus between the first and last fitted one (-1: nowhere;
+    :func:`validate_fit.dominated_decades`). The fitted taus are those of the CLI's default
+    grid (log, 100 points) for this record (:func:`validate_fit.fitted_factors`).
     """
     case = vf.Case(d.index, d.terms, d.n, d.fs, "log", "rate", d.unit, d.seed)
-    tau = vf.fitted_factors(case) / d.fs
+    factors = vf.fitted_factors(case)
+    tau = factors / d.fs
     comp = {
         s: np.asarray(t.avar(tau, 1.0 / d.fs), dtype=np.float64)
         for s, t in zip(d.terms, model.terms, strict=True)
     }
     total = sum(comp.values())
-    return {s: bool(np.any(c > 0.5 * total)) for s, c in comp.items()}
+    dense = vf.dominated_decades(model, vf._fine(factors), d.fs)
+    return (
+        {s: bool(np.any(c > 0.5 * total)) for s, c in comp.items()},
+        dict(zip(d.terms, dense, strict=True)),
+    )
 
 
 def run_cli(argv: list[str]) -> tuple[int, str, str, float]:
@@ -219,7 +226,10 @@ def run_cli(argv: list[str]) -> tuple[int, str, str, float]:
 
 
 def score_channel(
-    ch: dict[str, Any], d: Draw, truth: dict[str, float], dominant: dict[str, bool]
+    ch: dict[str, Any],
+    d: Draw,
+    truth: dict[str, float],
+    dominance: tuple[dict[str, bool], dict[str, float]],
 ) -> dict[str, Any]:
     """One channel of ``--json`` against the truth (customary units)."""
     want = customary(d.sensor)
@@ -243,7 +253,11 @@ def score_channel(
             problems.append(f"{s} in {r['unit']!r}, expected {want[s]!r}")
     terms: dict[str, Any] = {}
     for s, value in truth.items():
-        e: dict[str, Any] = {"truth": value, "dominant": dominant[s]}
+        e: dict[str, Any] = {
+            "truth": value,
+            "dominant": dominance[0][s],
+            "dominant_decades": dominance[1][s],
+        }
         if s in rows:
             r = rows[s]
             lo, hi = (convert(r[k], r["unit"], want[s]) for k in ("low", "high"))
@@ -274,7 +288,7 @@ def score_channel(
         "fitted": list(rows),
         "extra": [s for s in rows if s not in truth],
         "extra_rows": {s: r for s, r in rows.items() if s not in truth},
-        "missing_dominant": [s for s in truth if dominant[s] and s not in rows],
+        "missing_dominant": [s for s in truth if dominance[0][s] and s not in rows],
         "rejected": bool(ch.get("rejected")),
         "p_value": ch.get("p_value"),
         "terms": terms,
@@ -330,14 +344,24 @@ def evaluate(d: Draw, folder: Path) -> dict[str, Any]:
         row["error"] = err.strip()[-600:]
         return row
     chans = json.loads(out)["channels"]
-    dominant = exact_dominance(model, d)
-    row["channels"] = [score_channel(ch, d, truth, dominant) for ch in chans]
+    dominance = exact_dominance(model, d)
+    row["channels"] = [score_channel(ch, d, truth, dominance) for ch in chans]
     if len(chans) != d.axes:
         row["channel_problem"] = f"{len(chans)} channels for {d.axes} axes"
     if d.n <= TEXT_MAX:
         code_t, text, _, _ = run_cli(["fit", str(path), *user_flags(d)])
         row["text_problems"] = text_agrees(text, chans) if code_t == 0 else [f"text exit {code_t}"]
     path.unlink()
+    return row
+
+
+def with_dominance(row: dict[str, Any], grid_seed: int) -> dict[str, Any]:
+    """A stored row with the dominance spans (recomputed from its draw: exact, no simulation)."""
+    d = draw(row["index"], grid_seed)
+    dominant, decades = exact_dominance(model_of(d), d)
+    for c in row.get("channels", []):
+        for s, e in c["terms"].items():
+            e["dominant"], e["dominant_decades"] = dominant[s], decades[s]
     return row
 
 
@@ -360,22 +384,41 @@ def _coverage(chans: list[dict[str, Any]]) -> dict[str, Any]:
         left = [e for e in entries if not e["fitted"] and not e.get("ambiguous")]
         swapped = [e for e in entries if e.get("ambiguous")]
         dom = [e for e in entries if e["dominant"]]
+        clear = [e for e in entries if e["dominant_decades"] >= vf.CLEAR_DECADES]
         out[s] = {
             "interval": _cp(sum(e["covered"] for e in fitted), len(fitted)),
             "upper_limit": _cp(sum(e["covered"] for e in left), len(left)),
             "ambiguous": _cp(sum(e["covered"] for e in swapped), len(swapped)),
             "dominant": _cp(sum(e["covered"] and e["fitted"] for e in dom), len(dom)),
+            "clear": _cp(sum(e["covered"] and e["fitted"] for e in clear), len(clear)),
             "all": _cp(sum(e["covered"] for e in entries), len(entries)),
         }
     return out
 
 
+def _missing_clear(c: dict[str, Any]) -> list[str]:
+    """The true terms dominating >= 0.5 decade of the fitted taus that were not fitted."""
+    return [
+        s
+        for s, e in c["terms"].items()
+        if e["dominant_decades"] >= vf.CLEAR_DECADES and not e["fitted"]
+    ]
+
+
 def _ratios(chans: list[dict[str, Any]]) -> dict[str, Any]:
+    """Estimate/truth of N, B, K: every fitted one, and those resolved (interval above 0)."""
     out = {}
     for s in "NBK":
-        r = [c["terms"][s]["ratio"] for c in chans if s in c["terms"] and "ratio" in c["terms"][s]]
-        if r:
-            out[s] = {"n": len(r), "min": min(r), "median": float(np.median(r)), "max": max(r)}
+        fitted = [c["terms"][s] for c in chans if s in c["terms"] and "ratio" in c["terms"][s]]
+        for key, sel in (("fitted", fitted), ("resolved", [e for e in fitted if e["low"] > 0])):
+            r = [e["ratio"] for e in sel]
+            if r:
+                out[f"{s} {key}"] = {
+                    "n": len(r),
+                    "min": min(r),
+                    "median": float(np.median(r)),
+                    "max": max(r),
+                }
     return out
 
 
@@ -417,6 +460,7 @@ def summarise(rows: list[dict[str, Any]]) -> dict[str, Any]:
             "errors": sum("error" in r for r in sel),
             "rejected": _cp(sum(c["rejected"] for c in cs), len(cs)),
             "missing_dominant": sum(bool(c["missing_dominant"]) for c in cs),
+            "missing_clear": sum(bool(_missing_clear(c)) for c in cs),
             "extra": sum(bool(c["extra"]) for c in cs),
             "unit_problems": sum(bool(c["unit_problems"]) for c in cs),
             "coverage": _coverage(cs),
@@ -460,6 +504,20 @@ def summarise(rows: list[dict[str, Any]]) -> dict[str, Any]:
                 for r in ok
                 for c in r["channels"]
                 if c["missing_dominant"]
+            ],
+            "missing_clear": [
+                {
+                    "index": r["index"],
+                    "channel": c["channel"],
+                    "missing": _missing_clear(c),
+                    "terms": "+".join(r["terms"]),
+                    "sensor": r["sensor"],
+                    "n": r["n"],
+                    "fitted": c["fitted"],
+                }
+                for r in ok
+                for c in r["channels"]
+                if _missing_clear(c)
             ],
             "extra": [
                 {
@@ -541,14 +599,15 @@ def markdown(s: dict[str, Any], command: str) -> str:
             for k, cov in s["cover"].items()
         ),
         "",
-        "| class | records | channels | errors | rejected | dominant missing | extra term "
-        "| unit problems |",
+        "| class | records | channels | errors | rejected | dominant missing (>= 0.5 decade) "
+        "| extra term | unit problems |",
         "|---|---|---|---|---|---|---|---|",
     ]
     for name, b in [("all", s["overall"]), *s["per_class"].items()]:
         lines.append(
             f"| {name} | {b['records']} | {b['channels']} | {b['errors']} | "
-            f"{b['rejected']['count'] if b['channels'] else 0} | {b['missing_dominant']} | "
+            f"{b['rejected']['count'] if b['channels'] else 0} | "
+            f"{b['missing_dominant']} ({b['missing_clear']}) | "
             f"{b['extra']} | {b['unit_problems']} |"
         )
     lines += [
@@ -558,20 +617,24 @@ def markdown(s: dict[str, Any], command: str) -> str:
         "interval: truth inside the reported interval of a fitted term; upper limit: truth below "
         "the reported upper limit of a term left out; ambiguous: truth inside the AMBIGUOUS "
         "interval of a term left out that the record cannot tell from a fitted one; dominant: "
-        "a term carrying most of the exact Allan variance at a fitted tau, fitted and covered; "
-        "all: any of these.",
+        "a term carrying most of the exact Allan variance at a fitted tau, fitted and covered "
+        "(clear: over >= 0.5 decade of the fitted taus); all: any of these.",
         "",
-        "| class | term | interval | upper limit | ambiguous | dominant | all |",
-        "|---|---|---|---|---|---|---|",
+        "| class | term | interval | upper limit | ambiguous | dominant | clear | all |",
+        "|---|---|---|---|---|---|---|---|",
     ]
     for name, b in [("all", s["overall"]), *s["per_class"].items()]:
         for sym, cov in b["coverage"].items():
             lines.append(
                 f"| {name} | {sym} | {_fmt(cov['interval'])} | {_fmt(cov['upper_limit'])} | "
                 f"{_fmt(cov['ambiguous'])} | "
-                f"{_fmt(cov['dominant'])} | {_fmt(cov['all'])} |"
+                f"{_fmt(cov['dominant'])} | {_fmt(cov['clear'])} | {_fmt(cov['all'])} |"
             )
-    lines += ["", "## estimate / truth (fitted terms, customary units)", ""]
+    lines += [
+        "",
+        "## estimate / truth (customary units; fitted terms, and those whose interval excludes 0)",
+        "",
+    ]
     lines += ["| class | term | n | min | median | max |", "|---|---|---|---|---|---|"]
     for name, b in [("all", s["overall"]), *s["per_class"].items()]:
         for sym, r in b["ratios"].items():
@@ -617,7 +680,7 @@ def main(argv: list[str] | None = None) -> int:
     )
     if args.summarise:
         stored = json.loads(stem.with_suffix(".json").read_text(encoding="utf-8"))["rows"]
-        save(stem, stored, command)
+        save(stem, [with_dominance(r, args.grid_seed) for r in stored], command)
         return 0
     rows: list[dict[str, Any]] = []
     start = time.perf_counter()
