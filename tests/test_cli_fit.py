@@ -243,3 +243,26 @@ def test_fit_csv_with_a_time_column_the_error_names_a_fix_that_works(
     assert channel["units"] == "deg/s"  # from the header
     rows = {r["symbol"]: r for r in channel["coefficients"]}
     assert rows["N"]["low"] <= 60 * N_TRUE <= rows["N"]["high"]
+
+
+def test_fit_csv_time_column_given_fs_instead_the_notes_name_the_time_column(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A CSV with ``t [s]`` and ``gz [deg/s]`` read with ``--fs`` (the time column not named):
+    the time column is analysed as a channel and the header's units are not used; the notes
+    say why (a time column) and give the fix, quoted for the shell, instead of advising
+    ``--input angle`` for a header that states deg/s."""
+    import shlex
+
+    path = tmp_path / "imu.csv"
+    t = np.arange(20_000) / FS
+    header = "t [s],gz [deg/s]"
+    np.savetxt(path, np.column_stack([t, RATE[:20_000]]), delimiter=",", header=header, comments="")
+    assert main(["fit", str(path), "--fs", "100"]) == 0
+    err = capsys.readouterr().err
+    assert "--input angle or increment" not in err
+    note = [x for x in err.splitlines() if "t [s] is a time column read as a channel" in x]
+    assert len(note) == 1
+    fix = shlex.split(note[0].split("give ")[1].split(" to read it")[0])
+    assert fix == ["--time-column", "t [s]"]
+    assert "give --time-column 't [s]' (time_column='t [s]')" in err  # the channel-name note
