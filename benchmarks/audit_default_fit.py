@@ -46,6 +46,7 @@ import shlex
 import sys
 import tempfile
 import time
+from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
@@ -405,6 +406,26 @@ def _missing_clear(c: dict[str, Any]) -> list[str]:
     ]
 
 
+def _channel_items(
+    records: list[dict[str, Any]], keep: Callable[[dict[str, Any]], Any], **fields: Any
+) -> list[dict[str, Any]]:
+    """One entry per channel ``keep`` selects: its record, channel and the ``fields`` of it."""
+    return [
+        {
+            "index": r["index"],
+            "channel": c["channel"],
+            "terms": "+".join(r["terms"]),
+            "sensor": r["sensor"],
+            "n": r["n"],
+            "fitted": c["fitted"],
+            **{k: f(c) for k, f in fields.items()},
+        }
+        for r in records
+        for c in r["channels"]
+        if keep(c)
+    ]
+
+
 def _ratios(chans: list[dict[str, Any]]) -> dict[str, Any]:
     """Estimate/truth of N, B, K: every fitted one, and those resolved (interval above 0)."""
     out = {}
@@ -479,60 +500,14 @@ def summarise(rows: list[dict[str, Any]]) -> dict[str, Any]:
                 for r in rows
                 if "error" in r
             ],
-            "rejected": [
-                {
-                    "index": r["index"],
-                    "channel": c["channel"],
-                    "p": c["p_value"],
-                    "terms": "+".join(r["terms"]),
-                    "fitted": c["fitted"],
-                    "sensor": r["sensor"],
-                }
-                for r in ok
-                for c in r["channels"]
-                if c["rejected"]
-            ],
-            "missing_dominant": [
-                {
-                    "index": r["index"],
-                    "channel": c["channel"],
-                    "missing": c["missing_dominant"],
-                    "terms": "+".join(r["terms"]),
-                    "sensor": r["sensor"],
-                    "n": r["n"],
-                }
-                for r in ok
-                for c in r["channels"]
-                if c["missing_dominant"]
-            ],
-            "missing_clear": [
-                {
-                    "index": r["index"],
-                    "channel": c["channel"],
-                    "missing": _missing_clear(c),
-                    "terms": "+".join(r["terms"]),
-                    "sensor": r["sensor"],
-                    "n": r["n"],
-                    "fitted": c["fitted"],
-                }
-                for r in ok
-                for c in r["channels"]
-                if _missing_clear(c)
-            ],
-            "extra": [
-                {
-                    "index": r["index"],
-                    "channel": c["channel"],
-                    "extra": c["extra"],
-                    "terms": "+".join(r["terms"]),
-                    "sensor": r["sensor"],
-                    "n": r["n"],
-                    "rows": c["extra_rows"],
-                }
-                for r in ok
-                for c in r["channels"]
-                if c["extra"]
-            ],
+            "rejected": _channel_items(ok, lambda c: c["rejected"], p=lambda c: c["p_value"]),
+            "missing_dominant": _channel_items(
+                ok, lambda c: c["missing_dominant"], missing=lambda c: c["missing_dominant"]
+            ),
+            "missing_clear": _channel_items(ok, _missing_clear, missing=_missing_clear),
+            "extra": _channel_items(
+                ok, lambda c: c["extra"], extra=lambda c: c["extra"], rows=lambda c: c["extra_rows"]
+            ),
             "units": [
                 {"index": r["index"], "problems": c["unit_problems"]}
                 for r in ok
