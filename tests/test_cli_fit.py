@@ -183,3 +183,86 @@ def test_fit_text_short_on_a_six_axis_white_noise_file(
         # the JSON keeps every alternative with its note
         assert len(f.alternatives_dict()) == len(f.alternatives)
     assert weak >= 3  # the case this test is about occurs on this record
+
+
+def test_fit_json_gives_the_upper_limits_the_text_prints(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--json`` carries the text's "not detected (95 % upper limits)" line as
+    ``"undetected"``: every left-out candidate with its upper limit in the same customary
+    unit (a user scripting the CLI can tell "not detected, <= u" from "not reported")."""
+    data = tmp_path / "rate.npy"
+    np.save(data, RATE[:20_000])
+    common = ["fit", str(data), "--fs", "100", "--units", "deg/s", "--points", "30"]
+    assert main(common) == 0
+    text = capsys.readouterr().out
+    (line,) = [x for x in text.splitlines() if "not detected (95 % upper limits): " in x]
+    shown = dict(
+        part.split(" <= ") for part in line.split("upper limits): ")[1].strip().split(", ")
+    )
+    assert main([*common, "--json"]) == 0
+    (channel,) = json.loads(capsys.readouterr().out)["channels"]
+    got = {u["symbol"]: u for u in channel["undetected"]}
+    assert list(got) == list(shown)  # the same terms, in the same order (Q N B K R)
+    f = fit_module.fit(allanite.avar(RATE[:20_000], fs=FS, points=30, units="deg/s"))
+    for symbol, printed in shown.items():
+        assert f"{got[symbol]['high']:.3g} {got[symbol]['unit']}" == printed
+        assert symbol not in f.coefficients
+        high, unit = f.upper_limits()[symbol]
+        assert got[symbol]["high"] == pytest.approx(high, rel=1e-12)
+        assert got[symbol]["unit"] == unit
+    # the gyro's customary units (deg, deg/h, deg/h/sqrt(h), deg/h^2), not the model's
+    units = {"Q": "deg", "B": "deg/h", "K": "deg/h/sqrt(h)", "R": "deg/h^2"}
+    assert {s: u["unit"] for s, u in got.items()} == {s: units[s] for s in got}
+    assert got["K"]["high"] > 0
+
+
+def test_fit_csv_with_a_time_column_the_error_names_a_fix_that_works(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``allanite fit imu.csv`` on a CSV whose header names the time column ``t [s]`` (units
+    in brackets, as users and ``allanite simulate`` write them): the error names the time
+    column, and its fix pasted into a shell (split as a shell splits it) fits the record."""
+    import shlex
+
+    path = tmp_path / "imu.csv"
+    t = np.arange(20_000) / FS
+    np.savetxt(
+        path,
+        np.column_stack([t, RATE[:20_000]]),
+        delimiter=",",
+        header="t [s],gz [deg/s]",
+        comments="",
+    )
+    assert main(["fit", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert "column 't [s]' looks like the time: --time-column " in err
+    fix = shlex.split(err.strip().splitlines()[-1].split("looks like the time: ")[1])
+    assert main(["fit", str(path), *fix, "--json"]) == 0
+    (channel,) = json.loads(capsys.readouterr().out)["channels"]
+    assert channel["units"] == "deg/s"  # from the header
+    rows = {r["symbol"]: r for r in channel["coefficients"]}
+    assert rows["N"]["low"] <= 60 * N_TRUE <= rows["N"]["high"]
+
+
+def test_fit_csv_time_column_given_fs_instead_the_notes_name_the_time_column(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A CSV with ``t [s]`` and ``gz [deg/s]`` read with ``--fs`` (the time column not named):
+    the time column is analysed as a channel and the header's units are not used; the notes
+    say why (a time column) and give the fix, quoted for the shell, instead of advising
+    ``--input angle`` for a header that states deg/s."""
+    import shlex
+
+    path = tmp_path / "imu.csv"
+    t = np.arange(20_000) / FS
+    header = "t [s],gz [deg/s]"
+    np.savetxt(path, np.column_stack([t, RATE[:20_000]]), delimiter=",", header=header, comments="")
+    assert main(["fit", str(path), "--fs", "100"]) == 0
+    err = capsys.readouterr().err
+    assert "--input angle or increment" not in err
+    note = [x for x in err.splitlines() if "t [s] is a time column read as a channel" in x]
+    assert len(note) == 1
+    fix = shlex.split(note[0].split("give ")[1].split(" to read it")[0])
+    assert fix == ["--time-column", "t [s]"]
+    assert "give --time-column 't [s]' (time_column='t [s]')" in err  # the channel-name note

@@ -160,7 +160,9 @@ def goodness(fit: Any, level: float) -> dict[str, Any]:
     ``rejected`` is True when the generalized chi-square test rejects the fitted model
     (p below the fit's ``misfit_level``); ``missed_taus`` are the taus it misses;
     ``alternatives`` the term choices the record cannot tell apart
-    (:meth:`allanite.fit.FitResult.alternatives_dict`).
+    (:meth:`allanite.fit.FitResult.alternatives_dict`); ``undetected`` the upper limits of the
+    candidates left out, in customary units (:meth:`allanite.fit.FitResult.upper_limits`, the
+    text's "not detected" line).
     """
     if getattr(fit, "method", None) != "gls":
         return {"level": level}
@@ -172,6 +174,11 @@ def goodness(fit: Any, level: float) -> dict[str, Any]:
         "rejected": fit.rejected,
         "missed_taus": fit.missed_taus.tolist(),
         "alternatives": fit.alternatives_dict(level),
+        # the text's "not detected (95 % upper limits)" line: a term left out is bounded
+        "undetected": [
+            {"symbol": symbol, "high": high, "unit": unit}
+            for symbol, (high, unit) in fit.upper_limits(level).items()
+        ],
     }
 
 

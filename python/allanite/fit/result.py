@@ -312,20 +312,30 @@ class FitResult:
         The terms of :attr:`undetected` and the additions the record shows no evidence of
         (see :meth:`ambiguity_note`), in the order Q, N, B, K, R, customary units.
         """
+        parts = [f"{s} <= {hi:.3g} {unit}" for s, (hi, unit) in self.upper_limits(level).items()]
+        if not parts:
+            return ""
+        return f"not detected ({100 * level:g} % upper limits): " + ", ".join(parts)
+
+    def upper_limits(self, level: float = DEFAULT_LEVEL) -> dict[str, tuple[float, str]]:
+        """Upper limits of the candidates not detected, in customary units.
+
+        The terms of :attr:`undetected` and the additions the record shows no evidence of
+        (see :meth:`ambiguity_note`), in the order Q, N, B, K, R: symbol -> (upper end of the
+        ``level`` interval of the fit with the term, its customary unit). What
+        :meth:`undetected_line` prints and ``allanite fit --json`` gives as ``"undetected"``.
+        """
         left_out = dict(self.undetected)
         for alt in self.alternatives:
             if alt["symbol_in"] in self.exchangeable and self._empty_addition(alt):
                 left_out[alt["symbol_in"]] = self.exchangeable[alt["symbol_in"]]
         order = {s: k for k, s in enumerate("QNBKR")}
-        parts = []
+        out: dict[str, tuple[float, str]] = {}
         for symbol in sorted(left_out, key=lambda s: (order.get(s, len(order)), s)):
             coef = left_out[symbol]
             unit = customary_unit(self.model.units["rate"], symbol, coef.unit)
-            hi = coef.ci(level)[1] * _factor(coef, unit)
-            parts.append(f"{symbol} <= {hi:.3g} {unit}")
-        if not parts:
-            return ""
-        return f"not detected ({100 * level:g} % upper limits): " + ", ".join(parts)
+            out[symbol] = (float(coef.ci(level)[1] * _factor(coef, unit)), unit)
+        return out
 
     def rejection_warning(self) -> str:
         """The plain warning of a rejected fit (empty when the fit is not rejected)."""

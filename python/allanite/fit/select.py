@@ -375,7 +375,8 @@ def _exchangeable(
     The intervals of the chosen terms swapped out, conditional on the selection, claim what
     the record cannot show; the caller widens them to the hull with the union fit (the
     chosen plus every alternative term), where the alternative terms' intervals are read
-    too. An addition alone leaves the chosen intervals as they are.
+    too. An addition the record shows some of widens the chosen intervals to the hull with
+    the fit with it (:func:`allanite.fit.api._ambiguous`).
 
     Returns
     -------

@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 import os
 import re
+import shlex
 import zipfile
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -483,15 +484,30 @@ def _header_units(record: Record) -> Record:
     if found is None:
         return record
     stated = ", ".join(dict.fromkeys(found))
-    try:
-        for unit in set(found):
-            dataclasses.replace(record, units=unit).rate_unit()
-    except ValueError:
-        other = "--input angle or increment" if record.input == "rate" else "--input rate"
-        note = (
-            f"the header states {stated}, not a unit of {record.input} samples: not used; "
-            f"give {other} if that is what the samples are, or --units"
-        )
+
+    def usable(units: list[str]) -> bool:
+        try:
+            for unit in set(units):
+                dataclasses.replace(record, units=unit).rate_unit()
+        except ValueError:
+            return False
+        return True
+
+    if not usable(found):
+        timed = [c for c in record.channels if time_like(c)]
+        others = [u for c, u in zip(record.channels, found, strict=True) if not time_like(c)]
+        if timed and others and usable(others):  # a time column read as a channel
+            note = (
+                f"the header states units, but {', '.join(timed)} is a time column read as a "
+                f"channel: units from the header not used; give --time-column "
+                f"{shlex.quote(timed[0])} to read it as the time stamps"
+            )
+        else:
+            other = "--input angle or increment" if record.input == "rate" else "--input rate"
+            note = (
+                f"the header states {stated}, not a unit of {record.input} samples: not used; "
+                f"give {other} if that is what the samples are, or --units"
+            )
         return dataclasses.replace(record, warnings=(*record.warnings, note))
     meta = {**record.meta, "channel_units": dict(zip(record.channels, found, strict=True))}
     units = found[0] if len(set(found)) == 1 else None
@@ -506,7 +522,8 @@ def _time_channels(channels: tuple[str, ...], samples: NDArray[Any]) -> tuple[st
         if time_like(name) and bool(np.all(np.diff(samples[:, c]) > 0)):
             out.append(
                 f"channel {name} is named like time stamps and always increases: if it is the "
-                f"time, give --time-column {name} (time_column={name!r}); it is analysed as a "
+                f"time, give --time-column {shlex.quote(name)} (time_column={name!r}); it is "
+                "analysed as a "
                 "sensor channel"
             )
     return tuple(out)

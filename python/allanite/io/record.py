@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import re
+import shlex
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -177,8 +178,8 @@ class Record:
         """Return the sampling frequency, or raise a ValueError telling how to give it."""
         if self.fs is None:
             named = next((c for c in self.channels if time_like(c)), None)
-            hint = (
-                f"; column {named!r} looks like the time: --time-column {named}"
+            hint = (  # quoted: ``t [s]`` pasted unquoted is two shell words
+                f"; column {named!r} looks like the time: --time-column {shlex.quote(named)}"
                 if named is not None
                 else ""
             )
