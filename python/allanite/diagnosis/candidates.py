@@ -20,14 +20,16 @@ telegraph      dyn; kurtosis of block means, jump and level    -- (named only wh
                when its own process reproduces them (the      levels are shown: the
                re-tests of the slow candidates)                kurtosis re-test or the
                                                                two-level test)
-bursts         hf, kurtosis of differences, spike statistic    hf (noise-level changes)
+bursts         hf, kurtosis of differences, spike statistic,   hf (noise-level changes)
+               the tail's shape
 resonance      --                                              a band-pass shaped excess
                                                                whose peak stays put
 drifting_line  kurtosis of differences and of block means      a band-pass shaped excess
                (a sinusoid is platykurtic)                     whose peak moves linearly
-white_drift    hf, kurtosis of differences, spike statistic    hf, and a drift/step shape
-               (the model's white noise, its level drifting   of the windows' noise level
-               or stepping over the record)                    (replaces the white term)
+white_drift    hf, kurtosis of differences, spike statistic,   hf, and a drift/step shape
+               the tail's shape (the model's white noise,      of the windows' noise level
+               its level drifting or stepping over the         (replaces the white term)
+               record)
 =============  ==============================================  ==========================
 
 The last two come from :func:`allanite.diagnosis.band_shape.band_shapes` (frequency view and
@@ -100,12 +102,15 @@ EXPLAINS: dict[str, frozenset[str]] = {
     # re-tests of fit_candidate; a small two-level process does not explain a random walk's
     # platykurtic path or a ramp's level)
     "telegraph": frozenset({"dyn"}),
-    "bursts": frozenset({"hf", "kurt_hf", "spike"}),
+    # a noise level that changes in time is a scale mixture: moderate deviations (the tail's
+    # shape) as well as large ones; spikes (single large outliers above the tail statistic's
+    # cap) and a rescale (the same shape at another scale) do not explain the tail's shape
+    "bursts": frozenset({"hf", "kurt_hf", "spike", "tail"}),
     # a sinusoid's amplitude follows the arcsine law: platykurtic samples, differences and
     # short block means
     "drifting_line": frozenset({"kurt_hf", "kurt_lf"}),
     # a white-noise level that changes over the record: like bursts, a scale mixture
-    "white_drift": frozenset({"hf", "kurt_hf", "spike"}),
+    "white_drift": frozenset({"hf", "kurt_hf", "spike", "tail"}),
 }
 
 #: evidence an effect needs before it is proposed (any of)

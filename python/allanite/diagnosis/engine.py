@@ -43,7 +43,7 @@ START_EFFECTS = ("warmup",)
 TWO_LEVEL_SEED = 7_000_001
 
 #: statistics of the frequency and time views that count as evidence for an effect
-EVIDENCE = ("line", "jump", "level", "spike", "kurt_hf", "kurt_lf", "hf", "dyn")
+EVIDENCE = ("line", "jump", "level", "spike", "tail", "kurt_hf", "kurt_lf", "hf", "dyn")
 
 
 def _split(

@@ -8,11 +8,12 @@ view is consistent with chance:
   of freedom) is consistent with chance at level ``alpha``;
 * frequency and time views: for a model, the record is re-analysed against the model *with*
   the effects (its own Monte Carlo null), and every statistic of these views (line,
-  broadband bands, level, jump, ``hf``, ``dyn``, spikes, kurtosis) lies above ``alpha / 9``
-  (Bonferroni over the nine). For a simulated record there is no model to augment: the
-  broadband test is re-run with the effects' PSD added (:meth:`FrequencyView.band_test`) and
-  the significant evidence the effects do not explain remains; non-stationary effects have no
-  PSD, and then the broadband evidence counts as explained when the tau view is consistent.
+  broadband bands, level, jump, ``hf``, ``dyn``, spikes, the tail's shape, kurtosis) lies
+  above ``alpha / 10`` (Bonferroni over the ten). For a simulated record there is no model to
+  augment: the broadband test is re-run with the effects' PSD added
+  (:meth:`FrequencyView.band_test`) and the significant evidence the effects do not explain
+  remains; non-stationary effects have no PSD, and then the broadband evidence counts as
+  explained when the tau view is consistent.
 
 Whatever is left is reported as an :class:`Unexplained` item: its view, the evidence, *where*
 (taus, frequency band or lines, time segments) and *how large* (the remaining gap, the rms
@@ -83,6 +84,11 @@ EVIDENCE_TEXT = {
     "hf": "the short-term noise level changes over the record (bursts)",
     "dyn": "the mid-tau noise level changes over the record",
     "spike": "spikes",
+    "tail": (
+        "more moderate deviations from the running median than simulated, beyond a few large "
+        "spikes: a heavier tail over the whole record (a scale mixture, e.g. some samples "
+        "summing two increments)"
+    ),
     "kurt_hf": "heavy-tailed sample-to-sample changes (excess kurtosis)",
     "kurt_lf": "a two-level (platykurtic) amplitude distribution",
 }
@@ -108,8 +114,8 @@ class Unexplained:
         ``"tau"``, ``"frequency"`` or ``"time"``.
     evidence : str
         The statistic: ``tau`` (the Mahalanobis statistic), ``band`` (broadband PSD), ``line``,
-        ``level``, ``jump``, ``hf``, ``dyn``, ``spike``, ``kurt_hf``, ``kurt_lf``; or the time
-        base (:mod:`allanite.diagnosis.time_base`): ``time base`` (gaps, jitter, doubled
+        ``level``, ``jump``, ``hf``, ``dyn``, ``spike``, ``tail``, ``kurt_hf``, ``kurt_lf``; or
+        the time base (:mod:`allanite.diagnosis.time_base`): ``time base`` (gaps, jitter, doubled
         increments), ``held``.
     where : dict
         ``tau_bands_s``, ``frequency_bands_hz``, ``frequency_lines_hz`` or ``time_segments_s``;
@@ -361,6 +367,12 @@ def _time_item(name: str, tv: TimeView, p: float) -> Unexplained:
         size["count"] = float(len(tv.spike_times_s))
         if tv.spike_amplitudes:
             size["rms_height"] = float(np.sqrt(np.mean(np.square(tv.spike_amplitudes))))
+    elif name == "tail" and tv.tail:
+        t = tv.tail
+        size["score_ratio"] = t["score"] / t["expected"] if t["expected"] > 0 else float("inf")
+        for x, c, m in zip(t["levels"], t["count"], t["expected_count"], strict=True):
+            size[f"count_{x:g}"] = float(c)
+            size[f"expected_{x:g}"] = float(m)
     elif name in ("kurt_hf", "kurt_lf"):
         key = name.split("_")[1]
         size["excess_kurtosis_real"] = tv.kurtosis.get(f"{key}_real", float("nan"))
@@ -382,6 +394,15 @@ def _time_item(name: str, tv: TimeView, p: float) -> Unexplained:
         text += f" at {_segments_text(segs)}"
     elif name == "spike":
         text += f" ({int(size['count'])} found)"
+    elif name == "tail" and tv.tail:
+        cap = tv.tail["band"][1]
+        counts = ", ".join(
+            f"{c:.0f} vs {m:.0f} simulated at {x:g}-{cap:g}"
+            for x, c, m in zip(
+                tv.tail["levels"], tv.tail["count"], tv.tail["expected_count"], strict=True
+            )
+        )
+        text += f" (samples {counts} robust sigmas; score x{size['score_ratio']:.3g})"
     elif name.startswith("kurt"):
         real, sim = size["excess_kurtosis_real"], size["excess_kurtosis_sim"]
         departs = abs(real - sim)
