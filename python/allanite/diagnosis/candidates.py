@@ -56,6 +56,7 @@ from typing import Any
 
 import numpy as np
 
+from allanite.diagnosis.time_view import TAIL_BAND, TAIL_MEAN
 from allanite.terms import TERM_TYPES, Term
 
 __all__ = [
@@ -167,6 +168,9 @@ class Candidate:
         (``white_drift``: ``|ratio - 1|``, the time view's level ratio), for an effect that
         leaves the tau view unchanged; the size rule judges it on this number instead of
         its tau size. None: the tau view sizes it.
+    explains_also : frozenset of str
+        Evidence this candidate explains beyond its kind's :data:`EXPLAINS`, by its fixed
+        size (spikes low enough to fall in the tail-shape band explain ``tail``).
     """
 
     effect: str
@@ -179,6 +183,7 @@ class Candidate:
     measured: tuple[str, ...] = ()
     view_size: float | None = None
     others: tuple[dict[str, float], ...] = ()
+    explains_also: frozenset[str] = frozenset()
 
     @property
     def repeat_key(self) -> str | None:
@@ -226,7 +231,7 @@ class Candidate:
     @property
     def explains(self) -> frozenset[str]:
         """Evidence this candidate explains."""
-        return EXPLAINS.get(self.effect, frozenset())
+        return EXPLAINS.get(self.effect, frozenset()) | self.explains_also
 
     def term(self, values: dict[str, float]) -> Term:
         """Build the fitted Term from free-parameter ``values`` (``rescale:``: key ``scale``)."""
@@ -337,6 +342,7 @@ def candidate_library(
     bursts: tuple[float, float] | None = None,
     band: Any = None,
     drift: Any = None,
+    tail_spread: float | None = None,
 ) -> tuple[list[Candidate], list[str]]:
     """Candidates to fit, and the effects that cannot be tried (no Term class, no model term).
 
@@ -354,6 +360,11 @@ def candidate_library(
         Detected spectral lines, strongest first (the sine takes the strongest's frequency).
     spikes : (rate per second, rms height), optional
         Detected spikes (both parameters are then fixed from the time view).
+    tail_spread : float, optional
+        The spread of the record's deviations from its running mean, the unit of the time
+        view's tail-shape statistic (:func:`allanite.diagnosis.time_view.tail_test`): spikes
+        whose height falls in its band, within one spread of its cap, explain ``tail`` too
+        (higher ones lie above the band and leave it to a scale mixture).
     bursts : (duty, mean burst length in s), optional
         Windows of raised short-term noise level found by the time view (``bursts`` is only
         proposed with them; both parameters are then fixed, the level ``N`` is fitted).
@@ -397,6 +408,7 @@ def candidate_library(
         view_size: float | None = None
         replaces: Term | None = None
         others: tuple[dict[str, float], ...] = ()
+        also: frozenset[str] = frozenset()
         if effect == "sine" and lines:
             freq, amp = lines[0]
             fixed["frequency"] = freq
@@ -406,6 +418,8 @@ def candidate_library(
             # the time view counts and measures them: nothing left to fit
             fixed["amplitude"] = spikes[1]
             fixed["rate"] = spikes[0]
+            if tail_spread and spikes[1] * (1.0 - 1.0 / TAIL_MEAN) / tail_spread < TAIL_BAND[1] + 1:
+                also = frozenset({"tail"})
         elif effect == "step":
             fixed["interval"] = duration / max(n_changes, 1)
         elif effect == "warmup":
@@ -453,6 +467,7 @@ def candidate_library(
                 measured=measured,
                 others=others,
                 view_size=view_size,
+                explains_also=also,
             )
         )
     for term in terms:

@@ -368,6 +368,7 @@ def _attribute(
         bursts=_bursts(analysis.time, run.x_fit, run.fs),
         band=bands,
         drift=drift_shape(run.x_fit, run.fs, analysis.time, run.source.model),
+        tail_spread=analysis.time.tail.get("spread"),
     )
     # the same calibrated test ranks single effects and selects the joint set
     test: dict[str, Any] = {

@@ -73,6 +73,7 @@ __all__ = [
     "spike_features",
     "spike_test",
     "tail_features",
+    "tail_spread",
     "tail_test",
     "time_features",
     "time_plan",
@@ -174,9 +175,7 @@ def time_features(
         hp = ndimage.uniform_filter1d(x, KURT_MEAN, mode="nearest")
         np.subtract(x, hp, out=hp)
         out["kurt_hf"] = np.array([d1, _kurtosis(hp)])
-        ndimage.uniform_filter1d(x, TAIL_MEAN, output=hp, mode="nearest")
-        np.subtract(x, hp, out=hp)
-        out["tail"] = tail_features(hp)
+        out["tail"] = tail_features(x, work=hp)
         del hp
     return out
 
@@ -212,15 +211,33 @@ def spike_features(x: NDArray[np.float64]) -> dict[str, NDArray[np.float64]]:
     }
 
 
-def tail_features(hp: NDArray[np.float64]) -> NDArray[np.float64]:
-    """The tail-shape statistic of the samples minus their :data:`TAIL_MEAN`-sample running mean.
+def _tail_highpass(
+    x: NDArray[np.float64], work: NDArray[np.float64] | None = None
+) -> NDArray[np.float64]:
+    """The record minus its :data:`TAIL_MEAN`-sample running mean (into ``work``, if given)."""
+    hp = np.empty_like(x) if work is None else work
+    ndimage.uniform_filter1d(x, TAIL_MEAN, output=hp, mode="nearest")
+    return np.asarray(np.subtract(x, hp, out=hp))
 
-    ``a = |hp| / spread`` (``1.4826 MAD``: a linear high-pass keeps Gaussian samples Gaussian,
-    so ``a`` is in units of their standard deviation). Returns, as means over the samples, the
+
+def tail_spread(x: NDArray[np.float64]) -> float:
+    """The unit of the tail-shape statistic: the robust spread of :func:`tail_features`' ``hp``."""
+    return _robust_spread(_tail_highpass(np.asarray(x, dtype=np.float64)))
+
+
+def tail_features(
+    x: NDArray[np.float64], *, work: NDArray[np.float64] | None = None
+) -> NDArray[np.float64]:
+    """The tail-shape statistic of a rate record (:func:`tail_test`).
+
+    ``hp`` is the record minus its :data:`TAIL_MEAN`-sample running mean and ``a = |hp| /
+    spread`` (``1.4826 MAD``: a linear high-pass keeps Gaussian samples Gaussian, so ``a`` is
+    in units of their standard deviation). Returns, as means over the samples, the
     scale-mixture score ``exp(a^2 / 4)`` on the band :data:`TAIL_BAND` (0 outside it) and the
-    share of the samples in the band at or above each level of :data:`TAIL_LEVELS`
-    (:func:`tail_test`).
+    share of the samples in the band at or above each level of :data:`TAIL_LEVELS`. ``work``
+    (an array of ``x``'s shape) holds the high-pass, saving an allocation.
     """
+    hp = _tail_highpass(x, work)
     a = np.abs(hp) / _robust_spread(hp)
     lo, cap = TAIL_BAND
     band = a[(a >= lo) & (a < cap)]
@@ -373,8 +390,9 @@ class TimeView:
     tail : dict
         The tail's shape (:func:`tail_test`): the real record's ``score`` and the simulated
         sensor's ``expected`` score; per level of :data:`TAIL_LEVELS`, the real ``count`` of
-        samples between the level and the band's cap (robust spreads from the running median)
-        and the simulated sensor's ``expected_count``.
+        samples between the level and the band's cap (robust spreads from the running mean)
+        and the simulated sensor's ``expected_count``; the ``spread`` (rate units,
+        :func:`tail_spread`).
     change_points_s : list of float
         Refined times of significant level jumps.
     segments_s : list of (float, float)
@@ -709,6 +727,7 @@ def time_view(
     # record-wide statistics
     fam_p["spike"], spike_thr = spike_test(real, ens, alpha)
     fam_p["tail"], tail = tail_test(real, ens)
+    tail["spread"] = tail_spread(x)
     lf = _kurtosis_checks(x, real, ens, plan, fam_p)
     # localisation
     segments: list[tuple[float, float]] = []
