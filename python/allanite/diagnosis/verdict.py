@@ -85,9 +85,8 @@ EVIDENCE_TEXT = {
     "dyn": "the mid-tau noise level changes over the record",
     "spike": "spikes",
     "tail": (
-        "more moderate deviations from the running median than simulated, beyond a few large "
-        "spikes: a heavier tail over the whole record (a scale mixture, e.g. some samples "
-        "summing two increments)"
+        "a heavier tail of moderate deviations than simulated, beyond a few large spikes (a "
+        "scale mixture, e.g. some samples summing two increments)"
     ),
     "kurt_hf": "heavy-tailed sample-to-sample changes (excess kurtosis)",
     "kurt_lf": "a two-level (platykurtic) amplitude distribution",
@@ -369,6 +368,8 @@ def _time_item(name: str, tv: TimeView, p: float) -> Unexplained:
             size["rms_height"] = float(np.sqrt(np.mean(np.square(tv.spike_amplitudes))))
     elif name == "tail" and tv.tail:
         t = tv.tail
+        # a record-wide statistic: the moderate deviations lie all over the record
+        where["time_segments_s"] = [[0.0, float(tv.t_s.size * tv.window_s)]]
         size["score_ratio"] = t["score"] / t["expected"] if t["expected"] > 0 else float("inf")
         for x, c, m in zip(t["levels"], t["count"], t["expected_count"], strict=True):
             size[f"count_{x:g}"] = float(c)
@@ -390,10 +391,6 @@ def _time_item(name: str, tv: TimeView, p: float) -> Unexplained:
             text += f"slightly over the record ({spread}{_NEGLIGIBLE})"
         else:
             text += f" ({spread}" + (f" at {_segments_text(segs)})" if segs else ")")
-    elif segs and name != "spike":
-        text += f" at {_segments_text(segs)}"
-    elif name == "spike":
-        text += f" ({int(size['count'])} found)"
     elif name == "tail" and tv.tail:
         cap = tv.tail["band"][1]
         counts = ", ".join(
@@ -402,7 +399,13 @@ def _time_item(name: str, tv: TimeView, p: float) -> Unexplained:
                 tv.tail["levels"], tv.tail["count"], tv.tail["expected_count"], strict=True
             )
         )
-        text += f" (samples {counts} robust sigmas; score x{size['score_ratio']:.3g})"
+        text += f" (samples {counts} robust sigmas from the running mean; score "
+        text += f"x{size['score_ratio']:.3g}) over the "
+        text += f"whole record, {_segments_text(segs)}"
+    elif segs and name != "spike":
+        text += f" at {_segments_text(segs)}"
+    elif name == "spike":
+        text += f" ({int(size['count'])} found)"
     elif name.startswith("kurt"):
         real, sim = size["excess_kurtosis_real"], size["excess_kurtosis_sim"]
         departs = abs(real - sim)
