@@ -399,9 +399,19 @@ def _time_item(name: str, tv: TimeView, p: float) -> Unexplained:
                 tv.tail["levels"], tv.tail["count"], tv.tail["expected_count"], strict=True
             )
         )
-        text += f" (samples {counts} robust sigmas from the running mean; score "
-        text += f"x{size['score_ratio']:.3g}) over the "
-        text += f"whole record, {_segments_text(segs)}"
+        detail = f"samples {counts} robust sigmas from the running mean; score "
+        detail += f"x{size['score_ratio']:.3g}"
+        # its size is that of the heavy tail: the sample-level excess kurtosis, as kurt_hf's
+        k = tv.kurtosis
+        departs = max(
+            abs(k.get("hf_real", 0.0) - k.get("hf_sim", 0.0)),
+            abs(k.get("hf_samples_real", 0.0) - k.get("hf_samples_sim", 0.0)),
+        )
+        if departs < KURTOSIS_NEGLIGIBLE:
+            text = "time view: slightly more moderate deviations than simulated over the whole "
+            text += f"record ({detail}; excess kurtosis departs by {departs:.2g}{_NEGLIGIBLE})"
+        else:
+            text += f" ({detail}) over the whole record, {_segments_text(segs)}"
     elif segs and name != "spike":
         text += f" at {_segments_text(segs)}"
     elif name == "spike":
