@@ -1,4 +1,4 @@
-"""Calibration of the time view's spike p-value on null records (issue 14, false alarms).
+"""Calibration of the time view's spike (or tail-shape) p-value on null records (issue 14).
 
 For several simulated sensors (the validation's MEMS base with quantization, pure white noise,
 white + a short Gauss-Markov process, a navigation-grade model in deg/h with quantization) and
@@ -20,7 +20,14 @@ so the intervals are somewhat optimistic. Run niced on the shared machine::
 
     nice -n 10 python benchmarks/calibrate_spike_null.py --tag _spiketail
 
-Results: ``benchmarks/results/calibrate_spike_null<tag>.{json,md}``.
+``--statistic tail`` calibrates the tail-shape statistic instead
+(:func:`~allanite.diagnosis.time_view.tail_features`,
+:func:`~allanite.diagnosis.time_view.tail_test`; on the long-record path its shares are
+rescaled from the short replicates as the scaled null does,
+:func:`~allanite.diagnosis.null.rescaled`).
+
+Results: ``benchmarks/results/calibrate_spike_null<tag>.{json,md}``
+(``calibrate_tail_null<tag>`` for the tail shape).
 """
 
 from __future__ import annotations
@@ -35,9 +42,9 @@ from typing import Any
 import numpy as np
 from scipy import stats
 
-from allanite.diagnosis.null import NullEnsemble
+from allanite.diagnosis.null import NullEnsemble, rescaled
 from allanite.diagnosis.scaled_null import FULL_REPLICATES_MAX, SHORT_LENGTH
-from allanite.diagnosis.time_view import spike_features, spike_test
+from allanite.diagnosis.time_view import spike_features, spike_test, tail_features, tail_test
 from allanite.model import NoiseModel
 from allanite.terms import TERM_TYPES
 
@@ -76,7 +83,7 @@ def sensors() -> dict[str, tuple[NoiseModel, float]]:
 
 
 def bank(model: NoiseModel, fs: float, n: int, count: int, seed: int) -> list[dict[str, Any]]:
-    """Spike features of ``count`` independent records of ``n`` samples."""
+    """Spike and tail-shape features of ``count`` independent records of ``n`` samples."""
     out: list[dict[str, Any]] = []
     batch = max(1, min(count, 2**22 // n))
     done = 0
@@ -85,7 +92,9 @@ def bank(model: NoiseModel, fs: float, n: int, count: int, seed: int) -> list[di
         x = np.asarray(
             model.simulate(n, fs=fs, n_channels=k, seed=seed + done, allow_aliasing=True)
         ).reshape(n, -1)
-        out.extend(spike_features(np.ascontiguousarray(x[:, j])) for j in range(k))
+        for j in range(k):
+            xj = np.ascontiguousarray(x[:, j])
+            out.append({**spike_features(xj), "tail": tail_features(xj)})
         done += k
     return out
 
@@ -113,7 +122,19 @@ def dispersion(records: list[dict[str, Any]]) -> dict[str, float]:
     return out
 
 
-def calibrate(name: str, n: int, n_mcs: list[int], trials: int, seed: int) -> list[dict[str, Any]]:
+def p_value(statistic: str, real: dict[str, Any], ens: NullEnsemble, n: int, n_rep: int) -> float:
+    """The p-value of ``statistic`` (``spike`` or ``tail``) of one real record."""
+    if statistic == "spike":
+        return spike_test(real, ens, 0.05)[0]
+    if n != n_rep:  # the long-record path: shares rescaled from the short replicates
+        ref, null = rescaled(ens, "tail", n_rep / n, log_mean=False)
+        ens = NullEnsemble(ref={"tail": ref}, null={"tail": null}, real_scale=1.0)
+    return tail_test(real, ens)[0]
+
+
+def calibrate(
+    name: str, n: int, n_mcs: list[int], trials: int, seed: int, statistic: str = "spike"
+) -> list[dict[str, Any]]:
     """Calibration rows of one sensor and length (one row per ``n_mc``)."""
     model, fs = sensors()[name]
     long_path = n > FULL_REPLICATES_MAX
@@ -131,11 +152,11 @@ def calibrate(name: str, n: int, n_mcs: list[int], trials: int, seed: int) -> li
             if not long_path:
                 others = others + (others >= t)  # the real record is not a replicate
             ens = NullEnsemble.from_model([pool[i] for i in others])
-            ps[t] = spike_test(reals[t], ens, 0.05)[0]
+            ps[t] = p_value(statistic, reals[t], ens, n, n_rep)
 
         row: dict[str, Any] = {
-            "sensor": name, "n": n, "replicate_n": n_rep, "n_mc": n_mc, "trials": trials,
-            "bank_s": round(t_bank, 1), "min_p": float(ps.min()),
+            "statistic": statistic, "sensor": name, "n": n, "replicate_n": n_rep, "n_mc": n_mc,
+            "trials": trials, "bank_s": round(t_bank, 1), "min_p": float(ps.min()),
         }  # fmt: skip
         for level in LEVELS:
             hits = int(np.count_nonzero(ps < level))
@@ -147,13 +168,13 @@ def calibrate(name: str, n: int, n_mcs: list[int], trials: int, seed: int) -> li
     return rows
 
 
-def markdown(rows: list[dict[str, Any]], command: str, load: str) -> str:
+def markdown(rows: list[dict[str, Any]], command: str, load: str, title: str = "Spike") -> str:
     """The results as a markdown table."""
     head = "| sensor | n | replicates of | n_mc | " + " | ".join(
         f"P(p < {lv:g}) [95 %]" for lv in LEVELS
     )
     lines = [
-        "# Spike p-value calibration on null records",
+        f"# {title} p-value calibration on null records",
         "",
         f"`{command}` (load: {load})",
         "",
@@ -188,12 +209,15 @@ def main() -> None:
     parser.add_argument("--trials", type=int, default=1000)
     parser.add_argument("--long-trials", type=int, default=1000)
     parser.add_argument("--tag", default="")
+    parser.add_argument("--statistic", choices=("spike", "tail"), default="spike")
     args = parser.parse_args()
     rows: list[dict[str, Any]] = []
     jobs = [(s, 2**k, args.trials) for s in args.sensors for k in args.lengths]
     jobs += [(s, 2**k, args.long_trials) for s in args.long_sensors for k in args.long]
     for i, (name, n, trials) in enumerate(jobs):
-        new = calibrate(name, n, args.n_mc, trials, seed=7_000_000 + 1000 * i)
+        new = calibrate(
+            name, n, args.n_mc, trials, seed=7_000_000 + 1000 * i, statistic=args.statistic
+        )
         rows.extend(new)
         for r in new:
             print(
@@ -205,11 +229,12 @@ def main() -> None:
     with open("/proc/loadavg") as f:
         load = " ".join(f.read().split()[:3])
     RESULTS.mkdir(exist_ok=True)
-    out = RESULTS / f"calibrate_spike_null{args.tag}"
+    out = RESULTS / f"calibrate_{args.statistic}_null{args.tag}"
     out.with_suffix(".json").write_text(
         json.dumps({"command": command, "load": load, "rows": rows}, indent=1) + "\n"
     )
-    out.with_suffix(".md").write_text(markdown(rows, command, load))
+    title = "Spike" if args.statistic == "spike" else "Tail-shape"
+    out.with_suffix(".md").write_text(markdown(rows, command, load, title))
 
 
 if __name__ == "__main__":

@@ -26,8 +26,8 @@ from allanite.diagnosis.time_view import (
 from allanite.model import NoiseModel
 
 FS = 100.0
-#: the diagnosis' level for one statistic of the time view (3 views x 7 statistics)
-STAT_ALPHA = 0.05 / 3.0 / 7.0
+#: the diagnosis' level for one statistic of the time view (3 views x 8 statistics)
+STAT_ALPHA = 0.05 / 3.0 / 8.0
 
 
 @pytest.fixture(scope="module")

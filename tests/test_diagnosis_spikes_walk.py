@@ -57,7 +57,7 @@ def test_spikes_of_five_sigma_next_to_a_walk_are_found(base, walk) -> None:
     real = with_spikes(walk)
     source = SimSource(fs=FS, model=base)
     a = analyze(real, source, n_mc=60, seed=7, alpha=0.05)
-    view_alpha = 0.05 / 3.0 / 7.0  # the time view's share of the level (see time_view)
+    view_alpha = 0.05 / 3.0 / 8.0  # the time view's share of the level (see time_view)
     assert a.time.family_p["spike"] < view_alpha
     found = np.round(np.array(a.time.spike_times_s) * FS).astype(int)
     assert len(found) >= 2
@@ -110,6 +110,6 @@ def test_a_bias_step_next_to_the_walk_is_not_read_as_spikes(base, walk) -> None:
     real[N // 3 :] += 10.0 * 0.05 * np.sqrt(FS)
     a = analyze(real, SimSource(fs=FS, model=base), n_mc=60, seed=7, alpha=0.05)
     assert a.time.spike_times_s == []
-    assert a.time.family_p["spike"] > 0.05 / 3.0 / 7.0
+    assert a.time.family_p["spike"] > 0.05 / 3.0 / 8.0
     # control: the step itself is seen (a level jump)
     assert a.time.family_p["jump"] < 1e-6

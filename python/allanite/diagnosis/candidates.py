@@ -20,14 +20,16 @@ telegraph      dyn; kurtosis of block means, jump and level    -- (named only wh
                when its own process reproduces them (the      levels are shown: the
                re-tests of the slow candidates)                kurtosis re-test or the
                                                                two-level test)
-bursts         hf, kurtosis of differences, spike statistic    hf (noise-level changes)
+bursts         hf, kurtosis of differences, spike statistic,   hf (noise-level changes)
+               the tail's shape
 resonance      --                                              a band-pass shaped excess
                                                                whose peak stays put
 drifting_line  kurtosis of differences and of block means      a band-pass shaped excess
                (a sinusoid is platykurtic)                     whose peak moves linearly
-white_drift    hf, kurtosis of differences, spike statistic    hf, and a drift/step shape
-               (the model's white noise, its level drifting   of the windows' noise level
-               or stepping over the record)                    (replaces the white term)
+white_drift    hf, kurtosis of differences, spike statistic,   hf, and a drift/step shape
+               the tail's shape (the model's white noise,      of the windows' noise level
+               its level drifting or stepping over the         (replaces the white term)
+               record)
 =============  ==============================================  ==========================
 
 The last two come from :func:`allanite.diagnosis.band_shape.band_shapes` (frequency view and
@@ -54,6 +56,7 @@ from typing import Any
 
 import numpy as np
 
+from allanite.diagnosis.time_view import TAIL_BAND, TAIL_MEAN
 from allanite.terms import TERM_TYPES, Term
 
 __all__ = [
@@ -100,12 +103,15 @@ EXPLAINS: dict[str, frozenset[str]] = {
     # re-tests of fit_candidate; a small two-level process does not explain a random walk's
     # platykurtic path or a ramp's level)
     "telegraph": frozenset({"dyn"}),
-    "bursts": frozenset({"hf", "kurt_hf", "spike"}),
+    # a noise level that changes in time is a scale mixture: moderate deviations (the tail's
+    # shape) as well as large ones; spikes (single large outliers above the tail statistic's
+    # cap) and a rescale (the same shape at another scale) do not explain the tail's shape
+    "bursts": frozenset({"hf", "kurt_hf", "spike", "tail"}),
     # a sinusoid's amplitude follows the arcsine law: platykurtic samples, differences and
     # short block means
     "drifting_line": frozenset({"kurt_hf", "kurt_lf"}),
     # a white-noise level that changes over the record: like bursts, a scale mixture
-    "white_drift": frozenset({"hf", "kurt_hf", "spike"}),
+    "white_drift": frozenset({"hf", "kurt_hf", "spike", "tail"}),
 }
 
 #: evidence an effect needs before it is proposed (any of)
@@ -162,6 +168,9 @@ class Candidate:
         (``white_drift``: ``|ratio - 1|``, the time view's level ratio), for an effect that
         leaves the tau view unchanged; the size rule judges it on this number instead of
         its tau size. None: the tau view sizes it.
+    explains_also : frozenset of str
+        Evidence this candidate explains beyond its kind's :data:`EXPLAINS`, by its fixed
+        size (spikes low enough to fall in the tail-shape band explain ``tail``).
     """
 
     effect: str
@@ -174,6 +183,7 @@ class Candidate:
     measured: tuple[str, ...] = ()
     view_size: float | None = None
     others: tuple[dict[str, float], ...] = ()
+    explains_also: frozenset[str] = frozenset()
 
     @property
     def repeat_key(self) -> str | None:
@@ -221,7 +231,7 @@ class Candidate:
     @property
     def explains(self) -> frozenset[str]:
         """Evidence this candidate explains."""
-        return EXPLAINS.get(self.effect, frozenset())
+        return EXPLAINS.get(self.effect, frozenset()) | self.explains_also
 
     def term(self, values: dict[str, float]) -> Term:
         """Build the fitted Term from free-parameter ``values`` (``rescale:``: key ``scale``)."""
@@ -332,6 +342,7 @@ def candidate_library(
     bursts: tuple[float, float] | None = None,
     band: Any = None,
     drift: Any = None,
+    tail_spread: float | None = None,
 ) -> tuple[list[Candidate], list[str]]:
     """Candidates to fit, and the effects that cannot be tried (no Term class, no model term).
 
@@ -349,6 +360,11 @@ def candidate_library(
         Detected spectral lines, strongest first (the sine takes the strongest's frequency).
     spikes : (rate per second, rms height), optional
         Detected spikes (both parameters are then fixed from the time view).
+    tail_spread : float, optional
+        The spread of the record's deviations from its running mean, the unit of the time
+        view's tail-shape statistic (:func:`allanite.diagnosis.time_view.tail_test`): spikes
+        whose height falls in its band, within one spread of its cap, explain ``tail`` too
+        (higher ones lie above the band and leave it to a scale mixture).
     bursts : (duty, mean burst length in s), optional
         Windows of raised short-term noise level found by the time view (``bursts`` is only
         proposed with them; both parameters are then fixed, the level ``N`` is fitted).
@@ -392,6 +408,7 @@ def candidate_library(
         view_size: float | None = None
         replaces: Term | None = None
         others: tuple[dict[str, float], ...] = ()
+        also: frozenset[str] = frozenset()
         if effect == "sine" and lines:
             freq, amp = lines[0]
             fixed["frequency"] = freq
@@ -401,6 +418,8 @@ def candidate_library(
             # the time view counts and measures them: nothing left to fit
             fixed["amplitude"] = spikes[1]
             fixed["rate"] = spikes[0]
+            if tail_spread and spikes[1] * (1.0 - 1.0 / TAIL_MEAN) / tail_spread < TAIL_BAND[1] + 1:
+                also = frozenset({"tail"})
         elif effect == "step":
             fixed["interval"] = duration / max(n_changes, 1)
         elif effect == "warmup":
@@ -448,6 +467,7 @@ def candidate_library(
                 measured=measured,
                 others=others,
                 view_size=view_size,
+                explains_also=also,
             )
         )
     for term in terms:

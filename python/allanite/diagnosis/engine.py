@@ -43,7 +43,7 @@ START_EFFECTS = ("warmup",)
 TWO_LEVEL_SEED = 7_000_001
 
 #: statistics of the frequency and time views that count as evidence for an effect
-EVIDENCE = ("line", "jump", "level", "spike", "kurt_hf", "kurt_lf", "hf", "dyn")
+EVIDENCE = ("line", "jump", "level", "spike", "tail", "kurt_hf", "kurt_lf", "hf", "dyn")
 
 
 def _split(
@@ -373,6 +373,7 @@ def _attribute(
         bursts=bursts[:2] if bursts else None,
         band=bands,
         drift=drift_shape(run.x_fit, run.fs, analysis.time, run.source.model),
+        tail_spread=analysis.time.tail.get("spread"),
     )
     # the same calibrated test ranks single effects and selects the joint set
     test: dict[str, Any] = {

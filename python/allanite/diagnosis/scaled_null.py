@@ -8,9 +8,9 @@ than :data:`FULL_REPLICATES_MAX` samples, each view gets a null whose cost does 
 * tau view: no replicate at all, draws from the model's exact Gaussian AVAR covariance
   (:func:`allanite.diagnosis.tau_view.gaussian_tau_null`);
 * frequency view and the sample-scale statistics of the time view (``hf``, ``spike``,
-  ``kurt_hf``, ``kurt_lf`` over 8 samples): ``n_mc`` *short* replicates at the real rate, of
-  :data:`SHORT_LENGTH` samples, with the same Welch segment length and 32 windows; a feature
-  that is a mean over ``k`` pieces (segments, differences) has its null residuals scaled by
+  ``tail``, ``kurt_hf``, ``kurt_lf`` over 8 samples): ``n_mc`` *short* replicates at the real
+  rate, of :data:`SHORT_LENGTH` samples, with the same Welch segment length and 32 windows; a
+  feature that is a mean over ``k`` pieces (segments, differences) has its null residuals scaled by
   ``sqrt(k_short / k)`` and its log-of-mean bias moved (:func:`allanite.diagnosis.null.rescaled`;
   the Welch log PSD is mapped quantile by quantile between log-gamma laws, which also moves
   its skewness: :func:`allanite.diagnosis.null.rescaled_log_gamma`); the 8-sample block
@@ -405,6 +405,8 @@ def scaled_ensemble(
     )
     # the excess kurtosis of k Gaussian values has mean -6 / (k + 1)
     ref["kurt_hf"] = ref["kurt_hf"] + 6.0 / n_s - 6.0 / n
+    # the tail's shape: shares of the samples (a mean over them), the same expected value
+    ref["tail"], null["tail"] = rescaled(ens_s, "tail", n_s / n, log_mean=False)
     # the record's 8-sample block kurtosis is the mean over its pieces of a short replicate's
     # length (piecewise_kurtosis_model): slow terms shape each piece as they shape a replicate
     if piecewise_kurtosis_model(model):

@@ -72,6 +72,9 @@ __all__ = [
     "sparse_jump_p",
     "spike_features",
     "spike_test",
+    "tail_features",
+    "tail_spread",
+    "tail_test",
     "time_features",
     "time_plan",
     "time_view",
@@ -90,6 +93,15 @@ SPIKE_GRID = np.round(np.arange(3.0, 12.0 + 1e-9, 0.05), 2)
 SPIKE_POOLED = ("spike_tail", "spike_n")
 #: window of the running mean removed before the sample-level kurtosis (``kurt_hf``'s second)
 KURT_MEAN = 9
+#: band (units of the robust spread) of the tail-shape statistic: moderate deviations from the
+#: running median; at or above the cap lies the far tail that spikes explain
+TAIL_BAND = (3.0, 4.5)
+#: window of the running mean removed before the tail-shape statistic: long, so that a
+#: sample's own deviation stays whole (``1 - 1/33``; a spike stays above the band) and the
+#: neighbours add little (a 9-sample mean keeps ``8/9`` and adds a tenth of the variance)
+TAIL_MEAN = 33
+#: levels at which the tail-shape statistic also counts its samples (for the report)
+TAIL_LEVELS = (3.0, 4.0)
 
 
 @dataclass(frozen=True)
@@ -163,6 +175,7 @@ def time_features(
         hp = ndimage.uniform_filter1d(x, KURT_MEAN, mode="nearest")
         np.subtract(x, hp, out=hp)
         out["kurt_hf"] = np.array([d1, _kurtosis(hp)])
+        out["tail"] = tail_features(x, work=hp)
         del hp
     return out
 
@@ -196,6 +209,41 @@ def spike_features(x: NDArray[np.float64]) -> dict[str, NDArray[np.float64]]:
         "spike_tail": (top.size - np.searchsorted(top, SPIKE_GRID, side="left")).astype(float),
         "spike_n": np.array([float(x.size)]),
     }
+
+
+def _tail_highpass(
+    x: NDArray[np.float64], work: NDArray[np.float64] | None = None
+) -> NDArray[np.float64]:
+    """The record minus its :data:`TAIL_MEAN`-sample running mean (into ``work``, if given)."""
+    hp = np.empty_like(x) if work is None else work
+    ndimage.uniform_filter1d(x, TAIL_MEAN, output=hp, mode="nearest")
+    return np.asarray(np.subtract(x, hp, out=hp))
+
+
+def tail_spread(x: NDArray[np.float64]) -> float:
+    """The unit of the tail-shape statistic: the robust spread of :func:`tail_features`' ``hp``."""
+    return _robust_spread(_tail_highpass(np.asarray(x, dtype=np.float64)))
+
+
+def tail_features(
+    x: NDArray[np.float64], *, work: NDArray[np.float64] | None = None
+) -> NDArray[np.float64]:
+    """The tail-shape statistic of a rate record (:func:`tail_test`).
+
+    ``hp`` is the record minus its :data:`TAIL_MEAN`-sample running mean and ``a = |hp| /
+    spread`` (``1.4826 MAD``: a linear high-pass keeps Gaussian samples Gaussian, so ``a`` is
+    in units of their standard deviation). Returns, as means over the samples, the
+    scale-mixture score ``exp(a^2 / 4)`` on the band :data:`TAIL_BAND` (0 outside it) and the
+    share of the samples in the band at or above each level of :data:`TAIL_LEVELS`. ``work``
+    (an array of ``x``'s shape) holds the high-pass, saving an allocation.
+    """
+    hp = _tail_highpass(x, work)
+    a = np.abs(hp) / _robust_spread(hp)
+    lo, cap = TAIL_BAND
+    band = a[(a >= lo) & (a < cap)]
+    score = float(np.sum(np.exp(0.25 * band * band)))
+    shares = [float(np.count_nonzero(band >= level)) for level in TAIL_LEVELS]
+    return np.array([score, *shares], dtype=np.float64) / float(max(hp.size, 1))
 
 
 def _largest(a: NDArray[np.float64], orders: tuple[int, ...]) -> NDArray[np.float64]:
@@ -339,6 +387,12 @@ class TimeView:
         differences (``hf``): ``log(D_w / (D_w - 2 sum h^2 / (L - 1)))`` with ``D_w`` the
         window's mean square and ``h`` the heights of its spikes (a spike enters two
         differences); zeros without spikes.
+    tail : dict
+        The tail's shape (:func:`tail_test`): the real record's ``score`` and the simulated
+        sensor's ``expected`` score; per level of :data:`TAIL_LEVELS`, the real ``count`` of
+        samples between the level and the band's cap (robust spreads from the running mean)
+        and the simulated sensor's ``expected_count``; the ``spread`` (rate units,
+        :func:`tail_spread`).
     change_points_s : list of float
         Refined times of significant level jumps.
     segments_s : list of (float, float)
@@ -364,6 +418,7 @@ class TimeView:
     spike_raise: NDArray[np.float64] = field(
         default_factory=lambda: np.zeros(0, dtype=np.float64), repr=False
     )
+    tail: dict[str, Any] = field(default_factory=dict, repr=False)
 
     def level_p_values(
         self,
@@ -457,6 +512,7 @@ class TimeView:
             "spike_amplitudes": list(self.spike_amplitudes),
             "change_points_s": list(self.change_points_s),
             "segments_s": [list(s) for s in self.segments_s],
+            "tail": dict(self.tail),
             "p_value": self.p_value,
         }
 
@@ -635,7 +691,7 @@ def time_view(
 ) -> TimeView:
     """Per-window scan, change points, spikes and kurtosis checks of the time view."""
     length = plan.length
-    alpha = alpha / 7.0  # seven statistics share the view's level (Bonferroni)
+    alpha = alpha / 8.0  # eight statistics share the view's level (Bonferroni)
     z: dict[str, NDArray[np.float64]] = {}
     thr: dict[str, float] = {}
     fam_p: dict[str, float] = {}
@@ -670,6 +726,8 @@ def time_view(
         residual[fam], spread[fam], null_max[fam] = r, sd, zmax_null
     # record-wide statistics
     fam_p["spike"], spike_thr = spike_test(real, ens, alpha)
+    fam_p["tail"], tail = tail_test(real, ens)
+    tail["spread"] = tail_spread(x)
     lf = _kurtosis_checks(x, real, ens, plan, fam_p)
     # localisation
     segments: list[tuple[float, float]] = []
@@ -718,6 +776,7 @@ def time_view(
         null_max=null_max,
         lf_kurtosis=lf,
         spike_raise=spike_raise,
+        tail=tail,
     )
 
 
@@ -760,6 +819,65 @@ def spike_test(
         if v > thr:
             out.append(thr)
     return float(min(1.0, len(orders) * p)), out
+
+
+def tail_test(
+    real: dict[str, NDArray[np.float64]], ens: NullEnsemble
+) -> tuple[float, dict[str, Any]]:
+    r"""p-value of the tail's shape: more moderate deviations than the simulated sensor has.
+
+    ``a = |hp| / spread`` as in :func:`tail_features` (``hp``: the samples minus their
+    :data:`TAIL_MEAN`-sample running mean). The statistic is the score of a scale mixture over
+    the band :data:`TAIL_BAND` = ``[x_0, x_1)``,
+
+    .. math:: S = \sum_{x_0 \le a_i < x_1} e^{a_i^2 / 4},
+
+    the likelihood ratio's weight (up to constants) of a small share of samples with
+    ``sqrt(2)`` times the spread against Gaussian samples, ``e^{a^2 (1 - 1/2) / 2}``: each
+    moderate deviation counts, the more the larger, while the far tail at or above ``x_1`` (a
+    few spikes, which the spike statistic judges) does not count at all. ``S`` is judged
+    against the replicates: its expected value ``m = n s_ref`` (``s_ref`` the reference mean
+    per sample, ``n`` the record's samples) and variance ``v = n^2 var(null residuals)``, at
+    least ``m e^{x_0^2 / 4}`` (a compound Poisson sum's ``m E[w^2] / E[w]``); its law is the
+    gamma law of that mean and variance, ``p = P(G >= S)``, one-sided (a sum of few positive
+    weights is right-skewed; the null calibration is measured in
+    ``tests/test_diagnosis_tail_shape.py`` and ``benchmarks/results/*_tailshape*``).
+
+    A scale mixture (one rate sample in ten the sum of two increments, a noise level that
+    changes from sample to sample) puts many samples at 3-4.5 spreads: ``P(|Z| >= 3) = 0.27 %``
+    for Gaussian samples, ~0.6 % when one sample in ten has ``sqrt(2)`` times the spread.
+    Spikes of more than 4.5 spreads lie above the band, so a spikes effect that explains the far
+    tail (the spike statistic, the kurtosis) leaves this one standing: the statistic tells a
+    scale mixture from a few spikes. ``S / n`` is a mean over the samples, so the long-record
+    null rescales it like the other means (:func:`allanite.diagnosis.null.rescaled`).
+
+    Returns the p-value and the details (``band``, the real ``score`` and the ``expected``
+    one, the ``levels`` of :data:`TAIL_LEVELS` with the real ``count`` of samples between
+    each and the band's cap and the ``expected_count``, ``n``).
+    """
+    if "tail" not in ens.ref or "tail" not in real:
+        raise ValueError(
+            "the null ensemble has no tail-shape feature: build it from time_features of the "
+            "replicates (spike_features returns it)"
+        )
+    n = float(real["spike_n"][0])
+    lo = TAIL_BAND[0]
+    value = np.asarray(real["tail"], dtype=np.float64) * n
+    expected = np.asarray(ens.ref["tail"], dtype=np.float64) * n
+    mean = max(float(expected[0]), 1e-300)
+    # at least a compound Poisson sum's variance, ``m E[w^2] / E[w] >= m w_min``
+    var = max(float(ens.null["tail"][:, 0].var(ddof=1)) * n * n, mean * math.exp(0.25 * lo * lo))
+    p = float(stats.gamma.sf(value[0], mean * mean / var, scale=var / mean))
+    details = {
+        "band": list(TAIL_BAND),
+        "score": float(value[0]),
+        "expected": float(expected[0]),
+        "levels": list(TAIL_LEVELS),
+        "count": value[1:].round().tolist(),
+        "expected_count": expected[1:].tolist(),
+        "n": n,
+    }
+    return p, details
 
 
 def _spike_raise(

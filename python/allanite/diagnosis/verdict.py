@@ -8,11 +8,12 @@ view is consistent with chance:
   of freedom) is consistent with chance at level ``alpha``;
 * frequency and time views: for a model, the record is re-analysed against the model *with*
   the effects (its own Monte Carlo null), and every statistic of these views (line,
-  broadband bands, level, jump, ``hf``, ``dyn``, spikes, kurtosis) lies above ``alpha / 9``
-  (Bonferroni over the nine). For a simulated record there is no model to augment: the
-  broadband test is re-run with the effects' PSD added (:meth:`FrequencyView.band_test`) and
-  the significant evidence the effects do not explain remains; non-stationary effects have no
-  PSD, and then the broadband evidence counts as explained when the tau view is consistent.
+  broadband bands, level, jump, ``hf``, ``dyn``, spikes, the tail's shape, kurtosis) lies
+  above ``alpha / 10`` (Bonferroni over the ten). For a simulated record there is no model to
+  augment: the broadband test is re-run with the effects' PSD added
+  (:meth:`FrequencyView.band_test`) and the significant evidence the effects do not explain
+  remains; non-stationary effects have no PSD, and then the broadband evidence counts as
+  explained when the tau view is consistent.
 
 Whatever is left is reported as an :class:`Unexplained` item: its view, the evidence, *where*
 (taus, frequency band or lines, time segments) and *how large* (the remaining gap, the rms
@@ -83,6 +84,10 @@ EVIDENCE_TEXT = {
     "hf": "the short-term noise level changes over the record (bursts)",
     "dyn": "the mid-tau noise level changes over the record",
     "spike": "spikes",
+    "tail": (
+        "a heavier tail of moderate deviations than simulated, beyond a few large spikes (a "
+        "scale mixture, e.g. some samples summing two increments)"
+    ),
     "kurt_hf": "heavy-tailed sample-to-sample changes (excess kurtosis)",
     "kurt_lf": "a two-level (platykurtic) amplitude distribution",
 }
@@ -108,8 +113,8 @@ class Unexplained:
         ``"tau"``, ``"frequency"`` or ``"time"``.
     evidence : str
         The statistic: ``tau`` (the Mahalanobis statistic), ``band`` (broadband PSD), ``line``,
-        ``level``, ``jump``, ``hf``, ``dyn``, ``spike``, ``kurt_hf``, ``kurt_lf``; or the time
-        base (:mod:`allanite.diagnosis.time_base`): ``time base`` (gaps, jitter, doubled
+        ``level``, ``jump``, ``hf``, ``dyn``, ``spike``, ``tail``, ``kurt_hf``, ``kurt_lf``; or
+        the time base (:mod:`allanite.diagnosis.time_base`): ``time base`` (gaps, jitter, doubled
         increments), ``held``.
     where : dict
         ``tau_bands_s``, ``frequency_bands_hz``, ``frequency_lines_hz`` or ``time_segments_s``;
@@ -361,6 +366,14 @@ def _time_item(name: str, tv: TimeView, p: float) -> Unexplained:
         size["count"] = float(len(tv.spike_times_s))
         if tv.spike_amplitudes:
             size["rms_height"] = float(np.sqrt(np.mean(np.square(tv.spike_amplitudes))))
+    elif name == "tail" and tv.tail:
+        t = tv.tail
+        # a record-wide statistic: the moderate deviations lie all over the record
+        where["time_segments_s"] = [[0.0, float(tv.t_s.size * tv.window_s)]]
+        size["score_ratio"] = t["score"] / t["expected"] if t["expected"] > 0 else float("inf")
+        for x, c, m in zip(t["levels"], t["count"], t["expected_count"], strict=True):
+            size[f"count_{x:g}"] = float(c)
+            size[f"expected_{x:g}"] = float(m)
     elif name in ("kurt_hf", "kurt_lf"):
         key = name.split("_")[1]
         size["excess_kurtosis_real"] = tv.kurtosis.get(f"{key}_real", float("nan"))
@@ -378,6 +391,27 @@ def _time_item(name: str, tv: TimeView, p: float) -> Unexplained:
             text += f"slightly over the record ({spread}{_NEGLIGIBLE})"
         else:
             text += f" ({spread}" + (f" at {_segments_text(segs)})" if segs else ")")
+    elif name == "tail" and tv.tail:
+        cap = tv.tail["band"][1]
+        counts = ", ".join(
+            f"{c:.0f} vs {m:.0f} simulated at {x:g}-{cap:g}"
+            for x, c, m in zip(
+                tv.tail["levels"], tv.tail["count"], tv.tail["expected_count"], strict=True
+            )
+        )
+        detail = f"samples {counts} robust sigmas from the running mean; score "
+        detail += f"x{size['score_ratio']:.3g}"
+        # its size is that of the heavy tail: the sample-level excess kurtosis, as kurt_hf's
+        k = tv.kurtosis
+        departs = max(
+            abs(k.get("hf_real", 0.0) - k.get("hf_sim", 0.0)),
+            abs(k.get("hf_samples_real", 0.0) - k.get("hf_samples_sim", 0.0)),
+        )
+        if departs < KURTOSIS_NEGLIGIBLE:
+            text = "time view: slightly more moderate deviations than simulated over the whole "
+            text += f"record ({detail}; excess kurtosis departs by {departs:.2g}{_NEGLIGIBLE})"
+        else:
+            text += f" ({detail}) over the whole record, {_segments_text(segs)}"
     elif segs and name != "spike":
         text += f" at {_segments_text(segs)}"
     elif name == "spike":
