@@ -34,7 +34,8 @@ not the Allan variance).
 
 Each per-window residual ``r_w`` is normalised by its null spread, ``z_w = r_w / s_w``; windows
 with ``|z_w|`` above the simultaneous threshold (the ``1 - alpha`` quantile of ``max_w |z_w|``
-under the null, Gumbel fit) form the time segments. A significant jump is refined to a change
+under the null, Gumbel fit; ``dyn``, left-skewed, gets a law for each side: :func:`window_scan`)
+form the time segments. A significant jump is refined to a change
 point with the CUSUM estimator ``argmax_k |sum_{i<k} (x_i - mean)|`` over the two windows
 around it; spikes are the samples whose deviation from the running median exceeds the
 threshold of the lowest significant order.
