@@ -34,7 +34,8 @@ not the Allan variance).
 
 Each per-window residual ``r_w`` is normalised by its null spread, ``z_w = r_w / s_w``; windows
 with ``|z_w|`` above the simultaneous threshold (the ``1 - alpha`` quantile of ``max_w |z_w|``
-under the null, Gumbel fit) form the time segments. A significant jump is refined to a change
+under the null, Gumbel fit; ``dyn``, left-skewed, gets a law for each side: :func:`window_scan`)
+form the time segments. A significant jump is refined to a change
 point with the CUSUM estimator ``argmax_k |sum_{i<k} (x_i - mean)|`` over the two windows
 around it; spikes are the samples whose deviation from the running median exceeds the
 threshold of the lowest significant order.
@@ -66,6 +67,7 @@ from allanite.diagnosis.null import (
 __all__ = [
     "TimePlan",
     "TimeView",
+    "WindowScan",
     "added_level_variance",
     "block_kurtosis",
     "kurtosis_blocks",
@@ -78,9 +80,13 @@ __all__ = [
     "time_features",
     "time_plan",
     "time_view",
+    "window_scan",
 ]
 
 WINDOW_FAMILIES = ("level", "jump", "hf", "dyn")
+#: per-window families whose largest and smallest scores get a law each (:func:`window_scan`):
+#: the log of a mean over few pieces is left-skewed
+SKEWED_FAMILIES = ("dyn",)
 #: at most this many spikes are listed individually
 MAX_SPIKES = 200
 #: window of the running median that the spike finder removes
@@ -681,6 +687,80 @@ def _kurtosis_checks(
     return lf
 
 
+@dataclass(frozen=True)
+class WindowScan:
+    """One per-window family judged against its null (see :func:`window_scan`)."""
+
+    z: NDArray[np.float64]
+    threshold: float
+    p_value: float
+    residual: NDArray[np.float64]
+    spread: NDArray[np.float64]
+    null_max: NDArray[np.float64]
+
+
+def window_scan(
+    r: NDArray[np.float64],
+    null: NDArray[np.float64],
+    alpha: float,
+    *,
+    sides: bool = False,
+    median: bool = False,
+) -> WindowScan:
+    """Scores, simultaneous threshold and p-value of a per-window residual.
+
+    ``r`` is the real record's residual per window, ``null`` the null residuals (replicates
+    in rows). With ``median`` the across-window median is removed from both (a uniform change
+    of the noise level is the tau view's business). Each window's score is ``z_w = r_w /
+    s_w`` (``s_w`` the null spread); every null value is scored against the OTHER replicates'
+    spread (leave-one-out: the real record is not part of the spread estimate either, so with
+    few replicates its score has heavier tails than in-sample null scores). The threshold and
+    p-value come from a Gumbel law fitted to the null's ``max_w |z_w|``.
+
+    With ``sides`` the largest and the smallest score each get their own Gumbel law (fitted
+    to the null's ``max_w z_w`` and ``max_w -z_w``), for a skewed per-window law: the log of a
+    mean over few pieces (``dyn``: 15 block-mean differences) has an exponential lower tail
+    and a light upper one, and one law of ``max |z|``, fitted where the upper side dominates,
+    understates how far the lowest window goes. The p-value is twice the smaller side's
+    (Bonferroni), each side's threshold is its ``1 - alpha/2`` quantile, and the reported
+    scores are on the upper side's scale (``z_w`` below zero times ``thr_+ / thr_-``), so
+    ``|z| > threshold`` flags a window past its own side's threshold.
+    """
+    r = np.asarray(r, dtype=np.float64)
+    null = np.asarray(null, dtype=np.float64)
+    if median:
+        r = r - np.median(r)
+        null = null - np.median(null, axis=1, keepdims=True)
+    n_rep = null.shape[0]
+    sd = null.std(axis=0, ddof=1)
+    sd = np.where(sd > 0, sd, np.inf)
+    zf = r / sd
+    loo = np.sqrt(np.maximum((np.sum(null**2, axis=0) - null**2) / max(n_rep - 2, 1), 1e-300))
+    z_null = null / np.where(np.isfinite(sd), loo, np.inf)
+    if not sides:
+        zmax_null = np.abs(z_null).max(axis=1)
+        return WindowScan(
+            z=zf,
+            threshold=gumbel_isf(alpha, zmax_null),
+            p_value=gumbel_sf(float(np.abs(zf).max()), zmax_null),
+            residual=r,
+            spread=sd,
+            null_max=zmax_null,
+        )
+    up, low = z_null.max(axis=1), (-z_null).max(axis=1)
+    thr_up, thr_low = gumbel_isf(alpha / 2.0, up), gumbel_isf(alpha / 2.0, low)
+    p = 2.0 * min(gumbel_sf(float(zf.max()), up), gumbel_sf(float(-zf.min()), low))
+    ratio = thr_up / thr_low if thr_up > 0 and thr_low > 0 else 1.0
+    return WindowScan(
+        z=np.where(zf < 0, zf * ratio, zf),
+        threshold=thr_up,
+        p_value=float(min(1.0, p)),
+        residual=r,
+        spread=sd,
+        null_max=np.maximum(up, low * ratio),
+    )
+
+
 def time_view(
     x: NDArray[np.float64],
     fs: float,
@@ -700,30 +780,15 @@ def time_view(
     spread: dict[str, NDArray[np.float64]] = {}
     null_max: dict[str, NDArray[np.float64]] = {}
     for fam in WINDOW_FAMILIES:
-        null = ens.null[fam]
-        sd = null.std(axis=0, ddof=1)
-        sd = np.where(sd > 0, sd, np.inf)
-        r = ens.residual(real, fam)
-        if fam in ("hf", "dyn"):
-            # a uniform change of the noise level is the tau view's business; the time view
-            # looks for changes *in time*, so the across-window median residual is removed
-            # (the median: with bursts in a minority of the windows the quiet windows keep
-            # z ~ 0 and only the bursts are flagged)
-            r = r - np.median(r)
-            null = null - np.median(null, axis=1, keepdims=True)
-            sd = null.std(axis=0, ddof=1)
-        zf = r / sd
-        # each null value normalised by the spread of the OTHER replicates (leave-one-out):
-        # the real record is not part of the spread estimate either, so with few replicates
-        # its z has heavier tails than in-sample null z's; this keeps max |z| calibrated
-        n_rep = null.shape[0]
-        loo = np.sqrt(np.maximum((np.sum(null**2, axis=0) - null**2) / max(n_rep - 2, 1), 1e-300))
-        zmax_null = np.abs(null / np.where(np.isfinite(sd), loo, np.inf)).max(axis=1)
-        thr[fam] = gumbel_isf(alpha, zmax_null)
-        fam_p[fam] = gumbel_sf(float(np.abs(zf).max()), zmax_null)
-        z[fam] = zf
-        flagged[fam] = np.abs(zf) > thr[fam]
-        residual[fam], spread[fam], null_max[fam] = r, sd, zmax_null
+        # a skewed per-window law (the log of a mean over few pieces) gets a law per side
+        scan = window_scan(
+            ens.residual(real, fam), ens.null[fam], alpha, sides=fam in SKEWED_FAMILIES,
+            median=fam in ("hf", "dyn"),
+        )  # fmt: skip
+        thr[fam], fam_p[fam] = scan.threshold, scan.p_value
+        z[fam] = scan.z
+        flagged[fam] = np.abs(scan.z) > scan.threshold
+        residual[fam], spread[fam], null_max[fam] = scan.residual, scan.spread, scan.null_max
     # record-wide statistics
     fam_p["spike"], spike_thr = spike_test(real, ens, alpha)
     fam_p["tail"], tail = tail_test(real, ens)
