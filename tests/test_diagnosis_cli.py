@@ -264,3 +264,30 @@ def test_a_wrong_config_is_told_what_to_change_in_its_own_names_and_units(tmp_pa
     assert float(new_density) == pytest.approx(fitted, rel=1e-9)
     for line in out.split("writes it):\n", 1)[1].splitlines():  # every changed line: a unit
         assert re.search(r"\[(rad/s\S*|s)\]$", line), line
+
+
+def test_a_corrected_config_that_cannot_be_written_keeps_the_diagnosis(tmp_path, capsys):
+    """Regression: a --write-corrected failure (here a folder that does not exist) ended the
+    command before the diagnosis was printed or --output written, after minutes of work."""
+    white = NoiseModel((TERM_TYPES["white"](N=1e-3),), {"rate": "rad/s", "time": "s"})
+    real = tmp_path / "real.npy"
+    np.save(real, white.simulate(2**14, fs=100.0, seed=2))
+    kalibr = tmp_path / "imu.yaml"
+    kalibr.write_text(
+        "gyroscope_noise_density: 3e-3\ngyroscope_random_walk: 1e-7\n"
+        "accelerometer_noise_density: 2e-3\naccelerometer_random_walk: 3e-5\nupdate_rate: 100\n"
+    )
+    out_json = tmp_path / "d.json"
+    target = tmp_path / "no such folder" / "fixed.yaml"
+    argv = [
+        "diagnose", str(real), "--fs", "100", "--units", "rad/s", "--sim-model", str(kalibr),
+        "--n-mc", "20", "--output", str(out_json), "--write-corrected", str(target),
+    ]  # fmt: skip
+    assert main(argv) == 2
+    captured = capsys.readouterr()
+    assert "--write-corrected OUT writes it):" in captured.out  # not "written to"
+    assert "gyroscope_noise_density" in captured.out
+    assert json.loads(out_json.read_text())["gap"]["significant"] is True
+    assert "the diagnosis above stands, but --write-corrected" in captured.err
+    assert "no such folder" in captured.err
+    assert not target.exists()

@@ -260,8 +260,12 @@ def run(args: argparse.Namespace) -> int:
         seed=args.seed,
         progress=_progress_printer() if show else None,
     )
+    failure: Exception | None = None
     if loaded is not None and args.write_corrected:
-        write_corrected(args, loaded, result)
+        try:
+            write_corrected(args, loaded, result)
+        except (ValueError, OSError) as exc:  # the diagnosis stands: shown first, then this
+            failure = exc
     if args.output:
         with atomic_output(args.output) as tmp:
             tmp.write_text(result.to_json(indent=1))
@@ -277,11 +281,20 @@ def run(args: argparse.Namespace) -> int:
         print(_summary(result))
         changes = config_changes(args, loaded, result) if loaded is not None else []
         if changes and loaded is not None:
+            how = (
+                f"written to {args.write_corrected}"
+                if args.write_corrected and failure is None
+                else "--write-corrected OUT writes it"
+            )
             print(
-                f"to close the gap, change in {Path(args.sim_model).name} ({loaded.format}; "
-                "--write-corrected OUT writes it):"
+                f"to close the gap, change in {Path(args.sim_model).name} ({loaded.format}; {how}):"
             )
             print("\n".join(f"  {line}" for line in changes))
+    if failure is not None:
+        raise ValueError(
+            f"the diagnosis above stands, but --write-corrected {args.write_corrected} was not "
+            f"written: {failure}"
+        ) from failure
     return 0
 
 

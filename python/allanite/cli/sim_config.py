@@ -215,17 +215,17 @@ def config_changes(args: argparse.Namespace, loaded: LoadedSim, diagnosis: Any) 
     if loaded.format == "allanite" or not diagnosis.significant:
         return []
     module = format_module(loaded.format)
-    config, _ = _corrected(loaded, diagnosis)
     # both sides written by the format's writer into the user's file, so the writer's own
     # layout (a one-line SDF indented, 2e-3 written as 0.002) is no change
     text = Path(args.sim_model).read_text(encoding="utf-8")
     try:
+        config, _ = _corrected(loaded, diagnosis)
         before, after = (
             module.write(c, rate=loaded.rate, template=text, tau_range=_tau_range(diagnosis)).text
             for c in (loaded.config, config)
         )
     except ValueError as exc:  # the diagnosis stands; only this listing is not possible
-        return [f"(the changes cannot be listed: {exc}; --write-corrected OUT says why)"]
+        return [f"(the changes cannot be listed: {exc})"]
     # one XML element per line, so a one-line SDF or plugin block diffs element by element
     old, new = (
         [ln.strip() for ln in _ELEMENTS.sub(">\n<", t).splitlines()] for t in (before, after)

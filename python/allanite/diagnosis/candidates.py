@@ -62,6 +62,7 @@ from allanite.terms import TERM_TYPES, Term
 __all__ = [
     "DISTINCT_FACTOR",
     "EFFECTS",
+    "EVIDENCE",
     "EXPLAINS",
     "REPEATABLE",
     "SIGNATURE",
@@ -113,6 +114,10 @@ EXPLAINS: dict[str, frozenset[str]] = {
     # a white-noise level that changes over the record: like bursts, a scale mixture
     "white_drift": frozenset({"hf", "kurt_hf", "spike", "tail"}),
 }
+
+#: statistics of the frequency and time views that count as evidence for an effect (each is
+#: judged at ``alpha / len(EVIDENCE)``)
+EVIDENCE = ("line", "jump", "level", "spike", "tail", "kurt_hf", "kurt_lf", "hf", "dyn")
 
 #: evidence an effect needs before it is proposed (any of)
 SIGNATURE: dict[str, frozenset[str]] = {

@@ -12,7 +12,7 @@ from allanite._deprecation import keyword_only_fs, renamed
 from allanite.diagnosis.analysis import Analysis, Progress, analyze
 from allanite.diagnosis.attribution import LF_KURTOSIS_MAX_SAMPLES, TWO_LEVEL, Attribution, rank
 from allanite.diagnosis.band_shape import band_shapes
-from allanite.diagnosis.candidates import candidate_library, check_effects
+from allanite.diagnosis.candidates import EVIDENCE, candidate_library, check_effects
 from allanite.diagnosis.holdout import holdout_check, holdout_set, tau_model_for
 from allanite.diagnosis.inputs import (
     MIN_SAMPLES,
@@ -41,9 +41,6 @@ START_EFFECTS = ("warmup",)
 
 #: seed offset of the sensor replicates of the telegraph's two-level test
 TWO_LEVEL_SEED = 7_000_001
-
-#: statistics of the frequency and time views that count as evidence for an effect
-EVIDENCE = ("line", "jump", "level", "spike", "tail", "kurt_hf", "kurt_lf", "hf", "dyn")
 
 
 def _split(

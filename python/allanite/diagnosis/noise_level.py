@@ -50,6 +50,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import stats
 
+from allanite.diagnosis.candidates import EVIDENCE
 from allanite.diagnosis.null import runs
 from allanite.diagnosis.time_view import TimePlan, TimeView
 from allanite.terms.white_drift import ramp_window_mean
@@ -246,7 +247,8 @@ def noise_misfit(effect: str, view: TimeView, per_param: float = 0.0) -> float:
     penalty, ``chi2_1`` quantile ``1 - alpha``) for every shape number the tau view does not
     see: three for the drift (``ratio``, ``t_start``, ``t_end``), one per raised window for the
     bursts. Spikes explain a changed short-term level only by as much as their heights raise
-    it: when ``hf`` is significant (``alpha / 8``, the evidence's Bonferroni level) they pay
+    it: when ``hf`` is significant (``alpha / len(EVIDENCE)``, the evidence's Bonferroni level)
+    they pay
     the misfit of all windows around one common level plus each window's
     :attr:`TimeView.spike_raise` (their times and heights come from the time view, no
     penalty). A level step raises the tails of the sample distribution enough for the spike
@@ -256,7 +258,7 @@ def noise_misfit(effect: str, view: TimeView, per_param: float = 0.0) -> float:
     w = int(view.t_s.size)
     if effect == "spikes":
         alpha = float(stats.chi2.sf(per_param, 1)) if per_param > 0 else 0.05
-        if view.family_p.get("hf", 1.0) >= alpha / 8.0 or "hf" not in view.z:
+        if view.family_p.get("hf", 1.0) >= alpha / len(EVIDENCE) or "hf" not in view.z:
             return 0.0
         # no located spike (a dense, fitted spike process is stationary): one common level
         spiky = _flat_fit(view, view.spike_raise if view.spike_raise.size == w else None)

@@ -222,7 +222,8 @@ def burst_factor(
     exact at every ``tau`` up to the edges of the record (short taus: ``E[v^2]/E[v]^2``; taus
     comparable to the burst length and longer: the bursts' overlap with themselves at the
     filters' lags, which falls as the filters span whole bursts). The lags are summed on at most
-    :data:`BURST_LAGS` points per pair (midpoints; the terms are piecewise linear in ``l``).
+    :data:`BURST_LAGS` points per pair (a midpoint rule: the terms are piecewise cubic in
+    ``l``, smooth between the filters' breakpoints, so the sum is approximate there).
     """
     sp = np.asarray(spans, dtype=np.float64).reshape(-1, 2)
     mm = np.asarray(m, dtype=np.int64)

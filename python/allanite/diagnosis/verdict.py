@@ -86,7 +86,8 @@ EVIDENCE_TEXT = {
     "spike": "spikes",
     "tail": (
         "a heavier tail of moderate deviations than simulated, beyond a few large spikes (a "
-        "scale mixture, e.g. some samples summing two increments)"
+        "scale mixture: a noise level that changes, bursts, or some samples summing two "
+        "increments)"
     ),
     "kurt_hf": "heavy-tailed sample-to-sample changes (excess kurtosis)",
     "kurt_lf": "a two-level (platykurtic) amplitude distribution",
@@ -394,13 +395,12 @@ def _time_item(name: str, tv: TimeView, p: float) -> Unexplained:
     elif name == "tail" and tv.tail:
         cap = tv.tail["band"][1]
         counts = ", ".join(
-            f"{c:.0f} vs {m:.0f} simulated at {x:g}-{cap:g}"
+            f"at {x:g}-{cap:g} robust sigmas from the running mean: {c:.0f} ({m:.0f} simulated)"
             for x, c, m in zip(
                 tv.tail["levels"], tv.tail["count"], tv.tail["expected_count"], strict=True
             )
         )
-        detail = f"samples {counts} robust sigmas from the running mean; score "
-        detail += f"x{size['score_ratio']:.3g}"
+        detail = f"samples {counts}; score x{size['score_ratio']:.3g}"
         # its size is that of the heavy tail: the sample-level excess kurtosis, as kurt_hf's
         k = tv.kurtosis
         departs = max(
@@ -411,7 +411,7 @@ def _time_item(name: str, tv: TimeView, p: float) -> Unexplained:
             text = "time view: slightly more moderate deviations than simulated over the whole "
             text += f"record ({detail}; excess kurtosis departs by {departs:.2g}{_NEGLIGIBLE})"
         else:
-            text += f" ({detail}) over the whole record, {_segments_text(segs)}"
+            text += f" over the whole record ({detail})"
     elif segs and name != "spike":
         text += f" at {_segments_text(segs)}"
     elif name == "spike":

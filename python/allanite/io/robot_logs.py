@@ -129,7 +129,7 @@ def _imu_table(reader: Any, batch: list[tuple[Any, bytes]]) -> NDArray[np.float6
     fast = _imu_bytes(raws, bool(getattr(reader, "is2", False)))
     if fast is not None:
         check = [0, len(raws) - 1]
-        if all(np.array_equal(fast[i], _imu_row(reader, *batch[i])) for i in check):
+        if all(np.array_equal(fast[i], _imu_row(reader, *batch[i]), equal_nan=True) for i in check):
             return fast
     return np.array([_imu_row(reader, conn, raw) for conn, raw in batch], dtype=np.float64)
 
