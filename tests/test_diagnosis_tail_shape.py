@@ -130,3 +130,24 @@ def test_a_spikes_only_record_is_still_closed_by_spikes() -> None:
     assert "spikes" in [a.effect for a in d.explanation.effects]
     assert d.closed
     assert "tail" not in [u.evidence for u in d.unexplained]
+
+
+def test_a_model_whose_samples_never_reach_the_band_gets_a_p_value():
+    """Regression: a quantization-dominated model (bounded samples: none at 3-4.5 spreads)
+    gave the tail family p = nan (a gamma law of mean 0), which the false-alarm study's
+    tiny-record test caught."""
+    terms = (TERM_TYPES["quantization"](Q=7.7e-7), TERM_TYPES["white"](N=1.4e-6))
+    model = NoiseModel(terms, {"rate": "rad/s", "time": "s"})
+    reps = [np.asarray(model.simulate(4096, fs=100.0, seed=s)).ravel() for s in range(20)]
+    feats = np.array([tail_features(r) for r in reps])
+    assert not feats[:, 0].any()  # no replicate reaches the band
+    n = np.array([4096.0])
+    ref = feats.mean(axis=0)
+    ens = NullEnsemble(ref={"tail": ref}, null={"tail": feats - ref}, real_scale=1.0)
+    same = {"tail": tail_features(reps[0]), "spike_n": n}
+    assert tail_test(same, ens)[0] == 1.0
+    mixed = np.asarray(model.simulate(4096, fs=100.0, seed=99)).ravel()
+    mixed[::10] *= 4.0  # a tenth of the samples far out: the record reaches the band
+    heavy = {"tail": tail_features(mixed), "spike_n": n}
+    assert heavy["tail"][0] > 0
+    assert tail_test(heavy, ens)[0] == pytest.approx(1.0 / 21.0)

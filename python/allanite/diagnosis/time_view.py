@@ -918,6 +918,10 @@ def tail_test(
     scale mixture from a few spikes. ``S / n`` is a mean over the samples, so the long-record
     null rescales it like the other means (:func:`allanite.diagnosis.null.rescaled`).
 
+    When no replicate reaches the band (a bounded law such as quantization noise) the gamma
+    law is undefined and the p-value is the Monte Carlo one, ``(1 + #{null >= S}) / (1 +
+    n_null)``: 1 when the record does not reach the band either.
+
     Returns the p-value and the details (``band``, the real ``score`` and the ``expected``
     one, the ``levels`` of :data:`TAIL_LEVELS` with the real ``count`` of samples between
     each and the band's cap and the ``expected_count``, ``n``).
@@ -933,8 +937,14 @@ def tail_test(
     expected = np.asarray(ens.ref["tail"], dtype=np.float64) * n
     mean = max(float(expected[0]), 1e-300)
     # at least a compound Poisson sum's variance, ``m E[w^2] / E[w] >= m w_min``
-    var = max(float(ens.null["tail"][:, 0].var(ddof=1)) * n * n, mean * math.exp(0.25 * lo * lo))
-    p = float(stats.gamma.sf(value[0], mean * mean / var, scale=var / mean))
+    null = np.asarray(ens.null["tail"][:, 0], dtype=np.float64)
+    var = max(float(null.var(ddof=1)) * n * n, mean * math.exp(0.25 * lo * lo))
+    if expected[0] > 0 and var > 0:
+        p = float(stats.gamma.sf(value[0], mean * mean / var, scale=var / mean))
+    else:  # the replicates never reach the band (a bounded law, e.g. quantization noise):
+        # the Monte Carlo p-value, 1 when the record does not reach it either
+        reached = np.count_nonzero(expected[0] + null * n >= value[0])
+        p = float((1 + reached) / (1 + null.size))
     details = {
         "band": list(TAIL_BAND),
         "score": float(value[0]),
