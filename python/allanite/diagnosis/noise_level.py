@@ -248,8 +248,7 @@ def noise_misfit(effect: str, view: TimeView, per_param: float = 0.0) -> float:
     see: three for the drift (``ratio``, ``t_start``, ``t_end``), one per raised window for the
     bursts. Spikes explain a changed short-term level only by as much as their heights raise
     it: when ``hf`` is significant (``alpha / len(EVIDENCE)``, the evidence's Bonferroni level)
-    they pay
-    the misfit of all windows around one common level plus each window's
+    they pay the misfit of all windows around one common level plus each window's
     :attr:`TimeView.spike_raise` (their times and heights come from the time view, no
     penalty). A level step raises the tails of the sample distribution enough for the spike
     finder to list a few samples per window after it, but those add a fraction of a percent

@@ -523,8 +523,7 @@ def _time_channels(channels: tuple[str, ...], samples: NDArray[Any]) -> tuple[st
             out.append(
                 f"channel {name} is named like time stamps and always increases: if it is the "
                 f"time, give --time-column {shlex.quote(name)} (time_column={name!r}); it is "
-                "analysed as a "
-                "sensor channel"
+                "analysed as a sensor channel"
             )
     return tuple(out)
 
