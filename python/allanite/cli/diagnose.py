@@ -17,6 +17,7 @@ from allanite.cli.record_options import (
 )
 from allanite.cli.sim_config import (
     add_sim_config_arguments,
+    check_sim_model,
     config_changes,
     load_sim_model,
     write_corrected,
@@ -226,6 +227,7 @@ def run(args: argparse.Namespace) -> int:
 
     if args.seed < 0:
         raise ValueError(f"--seed must be a non-negative integer, got {args.seed}")
+    check_sim_model(args)  # before the record: a bag may take minutes to read
     record = read_from_args(args.real, args)
     print_reader_notes([record], args)
     real, part = _one_channel(record, "real")

@@ -17,7 +17,7 @@ from allanite.cli.record_options import (
     read_sensors,
     warn_implausible,
 )
-from allanite.cli.sim_config import add_sim_config_arguments, load_sim_model
+from allanite.cli.sim_config import add_sim_config_arguments, check_sim_model, load_sim_model
 from allanite.report import Datasheet, DeviceAnalysis, build_report
 
 __all__ = ["register", "run"]
@@ -138,6 +138,7 @@ def run(args: argparse.Namespace) -> int:
     if not args.files and not args.example:
         raise ValueError("give at least one record FILE, or --example")
     sheet = Datasheet.load(args.datasheet) if args.datasheet else None
+    check_sim_model(args)  # before the records: a bag may take minutes to read
     sources: list[str | None] = list(args.files) or [None]
     devices = []
     for path in progress(sources, desc="analysing", total=len(sources)):

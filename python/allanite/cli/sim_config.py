@@ -31,6 +31,7 @@ from allanite.units import RECORD_UNIT, sensor_kind
 __all__ = [
     "LoadedSim",
     "add_sim_config_arguments",
+    "check_sim_model",
     "config_changes",
     "load_sim_model",
     "write_corrected",
@@ -80,6 +81,52 @@ class LoadedSim:
     sensor: str = "gyro"
 
 
+def _noisy(config: ImuConfig, sensor: str, name: str, fmt: str) -> NoiseModel:
+    """The model of ``sensor``, or a ValueError when the config gives it no noise at all."""
+    model = config.model(sensor)
+    if model.terms:
+        return model
+    off = [n for n in config.notes if n.startswith(f"{sensor}:") and 'type="none"' in n]
+    if off:  # the entries are there, but the simulator does not use them
+        raise ValueError(f"{name} ({fmt}) gives the {sensor} no noise: {off[0].split(': ', 1)[1]}")
+    # a simulator config with every noise entry zero: a noiseless sensor
+    raise ValueError(
+        f"{name} ({fmt}) gives the {sensor} no noise: every {sensor} noise entry is "
+        f"zero, so there is no simulated sensor to compare; set its {sensor} noise, or "
+        "give a config that holds it (allanite model convert FITTED.json CONFIG --template "
+        "CONFIG writes a fitted model into it)"
+    )
+
+
+def check_sim_model(args: argparse.Namespace) -> None:
+    """Check ``--sim-model`` before the record is read (a bag may take minutes to read).
+
+    The config must be readable and give the compared sensor (``--sim-sensor``, else the
+    sensor of the first ``--units``) some noise; its rate, when it needs one, comes later from
+    the record, so a stand-in rate is used here only to read it.
+    """
+    from pathlib import Path
+
+    if not getattr(args, "sim_model", None):
+        return
+    path = Path(args.sim_model)
+    fmt = args.sim_format or detect_format(path, read_text_file(path, CONFIG_TEXT))
+    rate = args.sim_rate or getattr(args, "fs", None)
+    try:
+        config = read_config(path, format=fmt, rate=rate)
+    except ValueError as exc:
+        if rate is not None or "update rate is needed" not in str(exc):
+            raise
+        config = read_config(path, format=fmt, rate=1.0)  # the laws' zero tests need no rate
+    units = (getattr(args, "units", None) or "").split(",")[0].strip() or None
+    kind = sensor_kind(units) if units else None
+    if args.sim_sensor is None and kind not in ("gyro", "accelerometer"):
+        return  # the sensor is known once the record's unit is
+    sensor = args.sim_sensor or _sensor_of(units)
+    if getattr(config, sensor) is not None:
+        _noisy(config, sensor, path.name, fmt)
+
+
 def load_sim_model(args: argparse.Namespace, fs: float, units: str | None) -> LoadedSim:
     """Read ``--sim-model`` in any format; the model comes in the record's rate unit."""
     from pathlib import Path
@@ -101,14 +148,7 @@ def load_sim_model(args: argparse.Namespace, fs: float, units: str | None) -> Lo
         config = read_config(path, format=fmt, rate=fs)  # rate-dependent laws (AirSim > 1 kHz)
     sensor = args.sim_sensor or _sensor_of(units)
     _check_sensor(config, sensor, units, path.name, chosen=args.sim_sensor is not None)
-    model = config.model(sensor)
-    if not model.terms:  # a simulator config with every noise entry zero: a noiseless sensor
-        raise ValueError(
-            f"{path.name} ({fmt}) gives the {sensor} no noise: every {sensor} noise entry is "
-            f"zero, so there is no simulated sensor to compare; set its {sensor} noise, or "
-            "give a config that holds it (allanite model convert FITTED.json CONFIG --template "
-            "CONFIG writes a fitted model into it)"
-        )
+    model = _noisy(config, sensor, path.name, fmt)
     if fmt == "allanite":
         model = NoiseModel.from_json(path.read_text(encoding="utf-8"))
     model_unit = model.units["rate"]

@@ -99,8 +99,13 @@ def _child(el: ET.Element, name: str) -> ET.Element | None:
     return None
 
 
+def _disabled(noise: ET.Element | None) -> bool:
+    """Whether a ``<noise>`` element is switched off (``type="none"``: its entries unused)."""
+    return noise is not None and noise.get("type", "gaussian").lower() == "none"
+
+
 def _axis_values(noise: ET.Element | None, where: str) -> dict[str, float]:
-    if noise is None or noise.get("type", "gaussian").lower() == "none":
+    if noise is None or _disabled(noise):
         return {}
     out = {}
     for name in FIELDS:
@@ -159,6 +164,14 @@ def read(text: str, *, rate: float | None = None, axis: str = "x") -> ImuConfig:
         if axis not in per_axis:
             raise ValueError(f"axis must be one of x, y, z, got {axis!r}")
         chosen = per_axis[axis]
+        off = [
+            a for a in AXES if _disabled(_child(_child(block, a) or ET.Element("none"), "noise"))
+        ]
+        if off:
+            notes.append(
+                f'{sensor}: <noise type="none"> on axis {", ".join(off)}: gz-sensors adds no '
+                'noise there and ignores its entries; set type="gaussian" to use them'
+            )
         differ = [a for a in AXES if per_axis[a] != chosen]
         if differ:
             notes.append(

@@ -41,6 +41,9 @@ UNITS = {
     "update_rate": "Hz",
 }
 
+#: the keys of a Kalibr imu.yaml besides the densities (``kalibr_common/ConfigReader.py``)
+OTHER_KEYS = ("update_rate", "rostopic", "time_offset")
+
 
 def has_keys(text: str) -> bool:
     """Whether ``text`` names any of the four density keys (a one-sensor file holds two)."""
@@ -57,7 +60,9 @@ def read(text: str, *, rate: float | None = None) -> ImuConfig:
     data = load_yaml(text, "Kalibr imu.yaml")
     if rate is None and "update_rate" in data:
         rate = number(data["update_rate"], "Kalibr imu.yaml: update_rate") or None
-    return from_densities(data, KEYS, fmt=NAME, rate=rate, what="Kalibr imu.yaml")
+    return from_densities(
+        data, KEYS, fmt=NAME, rate=rate, what="Kalibr imu.yaml", other_keys=OTHER_KEYS
+    )
 
 
 def entries(
