@@ -90,3 +90,91 @@ def test_noise_type_none_is_noted_when_reading(tmp_path):
     assert any('type="none"' in n and "x, y, z" in n for n in cfg.notes)
     sdf.write_text(_sdf("gaussian"))
     assert read_config(sdf).model("gyro").terms
+
+
+def _gyro_axis(a: str) -> str:
+    return f"""          <{a}>
+            <noise type="gaussian">
+              <mean>0.0</mean>
+              <stddev>0.0002</stddev>
+              <bias_mean>0.0000075</bias_mean>
+              <bias_stddev>0.0000008</bias_stddev>
+              <dynamic_bias_stddev>0.0000004</dynamic_bias_stddev>
+              <dynamic_bias_correlation_time>100000.0</dynamic_bias_correlation_time>
+            </noise>
+          </{a}>
+"""
+
+
+REAL_SDF = (
+    """<?xml version="1.0" ?>
+<!-- x500 IMU, tuned by hand -->
+<sdf version='1.9'>
+  <model name='x500'>
+    <link name='base_link'>
+      <inertial><mass>2.0</mass></inertial>
+      <sensor name='imu_sensor' type='imu'>
+        <always_on>1</always_on>
+        <update_rate>200.0</update_rate>
+        <topic>imu/data</topic>
+        <plugin filename='gz-sim-imu-system' name='gz::sim::systems::Imu'/>
+        <imu>
+        <angular_velocity>
+"""
+    + "".join(_gyro_axis(a) for a in "xyz")
+    + """        </angular_velocity>
+        <linear_acceleration>
+          <x><noise type="gaussian"><mean>0.0</mean><stddev>0.0025</stddev></noise></x>
+          <y><noise type="gaussian"><mean>0.0</mean><stddev>0.0025</stddev></noise></y>
+          <z><noise type="gaussian"><mean>0.0</mean><stddev>0.0025</stddev></noise></z>
+        </linear_acceleration>
+        </imu>
+      </sensor>
+    </link>
+  </model>
+</sdf>
+"""
+)
+
+REAL_KALIBR = """# Kalibr IMU noise, from the datasheet
+rostopic: /imu0
+update_rate: 200.0    # Hz
+
+accelerometer_noise_density: 0.0     # m/s^2/sqrt(Hz)
+accelerometer_random_walk: 3.0e-3     # m/s^3/sqrt(Hz)
+gyroscope_noise_density: 1.6968e-04   # rad/s/sqrt(Hz)
+gyroscope_random_walk: 1.9393e-05     # rad/s^2/sqrt(Hz)
+"""
+
+
+def _changed(before: str, after: str) -> list[str]:
+    """The lines of ``before`` that ``after`` changed or removed (notes added are allowed)."""
+    diff = difflib.ndiff(before.splitlines(), after.splitlines())
+    return [line[2:] for line in diff if line.startswith("- ")]
+
+
+@pytest.mark.parametrize("name, text", [("imu.sdf", REAL_SDF), ("imu.yaml", REAL_KALIBR)])
+def test_write_into_a_users_file_changes_only_the_changed_values(tmp_path, name, text):
+    src = tmp_path / name
+    src.write_text(text)
+    config = read_config(src)
+    gyro = config.model("gyro")
+    white = gyro.terms_of_type("white")[0]
+    terms = [White(N=3 * white.N) if t is white else t for t in gyro.terms]
+    fixed = config.with_model("gyro", NoiseModel(tuple(terms), gyro.units))
+    out = tmp_path / ("fixed" + src.suffix)
+    write = pytest.importorskip("allanite.formats").write_config
+    written = write(fixed, out, template=src)
+    after = out.read_text()
+    changed = _changed(text, after)
+    key = "stddev>0.0002<" if name.endswith(".sdf") else "gyroscope_noise_density"
+    assert changed, after
+    assert all(key in line for line in changed), changed
+    assert len(changed) == (3 if name.endswith(".sdf") else 1)
+    # every added line is a note of the write, or a changed value
+    added = [ln for ln in difflib.ndiff(text.splitlines(), after.splitlines()) if ln[:2] == "+ "]
+    assert all("projected" in ln or "dropped" in ln or "stddev" in ln or "gyroscope_noise" in ln
+               for ln in added), added  # fmt: skip
+    assert len(added) == len(changed) + len(written.report())
+    back = read_config(out).model("gyro").terms_of_type("white")[0]
+    assert math.isclose(back.N, 3 * white.N, rel_tol=1e-8)
