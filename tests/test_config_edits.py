@@ -178,3 +178,21 @@ def test_write_into_a_users_file_changes_only_the_changed_values(tmp_path, name,
     assert len(added) == len(changed) + len(written.report())
     back = read_config(out).model("gyro").terms_of_type("white")[0]
     assert math.isclose(back.N, 3 * white.N, rel_tol=1e-8)
+
+
+@pytest.mark.parametrize("to, line", [("kalibr", "rostopic: /imu/data"),
+                                      ("openvins", "  rostopic: /imu/data")])  # fmt: skip
+def test_convert_an_sdf_keeps_its_topic(tmp_path, to, line):
+    src = tmp_path / "imu.sdf"
+    src.write_text(REAL_SDF)
+    out = tmp_path / "imu.yaml"
+    assert main(["model", "convert", str(src), str(out), "--to", to]) == 0
+    text = out.read_text()
+    assert line in text.splitlines()
+    assert "/imu0" not in text
+    assert read_config(out, format=to).topic == "/imu/data"
+    # a config that names no topic still gets Kalibr's conventional one
+    bare = tmp_path / "bare.sdf"
+    bare.write_text(REAL_SDF.replace("<topic>imu/data</topic>", ""))
+    assert main(["model", "convert", str(bare), str(out), "--to", to]) == 0
+    assert "rostopic: /imu0" in out.read_text()

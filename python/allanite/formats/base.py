@@ -66,6 +66,9 @@ class ImuConfig:
         Name of the format it was read from (``""`` when built in code).
     notes : tuple of str
         What the reader noticed (axes that differ, simulator defaults used, ...).
+    topic : str
+        The IMU topic the config names (an SDF's ``<topic>``, Kalibr's ``rostopic``), ``""``
+        when it names none; written into formats that name one.
     """
 
     gyro: NoiseModel | None = None
@@ -74,6 +77,7 @@ class ImuConfig:
     offsets: dict[str, float] = field(default_factory=dict)
     source_format: str = ""
     notes: tuple[str, ...] = ()
+    topic: str = ""
 
     @property
     def sensors(self) -> tuple[str, ...]:
@@ -111,6 +115,7 @@ class ImuConfig:
             offsets=dict(self.offsets),
             source_format=self.source_format,
             notes=self.notes,
+            topic=self.topic,
         )
 
     def filled_from(self, template: ImuConfig) -> ImuConfig:
@@ -140,6 +145,7 @@ class ImuConfig:
             offsets=offsets,
             source_format=self.source_format,
             notes=self.notes,
+            topic=self.topic,
         )
 
 

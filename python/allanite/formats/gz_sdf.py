@@ -184,6 +184,7 @@ def read(text: str, *, rate: float | None = None, axis: str = "x") -> ImuConfig:
             offsets[sensor] = chosen["mean"]
     if not models:
         raise ValueError("SDF: the <imu> element has no angular_velocity/linear_acceleration")
+    topic = _find(root, "topic")
     return ImuConfig(
         gyro=models.get("gyro"),
         accel=models.get("accel"),
@@ -191,6 +192,7 @@ def read(text: str, *, rate: float | None = None, axis: str = "x") -> ImuConfig:
         offsets=offsets,
         source_format=NAME,
         notes=tuple(notes),
+        topic=(topic.text or "").strip() if topic is not None else "",
     )
 
 
