@@ -10,13 +10,12 @@ from __future__ import annotations
 import difflib
 import math
 
-import numpy as np
 import pytest
 
 from allanite.cli import main
 from allanite.formats import read_config
 from allanite.model import NoiseModel
-from allanite.terms import RateRandomWalk, White
+from allanite.terms import White
 
 pytest.importorskip("yaml")
 
@@ -153,7 +152,7 @@ def _changed(before: str, after: str) -> list[str]:
     return [line[2:] for line in diff if line.startswith("- ")]
 
 
-@pytest.mark.parametrize("name, text", [("imu.sdf", REAL_SDF), ("imu.yaml", REAL_KALIBR)])
+@pytest.mark.parametrize(("name", "text"), [("imu.sdf", REAL_SDF), ("imu.yaml", REAL_KALIBR)])
 def test_write_into_a_users_file_changes_only_the_changed_values(tmp_path, name, text):
     src = tmp_path / name
     src.write_text(text)
@@ -180,7 +179,7 @@ def test_write_into_a_users_file_changes_only_the_changed_values(tmp_path, name,
     assert math.isclose(back.N, 3 * white.N, rel_tol=1e-8)
 
 
-@pytest.mark.parametrize("to, line", [("kalibr", "rostopic: /imu/data"),
+@pytest.mark.parametrize(("to", "line"), [("kalibr", "rostopic: /imu/data"),
                                       ("openvins", "  rostopic: /imu/data")])  # fmt: skip
 def test_convert_an_sdf_keeps_its_topic(tmp_path, to, line):
     src = tmp_path / "imu.sdf"

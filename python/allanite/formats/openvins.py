@@ -8,7 +8,6 @@ N = noise density and RateRandomWalk K = random walk, as in :mod:`allanite.forma
 from __future__ import annotations
 
 import dataclasses
-
 from typing import Any
 
 from allanite.formats import kalibr
