@@ -20,6 +20,7 @@ from allanite.cli.sim_config import (
     check_sim_model,
     config_changes,
     load_sim_model,
+    recheck_corrected,
     write_corrected,
 )
 from allanite.io.atomic import atomic_output
@@ -263,11 +264,22 @@ def run(args: argparse.Namespace) -> int:
         progress=_progress_printer() if show else None,
     )
     failure: Exception | None = None
+    corrected = None
     if loaded is not None and args.write_corrected:
         try:
-            write_corrected(args, loaded, result)
+            corrected = write_corrected(args, loaded, result)
         except (ValueError, OSError) as exc:  # the diagnosis stands: shown first, then this
             failure = exc
+    if corrected is not None and loaded is not None:  # the file as written, same record
+        corrected = recheck_corrected(
+            corrected,
+            loaded,
+            record if record.timing is not None else real,
+            result,
+            input=part.input,
+            units=rate_unit(part),
+            progress=_progress_printer() if show else None,
+        )
     if args.output:
         with atomic_output(args.output) as tmp:
             tmp.write_text(result.to_json(indent=1))
@@ -278,6 +290,7 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         data = json.loads(result.to_json(views=False))
         data["warnings"] = list(warnings)  # plausibility findings on the real record
+        data["corrected"] = corrected.to_dict() if corrected is not None else None
         sys.stdout.write(json.dumps(data) + "\n")
     else:
         print(_summary(result))
@@ -292,6 +305,8 @@ def run(args: argparse.Namespace) -> int:
                 f"to close the gap, change in {Path(args.sim_model).name} ({loaded.format}; {how}):"
             )
             print("\n".join(f"  {line}" for line in changes))
+        if corrected is not None:
+            print("\n".join(corrected.lines()))
     if failure is not None:
         raise ValueError(
             f"the diagnosis above stands, but --write-corrected {args.write_corrected} was not "
