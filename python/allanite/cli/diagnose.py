@@ -283,10 +283,11 @@ def run(args: argparse.Namespace) -> int:
     if args.output:
         with atomic_output(args.output) as tmp:
             tmp.write_text(result.to_json(indent=1))
+    changes = config_changes(args, loaded, result) if loaded is not None else []
     if args.report:
         sim_name = Path(args.sim_model or args.sim_record).name
         channel = part.channels[0] if part.channels else Path(args.real).name
-        _write_report(result, args.report, channel=channel, model_name=sim_name)
+        _write_report(result, args.report, channel=channel, model_name=sim_name, changes=changes)
     if args.json:
         data = json.loads(result.to_json(views=False))
         data["warnings"] = list(warnings)  # plausibility findings on the real record
@@ -294,7 +295,6 @@ def run(args: argparse.Namespace) -> int:
         sys.stdout.write(json.dumps(data) + "\n")
     else:
         print(_summary(result))
-        changes = config_changes(args, loaded, result) if loaded is not None else []
         if changes and loaded is not None:
             how = (
                 f"written to {args.write_corrected}"
@@ -315,14 +315,16 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _write_report(result: Any, path: str, *, channel: str, model_name: str) -> None:
+def _write_report(
+    result: Any, path: str, *, channel: str, model_name: str, changes: list[str]
+) -> None:
     """Write a self-contained HTML page: the report's diagnosis section and the three views."""
     from allanite.plot.diagnosis import diagnosis_figure
     from allanite.plot.export import figure_bytes
     from allanite.report import html as h
     from allanite.report.diagnosis import diagnosis_html
 
-    body = diagnosis_html(result, channel=channel, model_name=model_name)
+    body = diagnosis_html(result, channel=channel, model_name=model_name, changes=changes)
     png = figure_bytes(diagnosis_figure(result), "png")
     body += h.figure(
         png,
