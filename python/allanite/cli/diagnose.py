@@ -271,15 +271,18 @@ def run(args: argparse.Namespace) -> int:
         except (ValueError, OSError) as exc:  # the diagnosis stands: shown first, then this
             failure = exc
     if corrected is not None and loaded is not None:  # the file as written, same record
-        corrected = recheck_corrected(
-            corrected,
-            loaded,
-            record if record.timing is not None else real,
-            result,
-            input=part.input,
-            units=rate_unit(part),
-            progress=_progress_printer() if show else None,
-        )
+        try:
+            corrected = recheck_corrected(
+                corrected,
+                loaded,
+                record if record.timing is not None else real,
+                result,
+                input=part.input,
+                units=rate_unit(part),
+                progress=_progress_printer() if show else None,
+            )
+        except ValueError as exc:  # the diagnosis stands: shown first, then this
+            failure = ValueError(f"it was written, but could not be re-checked as written: {exc}")
     if args.output:
         with atomic_output(args.output) as tmp:
             tmp.write_text(result.to_json(indent=1))
@@ -298,7 +301,7 @@ def run(args: argparse.Namespace) -> int:
         if changes and loaded is not None:
             how = (
                 f"written to {args.write_corrected}"
-                if args.write_corrected and failure is None
+                if args.write_corrected and corrected is not None
                 else "--write-corrected OUT writes it"
             )
             print(
@@ -308,9 +311,10 @@ def run(args: argparse.Namespace) -> int:
         if corrected is not None:
             print("\n".join(corrected.lines()))
     if failure is not None:
+        done = "" if corrected is not None else " was not written"
         raise ValueError(
-            f"the diagnosis above stands, but --write-corrected {args.write_corrected} was not "
-            f"written: {failure}"
+            f"the diagnosis above stands, but --write-corrected {args.write_corrected}{done}: "
+            f"{failure}"
         ) from failure
     return 0
 
