@@ -43,7 +43,10 @@ params_units, gap_before, gap_after, shrinkage, consistent_after, ...}, ...] (si
 best first), explanation {effects, gap_before, gap_after, consistent_after, p_after, share,
 explained, terms, holdout} or null (the joint set; terms: the model JSON "terms" with the
 effects added; with --sim-record, the effects' terms alone), holdout {shrinkage, ...} or null
-(the best single effect), meta, warnings. The text leads with the headline and what remains
+(the best single effect), meta, warnings, corrected {path, format, folded, projections,
+adev_error, tau_range_s, recheck {statistic, p_value, significant, n_samples}} or null (with
+--write-corrected: the file read back under its format's law and re-checked against the same
+record). The text leads with the headline and what remains
 unexplained, and shows parameters in the customary units of `allanite fit` (N in
 deg/sqrt(h), ...); the JSON keeps them in the units of --units, named in params_units.
 """
