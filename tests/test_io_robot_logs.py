@@ -162,6 +162,17 @@ def test_several_imu_topics_need_topic(tmp_path):
 
 
 # --- PX4 ULog ------------------------------------------------------------------------------
+@pytest.mark.parametrize("kind", ["ros1", "sqlite3", "mcap"])
+def test_topic_with_or_without_its_leading_slash(tmp_path, kind):
+    path = tmp_path / ("imu.bag" if kind == "ros1" else "imu_bag")
+    topics = ("/imu/data", "/imu/raw") if kind != "mcap" else ("imu/data", "/imu/raw")
+    write_bag(path, kind, _signals(), np.arange(N) / FS, topics=topics)
+    for given in ("imu/data", "/imu/data", "imu/raw"):
+        assert read_record(path, topic=given).n_samples == N
+    with pytest.raises(InputError, match="imu/data"):  # the topic list still shows
+        read_record(path, topic="imu/dat")
+
+
 def write_ulog(path, topic: str, fields: list[tuple[str, str]], rows: list[tuple]) -> None:
     """Minimal ULog: header, one format (F), one subscription (A), data messages (D)."""
     codes = {"uint64_t": "Q", "float": "f", "uint32_t": "I", "int32_t": "i"}

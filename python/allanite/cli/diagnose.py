@@ -17,8 +17,10 @@ from allanite.cli.record_options import (
 )
 from allanite.cli.sim_config import (
     add_sim_config_arguments,
+    check_sim_model,
     config_changes,
     load_sim_model,
+    recheck_corrected,
     write_corrected,
 )
 from allanite.io.atomic import atomic_output
@@ -41,7 +43,10 @@ params_units, gap_before, gap_after, shrinkage, consistent_after, ...}, ...] (si
 best first), explanation {effects, gap_before, gap_after, consistent_after, p_after, share,
 explained, terms, holdout} or null (the joint set; terms: the model JSON "terms" with the
 effects added; with --sim-record, the effects' terms alone), holdout {shrinkage, ...} or null
-(the best single effect), meta, warnings. The text leads with the headline and what remains
+(the best single effect), meta, warnings, corrected {path, format, folded, projections,
+adev_error, tau_range_s, recheck {statistic, p_value, significant, n_samples}} or null (with
+--write-corrected: the file read back under its format's law and re-checked against the same
+record). The text leads with the headline and what remains
 unexplained, and shows parameters in the customary units of `allanite fit` (N in
 deg/sqrt(h), ...); the JSON keeps them in the units of --units, named in params_units.
 """
@@ -226,6 +231,7 @@ def run(args: argparse.Namespace) -> int:
 
     if args.seed < 0:
         raise ValueError(f"--seed must be a non-negative integer, got {args.seed}")
+    check_sim_model(args)  # before the record: a bag may take minutes to read
     record = read_from_args(args.real, args)
     print_reader_notes([record], args)
     real, part = _one_channel(record, "real")
@@ -261,51 +267,71 @@ def run(args: argparse.Namespace) -> int:
         progress=_progress_printer() if show else None,
     )
     failure: Exception | None = None
+    corrected = None
     if loaded is not None and args.write_corrected:
         try:
-            write_corrected(args, loaded, result)
+            corrected = write_corrected(args, loaded, result)
         except (ValueError, OSError) as exc:  # the diagnosis stands: shown first, then this
             failure = exc
+    if corrected is not None and loaded is not None:  # the file as written, same record
+        try:
+            corrected = recheck_corrected(
+                corrected,
+                loaded,
+                record if record.timing is not None else real,
+                result,
+                input=part.input,
+                units=rate_unit(part),
+                progress=_progress_printer() if show else None,
+            )
+        except ValueError as exc:  # the diagnosis stands: shown first, then this
+            failure = ValueError(f"it was written, but could not be re-checked as written: {exc}")
     if args.output:
         with atomic_output(args.output) as tmp:
             tmp.write_text(result.to_json(indent=1))
+    changes = config_changes(args, loaded, result) if loaded is not None else []
     if args.report:
         sim_name = Path(args.sim_model or args.sim_record).name
         channel = part.channels[0] if part.channels else Path(args.real).name
-        _write_report(result, args.report, channel=channel, model_name=sim_name)
+        _write_report(result, args.report, channel=channel, model_name=sim_name, changes=changes)
     if args.json:
         data = json.loads(result.to_json(views=False))
         data["warnings"] = list(warnings)  # plausibility findings on the real record
+        data["corrected"] = corrected.to_dict() if corrected is not None else None
         sys.stdout.write(json.dumps(data) + "\n")
     else:
         print(_summary(result))
-        changes = config_changes(args, loaded, result) if loaded is not None else []
         if changes and loaded is not None:
             how = (
                 f"written to {args.write_corrected}"
-                if args.write_corrected and failure is None
+                if args.write_corrected and corrected is not None
                 else "--write-corrected OUT writes it"
             )
             print(
                 f"to close the gap, change in {Path(args.sim_model).name} ({loaded.format}; {how}):"
             )
             print("\n".join(f"  {line}" for line in changes))
+        if corrected is not None:
+            print("\n".join(corrected.lines()))
     if failure is not None:
+        done = "" if corrected is not None else " was not written"
         raise ValueError(
-            f"the diagnosis above stands, but --write-corrected {args.write_corrected} was not "
-            f"written: {failure}"
+            f"the diagnosis above stands, but --write-corrected {args.write_corrected}{done}: "
+            f"{failure}"
         ) from failure
     return 0
 
 
-def _write_report(result: Any, path: str, *, channel: str, model_name: str) -> None:
+def _write_report(
+    result: Any, path: str, *, channel: str, model_name: str, changes: list[str]
+) -> None:
     """Write a self-contained HTML page: the report's diagnosis section and the three views."""
     from allanite.plot.diagnosis import diagnosis_figure
     from allanite.plot.export import figure_bytes
     from allanite.report import html as h
     from allanite.report.diagnosis import diagnosis_html
 
-    body = diagnosis_html(result, channel=channel, model_name=model_name)
+    body = diagnosis_html(result, channel=channel, model_name=model_name, changes=changes)
     png = figure_bytes(diagnosis_figure(result), "png")
     body += h.figure(
         png,

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import re
 from pathlib import Path
 from typing import Any
 
@@ -17,7 +18,12 @@ from allanite.cli.record_options import (
     read_sensors,
     warn_implausible,
 )
-from allanite.cli.sim_config import add_sim_config_arguments, load_sim_model
+from allanite.cli.sim_config import (
+    add_sim_config_arguments,
+    check_sim_model,
+    config_changes,
+    load_sim_model,
+)
 from allanite.report import Datasheet, DeviceAnalysis, build_report
 
 __all__ = ["register", "run"]
@@ -98,19 +104,55 @@ def fit_channels(device: DeviceAnalysis) -> tuple[Any, ...]:
     )
 
 
-def diagnosis_parts(device: DeviceAnalysis, args: argparse.Namespace) -> tuple[str, dict[str, Any]]:
-    """HTML and figures of the sim-to-real diagnosis of ``device`` against ``--sim-model``.
+def _diagnose_device(
+    device: DeviceAnalysis, args: argparse.Namespace
+) -> list[tuple[str, Any, list[str]]]:
+    """``(channel, diagnosis, config changes)`` of every channel of one device.
 
-    The config is read as ``allanite diagnose`` reads it (any format, in the record's unit).
+    The config is read as ``allanite diagnose`` reads it (any format, in the device's unit);
+    a device whose sensor the config holds no model of is listed as not diagnosed, with why.
     """
-    from allanite.report.diagnosis import diagnosis_section
+    from allanite.report.diagnosis import run_diagnosis
 
     record = device.record
-    fs = record.longest_segment().require_fs()
-    loaded = load_sim_model(args, fs, rate_unit(record))
-    return diagnosis_section(
-        record, loaded.model, model_name=Path(args.sim_model).name, n_mc=args.n_mc
-    )
+    prefix = f"{device.name}: " if device.name else ""
+    try:
+        loaded = load_sim_model(args, record.longest_segment().require_fs(), rate_unit(record))
+    except ValueError as exc:
+        if "holds no" not in str(exc):
+            raise
+        return [(prefix + c, None, [str(exc)]) for c in record.channels]
+    out = []
+    channels = range(len(record.channels))
+    for c in progress(channels, desc="diagnosing", total=len(channels)):
+        diagnosis = run_diagnosis(record, loaded.model, c, n_mc=args.n_mc)
+        changes = config_changes(args, loaded, diagnosis)
+        out.append((prefix + record.channels[c], diagnosis, changes))
+    return out
+
+
+def diagnosis_parts(
+    devices: list[DeviceAnalysis], args: argparse.Namespace
+) -> tuple[str, dict[str, Any]]:
+    """HTML and figures of the sim-to-real diagnosis of every channel against ``--sim-model``.
+
+    One verdict per channel (an overview table first), the config changes each would need,
+    and each channel's three views.
+    """
+    from allanite.report.diagnosis import channels_html
+
+    items = [item for device in devices for item in _diagnose_device(device, args)]
+    name = Path(args.sim_model).name
+    html = channels_html(items, model_name=name)
+    figures: dict[str, Any] = {}
+    try:
+        from allanite.plot.diagnosis import diagnosis_figure
+    except ImportError:
+        return html, figures
+    for channel, diagnosis, _ in items:
+        if diagnosis is not None:
+            figures["views-" + re.sub(r"[^\w.-]+", "_", channel)] = diagnosis_figure(diagnosis)
+    return html, figures
 
 
 def _sensor_name(record: Any) -> str:
@@ -138,6 +180,7 @@ def run(args: argparse.Namespace) -> int:
     if not args.files and not args.example:
         raise ValueError("give at least one record FILE, or --example")
     sheet = Datasheet.load(args.datasheet) if args.datasheet else None
+    check_sim_model(args)  # before the records: a bag may take minutes to read
     sources: list[str | None] = list(args.files) or [None]
     devices = []
     for path in progress(sources, desc="analysing", total=len(sources)):
@@ -163,7 +206,7 @@ def run(args: argparse.Namespace) -> int:
     diag_html = None
     diag_figures = None
     if args.sim_model:
-        diag_html, diag_figures = diagnosis_parts(devices[0], args)
+        diag_html, diag_figures = diagnosis_parts(devices, args)
     report = build_report(
         devices,
         reference=reference,

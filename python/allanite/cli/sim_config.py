@@ -29,10 +29,13 @@ from allanite.model import NoiseModel, read_text_file
 from allanite.units import RECORD_UNIT, sensor_kind
 
 __all__ = [
+    "CorrectedWrite",
     "LoadedSim",
     "add_sim_config_arguments",
+    "check_sim_model",
     "config_changes",
     "load_sim_model",
+    "recheck_corrected",
     "write_corrected",
 ]
 
@@ -80,6 +83,52 @@ class LoadedSim:
     sensor: str = "gyro"
 
 
+def _noisy(config: ImuConfig, sensor: str, name: str, fmt: str) -> NoiseModel:
+    """The model of ``sensor``, or a ValueError when the config gives it no noise at all."""
+    model = config.model(sensor)
+    if model.terms:
+        return model
+    off = [n for n in config.notes if n.startswith(f"{sensor}:") and 'type="none"' in n]
+    if off:  # the entries are there, but the simulator does not use them
+        raise ValueError(f"{name} ({fmt}) gives the {sensor} no noise: {off[0].split(': ', 1)[1]}")
+    # a simulator config with every noise entry zero: a noiseless sensor
+    raise ValueError(
+        f"{name} ({fmt}) gives the {sensor} no noise: every {sensor} noise entry is "
+        f"zero, so there is no simulated sensor to compare; set its {sensor} noise, or "
+        "give a config that holds it (allanite model convert FITTED.json CONFIG --template "
+        "CONFIG writes a fitted model into it)"
+    )
+
+
+def check_sim_model(args: argparse.Namespace) -> None:
+    """Check ``--sim-model`` before the record is read (a bag may take minutes to read).
+
+    The config must be readable and give the compared sensor (``--sim-sensor``, else the
+    sensor of the first ``--units``) some noise; its rate, when it needs one, comes later from
+    the record, so a stand-in rate is used here only to read it.
+    """
+    from pathlib import Path
+
+    if not getattr(args, "sim_model", None):
+        return
+    path = Path(args.sim_model)
+    fmt = args.sim_format or detect_format(path, read_text_file(path, CONFIG_TEXT))
+    rate = args.sim_rate or getattr(args, "fs", None)
+    try:
+        config = read_config(path, format=fmt, rate=rate)
+    except ValueError as exc:
+        if rate is not None or "update rate is needed" not in str(exc):
+            raise
+        config = read_config(path, format=fmt, rate=1.0)  # the laws' zero tests need no rate
+    units = (getattr(args, "units", None) or "").split(",")[0].strip() or None
+    kind = sensor_kind(units) if units else None
+    if args.sim_sensor is None and kind not in ("gyro", "accelerometer"):
+        return  # the sensor is known once the record's unit is
+    sensor = args.sim_sensor or _sensor_of(units)
+    if getattr(config, sensor) is not None:
+        _noisy(config, sensor, path.name, fmt)
+
+
 def load_sim_model(args: argparse.Namespace, fs: float, units: str | None) -> LoadedSim:
     """Read ``--sim-model`` in any format; the model comes in the record's rate unit."""
     from pathlib import Path
@@ -101,14 +150,7 @@ def load_sim_model(args: argparse.Namespace, fs: float, units: str | None) -> Lo
         config = read_config(path, format=fmt, rate=fs)  # rate-dependent laws (AirSim > 1 kHz)
     sensor = args.sim_sensor or _sensor_of(units)
     _check_sensor(config, sensor, units, path.name, chosen=args.sim_sensor is not None)
-    model = config.model(sensor)
-    if not model.terms:  # a simulator config with every noise entry zero: a noiseless sensor
-        raise ValueError(
-            f"{path.name} ({fmt}) gives the {sensor} no noise: every {sensor} noise entry is "
-            f"zero, so there is no simulated sensor to compare; set its {sensor} noise, or "
-            "give a config that holds it (allanite model convert FITTED.json CONFIG --template "
-            "CONFIG writes a fitted model into it)"
-        )
+    model = _noisy(config, sensor, path.name, fmt)
     if fmt == "allanite":
         model = NoiseModel.from_json(path.read_text(encoding="utf-8"))
     model_unit = model.units["rate"]
@@ -168,14 +210,14 @@ def _sensor_of(units: str | None) -> str:
     return "accel" if sensor_kind(units) == "accelerometer" else "gyro"
 
 
-def _corrected(loaded: LoadedSim, diagnosis: Any) -> tuple[ImuConfig, str]:
-    """The config with the diagnosed effects folded in, and what was folded in."""
+def _corrected(loaded: LoadedSim, diagnosis: Any) -> tuple[ImuConfig, NoiseModel, str]:
+    """The config with the diagnosed effects folded in, its sensor's model, what was folded."""
     from allanite.formats import format_module
     from allanite.formats.corrected import corrected_model
 
     holds = format_module(loaded.format).HOLDS
     model, what = corrected_model(loaded.model, diagnosis, holds)
-    return loaded.config.with_model(loaded.sensor, model), what
+    return loaded.config.with_model(loaded.sensor, model), model, what
 
 
 def _tau_range(diagnosis: Any) -> tuple[float, float]:
@@ -219,7 +261,7 @@ def config_changes(args: argparse.Namespace, loaded: LoadedSim, diagnosis: Any) 
     # layout (a one-line SDF indented, 2e-3 written as 0.002) is no change
     text = Path(args.sim_model).read_text(encoding="utf-8")
     try:
-        config, _ = _corrected(loaded, diagnosis)
+        config, _, _ = _corrected(loaded, diagnosis)
         before, after = (
             module.write(c, rate=loaded.rate, template=text, tau_range=_tau_range(diagnosis)).text
             for c in (loaded.config, config)
@@ -256,9 +298,109 @@ def config_changes(args: argparse.Namespace, loaded: LoadedSim, diagnosis: Any) 
     return out
 
 
-def write_corrected(args: argparse.Namespace, loaded: LoadedSim, diagnosis: Any) -> None:
-    """Write the corrected config and list what was folded in, dropped and projected."""
-    config, what = _corrected(loaded, diagnosis)
+#: the gap and shrinkage of the unprojected effects in a fold description (``corrected_model``)
+_UNPROJECTED_GAP = re.compile(r";? ?gap [^;]*? -> [^;]*? \(shrinkage [^)]*\)")
+
+
+@dataclass(frozen=True)
+class CorrectedWrite:
+    """A corrected config as written, and the gap it leaves on the diagnosed record.
+
+    Attributes
+    ----------
+    path, format : str
+        The file written and its format.
+    folded : str
+        What was folded in (the effects, in customary units); without the shrinkage of the
+        unprojected effects when the file holds a projection of them.
+    report : list of str
+        What the format dropped or projected (:meth:`Written.report`).
+    adev_error : float
+        Largest relative difference between the Allan deviation of the model read back from the
+        file (the format's own law) and of the corrected model, over ``tau_range``.
+    tau_range : tuple of float
+        The diagnosis' tau range (s).
+    recheck : GapTest or None
+        The gap test of the record against the file as written (same n_mc, seed, level).
+    """
+
+    path: str
+    format: str
+    folded: str
+    report: list[str]
+    adev_error: float
+    tau_range: tuple[float, float]
+    recheck: Any = None
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready fields (``corrected`` in ``diagnose --json``)."""
+        return {
+            "path": self.path,
+            "format": self.format,
+            "folded": self.folded,
+            "projections": list(self.report),
+            "adev_error": float(self.adev_error),
+            "tau_range_s": list(self.tau_range),
+            "recheck": self.recheck.to_dict() if self.recheck is not None else None,
+        }
+
+    def lines(self) -> list[str]:
+        """The summary lines: the gap after projection into the format, with its error."""
+        a, b = self.tau_range
+        held = (
+            f"the file holds a projection: its Allan deviation differs from the corrected "
+            f"model's by up to {100 * self.adev_error:.0f} % over {a:.3g}-{b:.3g} s"
+            if self.report
+            else f"the format holds the correction (Allan deviation within "
+            f"{100 * self.adev_error:.2g} % over {a:.3g}-{b:.3g} s)"
+        )
+        out = [f"corrected config {self.path} ({self.format}), re-checked as written:", f"  {held}"]
+        out.extend(f"  {line}" for line in self.report)
+        if self.recheck is not None:
+            r = self.recheck
+            verdict = (
+                "SIGNIFICANT: the written config leaves a gap"
+                if r.significant
+                else "consistent with chance: the written config closes the gap"
+            )
+            out.append(
+                f"  gap against the same record as written: G = {r.statistic:.4g}, "
+                f"p = {r.p_value:.3g}: {verdict}"
+            )
+        return out
+
+
+def _read_back(path: str, loaded: LoadedSim) -> NoiseModel:
+    """The model the written file gives the sensor, under the format's own law."""
+    from pathlib import Path
+
+    if loaded.format == "allanite":
+        model = NoiseModel.from_json(Path(path).read_text(encoding="utf-8"))
+    else:
+        model = read_config(path, format=loaded.format, rate=loaded.rate).model(loaded.sensor)
+    unit = loaded.model.units["rate"]
+    return model if model.units["rate"] == unit else model.in_units(unit)
+
+
+def _adev_error(a: NoiseModel, b: NoiseModel, tau: Any, dt: float) -> float:
+    """Largest ``|ADEV_b / ADEV_a - 1|`` over ``tau`` (0 where both vanish)."""
+    import numpy as np
+
+    x, y = a.adev(tau, dt), b.adev(tau, dt)
+    keep = x > 0
+    if not np.any(keep):
+        return 0.0 if not np.any(y > 0) else float("inf")
+    return float(np.max(np.abs(y[keep] / x[keep] - 1.0)))
+
+
+def write_corrected(args: argparse.Namespace, loaded: LoadedSim, diagnosis: Any) -> CorrectedWrite:
+    """Write the corrected config and list what was folded in, dropped and projected.
+
+    The file is read back with the format's own law: the returned record says how far its
+    Allan deviation departs from the corrected model's (:func:`recheck_corrected` then
+    tests it against the record).
+    """
+    config, model, what = _corrected(loaded, diagnosis)
     written = write_config(
         config,
         args.write_corrected,
@@ -267,6 +409,39 @@ def write_corrected(args: argparse.Namespace, loaded: LoadedSim, diagnosis: Any)
         template=args.sim_model,
         tau_range=_tau_range(diagnosis),
     )
+    mine = [ln for ln in written.report() if ln.split(" ", 1)[1].startswith(f"{loaded.sensor}:")]
+    if mine:  # the file does not hold the effects as diagnosed: their shrinkage is not its
+        what = _UNPROJECTED_GAP.sub("", what) + "; as written, see the re-check"
     print(f"corrected config {args.write_corrected}: {what}", file=sys.stderr)
     for line in written.report():
         print(f"  {line}", file=sys.stderr)
+    back = _read_back(args.write_corrected, loaded)
+    error = _adev_error(model, back, diagnosis.tau.tau, 1.0 / float(diagnosis.meta["fs"]))
+    return CorrectedWrite(
+        args.write_corrected, loaded.format, what, mine, error, _tau_range(diagnosis)
+    )
+
+
+def recheck_corrected(
+    done: CorrectedWrite, loaded: LoadedSim, real: Any, diagnosis: Any, **options: Any
+) -> CorrectedWrite:
+    """``done`` with the gap test of ``real`` against the file as written.
+
+    ``options`` are :func:`~allanite.diagnosis.recheck.gap_test`'s (``input``, ``units``,
+    ``progress``); the diagnosis' sampling rate, n_mc, significance and seed are used.
+    """
+    import dataclasses
+
+    from allanite.diagnosis.recheck import gap_test
+
+    meta = diagnosis.meta
+    test = gap_test(
+        real,
+        _read_back(done.path, loaded),
+        fs=float(meta["fs"]),
+        n_mc=int(meta["n_mc"]),
+        significance=float(meta["significance"]),
+        seed=int(meta["seed"]),
+        **options,
+    )
+    return dataclasses.replace(done, recheck=test)

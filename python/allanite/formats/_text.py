@@ -8,12 +8,25 @@ from typing import Any
 
 from allanite.extras import require
 
-__all__ = ["load_yaml", "number_text", "update_keys"]
+__all__ = ["keep_number", "load_yaml", "number_text", "update_keys"]
 
 
 def number_text(value: float) -> str:
     """A float as config text, round-trip exact to 10 significant digits."""
     return f"{value:.10g}"
+
+
+def keep_number(old: str, new: str) -> str:
+    """``old`` when both texts are the same number (``0.0`` and ``0``), else ``new``.
+
+    A config written into a user's file keeps the user's spelling of the values it does not
+    change (:func:`number_text` writes 10 significant digits, so equal within 1e-9).
+    """
+    try:
+        a, b = float(old), float(new)
+    except ValueError:
+        return new
+    return old if abs(a - b) <= 1e-9 * max(abs(a), abs(b)) else new
 
 
 def load_yaml(text: str, what: str) -> dict[str, Any]:
@@ -55,7 +68,8 @@ def update_keys(text: str, values: dict[str, str], *, indent: str = "") -> str:
         for i, line in enumerate(lines):
             match = pattern.match(line)
             if match:
-                lines[i] = f"{match.group(1)}{value}{match.group(3)}"
+                kept = keep_number(match.group(2).strip(), value)
+                lines[i] = f"{match.group(1)}{kept}{match.group(3)}"
                 break
         else:
             missing.append(f"{indent}{key}: {value}")

@@ -9,6 +9,7 @@ what the format could not hold and the projections made instead.
 
 from __future__ import annotations
 
+import difflib
 import math
 import re
 from collections.abc import Collection, Iterable
@@ -25,7 +26,9 @@ __all__ = [
     "SENSORS",
     "ImuConfig",
     "Written",
+    "closest_key",
     "describe_term",
+    "key_notes",
     "merge_same",
     "need_rate",
     "notes_of_others",
@@ -63,6 +66,9 @@ class ImuConfig:
         Name of the format it was read from (``""`` when built in code).
     notes : tuple of str
         What the reader noticed (axes that differ, simulator defaults used, ...).
+    topic : str
+        The IMU topic the config names (an SDF's ``<topic>``, Kalibr's ``rostopic``), ``""``
+        when it names none; written into formats that name one.
     """
 
     gyro: NoiseModel | None = None
@@ -71,6 +77,7 @@ class ImuConfig:
     offsets: dict[str, float] = field(default_factory=dict)
     source_format: str = ""
     notes: tuple[str, ...] = ()
+    topic: str = ""
 
     @property
     def sensors(self) -> tuple[str, ...]:
@@ -108,6 +115,7 @@ class ImuConfig:
             offsets=dict(self.offsets),
             source_format=self.source_format,
             notes=self.notes,
+            topic=self.topic,
         )
 
     def filled_from(self, template: ImuConfig) -> ImuConfig:
@@ -137,6 +145,7 @@ class ImuConfig:
             offsets=offsets,
             source_format=self.source_format,
             notes=self.notes,
+            topic=self.topic,
         )
 
 
@@ -239,6 +248,34 @@ def number(value: Any, where: str) -> float:
         raise ValueError(f"{where}: expected a number, got {value!r}") from None
     if math.isnan(out) or out < 0:
         raise ValueError(f"{where}: expected a non-negative number, got {value!r}")
+    return out
+
+
+def closest_key(name: str, known: Iterable[str]) -> str | None:
+    """The known key ``name`` is most likely a misspelling of (difflib ratio >= 0.8), or None."""
+    found = difflib.get_close_matches(name, list(known), n=1, cutoff=0.8)
+    return found[0] if found else None
+
+
+def key_notes(
+    found: Iterable[Any], known: Collection[str], what: str, *, strict: bool = False
+) -> list[str]:
+    """Warnings on the keys of a config that its reader does not know.
+
+    A misspelled key (``gyroscope_noise_denisty``) is otherwise ignored silently and its value
+    taken as absent. Each unknown key close to a known one is named with that key; with
+    ``strict`` (a format whose every key the reader knows, e.g. Kalibr's imu.yaml) every
+    unknown key is named, otherwise (a file that holds many other settings) only near misses.
+    """
+    out = []
+    for key in found:
+        if not isinstance(key, str) or key in known:
+            continue
+        near = closest_key(key, known)
+        if near is not None:
+            out.append(f"{what}: unknown key {key!r} ignored; did you mean {near!r}?")
+        elif strict:
+            out.append(f"{what}: unknown key {key!r} ignored")
     return out
 
 

@@ -28,6 +28,7 @@ import math
 import re
 import xml.etree.ElementTree as ET
 
+from allanite.formats import _xml_edit
 from allanite.formats._text import number_text
 from allanite.formats.base import (
     ImuConfig,
@@ -99,8 +100,13 @@ def _child(el: ET.Element, name: str) -> ET.Element | None:
     return None
 
 
+def _disabled(noise: ET.Element | None) -> bool:
+    """Whether a ``<noise>`` element is switched off (``type="none"``: its entries unused)."""
+    return noise is not None and noise.get("type", "gaussian").lower() == "none"
+
+
 def _axis_values(noise: ET.Element | None, where: str) -> dict[str, float]:
-    if noise is None or noise.get("type", "gaussian").lower() == "none":
+    if noise is None or _disabled(noise):
         return {}
     out = {}
     for name in FIELDS:
@@ -159,6 +165,14 @@ def read(text: str, *, rate: float | None = None, axis: str = "x") -> ImuConfig:
         if axis not in per_axis:
             raise ValueError(f"axis must be one of x, y, z, got {axis!r}")
         chosen = per_axis[axis]
+        off = [
+            a for a in AXES if _disabled(_child(_child(block, a) or ET.Element("none"), "noise"))
+        ]
+        if off:
+            notes.append(
+                f'{sensor}: <noise type="none"> on axis {", ".join(off)}: gz-sensors adds no '
+                'noise there and ignores its entries; set type="gaussian" to use them'
+            )
         differ = [a for a in AXES if per_axis[a] != chosen]
         if differ:
             notes.append(
@@ -170,6 +184,7 @@ def read(text: str, *, rate: float | None = None, axis: str = "x") -> ImuConfig:
             offsets[sensor] = chosen["mean"]
     if not models:
         raise ValueError("SDF: the <imu> element has no angular_velocity/linear_acceleration")
+    topic = _find(root, "topic")
     return ImuConfig(
         gyro=models.get("gyro"),
         accel=models.get("accel"),
@@ -177,6 +192,7 @@ def read(text: str, *, rate: float | None = None, axis: str = "x") -> ImuConfig:
         offsets=offsets,
         source_format=NAME,
         notes=tuple(notes),
+        topic=(topic.text or "").strip() if topic is not None else "",
     )
 
 
@@ -223,6 +239,37 @@ def values_from_model(
     return out, notes
 
 
+def _set_noise(
+    noise: ET.Element, model: NoiseModel, dt: float, offset: float | None, *, fresh: bool
+) -> list[str]:
+    """Set one axis' ``<noise>`` element to ``model``; what it could not hold.
+
+    Values the element states as the model has them are left as the user wrote them (a
+    turn-on bias split into ``bias_mean`` and ``bias_stddev`` keeps its split, an entry left
+    out, which gz-sensors reads as zero, is not added as a zero).
+    """
+    if noise.get("type", "").lower() == "none":
+        noise.set("type", "gaussian")
+    prec_el = _child(noise, "precision")
+    prec = float(prec_el.text) if prec_el is not None and prec_el.text else 0.0
+    was = _axis_values(noise, "SDF template")
+    values, notes = values_from_model(model, dt, prec)
+    on = math.hypot(was.get("bias_mean", 0.0), was.get("bias_stddev", 0.0))
+    if math.isclose(on, values["bias_stddev"], rel_tol=1e-9, abs_tol=0.0):
+        del values["bias_mean"], values["bias_stddev"]  # the user's split is kept
+    if "precision" not in values and prec_el is not None:
+        noise.remove(prec_el)
+    if offset is not None:
+        values["mean"] = offset
+    elif _child(noise, "mean") is None:
+        values["mean"] = 0.0
+    for name in FIELDS:
+        if name not in values or (not fresh and values[name] == 0 and _child(noise, name) is None):
+            continue
+        _set(noise, name, number_text(values[name]))
+    return notes
+
+
 def write(
     config: ImuConfig,
     *,
@@ -235,8 +282,9 @@ def write(
     rate = need_rate(rate or config.rate, "gz-sensors <stddev>")
     dt = 1.0 / rate
     models, dropped, projections = project_config(config, holds, rate=rate, tau_range=tau_range)
+    spans = None
     if template is not None:
-        root = _parse(template)
+        root, spans = _xml_edit.parse(template)
         imu = root if _local(root.tag) == "imu" else _find(root, "imu")
         if imu is None:
             raise ValueError("SDF template: no <imu> element to write the noise into")
@@ -257,31 +305,40 @@ def write(
             if axis_el is None:
                 axis_el = ET.SubElement(block, a)
             noise = _child(axis_el, "noise")
+            fresh = noise is None
             if noise is None:
                 noise = ET.SubElement(axis_el, "noise", {"type": "gaussian"})
-            if noise.get("type", "").lower() == "none":
-                noise.set("type", "gaussian")
-            prec_el = _child(noise, "precision")
-            prec = float(prec_el.text) if prec_el is not None and prec_el.text else 0.0
-            values, notes = values_from_model(model, dt, prec)
+            notes = _set_noise(noise, model, dt, config.offsets.get(sensor), fresh=fresh)
             dropped.extend(f"{sensor}/{a}: {n}" for n in notes)
-            if "precision" not in values and prec_el is not None:
-                noise.remove(prec_el)
-            if sensor in config.offsets:
-                values["mean"] = config.offsets[sensor]
-            elif _child(noise, "mean") is None:
-                values["mean"] = 0.0
-            for name in FIELDS:
-                if name in values:
-                    _set(noise, name, number_text(values[name]))
+    comments = [f"<!-- dropped: {_safe(d)} -->" for d in dropped]
+    comments += [f"<!-- projected: {_safe(p)} -->" for p in projections]
+    if template is not None and spans is not None:  # the user's text, edited in place
+        return Written(_in_place(template, root, spans, comments, config), dropped, projections)
     ET.indent(root, space="  ")
     text = ET.tostring(root, encoding="unicode")
     head = ""
     if template is not None and template.lstrip().startswith("<?xml"):
         head = template.lstrip().split("?>", 1)[0] + "?>\n"
-    comments = [f"<!-- dropped: {_safe(d)} -->" for d in dropped]
-    comments += [f"<!-- projected: {_safe(p)} -->" for p in projections]
     if template is not None:  # the notes of an earlier write on the sensor this one leaves
         earlier = re.findall(r"<!--(.*?)-->", template.split("<" + _local(root.tag), 1)[0], re.S)
         comments += [f"<!-- {n} -->" for n in notes_of_others(earlier, config.sensors)]
     return Written(head + "\n".join([*comments, text]) + "\n", dropped, projections)
+
+
+#: a note of an earlier write before the root element, with its line
+_EARLIER = re.compile(r"[ \t]*<!-- (?:dropped|projected): (gyro|accel)\b.*?-->[ \t]*\n?", re.S)
+
+
+def _in_place(
+    template: str, root: ET.Element, spans: _xml_edit.Spans, notes: list[str], config: ImuConfig
+) -> str:
+    """``template`` with the tree's edits made in place and this write's notes before the root.
+
+    The earlier notes on the sensors this write sets are replaced; the other sensor's stay.
+    """
+    text = _xml_edit.serialize(root, spans)
+    start = spans.spans[id(root)].start
+    cut = len(spans.data[:start].decode("utf-8"))
+    head = _EARLIER.sub(lambda m: "" if m.group(1) in config.sensors else m.group(0), text[:cut])
+    block = "".join(f"{n}\n" for n in notes)
+    return head + block + text[cut:]

@@ -21,6 +21,8 @@ ETH ASL, Kalibr wiki "IMU Noise Model"; ``kalibr_common/ConfigReader.py``.
 
 from __future__ import annotations
 
+import dataclasses
+
 from allanite.formats._densities import HOLDS as HOLDS  # the format protocol: what it holds
 from allanite.formats._densities import density_entries, from_densities
 from allanite.formats._text import load_yaml, number_text, update_keys, with_notes
@@ -41,6 +43,9 @@ UNITS = {
     "update_rate": "Hz",
 }
 
+#: the keys of a Kalibr imu.yaml besides the densities (``kalibr_common/ConfigReader.py``)
+OTHER_KEYS = ("update_rate", "rostopic", "time_offset")
+
 
 def has_keys(text: str) -> bool:
     """Whether ``text`` names any of the four density keys (a one-sensor file holds two)."""
@@ -57,7 +62,17 @@ def read(text: str, *, rate: float | None = None) -> ImuConfig:
     data = load_yaml(text, "Kalibr imu.yaml")
     if rate is None and "update_rate" in data:
         rate = number(data["update_rate"], "Kalibr imu.yaml: update_rate") or None
-    return from_densities(data, KEYS, fmt=NAME, rate=rate, what="Kalibr imu.yaml")
+    config = from_densities(
+        data, KEYS, fmt=NAME, rate=rate, what="Kalibr imu.yaml", other_keys=OTHER_KEYS
+    )
+    topic = data.get("rostopic")
+    return dataclasses.replace(config, topic=topic) if isinstance(topic, str) else config
+
+
+def ros_topic(config: ImuConfig) -> str:
+    """The ``rostopic`` of a config: the topic it names (made absolute), else ``/imu0``."""
+    topic = config.topic.strip()
+    return "/" + topic.lstrip("/") if topic else "/imu0"
 
 
 def entries(
@@ -73,9 +88,12 @@ def write(
     rate: float | None = None,
     template: str | None = None,
     tau_range: tuple[float, float] | None = None,
-    rostopic: str = "/imu0",
+    rostopic: str | None = None,
 ) -> Written:
-    """Kalibr ``imu.yaml`` text (into ``template`` when given, keeping its other lines)."""
+    """Kalibr ``imu.yaml`` text (into ``template`` when given, keeping its other lines).
+
+    ``rostopic`` defaults to the config's topic (an SDF's ``<topic>``), else ``/imu0``.
+    """
     rate = rate or config.rate
     values, dropped, projections = entries(config, rate, tau_range)
     if template is not None:
@@ -86,7 +104,7 @@ def write(
     lines = ["# IMU noise model exported by allanite (continuous-time densities, SI units)"]
     for key in sorted(values):
         lines.append(f"{key}: {number_text(values[key])}  # {UNITS[key]}")
-    lines.append(f"rostopic: {rostopic}")
+    lines.append(f"rostopic: {rostopic or ros_topic(config)}")
     if rate:
         lines.append(f"update_rate: {number_text(rate)}  # Hz")
     lines.extend(f"# not representable in imu.yaml, dropped: {d}" for d in dropped)

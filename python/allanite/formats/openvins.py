@@ -7,6 +7,7 @@ N = noise density and RateRandomWalk K = random walk, as in :mod:`allanite.forma
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Any
 
 from allanite.formats import kalibr
@@ -33,7 +34,9 @@ def read(text: str, *, rate: float | None = None) -> ImuConfig:
         raise ValueError("OpenVINS config: no 'imu0:' mapping with the IMU noise keys")
     if rate is None and "update_rate" in block:
         rate = number(block["update_rate"], "OpenVINS imu0: update_rate") or None
-    return from_densities(block, kalibr.KEYS, fmt=NAME, rate=rate, what="OpenVINS imu0")
+    config = from_densities(block, kalibr.KEYS, fmt=NAME, rate=rate, what="OpenVINS imu0")
+    topic = block.get("rostopic")
+    return dataclasses.replace(config, topic=topic) if isinstance(topic, str) else config
 
 
 def write(
@@ -54,7 +57,7 @@ def write(
         return Written(with_notes(text, dropped, projections, config.sensors), dropped, projections)
     lines = ["%YAML:1.0 # need to specify the file type at the top!", "", "imu0:"]
     lines += [f"  {k}: {v}  # {kalibr.UNITS[k]}" for k, v in sorted(text_values.items())]
-    lines += ["  rostopic: /imu0", "  time_offset: 0.0"]
+    lines += [f"  rostopic: {kalibr.ros_topic(config)}", "  time_offset: 0.0"]
     lines.extend(f"# dropped: {d}" for d in dropped)
     lines.extend(f"# projected: {p}" for p in projections)
     return Written("\n".join(lines) + "\n", dropped, projections)

@@ -17,7 +17,7 @@ from __future__ import annotations
 import math
 import re
 
-from allanite.formats._text import number_text
+from allanite.formats._text import keep_number, number_text
 from allanite.formats.base import ImuConfig, Written, number, sensor_model
 from allanite.formats.projection import project_config
 from allanite.model import NoiseModel
@@ -141,7 +141,11 @@ def write(
         for key, value in values.items():
             pattern = _element(key)
             if pattern.search(text):
-                text = pattern.sub(rf"\g<1>{number_text(value)}\g<3>", text)
+                new = number_text(value)
+                text = pattern.sub(
+                    lambda m: m.group(1) + keep_number(m.group(2), new) + m.group(3),  # noqa: B023
+                    text,
+                )
             else:
                 text = _insert_element(text, key, number_text(value))
         return Written(_with_notes(text, notes, config.sensors), dropped, projections)

@@ -58,6 +58,19 @@ def _sorted(t: NDArray[np.float64], rows: NDArray[np.float64], warnings: list[st
     return t[order], rows[order]
 
 
+def _as_in_bag(topic: str | None, topics: list[str]) -> str | None:
+    """``topic`` as the bag spells it: ``imu/data`` is ``/imu/data`` (and the reverse).
+
+    A ROS name without its leading slash is the same topic at the root namespace; the user
+    types it either way, ROS 1 and ROS 2 bags store it with the slash (MCAP as recorded).
+    """
+    if topic is None or topic in topics:
+        return topic
+    bare = topic.lstrip("/")
+    same = [t for t in topics if t.lstrip("/") == bare]
+    return same[0] if len(same) == 1 else topic
+
+
 def load_rosbag(
     path: Path, topic: str | None = None
 ) -> tuple[NDArray[Any], tuple[str, ...], list[str]]:
@@ -83,7 +96,11 @@ def load_rosbag(
                 path=str(path),
             )
         topic = choose_one(
-            topic, topics, what="IMU topic", option="topic= (CLI: --topic NAME)", path=str(path)
+            _as_in_bag(topic, topics),
+            topics,
+            what="IMU topic",
+            option="topic= (CLI: --topic NAME)",
+            path=str(path),
         )
         chosen = [c for c in imu if c.topic == topic]
         parts: list[NDArray[np.float64]] = []

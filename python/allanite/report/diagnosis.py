@@ -7,7 +7,7 @@ from typing import Any
 from allanite.io.record import Record
 from allanite.report import html as h
 
-__all__ = ["diagnosis_html", "diagnosis_section", "run_diagnosis"]
+__all__ = ["channels_html", "diagnosis_html", "diagnosis_section", "run_diagnosis", "verdict_of"]
 
 
 def run_diagnosis(record: Record, model: Any, channel: int = 0, **options: Any) -> Any:
@@ -44,9 +44,31 @@ def _ranges(items: list[Any], unit: str) -> str:
     return "; ".join(out)
 
 
-def diagnosis_html(diagnosis: Any, *, channel: str, model_name: str) -> str:
-    """HTML of a diagnosis: verdict, per-view p-values, where the gap is and what explains it."""
-    verdict = "fail" if diagnosis.significant else "pass"
+def verdict_of(diagnosis: Any) -> tuple[str, str]:
+    """The one badge status and label of a diagnosis (as ``allanite diagnose`` words it).
+
+    A significant gap is a FAIL of the simulated sensor whether or not the effects close it
+    (then the label says so); no gap in the noise with something unexplained elsewhere (the
+    time base, ...) is MARGINAL; no gap at all is a PASS.
+    """
+    closed = bool(getattr(diagnosis, "closed", False))
+    if diagnosis.significant:
+        return "fail", (
+            "gap, closed by the effects below" if closed else "gap, not fully explained"
+        )
+    return (
+        ("pass", "no gap") if closed else ("marginal", "no gap in the noise, not fully explained")
+    )
+
+
+def diagnosis_html(
+    diagnosis: Any, *, channel: str, model_name: str, changes: list[str] | None = None
+) -> str:
+    """HTML of a diagnosis: verdict, per-view p-values, where the gap is and what explains it.
+
+    One verdict with one badge (:func:`verdict_of`); ``changes`` (the config lines to change,
+    ``old -> new``) are listed after the explanation when given.
+    """
     text = (
         "the real record differs significantly from the simulated sensor"
         if diagnosis.significant
@@ -74,24 +96,20 @@ def diagnosis_html(diagnosis: Any, *, channel: str, model_name: str) -> str:
         ],
     ]
     headline = getattr(diagnosis, "headline", "")
-    closed = getattr(diagnosis, "closed", False)
-    parts = []
-    if headline:
-        label = (
-            "closed" if closed else ("not fully explained" if diagnosis.significant else "no gap")
-        )
-        parts.append(
-            f'<p class="verdict">{h.badge("pass" if closed else "fail")} <b>{h.escape(label)}</b>: '
-            f"{h.escape(headline)}</p>"
-        )
+    status, label = verdict_of(diagnosis)
+    parts = [
+        f'<p class="verdict">{h.badge(status)} <b>{h.escape(label)}</b>'
+        + (f": {h.escape(headline)}" if headline else "")
+        + "</p>"
+    ]
     if getattr(diagnosis, "unexplained", None):
         rows_u = [[u.view, u.evidence, u.text, _p(u.p_value, None)] for u in diagnosis.unexplained]
         parts.append("<h3>What no candidate explains</h3>")
         parts.append(h.table(["view", "evidence", "where and how large", "p-value"], rows_u,
                              text_columns=3))  # fmt: skip
     parts += [
-        f'<p class="verdict">Channel <b>{h.escape(channel)}</b> against model '
-        f"<b>{h.escape(model_name)}</b>: {h.badge(verdict)} — {h.escape(text)} "
+        f"<p>Channel <b>{h.escape(channel)}</b> against model "
+        f"<b>{h.escape(model_name)}</b>: {h.escape(text)} "
         f"(combined p = {_p(diagnosis.p_value, n_mc)}, "
         f"gap G = {h.fmt(diagnosis.statistic, 3)}).</p>",
         h.table(["view", "p-value", "where the gap is"], views, text_columns=1),
@@ -135,7 +153,41 @@ def diagnosis_html(diagnosis: Any, *, channel: str, model_name: str) -> str:
     if explanation is not None and diagnosis.attribution:
         model = diagnosis.meta.get("sim") != "record"
         parts.append(_explanation_html(explanation, units, diagnosis.meta.get("fs"), model))
+    if changes:
+        items = "".join(f"<li><code>{h.escape(c)}</code></li>" for c in changes)
+        parts.append(f"<h3>To close the gap, change in {h.escape(model_name)}</h3><ul>{items}</ul>")
     return "".join(parts)
+
+
+def channels_html(items: list[tuple[str, Any, list[str]]], *, model_name: str) -> str:
+    """Every diagnosed channel: an overview (one verdict each), then each channel's section.
+
+    ``items`` are ``(channel name, diagnosis, config changes)``; a diagnosis of None is a
+    channel that could not be diagnosed, its reason the one change line.
+    """
+    rows = []
+    sections = []
+    for name, diagnosis, changes in items:
+        if diagnosis is None:
+            why = changes[0] if changes else "not diagnosed"
+            rows.append([h.escape(name), "–", h.escape(f"not diagnosed: {why}"), "–"])
+            continue
+        status, label = verdict_of(diagnosis)
+        headline = getattr(diagnosis, "headline", "")
+        rows.append(
+            [h.escape(name), h.badge(status),
+             h.escape(f"{label}: {headline}" if headline else label),
+             h.escape(_p(diagnosis.p_value, diagnosis.meta.get("n_mc")))]
+        )  # fmt: skip
+        sections.append(
+            f"<h3>Channel {h.escape(name)}</h3>"
+            + diagnosis_html(diagnosis, channel=name, model_name=model_name, changes=changes)
+        )
+    overview = (
+        f"<p>Every channel against <b>{h.escape(model_name)}</b>, one verdict each:</p>"
+        + h.table(["channel", "verdict", "headline", "combined p"], rows, text_columns=3, raw=True)
+    )
+    return overview + "".join(sections)
 
 
 def _explanation_html(e: Any, units: str | None, fs: float | None, model: bool) -> str:
