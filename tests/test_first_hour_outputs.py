@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import json
 import subprocess
 import sys
 from pathlib import Path
@@ -73,3 +74,51 @@ def test_lazy_package_keeps_fit_and_batch_the_functions() -> None:
     assert callable(allanite.fit)
     assert callable(allanite.batch)
     assert allanite.avar is allanite.variance.avar
+
+
+def _timed_csv(tmp_path: Path, rate: float = 100.0, n: int = 2000) -> Path:
+    t = np.arange(n) / rate
+    x = np.random.default_rng(1).normal(0.0, 0.01, n)
+    path = tmp_path / "timed.csv"
+    np.savetxt(path, np.column_stack([t, x]), delimiter=",", header="time,gx", comments="")
+    return path
+
+
+def test_fs_contradicting_the_time_column_is_refused_until_one_is_chosen(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Item 13: --fs 10 on a 100 Hz time column: refused, naming --fs-source; then obeyed."""
+    path = _timed_csv(tmp_path)
+    base = ["analyze", str(path), "--time-column", "time", "--fs", "10", "--json"]
+    code, out, err = _run(base, capsys)
+    assert code == 2
+    assert out == ""
+    assert "--fs-source time" in err
+    assert "--fs-source fs" in err
+    assert "10x apart" in err
+    for source, rate in (("time", 100.0), ("fs", 10.0)):
+        code, out, err = _run([*base, "--fs-source", source], capsys)
+        assert code == 0, err
+        assert json.loads(out)["record"]["fs"] == pytest.approx(rate)
+
+
+def test_bag_with_one_noisy_gyro_axis_analyses_it_and_names_the_constant_ones(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Item 14: a ROS 2 bag with noise on gyro_z only: gyro_z analysed, the rest named."""
+    pytest.importorskip("rosbags")
+    from test_io_robot_logs import write_bag
+
+    n = 1200
+    data = np.zeros((n, 6))
+    data[:, 5] = 9.81
+    data[:, 2] = np.random.default_rng(5).normal(0.0, 0.01, n)
+    path = tmp_path / "sim_bag"
+    write_bag(path, "sqlite3", data, np.arange(n) / 200.0)
+    code, out, err = _run(["analyze", str(path), "--json"], capsys)
+    assert code == 0, err
+    assert json.loads(out)["allan"]["channels"] == ["gyro_z"]
+    warning = next(line for line in err.splitlines() if "constant" in line)
+    for name in ("gyro_x", "gyro_y", "accel_x", "accel_y", "accel_z"):
+        assert name in warning
+    assert "analysing gyro_z" in warning
