@@ -115,9 +115,15 @@ def test_bad_stamps_name_the_line(tmp_path: Path, t: np.ndarray, pattern: str) -
 
 def test_given_fs_wins_with_warning() -> None:
     t = np.arange(100) * 0.01
-    base = resolve_time(t, np.ones((100, 1)), source="x", fs=120.0)
-    assert base.fs == 120.0
+    base = resolve_time(t, np.ones((100, 1)), source="x", fs=105.0)
+    assert base.fs == 105.0
     assert any("differs" in w for w in base.warnings)
+    # beyond FS_CONFLICT (10 %) the caller must say which wins (issue 30 item 13)
+    with pytest.raises(ValueError, match=r"contradicts the 100 Hz.*fs_source='time'"):
+        resolve_time(t, np.ones((100, 1)), source="x", fs=120.0)
+    assert resolve_time(t, np.ones((100, 1)), source="x", fs=120.0, fs_source="fs").fs == 120.0
+    chosen = resolve_time(t, np.ones((100, 1)), source="x", fs=120.0, fs_source="time")
+    assert chosen.fs == pytest.approx(100.0)
     with pytest.raises(ValueError, match="unknown gap policy 'skip'"):
         resolve_time(t, np.ones((100, 1)), source="x", policy="skip")
 

@@ -13,7 +13,7 @@ mistaken for the default. The JSON columns ``dev_low_68``/``dev_high_68`` of
 
 from __future__ import annotations
 
-__all__ = ["DEFAULT_LEVEL", "ONE_SIGMA", "check_level"]
+__all__ = ["DEFAULT_LEVEL", "ONE_SIGMA", "check_level", "level_tag"]
 
 #: default two-sided confidence level of every interval
 DEFAULT_LEVEL = 0.95
@@ -32,3 +32,15 @@ def check_level(level: float, name: str = "level") -> float:
     if not 0.0 < value < 1.0:
         raise ValueError(f"{name} must lie between 0 and 1 (e.g. 0.95), got {level!r}")
     return value
+
+
+def level_tag(level: float) -> str:
+    """The column-name tag of an interval at ``level``: ``68`` (1 sigma), ``95``, ``99p9``.
+
+    Names the ``dev_low_TAG``/``dev_high_TAG`` columns of a written table so a file says which
+    interval it holds.
+    """
+    value = check_level(level)
+    if value == ONE_SIGMA:
+        return "68"
+    return f"{100 * value:.4g}".replace(".", "p")

@@ -48,6 +48,7 @@ __all__ = [
     "check_channel_units",
     "check_coefficients",
     "check_samples",
+    "constant_channels",
     "refuse_constant",
     "stuck_segments",
     "warn_coefficients",
@@ -146,6 +147,14 @@ def _columns(samples: NDArray[Any]) -> NDArray[Any]:
     return arr.reshape(-1, 1) if arr.ndim == 1 else arr
 
 
+def constant_channels(samples: NDArray[Any]) -> list[int]:
+    """Indices of the channels whose samples are all equal (none for fewer than 2 samples)."""
+    x = _columns(samples)
+    if x.shape[0] < 2:
+        return []
+    return [c for c in range(x.shape[1]) if x[:, c].min() == x[:, c].max()]
+
+
 def refuse_constant(
     samples: NDArray[Any], channels: Sequence[str] = (), *, source: str = "record"
 ) -> None:
@@ -155,10 +164,8 @@ def refuse_constant(
     of noise but a dead channel, a wrong column or a sensor that was not running.
     """
     x = _columns(samples)
-    if x.shape[0] < 2:
-        return
+    dead = constant_channels(x)
     names = list(channels) or [f"ch{i}" for i in range(x.shape[1])]
-    dead = [c for c in range(x.shape[1]) if x[:, c].min() == x[:, c].max()]
     if not dead:
         return
     which = ", ".join(f"{names[c]} (all {x.shape[0]} samples equal {x[0, c]:.6g})" for c in dead)

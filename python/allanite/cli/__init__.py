@@ -18,27 +18,22 @@ import warnings
 from collections.abc import Callable, Sequence
 from typing import Any
 
-__all__ = ["SUBCOMMANDS", "build_parser", "main"]
+__all__ = ["SUBCOMMANDS", "SUMMARIES", "build_parser", "main"]
 
-#: subcommand name -> module under allanite.cli
-SUBCOMMANDS: dict[str, str] = {
-    "analyze": "allanite.cli.analyze",
-    "fit": "allanite.cli.fit",
-    "simulate": "allanite.cli.simulate",
-    "diagnose": "allanite.cli.diagnose",
-    "report": "allanite.cli.report",
-    "batch": "allanite.cli.batch",
-    "gui": "allanite.cli.gui",
-    "model": "allanite.cli.model",
-}
+from allanite.cli.commands import SUBCOMMANDS, SUMMARIES
 
 EXIT_OK = 0
 EXIT_FAILURE = 1  # e.g. a pass/fail check failed
 EXIT_USAGE = 2  # bad input, bad arguments, unreadable file
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The top-level parser with every available subcommand registered."""
+def build_parser(*, top_level_only: bool = False) -> argparse.ArgumentParser:
+    """The top-level parser with every available subcommand registered.
+
+    With ``top_level_only`` the subcommands are listed by name and summary only, without
+    importing their modules (numpy, scipy, ...): enough for ``allanite --version`` and
+    ``allanite --help``, which then answer at once.
+    """
     parser = argparse.ArgumentParser(
         prog="allanite",
         description="Gyroscope noise analysis: Allan deviation, noise-term fits, simulation and "
@@ -52,6 +47,10 @@ def build_parser() -> argparse.ArgumentParser:
 
     parser.add_argument("--version", action="version", version=f"allanite {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    if top_level_only:
+        for name in SUBCOMMANDS:
+            sub.add_parser(name, help=SUMMARIES[name])
+        return parser
     for module_name in SUBCOMMANDS.values():
         try:
             module = importlib.import_module(module_name)
@@ -104,8 +103,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``allanite`` console script; returns the exit code."""
     from allanite.errors import ImplausibleInputWarning, InputError, MissingExtraError
 
+    words = list(sys.argv[1:] if argv is None else argv)
+    if not any(word in SUBCOMMANDS for word in words):  # --version, --help: no imports
+        build_parser(top_level_only=True).parse_args(words)
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args = parser.parse_args(words)
     if not getattr(args, "func", None):
         parser.print_help(sys.stderr)
         return EXIT_USAGE

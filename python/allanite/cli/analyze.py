@@ -9,6 +9,7 @@ from typing import Any
 
 import numpy as np
 
+from allanite.cli.commands import SUMMARIES
 from allanite.cli.fit import fit_impossible_reason, fit_possible
 from allanite.cli.record_options import (
     add_grid_arguments,
@@ -54,7 +55,7 @@ def register(subparsers: Any) -> None:
     """Add the ``analyze`` subcommand."""
     parser = subparsers.add_parser(
         "analyze",
-        help="Allan deviation of a record with confidence intervals",
+        help=SUMMARIES["analyze"],
         description="Compute the Allan deviation (or another Allan-family deviation) of a "
         "record with chi-square confidence intervals, print it as a table or JSON, and "
         "optionally write it to CSV/JSON and plot it.",
@@ -287,7 +288,7 @@ def write_output(path: str, record: Record, result: AllanResult, level: float) -
         raise ValueError(f"output {path}: use a .csv or .json file name")
     with atomic_output(path) as tmp:
         if suffix == ".csv":
-            result.to_csv(tmp)
+            result.to_csv(tmp, level=level)
         else:
             tmp.write_text(dump_json(analysis_dict(record, result, level)), encoding="utf-8")
 

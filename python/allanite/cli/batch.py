@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import Any
 
 from allanite.cli import cli_spelling
+from allanite.cli.commands import SUMMARIES
 from allanite.cli.progress import progress_bars
 from allanite.cli.record_options import add_record_arguments, read_options
 from allanite.confidence import DEFAULT_LEVEL
@@ -45,7 +46,7 @@ def register(subparsers: Any) -> None:
     """Add the ``batch`` subcommand."""
     parser = subparsers.add_parser(
         "batch",
-        help="noise coefficients and datasheet pass/fail of many recordings",
+        help=SUMMARIES["batch"],
         description="Analyse every file matching the patterns: overlapping Allan variance, "
         "noise-model fit per channel (coefficients with confidence intervals, goodness of "
         "fit), pass/marginal/fail against a datasheet; one table out. Runs locally, or on a "

@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from allanite.cli.commands import SUMMARIES
 from allanite.cli.record_options import (
     add_record_arguments,
     print_reader_notes,
@@ -56,7 +57,7 @@ def register(subparsers: Any) -> None:
     """Add the ``diagnose`` subcommand."""
     parser = subparsers.add_parser(
         "diagnose",
-        help="sim-to-real gap: where it lies, which effect causes it, how far it shrinks",
+        help=SUMMARIES["diagnose"],
         description="Compare a real record with a simulated sensor (a noise model or a "
         "simulated record) in averaging time, frequency and time, test whether they differ "
         "beyond chance, and attribute the gap to the unmodelled effect that closes it.",

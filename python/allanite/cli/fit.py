@@ -7,6 +7,7 @@ import sys
 import warnings
 from typing import Any
 
+from allanite.cli.commands import SUMMARIES
 from allanite.cli.progress import progress
 from allanite.cli.record_options import (
     add_grid_arguments,
@@ -44,7 +45,7 @@ def register(subparsers: Any) -> None:
     """Add the ``fit`` subcommand."""
     parser = subparsers.add_parser(
         "fit",
-        help="fit IEEE noise terms to the Allan variance and save the noise model",
+        help=SUMMARIES["fit"],
         description="Compute the Allan variance of a record, fit a noise model (quantization, "
         "angle random walk, bias instability, rate random walk, rate ramp, ...) with "
         "uncertainties, print the coefficients in customary units and save the model as JSON.",

@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+from allanite.cli.commands import SUMMARIES
+
 __all__ = ["register", "run"]
 
 EXAMPLES = """examples:
@@ -18,7 +20,7 @@ def register(subparsers: Any) -> None:
     """Add the ``gui`` subcommand."""
     parser = subparsers.add_parser(
         "gui",
-        help="desktop GUI: open a file, Allan deviation, fit, coefficients, diagnosis, report",
+        help=SUMMARIES["gui"],
         description="Open the desktop GUI. It does what the original program did (open a "
         "file, set the sampling frequency and the number of grid points, switch between the "
         "Allan deviation and its fit, show the coefficients) plus channel selection, display "

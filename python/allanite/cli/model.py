@@ -9,6 +9,7 @@ from typing import Any
 
 import numpy as np
 
+from allanite.cli.commands import SUMMARIES
 from allanite.formats import FORMATS, read_config, write_config
 from allanite.formats.base import ImuConfig
 from allanite.formats.projection import adev_error, default_tau_range
@@ -38,7 +39,7 @@ def register(subparsers: Any) -> None:
     """Add the ``model`` subcommand (with ``convert``)."""
     parser = subparsers.add_parser(
         "model",
-        help="noise models in simulator/estimator formats (convert)",
+        help=SUMMARIES["model"],
         description="Work with IMU noise models in the formats simulators and estimators read.",
         epilog="examples:\n  allanite model convert model.json kalibr.yaml --rate 200\n"
         "Run 'allanite model convert --help' for the formats and more examples.",

@@ -22,12 +22,13 @@ from allanite.confidence import DEFAULT_LEVEL
 from allanite.io.options import ReadOptions
 from allanite.io.readers import FORMATS, read_record, stated_unit_conflict
 from allanite.io.record import INPUT_KINDS, Record
-from allanite.io.timebase import GAP_POLICIES
+from allanite.io.timebase import FS_SOURCES, GAP_POLICIES
 from allanite.plausibility import (
     check_allan,
     check_channel_units,
     check_coefficients,
     check_samples,
+    constant_channels,
     refuse_constant,
 )
 from allanite.variance import KINDS, AllanResult, avar
@@ -52,6 +53,13 @@ def add_record_arguments(parser: argparse.ArgumentParser) -> None:
     """Add the options that say how to read a record file."""
     group = parser.add_argument_group("reading the record")
     group.add_argument("--fs", type=float, help="sampling frequency in Hz (or use --time-column)")
+    group.add_argument(
+        "--fs-source",
+        choices=FS_SOURCES,
+        default=None,
+        help="which rate wins when --fs contradicts the time column by more than 10 %% "
+        "(such a record is refused without it): 'time' (the time stamps) or 'fs'",
+    )
     group.add_argument(
         "--input",
         choices=INPUT_KINDS,
@@ -324,8 +332,30 @@ def _read(path: str | None, args: argparse.Namespace, **override: Any) -> Record
             return dataclasses.replace(record, units=override["units"]) if override else record
         raise ValueError("give a FILE to analyse, or --example for the built-in example record")
     record = read_record(path, read_options(args), **override)
-    refuse_constant(record.samples, record.channels, source=record.source)
-    return record
+    return _without_constant(record, args)
+
+
+def _without_constant(record: Record, args: argparse.Namespace) -> Record:
+    """The record without its constant channels, named in a warning; all constant is refused.
+
+    A simulator's bag often has noise on some axes only: the channels that vary are analysed.
+    """
+    dead = constant_channels(record.samples)
+    if not dead or len(dead) == len(record.channels):
+        refuse_constant(record.samples, record.channels, source=record.source)
+        return record
+    names = [record.channels[c] for c in dead]
+    values = ", ".join(f"{record.channels[c]} = {record.samples[0, c]:.6g}" for c in dead)
+    message = (
+        f"{record.source}: channel(s) {', '.join(names)} constant ({values}): no noise to "
+        "analyse, left out; analysing "
+        + ", ".join(c for i, c in enumerate(record.channels) if i not in dead)
+    )
+    command = getattr(args, "command", None) or "allanite"
+    print(f"allanite {command}: warning: {message}", file=sys.stderr)
+    keep = [c for c in range(len(record.channels)) if c not in dead]
+    kept = record.select(tuple(keep))
+    return dataclasses.replace(kept, warnings=(*kept.warnings, message))
 
 
 def read_options(args: argparse.Namespace) -> ReadOptions:
@@ -339,6 +369,7 @@ def read_options(args: argparse.Namespace) -> ReadOptions:
         time_scale=args.time_scale,
         gaps=args.gaps,
         scale=args.scale,
+        fs_source=getattr(args, "fs_source", None),
         format=args.format,
         delimiter=args.delimiter,
         header={"auto": None, "yes": True, "no": False}[args.header],
@@ -354,6 +385,7 @@ def read_options(args: argparse.Namespace) -> ReadOptions:
 #: reader option -> (its flag, its default): what :func:`record_command` writes back
 _READER_FLAGS: dict[str, tuple[str, Any]] = {
     "fs": ("--fs", None),
+    "fs_source": ("--fs-source", None),
     "input": ("--input", None),
     "units": ("--units", None),
     "scale": ("--scale", None),

@@ -7,6 +7,7 @@ import re
 from pathlib import Path
 from typing import Any
 
+from allanite.cli.commands import SUMMARIES
 from allanite.cli.progress import progress
 from allanite.cli.record_options import (
     add_grid_arguments,
@@ -49,7 +50,7 @@ def register(subparsers: Any) -> None:
     """Add the ``report`` subcommand."""
     parser = subparsers.add_parser(
         "report",
-        help="self-contained HTML report (plots, coefficients, pass/fail, diagnosis)",
+        help=SUMMARIES["report"],
         description="Analyse one or more records and write one self-contained HTML report: "
         "record summary, Allan deviation plot, fitted noise coefficients in customary units "
         "with intervals, slope table, comparison with a reference device or datasheet limits, "

@@ -9,6 +9,8 @@ import argparse
 from pathlib import Path
 from typing import Any
 
+from allanite.cli.commands import SUMMARIES
+
 __all__ = ["register", "run"]
 
 EXAMPLES = """examples:
@@ -23,7 +25,7 @@ def register(subparsers: Any) -> None:
     """Add the ``simulate`` subcommand."""
     parser = subparsers.add_parser(
         "simulate",
-        help="simulate sensor noise from a model JSON",
+        help=SUMMARIES["simulate"],
         description="Simulate rate, angle-increment or angle samples from a noise model (JSON, "
         "as written by 'allanite fit'), streamed in bounded memory to .npy, .csv or raw float64 "
         "(.bin/.raw/.f64). The same seed gives the same samples.",

@@ -12,7 +12,17 @@ __all__ = ["Column", "ReadOptions"]
 Column = int | str
 
 #: the options that describe the table itself (those of :func:`allanite.io.make_record`)
-TABLE_FIELDS = ("fs", "input", "units", "columns", "time_column", "time_scale", "gaps", "scale")
+TABLE_FIELDS = (
+    "fs",
+    "input",
+    "units",
+    "columns",
+    "time_column",
+    "time_scale",
+    "gaps",
+    "scale",
+    "fs_source",
+)
 
 
 @dataclass(frozen=True)
@@ -40,6 +50,10 @@ class ReadOptions:
         What to do about gaps in the time column.
     scale : float, optional
         Counts-to-units factor.
+    fs_source : {"time", "fs"}, optional
+        Which rate wins when ``fs`` and the time column disagree by more than
+        :data:`allanite.io.timebase.FS_CONFLICT`: the time stamps or the given ``fs``.
+        Without it such a record is refused.
     format : {"text", "npy", "npz", "raw", "hdf5", "parquet"}, optional
         Override the suffix-based detection. Any raw-layout option (``dtype``,
         ``n_channels``, ``byteorder``, ``offset``) means raw binary whatever the suffix,
@@ -67,6 +81,7 @@ class ReadOptions:
     time_scale: float = 1.0
     gaps: str = "error"
     scale: float | None = None
+    fs_source: str | None = None
     format: str | None = None
     delimiter: str | None = None
     header: bool | None = None

@@ -257,6 +257,7 @@ def make_record(
     gaps: str = "error",
     scale: float | None = None,
     where: Where | None = None,
+    fs_source: str | None = None,
 ) -> Record:
     """Build a :class:`Record` from a 2-D table of numbers.
 
@@ -287,6 +288,9 @@ def make_record(
         Factor from counts to units: ``samples = counts * scale``.
     where : callable, optional
         Maps a row index to a location for messages (default ``"row i"``).
+    fs_source : {"time", "fs"}, optional
+        Which rate wins when ``fs`` contradicts the time column (see
+        :func:`allanite.io.timebase.resolve_time`).
 
     Returns
     -------
@@ -319,7 +323,13 @@ def make_record(
         raise ValueError(f"time_scale must be a positive number of seconds, got {time_scale!r}")
     t = np.asarray(arr[:, t_index], dtype=np.float64) * time_scale
     base = resolve_time(
-        t, np.asarray(samples, dtype=np.float64), source=source, policy=gaps, fs=fs, where=locate
+        t,
+        np.asarray(samples, dtype=np.float64),
+        source=source,
+        policy=gaps,
+        fs=fs,
+        where=locate,
+        fs_source=fs_source,
     )
     record = Record(
         samples=base.samples,

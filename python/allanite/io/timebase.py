@@ -18,12 +18,25 @@ from numpy.typing import NDArray
 from allanite.errors import InputError
 from allanite.io.record import Segment, Timing
 
-__all__ = ["GAP_FACTOR", "GAP_POLICIES", "JITTER_WARN", "TimeBase", "resolve_time"]
+__all__ = [
+    "FS_CONFLICT",
+    "FS_SOURCES",
+    "GAP_FACTOR",
+    "GAP_POLICIES",
+    "JITTER_WARN",
+    "TimeBase",
+    "resolve_time",
+]
 
 #: an interval of at least this many nominal periods is a gap
 GAP_FACTOR = 1.5
 #: RMS jitter (fraction of the period) above which a warning is attached
 JITTER_WARN = 0.01
+#: relative difference between a given fs and the time column's rate beyond which the record
+#: is refused unless ``fs_source`` says which wins (a clock off by 10 % is not drift)
+FS_CONFLICT = 0.1
+#: what ``fs_source`` may name: the time stamps or the given fs
+FS_SOURCES = ("time", "fs")
 #: what to do about gaps
 GAP_POLICIES: tuple[str, ...] = ("error", "split", "fill")
 
@@ -51,6 +64,7 @@ def resolve_time(
     policy: str = "error",
     fs: float | None = None,
     where: Callable[[int], str] = _default_where,
+    fs_source: str | None = None,
 ) -> TimeBase:
     """Check a time column and return evenly sampled data under a gap policy.
 
@@ -67,9 +81,12 @@ def resolve_time(
         ``fill`` inserts the missing samples by linear interpolation between the neighbours.
     fs : float, optional
         Sampling frequency given by the user; it wins over the inferred one (a warning is
-        attached when they differ by more than 1 %).
+        attached when they differ by more than 1 %). When they differ by more than
+        :data:`FS_CONFLICT` the record is refused unless ``fs_source`` says which wins.
     where : callable
         Maps a row index to a location for messages (``"line 12"``).
+    fs_source : {"time", "fs"}, optional
+        Which rate wins when ``fs`` and the time column disagree.
 
     Returns
     -------
@@ -97,14 +114,7 @@ def resolve_time(
             f"(largest {100 * jitter_max / dt_nominal:.2g} %); the Allan variance assumes even "
             "sampling"
         )
-    rate = inferred
-    if fs is not None:
-        if abs(fs - inferred) > 0.01 * inferred:
-            warnings.append(
-                f"the given fs = {fs:g} Hz differs from the {inferred:.6g} Hz of the time column; "
-                "using the given value"
-            )
-        rate = float(fs)
+    rate = _chosen_rate(fs, inferred, fs_source, source, warnings)
     samples, segments, filled = _apply_gap_policy(
         t,
         samples,
@@ -205,3 +215,39 @@ def _apply_gap_policy(
     filled = int(grid.size - n)
     warnings.append(f"{described}; filled {filled} sample(s) by linear interpolation")
     return filled_samples, (Segment(0, grid.size, float(t[0])),), filled
+
+
+def _chosen_rate(
+    fs: float | None, inferred: float, fs_source: str | None, source: str, warnings: list[str]
+) -> float:
+    """The sampling rate of a record with a time column and perhaps a given ``fs``.
+
+    A given ``fs`` within 1 % of the time column's rate is used silently, within
+    :data:`FS_CONFLICT` with a warning; beyond it, only when ``fs_source`` says which wins.
+    """
+    if fs_source is not None and fs_source not in FS_SOURCES:
+        raise ValueError(f"fs_source must be one of {', '.join(FS_SOURCES)}, got {fs_source!r}")
+    if fs is None:
+        return inferred
+    differ = abs(fs - inferred) > 0.01 * inferred
+    if fs_source is None and abs(fs - inferred) > FS_CONFLICT * inferred:
+        raise ValueError(
+            f"{source}: the given fs = {fs:g} Hz contradicts the {inferred:.6g} Hz of the time "
+            f"column ({max(fs, inferred) / min(fs, inferred):.3g}x apart); say which wins with "
+            "fs_source='time' (CLI: --fs-source time) to use the time stamps, or "
+            "fs_source='fs' (CLI: --fs-source fs) to use the given fs"
+        )
+    if fs_source == "time":
+        if differ:
+            warnings.append(
+                f"the given fs = {fs:g} Hz differs from the {inferred:.6g} Hz of the time column; "
+                "using the time column (--fs-source time)"
+            )
+        return inferred
+    if differ:
+        how = "(--fs-source fs)" if fs_source == "fs" else ""
+        warnings.append(
+            f"the given fs = {fs:g} Hz differs from the {inferred:.6g} Hz of the time column; "
+            f"using the given value {how}".rstrip()
+        )
+    return float(fs)

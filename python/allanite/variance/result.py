@@ -13,7 +13,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy import stats
 
 from allanite import _core
-from allanite.confidence import DEFAULT_LEVEL, ONE_SIGMA, check_level
+from allanite.confidence import DEFAULT_LEVEL, ONE_SIGMA, check_level, level_tag
 from allanite.extras import require
 from allanite.notebook import allan_html
 from allanite.variance.edf import equivalent_dof
@@ -250,15 +250,16 @@ class AllanResult:
         """JSON text of :meth:`to_dict`."""
         return json.dumps(self.to_dict(), **kwargs)
 
-    def _columns(self) -> dict[str, NDArray[Any]]:
-        lo, hi = self.ci(ONE_SIGMA)  # the dev_low_68/dev_high_68 columns
+    def _columns(self, level: float = ONE_SIGMA) -> dict[str, NDArray[Any]]:
+        lo, hi = self.ci(level)  # the dev_low_TAG/dev_high_TAG columns (TAG = level_tag)
+        tag = level_tag(level)
         cols: dict[str, NDArray[Any]] = {"tau": self.tau, "m": self.m, "n_terms": self.n_terms}
         var2 = self.var.reshape(self.tau.size, -1)
         parts = {
             "var": var2,
             "dev": np.sqrt(var2),
-            "dev_low_68": lo.reshape(var2.shape),
-            "dev_high_68": hi.reshape(var2.shape),
+            f"dev_low_{tag}": lo.reshape(var2.shape),
+            f"dev_high_{tag}": hi.reshape(var2.shape),
             "edf": self.edf.reshape(var2.shape),
             "alpha": self.alpha.reshape(var2.shape),
         }
@@ -273,9 +274,14 @@ class AllanResult:
         pd = require("pandas", extra="pandas", purpose="to_frame()")
         return pd.DataFrame(self._columns())
 
-    def to_csv(self, path: str | Path) -> None:
-        """Write the table of :meth:`to_frame` as CSV (no pandas needed)."""
-        cols = self._columns()
+    def to_csv(self, path: str | Path, level: float = ONE_SIGMA) -> None:
+        """Write the table of :meth:`to_frame` as CSV (no pandas needed).
+
+        The interval columns hold the two-sided interval at ``level``, named by it
+        (``dev_low_68`` for the default 1 sigma, ``dev_low_95`` for 0.95; see
+        :func:`allanite.confidence.level_tag`).
+        """
+        cols = self._columns(level)
         header = ",".join(cols)
         table = np.column_stack([np.asarray(v, dtype=np.float64) for v in cols.values()])
         np.savetxt(path, table, delimiter=",", header=header, comments="", fmt="%.17g")
