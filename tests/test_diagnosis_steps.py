@@ -76,7 +76,7 @@ def _power_case(model: NoiseModel, rec: dict[str, float], n: int, fs: float, siz
 
 
 @pytest.mark.parametrize(
-    "terms, rec",
+    ("terms", "rec"),
     [
         ((T["white"](N=0.18), T["flicker"](B=0.004)), {"n_white": 0.18, "b": 0.004}),
         ((T["white"](N=0.18), T["rrw"](K=2e-4)), {"n_white": 0.18, "k": 2e-4}),

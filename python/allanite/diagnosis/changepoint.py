@@ -9,11 +9,12 @@ likelihood ratio of "one step at ``t``" against "no step" is
 .. math:: z_t^2 = \frac{(u_t^\top P j)^2}{u_t^\top P u_t}, \qquad P = C^{-1},
 
 and the statistic is ``Z = max_t |z_t|`` over a grid of quarter windows. ``C`` comes from the
-model's own replicates (the time view's null ensemble: the model's flicker, random walk and any
-slow noise are in it, so a random walk's wander is not a step), as a stationary (Toeplitz)
-covariance (:func:`toeplitz_covariance`). With a white-noise model ``z_t`` is the standardised CUSUM of the window means
-(the CUSUM's optimal form for one step); with slow noise the whitening ``P`` removes the slow
-wander a plain CUSUM of block means is dominated by.
+model's own replicates (the time view's null ensemble: the model's flicker, random walk and
+any slow noise are in it, so a random walk's wander is not a step), as a stationary
+(Toeplitz) covariance (:func:`toeplitz_covariance`). With a white-noise model ``z_t`` is the
+standardised CUSUM of the window means (the CUSUM's optimal form for one step); with slow
+noise the whitening ``P`` removes the slow wander a plain CUSUM of block means is dominated
+by.
 
 **Calibration.** The null law of ``Z`` comes from the same replicates, out of sample: they are
 cut into :data:`FOLDS` folds, and each fold's ``Z`` values are computed with ``C`` estimated
@@ -52,7 +53,7 @@ from scipy import linalg
 
 from allanite.diagnosis.null import gumbel_sf
 
-__all__ = ["FOLDS", "GRID", "MAX_STEPS", "Step", "StepScan", "toeplitz_covariance", "step_scan"]
+__all__ = ["FOLDS", "GRID", "MAX_STEPS", "Step", "StepScan", "step_scan", "toeplitz_covariance"]
 
 #: folds of the out-of-sample calibration of the null maxima
 FOLDS = 4
@@ -139,7 +140,7 @@ class StepScan:
         if extra_jump_var <= 0 or self.jumps.size == 0:
             return self.p_value
         cov = self.cov + np.eye(self.cov.shape[0]) * extra_jump_var
-        z = _scores(_profiles(self.jumps.size + 1), np.linalg.inv(cov), self.jumps)
+        z = _scores(_profiles(self.jumps.size + 1), _inv(cov), self.jumps)
         return gumbel_sf(float(np.abs(z).max()), self.null_max)
 
     def to_dict(self) -> dict[str, Any]:
@@ -156,6 +157,10 @@ class StepScan:
             return self
         cov = self.cov + np.eye(self.cov.shape[0]) * extra_jump_var
         return replace(self, cov=cov, p_value=self.p_with_extra(extra_jump_var))
+
+
+def _inv(c: NDArray[np.float64]) -> NDArray[np.float64]:
+    return np.asarray(np.linalg.inv(c), dtype=np.float64)
 
 
 def toeplitz_covariance(x: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -204,7 +209,7 @@ def _null_maxima(null_jumps: NDArray[np.float64], u: NDArray[np.float64]) -> NDA
     out = np.empty(n)
     for f in range(FOLDS):
         test = folds == f
-        prec = np.linalg.inv(toeplitz_covariance(null_jumps[~test]))
+        prec = _inv(toeplitz_covariance(null_jumps[~test]))
         out[test] = np.abs(_scores(u, prec, null_jumps[test])).max(axis=1)
     return out
 
@@ -215,7 +220,7 @@ def _fit_steps(
     """Joint GLS sizes of the steps at grid indices ``idx`` and their covariance."""
     x = u[idx].T
     info = x.T @ prec @ x
-    cov = np.linalg.inv(info)
+    cov = _inv(info)
     return np.asarray(cov @ (x.T @ prec @ j)), np.asarray(cov)
 
 
@@ -268,7 +273,7 @@ def step_scan(
     nj = np.asarray(null_jumps, dtype=np.float64)
     u = _profiles(j.size + 1)
     cov = toeplitz_covariance(nj)
-    prec = np.linalg.inv(cov)
+    prec = _inv(cov)
     null_max = _null_maxima(nj, u)
     z = _scores(u, prec, j)
     stat = float(np.abs(z).max())
