@@ -211,7 +211,8 @@ def with_level_background(
     spread = dict(tv.spread)
     spread["level"] = np.sqrt(spread["level"] ** 2 + v)
     spread["jump"] = np.sqrt(spread["jump"] ** 2 + 2.0 * a_w)
-    return replace(tv, level_sd=np.sqrt(tv.level_sd**2 + v), spread=spread)
+    steps = tv.steps.with_extra(2.0 * a_w) if tv.steps is not None else None
+    return replace(tv, level_sd=np.sqrt(tv.level_sd**2 + v), spread=spread, steps=steps)
 
 
 def _own_extra(a: Attribution, c: Candidate, tm: TauModel) -> NDArray[np.float64]:

@@ -197,6 +197,7 @@ class Diagnosis:
                 },
             },
             "where": self.where,
+            "steps": self.time.steps.to_dict() if self.time.steps is not None else None,
             "attribution": [a.to_dict() for a in self.attribution],
             "explanation": self.explanation.to_dict() if self.explanation is not None else None,
             "holdout": self.holdout.to_dict() if self.holdout is not None else None,

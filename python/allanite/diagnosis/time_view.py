@@ -56,6 +56,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import ndimage, stats
 
+from allanite.diagnosis.changepoint import StepScan, step_scan
 from allanite.diagnosis.null import (
     ExceedanceTail,
     NullEnsemble,
@@ -425,6 +426,7 @@ class TimeView:
         default_factory=lambda: np.zeros(0, dtype=np.float64), repr=False
     )
     tail: dict[str, Any] = field(default_factory=dict, repr=False)
+    steps: StepScan | None = field(default=None, repr=False)
 
     def level_p_values(
         self,
@@ -455,11 +457,14 @@ class TimeView:
         p_max = gumbel_sf(float(np.abs(self.residual["jump"] / new_j).max()), self.null_max["jump"])
         # a Gaussian process spreads the jumps evenly; a few large ones are level changes
         # (bias steps), whatever the process's size: both tests, Bonferroni
+        # the step scan (whitened CUSUM, :mod:`~allanite.diagnosis.changepoint`) with the
+        # process's jump variance in its covariance: one more statistic of the family
+        tests = [p_max]
+        if self.steps is not None:
+            tests.append(self.steps.p_with_extra(2.0 * max(extra_avar_window, 0.0)))
         if gaussian:
-            p_sparse = sparse_jump_p(self.residual["jump"] / sd_j)
-            out["jump"] = min(1.0, 2.0 * min(p_max, p_sparse))
-        else:
-            out["jump"] = p_max
+            tests.append(sparse_jump_p(self.residual["jump"] / sd_j))
+        out["jump"] = min(1.0, len(tests) * min(tests))
         sd_l = self.spread["level"]
         if extra_level_var is None:
             new_l = sd_l * float(np.mean(new_j / sd_j))
@@ -519,6 +524,7 @@ class TimeView:
             "change_points_s": list(self.change_points_s),
             "segments_s": [list(s) for s in self.segments_s],
             "tail": dict(self.tail),
+            "steps": self.steps.to_dict() if self.steps is not None else None,
             "p_value": self.p_value,
         }
 
@@ -791,6 +797,12 @@ def time_view(
         z[fam] = scan.z
         flagged[fam] = np.abs(scan.z) > scan.threshold
         residual[fam], spread[fam], null_max[fam] = scan.residual, scan.spread, scan.null_max
+    # level changes: the step scan shares the jump family's level with the largest jump
+    steps = step_scan(
+        ens.residual(real, "jump"), ens.null["jump"], length / fs, alpha / 2.0,
+        real_scale=float(np.mean(ens.real_scale)),
+    )  # fmt: skip
+    fam_p["jump"] = min(1.0, 2.0 * min(fam_p["jump"], steps.p_value))
     # record-wide statistics
     fam_p["spike"], spike_thr = spike_test(real, ens, alpha)
     fam_p["tail"], tail = tail_test(real, ens)
@@ -805,6 +817,11 @@ def time_view(
         t = k / fs
         change_points.append(t)
         segments.append((max(t - length / (4 * fs), 0.0), t + length / (4 * fs)))
+    for st in steps.steps:
+        # a located step replaces a largest-jump change point within a window of it
+        change_points = [t for t in change_points if abs(t - st.t_s) > length / fs]
+        segments.append(st.t_interval_s)
+    change_points = sorted(change_points + [st.t_s for st in steps.steps])
     for fam in ("hf", "dyn") + (() if change_points else ("level",)):
         for a, b in runs(flagged[fam]):
             segments.append((a * length / fs, (b + 1) * length / fs))
@@ -844,6 +861,7 @@ def time_view(
         lf_kurtosis=lf,
         spike_raise=spike_raise,
         tail=tail,
+        steps=steps,
     )
 
 
