@@ -23,6 +23,7 @@ from numpy.typing import NDArray
 
 from allanite.errors import InputError, choose_one
 from allanite.extras import require
+from allanite.io.atomic import note_input
 from allanite.io.options import Column, ReadOptions
 from allanite.io.record import Record, time_like
 from allanite.io.text import read_text_table
@@ -802,6 +803,7 @@ def read_record(
     if path.is_dir() and not is_ros2_bag_dir(path):
         raise InputError("is a directory; give a file (or a ROS 2 bag directory)", path=str(path))
     fmt = "rosbag" if path.is_dir() else _format_of(path, opts.format, list(opts.raw_layout()))
+    note_input(path)  # an output of this command must not replace it
     if fmt in ("rosbag", "ulog"):
         return _read_robot_log(path, fmt, opts.topic, opts.table())
     if path.stat().st_size == 0:
