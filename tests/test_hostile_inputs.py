@@ -1,0 +1,98 @@
+"""Hostile inputs: configs and records refused cleanly, in bounded time (issue 31).
+
+Each case is generated here (no large files in the repository) and must end in a
+ValueError/InputError with a short message well inside a time bound that the old code
+exceeded by minutes (measured old times in the comments; the bound is generous for a
+loaded CI machine).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+
+import pytest
+
+from allanite.formats import kalibr, matlab, px4_plugin
+from allanite.formats.base import number
+
+#: seconds; the old code took minutes on each case below
+BOUND = 5.0
+#: longest message accepted (a message must not echo unbounded input)
+MESSAGE = 2000
+
+
+def _refused(read: Callable[[str], object], text: str, match: str | None = None) -> str:
+    start = time.monotonic()
+    with pytest.raises(ValueError, match=match) as info:
+        read(text)
+    assert time.monotonic() - start < BOUND
+    message = str(info.value)
+    assert len(message) < MESSAGE
+    return message
+
+
+def test_px4_unclosed_element_with_spaces_is_linear() -> None:
+    # old: 22 s for 2,000 spaces, about cubic (255 s for 10,000); 100,000 here
+    text = (
+        "<plugin name='imu' filename='libgazebo_imu_plugin.so'><gyroscopeNoiseDensity>"
+        + " " * 100_000
+        + "<gyroscopeRandomWalk>x</gyroscopeRandomWalk></plugin>"
+    )
+    _refused(px4_plugin.read, text, "gyroscopeRandomWalk")
+
+
+def test_px4_value_with_spacing_still_read_and_rewritten() -> None:
+    text = (
+        "<plugin filename='libgazebo_imu_plugin.so'>\n"
+        "  <gyroscopeNoiseDensity>  0.0003  </gyroscopeNoiseDensity>\n</plugin>\n"
+    )
+    config = px4_plugin.read(text)
+    written = px4_plugin.write(config, template=text, rate=250.0).text
+    assert "<gyroscopeNoiseDensity>  0.0003  </gyroscopeNoiseDensity>" in written
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        "a" * 100_000,  # old: 59 s at 20,000 (quadratic)
+        "a." * 50_000,
+        "gyroparams('NoiseDensity', [" + "1" * 100_000 + "x])",
+        "gyroparams(" * 9_000,
+        "x = 1\n" + "\n" * 100_000,
+    ],
+    ids=["word", "dotted", "digits", "nested-calls", "blank-lines"],
+)
+def test_matlab_pathological_lines_are_bounded(text: str) -> None:
+    _refused(matlab.read, text)
+
+
+def test_yaml_alias_bomb_is_refused() -> None:
+    # nine anchors of ten aliases: 10^9 leaves once expanded (old: > 60 s, 3 GB)
+    lines = ["a: &a [x, x, x, x, x, x, x, x, x, x]"]
+    for i in range(8):
+        name, prev = chr(98 + i), chr(97 + i)
+        lines.append(f"{name}: &{name} [" + ", ".join([f"*{prev}"] * 10) + "]")
+    text = "\n".join(lines) + "\ngyroscope_noise_density: *i\n"
+    _refused(kalibr.read, text, "alias")
+
+
+def test_scalar_yaml_alias_is_still_read() -> None:
+    text = (
+        "rate: &r 200\nupdate_rate: *r\ngyroscope_noise_density: 1.0e-4\n"
+        "gyroscope_random_walk: 1.0e-6\naccelerometer_noise_density: 1.0e-3\n"
+        "accelerometer_random_walk: 1.0e-5\n"
+    )
+    assert kalibr.read(text).rate == 200
+
+
+def test_number_message_is_bounded() -> None:
+    nested: list[object] = ["x"] * 10
+    for _ in range(6):
+        nested = [nested] * 10
+    with pytest.raises(ValueError, match="expected a number") as info:
+        number(nested, "gyroscope_noise_density")
+    assert len(str(info.value)) < 200
+    with pytest.raises(ValueError, match="expected a number") as info:
+        number("9" * 10_000 + "x", "gyroscope_noise_density")
+    assert len(str(info.value)) < 200
