@@ -9,12 +9,18 @@ loaded CI machine).
 from __future__ import annotations
 
 import time
+import zipfile
 from collections.abc import Callable
+from pathlib import Path
 
+import numpy as np
 import pytest
 
+from allanite.cli import main
+from allanite.errors import InputError
 from allanite.formats import kalibr, matlab, px4_plugin
 from allanite.formats.base import number
+from allanite.io import read_record
 
 #: seconds; the old code took minutes on each case below
 BOUND = 5.0
@@ -96,3 +102,39 @@ def test_number_message_is_bounded() -> None:
     with pytest.raises(ValueError, match="expected a number") as info:
         number("9" * 10_000 + "x", "gyroscope_noise_density")
     assert len(str(info.value)) < 200
+
+
+def _npz_with_text_member(path: Path) -> None:
+    with zipfile.ZipFile(path, "w") as archive:
+        archive.writestr("notes.txt", "not an array")
+
+
+def test_npz_member_not_npy_is_an_input_error(tmp_path: Path) -> None:
+    bad = tmp_path / "bad.npz"
+    _npz_with_text_member(bad)
+    start = time.monotonic()
+    with pytest.raises(InputError, match=r"bad\.npz: cannot read it as npz"):
+        read_record(bad, fs=100.0)
+    assert time.monotonic() - start < BOUND
+
+
+def test_batch_writes_the_table_with_an_error_row(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    rng = np.random.default_rng(6)
+    goods = []
+    for i in range(2):
+        goods.append(tmp_path / f"good{i}.npy")
+        np.save(goods[-1], rng.normal(0.0, 0.01, 3000))
+    bad = tmp_path / "bad.npz"
+    _npz_with_text_member(bad)
+    out = tmp_path / "out.csv"
+    rc = main(["batch", *map(str, goods), str(bad), "--fs", "100", "-o", str(out)])
+    err = capsys.readouterr().err
+    assert "Traceback" not in err
+    assert rc in (0, 1)
+    text = out.read_text()
+    rows = {Path(line.split(",")[0]).name: line for line in text.splitlines()[1:]}
+    assert ",error," in rows["bad.npz"]
+    assert "cannot read it as npz" in rows["bad.npz"]
+    assert len(rows) == 3
