@@ -21,6 +21,8 @@ from allanite.errors import InputError
 from allanite.formats import kalibr, matlab, px4_plugin
 from allanite.formats.base import number
 from allanite.io import read_record
+from allanite.model import NoiseModel
+from allanite.terms import White
 
 #: seconds; the old code took minutes on each case below
 BOUND = 5.0
@@ -138,3 +140,24 @@ def test_batch_writes_the_table_with_an_error_row(
     assert ",error," in rows["bad.npz"]
     assert "cannot read it as npz" in rows["bad.npz"]
     assert len(rows) == 3
+
+
+@pytest.mark.parametrize("fs", ["1e-320", "1e-300", "1e300"])
+@pytest.mark.parametrize("command", ["analyze", "simulate"])
+def test_extreme_fs_is_refused_with_the_range(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], fs: str, command: str
+) -> None:
+    rec = tmp_path / "rec.npy"
+    np.save(rec, np.random.default_rng(7).normal(0.0, 0.01, 2000))
+    out = tmp_path / "sim.npy"
+    model = tmp_path / "model.json"
+    model.write_text(NoiseModel((White(N=0.01),), "rad/s").to_json())
+    argv = {
+        "analyze": ["analyze", str(rec), "--fs", fs],
+        "simulate": ["simulate", str(model), "--fs", fs, "-n", "1000", "-o", str(out)],
+    }[command]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "outside the range allanite computes with" in err
+    assert "Traceback" not in err
+    assert not out.exists()
