@@ -234,3 +234,22 @@ def test_imu_topic_without_messages_is_refused_naming_it(tmp_path, kind, capsys)
     assert main(argv) == 2
     assert "holds no messages" in capsys.readouterr().err
     assert not (tmp_path / "m.json").exists()
+
+
+def test_corrupt_ulog_is_refused_not_read_as_data(tmp_path):
+    # 64 flipped bytes in the middle of the log (issue 31: read as 3.3e23 rad/s, exit 0)
+    n = 4000
+    data = np.random.default_rng(5).normal(0.0, 0.01, (n, 6))
+    stamps = (1_000_000 + np.arange(n) * 1e6 / FS).astype(np.uint64)
+    fields = [("uint64_t", "timestamp")]
+    fields += [("float", f"gyro_rad[{i}]") for i in range(3)]
+    fields += [("float", f"accelerometer_m_s2[{i}]") for i in range(3)]
+    rows = [(int(t), *map(float, r)) for t, r in zip(stamps, data, strict=True)]
+    path = tmp_path / "bad.ulg"
+    write_ulog(path, "sensor_combined", fields, rows)
+    raw = bytearray(path.read_bytes())
+    mid = len(raw) // 2
+    raw[mid : mid + 64] = bytes(b ^ 0xFF for b in raw[mid : mid + 64])
+    path.write_bytes(bytes(raw))
+    with pytest.raises(InputError, match="corrupt"):
+        read_record(path)

@@ -3,12 +3,30 @@
 from __future__ import annotations
 
 __all__ = [
+    "FS_RANGE",
     "ImplausibleInputWarning",
     "InputError",
     "MissingExtraError",
     "RecordTooShortError",
+    "check_fs_range",
     "choose_one",
 ]
+
+#: sampling frequencies (Hz) the arithmetic supports: 1/fs, fs*tau and the variances of a
+#: record stay far from float64 overflow and underflow (a subnormal 1e-320 Hz gave NaN/inf
+#: samples, 1e-300 an OverflowError); gyros sample between about 1 Hz and 100 kHz
+FS_RANGE = (1e-6, 1e9)
+
+
+def check_fs_range(value: float) -> float:
+    """``value`` (a positive finite fs in Hz) if inside :data:`FS_RANGE`, else a ValueError."""
+    low, high = FS_RANGE
+    if not low <= value <= high:
+        raise ValueError(
+            f"fs = {value:.6g} Hz is outside the range allanite computes with ({low:g} to "
+            f"{high:g} Hz); give the sampling frequency in Hz (not a period in seconds)"
+        )
+    return value
 
 
 class InputError(ValueError):

@@ -102,6 +102,7 @@ def _warning_printer(command: str, default: Callable[..., None]) -> Callable[...
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``allanite`` console script; returns the exit code."""
     from allanite.errors import ImplausibleInputWarning, InputError, MissingExtraError
+    from allanite.io.atomic import guard_inputs
 
     words = list(sys.argv[1:] if argv is None else argv)
     if not any(word in SUBCOMMANDS for word in words):  # --version, --help: no imports
@@ -112,7 +113,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.print_help(sys.stderr)
         return EXIT_USAGE
     try:
-        with warnings.catch_warnings():
+        with warnings.catch_warnings(), guard_inputs():  # no output may be an input
             # findings about the input are advice the CLI prints, whatever the -W filters
             warnings.simplefilter("always", ImplausibleInputWarning)
             warnings.showwarning = _warning_printer(args.command, warnings.showwarning)

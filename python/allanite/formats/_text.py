@@ -34,7 +34,19 @@ def load_yaml(text: str, what: str) -> dict[str, Any]:
     yaml = require("yaml", extra="yaml", purpose=f"reading {what}", package="pyyaml")
 
     class Loader(yaml.SafeLoader):  # type: ignore[name-defined,misc]
-        pass
+        def compose_node(self, parent: Any, index: Any) -> Any:
+            # an alias of a list or mapping can expand exponentially (a "billion laughs"
+            # bomb): refuse it; an alias of a single value cannot grow and is kept
+            if self.check_event(yaml.AliasEvent):
+                anchor = self.peek_event().anchor
+                node = self.anchors.get(anchor)
+                if node is not None and not isinstance(node, yaml.ScalarNode):
+                    raise ValueError(
+                        f"{what}: the YAML alias *{str(anchor)[:40]} repeats a list or "
+                        "mapping; allanite refuses such aliases (they can expand without "
+                        "bound): write the values out"
+                    )
+            return super().compose_node(parent, index)
 
     def any_tag(loader: Any, suffix: str, node: Any) -> Any:
         if isinstance(node, yaml.MappingNode):

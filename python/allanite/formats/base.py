@@ -34,6 +34,7 @@ __all__ = [
     "notes_of_others",
     "number",
     "sensor_model",
+    "shown",
     "single",
 ]
 
@@ -238,16 +239,29 @@ def describe_term(term: Term, sensor: str | None = None) -> str:
     return f"{term.type} ({', '.join(parts)})"
 
 
+def shown(value: Any, limit: int = 80) -> str:
+    """A bounded repr of a config value for a message (nested and long values cut short)."""
+    import reprlib
+
+    short = reprlib.Repr()
+    short.maxlevel, short.maxstring, short.maxother = 3, limit, limit
+    short.maxlist = short.maxtuple = short.maxdict = short.maxset = 6
+    text = short.repr(value)
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
 def number(value: Any, where: str) -> float:
     """A finite, non-negative float from a config value, or a ValueError naming ``where``."""
     if isinstance(value, bool):
-        raise ValueError(f"{where}: expected a number, got {value!r}")
+        raise ValueError(f"{where}: expected a number, got {shown(value)}")
+    if isinstance(value, str) and len(value) > 1000:
+        raise ValueError(f"{where}: expected a number, got {shown(value)} ({len(value)} chars)")
     try:
         out = float(value)
     except (TypeError, ValueError):
-        raise ValueError(f"{where}: expected a number, got {value!r}") from None
+        raise ValueError(f"{where}: expected a number, got {shown(value)}") from None
     if math.isnan(out) or out < 0:
-        raise ValueError(f"{where}: expected a non-negative number, got {value!r}")
+        raise ValueError(f"{where}: expected a non-negative number, got {shown(value)}")
     return out
 
 

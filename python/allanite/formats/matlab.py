@@ -90,7 +90,15 @@ import re
 import numpy as np
 
 from allanite.formats._text import number_text
-from allanite.formats.base import ImuConfig, Written, merge_same, need_rate, number, sensor_model
+from allanite.formats.base import (
+    ImuConfig,
+    Written,
+    merge_same,
+    need_rate,
+    number,
+    sensor_model,
+    shown,
+)
 from allanite.formats.projection import project_config
 from allanite.terms import Flicker, GaussMarkov, RateRandomWalk, Term, White
 
@@ -124,8 +132,10 @@ UNITS = {
 FUNCTION = {"gyro": "gyroparams", "accel": "accelparams"}
 #: the imuSensor property that takes each sensor's parameter object
 ROLE = {"gyro": "Gyroscope", "accel": "Accelerometer"}
-_NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
+_NUMBER = r"[-+]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][-+]?\d+)?"
 COEFFICIENTS = "BiasInstabilityCoefficients"
+#: deepest bracket nesting read (a parameter script nests a few levels)
+MAX_DEPTH = 50
 
 
 def sniff(text: str) -> bool:
@@ -166,14 +176,28 @@ def _split_top(text: str) -> list[str]:
 
 
 def _calls(code: str, func: str) -> list[tuple[str | None, str]]:
-    """``(assigned name or None, argument text)`` of every ``func(...)`` call in ``code``."""
+    """``(assigned name or None, argument text)`` of every ``func(...)`` call in ``code``.
+
+    Bounded time: the closing bracket of every ``(`` is found in one pass; brackets nested
+    deeper than :data:`MAX_DEPTH` are refused (each level is read again by its caller) and an
+    unclosed call runs to the end of the text.
+    """
+    closing: dict[int, int] = {}
+    stack: list[int] = []
+    for i, ch in enumerate(code):
+        if ch == "(":
+            stack.append(i)
+            if len(stack) > MAX_DEPTH:
+                raise ValueError(
+                    f"MATLAB script: brackets nested deeper than {MAX_DEPTH} (at character "
+                    f"{i}); this is not an IMU parameter script"
+                )
+        elif ch == ")" and stack:
+            closing[stack.pop()] = i
     out = []
-    for match in re.finditer(rf"(?:([\w.]+)\s*=\s*)?\b{func}\s*\(", code):
-        depth, i = 1, match.end()
-        while i < len(code) and depth:
-            depth += {"(": 1, ")": -1}.get(code[i], 0)
-            i += 1
-        out.append((match.group(1), code[match.end() : i - 1]))
+    for match in re.finditer(rf"(?:(?<![\w.])([\w.]+)\s*=\s*)?\b{func}\s*\(", code):
+        end = closing.get(match.end() - 1, len(code))
+        out.append((match.group(1), code[match.end() : end]))
     return out
 
 
@@ -208,7 +232,7 @@ class _Script:
         self.code = code
         self.variables = {
             m.group(1): m.group(2).strip()
-            for m in re.finditer(r"(?m)^\s*(\w+)\s*=\s*([^;\n]+)", code)
+            for m in re.finditer(r"(?m)^[ \t]*(\w+)[ \t]*=[ \t]*([^;\n]+)", code)
         }
         self.fields: dict[str, dict[str, str]] = {}
         owners: dict[str, str] = {}
@@ -217,7 +241,7 @@ class _Script:
                 if name:
                     owners[name] = sensor
                 self.fields.setdefault(sensor, {}).update(_pairs(args))
-        for match in re.finditer(r"([\w.]+)\s*=(?!=)\s*([^;\n]+)", code):
+        for match in re.finditer(r"(?<![\w.])([\w.]+)\s*=(?!=)\s*([^;\n]+)", code):
             path, value = match.group(1), match.group(2).strip()
             for owner, sensor in owners.items():
                 if not path.startswith(owner + "."):
@@ -251,7 +275,7 @@ def _vector(text: str, where: str) -> list[float]:
     body = text[1:-1] if text.startswith("[") and text.endswith("]") else text
     parts = [p for p in re.split(r"[\s,;]+", body.strip()) if p]
     if not parts or not all(re.fullmatch(_NUMBER, p) for p in parts):
-        raise ValueError(f"{where}: expected numbers, got {text!r}")
+        raise ValueError(f"{where}: expected numbers, got {shown(text)}")
     return [float(p) for p in parts]
 
 

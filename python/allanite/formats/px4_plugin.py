@@ -60,7 +60,21 @@ def sniff(text: str) -> bool:
 
 
 def _element(name: str) -> re.Pattern[str]:
-    return re.compile(rf"(<{name}>\s*)([^<]*?)(\s*</{name}>)")
+    """``<name>text</name>`` with no tag inside; linear time (no nested quantifiers)."""
+    return re.compile(rf"<{name}>([^<]*)</{name}>")
+
+
+def _with_value(match: re.Match[str], value: str) -> str:
+    """The matched element with its text replaced by ``value`` (its spacing kept).
+
+    The same number keeps the user's spelling (:func:`keep_number`: ``0.0`` stays ``0.0``).
+    """
+    inner = match.group(1)
+    body = inner.strip()
+    lead = inner[: len(inner) - len(inner.lstrip())]
+    trail = inner[len(inner.rstrip()) :] if body else ""
+    name = match.re.pattern[1 : match.re.pattern.index(">")]
+    return f"<{name}>{lead}{keep_number(body, value)}{trail}</{name}>"
 
 
 def terms_from_parameters(values: dict[str, float], sensor: str) -> list[Term]:
@@ -87,7 +101,7 @@ def read(text: str, *, rate: float | None = None) -> ImuConfig:
     for key, default in DEFAULTS.items():
         match = _element(key).search(text)
         if match:
-            values[key] = number(match.group(2), f"IMU plugin <{key}>")
+            values[key] = number(match.group(1).strip(), f"IMU plugin <{key}>")
         else:
             values[key] = default
             defaulted.append(key)
@@ -142,10 +156,7 @@ def write(
             pattern = _element(key)
             if pattern.search(text):
                 new = number_text(value)
-                text = pattern.sub(
-                    lambda m: m.group(1) + keep_number(m.group(2), new) + m.group(3),  # noqa: B023
-                    text,
-                )
+                text = pattern.sub(lambda m, v=new: _with_value(m, v), text)  # type: ignore[misc]
             else:
                 text = _insert_element(text, key, number_text(value))
         return Written(_with_notes(text, notes, config.sensors), dropped, projections)

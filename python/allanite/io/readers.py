@@ -23,6 +23,7 @@ from numpy.typing import NDArray
 
 from allanite.errors import InputError, choose_one
 from allanite.extras import require
+from allanite.io.atomic import note_input
 from allanite.io.options import Column, ReadOptions
 from allanite.io.record import Record, time_like
 from allanite.io.text import read_text_table
@@ -812,11 +813,23 @@ def read_record(
     if path.is_dir() and not is_ros2_bag_dir(path):
         raise InputError("is a directory; give a file (or a ROS 2 bag directory)", path=str(path))
     fmt = "rosbag" if path.is_dir() else _format_of(path, opts.format, list(opts.raw_layout()))
-    if fmt in ("rosbag", "ulog"):
-        return _read_robot_log(path, fmt, opts.topic, opts.table())
-    if path.stat().st_size == 0:
-        raise InputError("the file is empty; check that the recording was written", path=str(path))
-    table, names, where = _load(path, fmt, opts)
+    note_input(path)  # an output of this command must not replace it
+    try:
+        if fmt in ("rosbag", "ulog"):
+            return _read_robot_log(path, fmt, opts.topic, opts.table())
+        if path.stat().st_size == 0:
+            raise InputError(
+                "the file is empty; check that the recording was written", path=str(path)
+            )
+        table, names, where = _load(path, fmt, opts)
+    except (ValueError, TypeError, OSError, ImportError, MemoryError, RecursionError):
+        raise  # already a message (InputError is a ValueError) or a missing extra
+    except Exception as exc:  # a library's own error on a damaged file: name the file
+        raise InputError(
+            f"cannot read it as {fmt} ({type(exc).__name__}: {str(exc)[:200]}); the file is "
+            "damaged or not in that format",
+            path=str(path),
+        ) from exc
     return make_record(table, names, source=str(path), where=where, **opts.table())
 
 

@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from allanite.errors import check_fs_range
 from allanite.units import record_rate_unit
 
 __all__ = ["INPUT_KINDS", "Record", "Segment", "Timing", "time_like"]
@@ -150,6 +151,8 @@ class Record:
             raise ValueError(f"unknown input {self.input!r}; use 'rate', 'increment' or 'angle'")
         if self.fs is not None and not (np.isfinite(self.fs) and self.fs > 0):
             raise ValueError(f"fs must be a positive, finite frequency in Hz, got {self.fs!r}")
+        if self.fs is not None:
+            check_fs_range(float(self.fs))
         if not self.channels:
             object.__setattr__(self, "channels", tuple(f"ch{i}" for i in range(samples.shape[1])))
         elif len(self.channels) != samples.shape[1]:

@@ -210,6 +210,12 @@ def load_ulog(
         log = ULog(str(path), message_name_filter_list=wanted)
     except Exception as exc:  # pyulog raises assorted errors on broken files
         raise InputError(f"not a readable ULog file ({exc})", path=str(path)) from exc
+    if getattr(log, "file_corruption", False):
+        raise InputError(
+            "the ULog file is corrupt (damaged messages were skipped, so the samples cannot be "
+            "trusted); copy the log from the vehicle again",
+            path=str(path),
+        )
     present = {(d.name, d.multi_id): d for d in log.data_list}
     for n in wanted:
         if (n, instance) in present:

@@ -33,6 +33,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from allanite.errors import check_fs_range
+
 __all__ = [
     "BLOCK",
     "SumStream",
@@ -89,7 +91,7 @@ def check_fs(fs: float) -> float:
     value = float(fs)
     if not math.isfinite(value) or value <= 0:
         raise ValueError(f"fs must be a positive, finite sampling frequency in Hz, got {fs!r}")
-    return value
+    return check_fs_range(value)
 
 
 def _check_count(name: str, value: Any, minimum: int) -> int:

@@ -11,6 +11,7 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from allanite.errors import check_fs_range
 from allanite.io.record import Record
 from allanite.variance.taus import KERNEL_KIND
 
@@ -92,7 +93,7 @@ def check_fs(fs: float) -> float:
         raise TypeError(f"fs must be a number in Hz, got {fs!r}") from exc
     if not np.isfinite(value) or value <= 0:
         raise ValueError(f"fs must be a positive, finite sampling frequency in Hz, got {fs!r}")
-    return value
+    return check_fs_range(value)
 
 
 def check_threads(threads: int | None) -> int:
