@@ -143,3 +143,14 @@ def test_analyze_diagnose_and_report_warn(tmp_path, capsys):
     assert "the record contains motion" in capsys.readouterr().err
     assert main(["analyze", *args, "--still", "auto"]) == 0
     assert "analysing the longest still segment, 2" in capsys.readouterr().out
+
+
+def test_real_static_records_are_still(shared_data):
+    # the static logs of the shared data: an outlier burst (MTi-G) and quantized counts
+    # (ADIS16405, gyro and accelerometer triads) are not motion
+    x = np.load(shared_data / "imu" / "mtig" / "cont_imu1_gyro_x.npy")
+    assert not find_motion(x, fs=100.0).has_motion
+    z = np.load(shared_data / "imu" / "adis16405" / "run1.npz")
+    assert not find_motion(z["gyro_counts"] * 0.05, fs=100.0).has_motion
+    accel = z["accel_counts"] * 0.00333 * 9.80665
+    assert not find_motion(accel, fs=100.0, accelerometer_triad=True).has_motion

@@ -11,7 +11,9 @@ every channel, as rate (and, for an accelerometer triad, the specific-force magn
 two statistics per window:
 
 * the **variance jump** ``log v_w``, the log of the window's variance;
-* the **rate change** ``m_w - m_{w-1}``, the difference of neighbouring window means.
+* the **rate change** ``m_w - m_{w-1}``, the difference of neighbouring windows' 10 %
+  trimmed means (so that a spike of a few samples does not move it, and a quantized output
+  still gives a continuous statistic).
 
 Both are local, so the slow wander of a random walk or flicker noise moves neither much, and
 both are calibrated against the record itself: a window is moving when a statistic lies more
@@ -21,7 +23,8 @@ statistics, and the variance also at least :data:`MIN_VARIANCE_FACTOR` times the
 rule holds for any stationary noise whatever its spectrum, since the windows' statistics of
 stationary noise are identically distributed (a random walk's increments, a flicker's, a
 filtered white noise's all are); motion is what breaks that. Isolated windows (a spike) are
-not motion: a moving stretch needs :data:`MIN_RUN` windows in a row; each is widened by one
+not motion: a moving stretch needs :data:`MIN_RUN` windows in a row (3 s; a 2 s burst of
+outliers in the Xsens MTi-G record of the shared data is not called motion); each is widened by one
 window on both sides (the start and end of a movement are slower than its middle).
 """
 
@@ -47,7 +50,9 @@ FALSE_ALARM = 1e-3
 #: a moving window's variance is also at least this many times the median window's
 MIN_VARIANCE_FACTOR = 1.5
 #: consecutive flagged windows that make motion (fewer: a spike, not a movement)
-MIN_RUN = 2
+MIN_RUN = 3
+#: share trimmed from each end of a window for its mean rate
+TRIM = 0.1
 #: the values of ``--still``
 STILL_MODES = ("warn", "auto", "off")
 
@@ -111,7 +116,7 @@ def _flags(v: NDArray[np.float64], m: NDArray[np.float64], n_tests: int) -> NDAr
     dm = np.diff(m)
     dmed = float(np.median(dm))
     ds = 1.4826 * float(np.median(np.abs(dm - dmed)))
-    step = np.abs(dm - dmed) > z * ds if ds > 0 else np.abs(dm - dmed) > 0
+    step = np.abs(dm - dmed) > z * ds if ds > 0 else np.zeros(dm.size, dtype=bool)
     change = np.zeros(v.size, dtype=bool)
     change[1:] |= step
     change[:-1] |= step
@@ -159,7 +164,7 @@ def find_motion(
         return Stillness(fs, n + offset, (), ((0, n + offset),))
     blocks = x[: n_win * w].reshape(n_win, w, x.shape[1])
     v = blocks.var(axis=1)
-    m = blocks.mean(axis=1)
+    m = stats.trim_mean(blocks, TRIM, axis=1)  # a spike of a few samples does not move it
     n_tests = 2 * n_win * x.shape[1]
     flag = np.zeros(n_win, dtype=bool)
     for c in range(x.shape[1]):
