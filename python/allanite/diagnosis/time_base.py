@@ -47,7 +47,6 @@ from numpy.typing import NDArray
 from scipy import stats
 
 from allanite.diagnosis.resolution import held_excess, output_resolution, rounding_floor
-from allanite.diagnosis.time_view import MAX_SPIKES
 from allanite.diagnosis.verdict import Unexplained, Verdict
 from allanite.io.record import Record
 from allanite.io.timebase import JITTER_WARN
@@ -284,9 +283,8 @@ def doubled_increments_item(input_kind: str, mean_rate: float, view: Any) -> Une
         return None
     times = np.asarray(view.spike_times_s, dtype=np.float64)[near]
     segs = [[float(t), float(t)] for t in times[:MAX_SEGMENTS]]
-    more = " (at least)" if heights.size >= MAX_SPIKES else ""
     text = (
-        f"time view: {int(near.sum())}{more} samples one mean rate too high "
+        f"time view: {int(near.sum())} samples one mean rate too high "
         f"({float(np.median(heights[near])):.3g} vs a mean rate of {mean_rate:.3g}) at "
         f"{', '.join(f'{t:.4g}' for t in times[:4])} s"
         f"{f' (+{times.size - 4} more)' if times.size > 4 else ''}: dropped {input_kind} samples "
