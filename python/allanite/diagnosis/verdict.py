@@ -420,9 +420,9 @@ def _time_item(name: str, tv: TimeView, p: float) -> Unexplained:
     elif segs and name != "spike":
         text += f" at {_segments_text(segs)}"
     elif name == "spike":
-        count, listed = int(size["count"]), int(size["listed"])
+        count, shown = int(size["count"]), int(size["listed"])
         text += f" ({count:,} found" + (
-            f"; the {listed} largest of {count:,} listed)" if listed < count else ")"
+            f"; the {shown} largest of {count:,} listed)" if shown < count else ")"
         )
     elif name.startswith("kurt"):
         real, sim = size["excess_kurtosis_real"], size["excess_kurtosis_sim"]
