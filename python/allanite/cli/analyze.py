@@ -14,6 +14,7 @@ from allanite.cli.fit import fit_impossible_reason, fit_possible
 from allanite.cli.record_options import (
     add_grid_arguments,
     add_record_arguments,
+    add_still_argument,
     avar_from_args,
     dump_json,
     read_from_args,
@@ -69,6 +70,7 @@ def register(subparsers: Any) -> None:
         help="analyse the built-in example record (simulated 30-minute angle record at 100 Hz)",
     )
     add_record_arguments(parser)
+    add_still_argument(parser)
     add_grid_arguments(parser)
     out = parser.add_argument_group("output")
     out.add_argument("--json", action="store_true", help="print machine-readable JSON")

@@ -11,6 +11,7 @@ from typing import Any
 from allanite.cli.commands import SUMMARIES
 from allanite.cli.record_options import (
     add_record_arguments,
+    add_still_argument,
     print_reader_notes,
     rate_unit,
     read_from_args,
@@ -66,6 +67,7 @@ def register(subparsers: Any) -> None:
     )
     parser.add_argument("real", metavar="REAL", help="the real record file")
     add_record_arguments(parser)
+    add_still_argument(parser)
     sim = parser.add_argument_group("simulated sensor (one of)")
     which = sim.add_mutually_exclusive_group(required=True)
     which.add_argument(

@@ -12,6 +12,7 @@ from allanite.cli.progress import progress
 from allanite.cli.record_options import (
     add_grid_arguments,
     add_record_arguments,
+    add_still_argument,
     avar_from_args,
     dump_json,
     read_sensors,
@@ -67,6 +68,7 @@ def register(subparsers: Any) -> None:
         help="check the coefficients against datasheet limits (exit code 1 when one fails)",
     )
     add_record_arguments(parser)
+    add_still_argument(parser)
     add_grid_arguments(parser)
     parser.set_defaults(func=run)
 

@@ -31,11 +31,13 @@ from allanite.plausibility import (
     constant_channels,
     refuse_constant,
 )
+from allanite.stillness import STILL_MODES, still_record
 from allanite.variance import KINDS, AllanResult, avar
 
 __all__ = [
     "add_grid_arguments",
     "add_record_arguments",
+    "add_still_argument",
     "avar_from_args",
     "example_record",
     "print_reader_notes",
@@ -128,6 +130,18 @@ def add_record_arguments(parser: argparse.ArgumentParser) -> None:
         help="raw binary byte order (default little)",
     )
     group.add_argument("--offset", type=int, help="raw binary: bytes to skip at the start")
+
+
+def add_still_argument(parser: argparse.ArgumentParser) -> None:
+    """Add ``--still``: what to do about motion in a record that should be still."""
+    parser.add_argument(
+        "--still",
+        choices=STILL_MODES,
+        default="warn",
+        help="motion in the record (handling, a robot driving): warn naming the still "
+        "segments' times (default), analyse the longest still segment (auto; the output says "
+        "which), or do not look (off). See allanite.stillness",
+    )
 
 
 def add_grid_arguments(parser: argparse.ArgumentParser) -> None:
@@ -332,7 +346,9 @@ def _read(path: str | None, args: argparse.Namespace, **override: Any) -> Record
             return dataclasses.replace(record, units=override["units"]) if override else record
         raise ValueError("give a FILE to analyse, or --example for the built-in example record")
     record = read_record(path, read_options(args), **override)
-    return _without_constant(record, args)
+    record = _without_constant(record, args)
+    record, _ = still_record(record, getattr(args, "still", "warn"))
+    return record
 
 
 def _without_constant(record: Record, args: argparse.Namespace) -> Record:
@@ -402,6 +418,7 @@ _READER_FLAGS: dict[str, tuple[str, Any]] = {
     "byte_order": ("--byte-order", None),
     "offset": ("--offset", None),
     "topic": ("--topic", None),
+    "still": ("--still", "warn"),
 }
 
 

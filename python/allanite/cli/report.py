@@ -12,6 +12,7 @@ from allanite.cli.progress import progress
 from allanite.cli.record_options import (
     add_grid_arguments,
     add_record_arguments,
+    add_still_argument,
     avar_from_args,
     dump_json,
     rate_unit,
@@ -90,6 +91,7 @@ def register(subparsers: Any) -> None:
     parser.add_argument("--pdf", action="store_true", help="also export the figures as PDF")
     parser.add_argument("--json", action="store_true", help="print the verdict and checks as JSON")
     add_record_arguments(parser)
+    add_still_argument(parser)
     add_grid_arguments(parser)
     parser.set_defaults(func=run)
 

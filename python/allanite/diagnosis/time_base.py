@@ -18,14 +18,15 @@ analysis. So the diagnosis reports what the time base itself says, next to the t
   to repair.
 * **held samples** (any record): a sensor or logger that repeats the previous value when a
   sample is missing leaves runs of exactly equal consecutive samples. Their number ``n_0`` is
-  compared with what the record's own resolution explains. With ``q`` the smallest non-zero
-  step between consecutive samples and ``n_1``, ``n_2`` the steps of ``q`` and ``2q`` (per
-  sign), a Gaussian density of the steps (log-quadratic) predicts
-  ``e_0 = n_1 (n_1 / n_2)^{1/3}`` zero steps; ``log(n_0 / e_0)`` is tested one-sided with the
-  counts' Poisson variances (``1/n_0 + (16/9)/n_1 + (1/9)/n_2``). Continuous (float) samples
-  have ``n_1 < 5``: then ``e_0 = 1/2`` and the Poisson tail ``P(X >= n_0)`` is the p-value, so
-  a handful of exact repeats already counts. A resolution coarser than the noise
-  (``n_2 < n_1 / 4``) makes repeated values the rule; held samples are then not tested.
+  compared with what the record's own resolution explains
+  (:mod:`allanite.diagnosis.resolution`): the resolution ``q`` is a lattice fit of the first
+  differences that tolerates float rounding; for quantized samples the repeats expected
+  without holding come from the record's own levels (the larger of independent levels,
+  ``sum p_k^2`` in windows, and a quantized Gaussian difference fitted to the non-zero
+  steps), block by block, and the held share beyond them is tested one-sided against
+  :data:`~allanite.diagnosis.resolution.HELD_FLOOR`. Continuous (float) samples have no
+  lattice: then ``e_0 = 1/2`` and the Poisson tail ``P(X >= n_0)`` is the p-value, so a
+  handful of exact repeats already counts.
 
 * **doubled increments** (angle or increment input without time stamps): a dropped sample
   makes one rate sample span two periods, one mean rate too high. On a turntable (a mean rate
@@ -45,7 +46,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import stats
 
-from allanite.diagnosis.time_view import MAX_SPIKES
+from allanite.diagnosis.resolution import held_excess, output_resolution, rounding_floor
 from allanite.diagnosis.verdict import Unexplained, Verdict
 from allanite.io.record import Record
 from allanite.io.timebase import JITTER_WARN
@@ -60,8 +61,6 @@ __all__ = [
 
 #: at most this many time segments are listed per item
 MAX_SEGMENTS = 50
-#: steps of one resolution unit (per sign) above which the samples count as quantized
-RESOLVED = 5
 #: a jitter is evidence when its predicted extra short-term variance exceeds this many
 #: standard errors (``sqrt(3 / n)`` relative, first differences of white noise) of that variance
 JITTER_SE = 3.0
@@ -234,34 +233,26 @@ def held_samples_item(samples: Any, fs: float, level: float) -> Unexplained | No
     x = np.asarray(samples, dtype=np.float64).ravel()
     if x.size < 3:
         return None
-    d = np.diff(x)
-    held = d == 0.0
-    n0 = int(held.sum())
-    if n0 == 0:
-        return None
-    step = np.abs(d[~held])
-    if step.size == 0:
-        return None
-    q = float(step.min())
-    k = np.rint(step / q)
-    n1 = float(np.count_nonzero(k == 1)) / 2.0  # steps of one resolution unit, per sign
-    n2 = float(np.count_nonzero(k == 2)) / 2.0
-    if n1 < RESOLVED:  # continuous samples: an exact repeat is a held sample
+    q = output_resolution(x)
+    if q is None:  # continuous samples: an exact repeat (within rounding) is a held sample
+        held = np.abs(np.diff(x)) <= rounding_floor(x)
+        n0 = int(held.sum())
+        if n0 == 0:
+            return None
         expected = 0.5
         p = float(stats.poisson.sf(n0 - 1, expected))
-    elif n2 < n1 / 4.0:
-        return None  # the resolution is coarser than the noise: repeats are the rule
+        basis = "the record's resolution"
     else:
-        # log-quadratic (Gaussian) density of the steps through k = 1, 2, extrapolated to 0
-        expected = n1 * (n1 / n2) ** (1.0 / 3.0)
-        sd = np.sqrt(1.0 / n0 + (16.0 / 9.0) / n1 + (1.0 / 9.0) / n2)
-        p = float(stats.norm.sf(np.log(n0 / expected) / sd))
+        held = np.diff(np.rint((x - x[0]) / q)) == 0
+        test = held_excess(x, q)
+        n0, expected, p = test.count, test.expected, test.p_value
+        basis = f"the record's resolution {q:.4g} and its level distribution"
     if p >= level:
         return None
     segs = _held_runs(held, fs, gap_s=0.01 * x.size / fs)
     text = (
-        f"time view: {n0} held samples (a value repeated exactly, {100.0 * n0 / d.size:.2g} % of "
-        f"the samples; {expected:.3g} expected from the record's resolution) at "
+        f"time view: {n0} held samples (a value repeated exactly, {100.0 * n0 / held.size:.2g} % "
+        f"of the samples; {expected:.3g} expected from {basis}) at "
         f"{_segments_text(segs)}: a logger or sensor that repeats the last value when a sample "
         f"is missing, p = {p:.2g}"
     )
@@ -269,7 +260,8 @@ def held_samples_item(samples: Any, fs: float, level: float) -> Unexplained | No
         "time",
         "held",
         {"time_segments_s": segs[:MAX_SEGMENTS]},
-        {"count": float(n0), "fraction": n0 / d.size, "expected": expected},
+        {"count": float(n0), "fraction": n0 / held.size, "expected": expected}
+        | ({} if q is None else {"resolution": q}),
         p,
         text,
     )
@@ -291,9 +283,8 @@ def doubled_increments_item(input_kind: str, mean_rate: float, view: Any) -> Une
         return None
     times = np.asarray(view.spike_times_s, dtype=np.float64)[near]
     segs = [[float(t), float(t)] for t in times[:MAX_SEGMENTS]]
-    more = " (at least)" if heights.size >= MAX_SPIKES else ""
     text = (
-        f"time view: {int(near.sum())}{more} samples one mean rate too high "
+        f"time view: {int(near.sum())} samples one mean rate too high "
         f"({float(np.median(heights[near])):.3g} vs a mean rate of {mean_rate:.3g}) at "
         f"{', '.join(f'{t:.4g}' for t in times[:4])} s"
         f"{f' (+{times.size - 4} more)' if times.size > 4 else ''}: dropped {input_kind} samples "

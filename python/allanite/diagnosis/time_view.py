@@ -49,6 +49,7 @@ E. S. Page, "Continuous inspection schemes", Biometrika 41 (1954) 100-115 (CUSUM
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -72,6 +73,7 @@ __all__ = [
     "added_level_variance",
     "block_kurtosis",
     "kurtosis_blocks",
+    "largest_spikes",
     "sparse_jump_p",
     "spike_features",
     "spike_test",
@@ -88,7 +90,7 @@ WINDOW_FAMILIES = ("level", "jump", "hf", "dyn")
 #: per-window families whose largest and smallest scores get a law each (:func:`window_scan`):
 #: the log of a mean over few pieces is left-skewed
 SKEWED_FAMILIES = ("dyn",)
-#: at most this many spikes are listed individually
+#: at most this many spikes are listed individually (the largest; every spike is counted)
 MAX_SPIKES = 200
 #: window of the running median that the spike finder removes
 SPIKE_MEDIAN = 9
@@ -388,7 +390,8 @@ class TimeView:
         simulated sensor's (``ref``) and its null spread (``sd``), for
         :meth:`lf_kurtosis_p_value`.
     spike_times_s, spike_amplitudes : list of float
-        Detected spikes (time and signed height above the local median).
+        Detected spikes (time and signed height above the local median), every one; the
+        segments list the :data:`MAX_SPIKES` largest (:func:`largest_spikes`).
     spike_raise : numpy.ndarray
         Per window, how much the detected spikes raise the log mean square of the first
         differences (``hf``): ``log(D_w / (D_w - 2 sum h^2 / (L - 1)))`` with ``D_w`` the
@@ -644,9 +647,20 @@ def _spikes(x: NDArray[np.float64], threshold: float) -> tuple[list[int], list[f
                 found[-1] = k
             continue
         found.append(k)
-        if len(found) >= MAX_SPIKES:
-            break
     return found, [float(hp[k]) for k in found]
+
+
+def largest_spikes(amplitudes: Sequence[float], limit: int = MAX_SPIKES) -> list[int]:
+    """Positions of the ``limit`` largest spikes (by absolute height), in time order.
+
+    Every spike is counted; only a listing is capped, and then by size, so that the spikes
+    listed are those that matter rather than the first seconds of the record.
+    """
+    heights = np.abs(np.asarray(amplitudes, dtype=np.float64))
+    if heights.size <= limit:
+        return list(range(heights.size))
+    keep = np.argsort(-heights, kind="stable")[:limit]
+    return sorted(int(i) for i in keep)
 
 
 def _change_point(x: NDArray[np.float64], start: int, stop: int) -> int:
@@ -831,7 +845,8 @@ def time_view(
         # the lowest significant order's threshold: a higher order's lower threshold would
         # also list samples the null reaches (~1.3 of them above the 8th largest's level)
         spike_idx, spike_amp = _spikes(x, spike_thr[0])
-        segments.extend(((k - 1) / fs, (k + 1) / fs) for k in spike_idx)
+        listed = [spike_idx[i] for i in largest_spikes(spike_amp)]
+        segments.extend(((k - 1) / fs, (k + 1) / fs) for k in listed)
     spike_raise = _spike_raise(real.get("hf"), spike_idx, spike_amp, plan)
     kurt = {
         "hf_real": float(real["kurt_hf"][0]),

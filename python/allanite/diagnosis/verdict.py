@@ -35,7 +35,7 @@ from allanite.diagnosis.frequency_view import FrequencyView
 from allanite.diagnosis.joint import Explanation
 from allanite.diagnosis.null import runs
 from allanite.diagnosis.tau_view import TauModel, TauView
-from allanite.diagnosis.time_view import TimeView
+from allanite.diagnosis.time_view import TimeView, largest_spikes
 from allanite.units import coefficient_text as param_unit
 from allanite.units import customary_value as shown_param
 
@@ -54,6 +54,9 @@ __all__ = [
 ]
 
 #: plain names of the term types (the headline's vocabulary)
+#: spikes listed in an item's time segments (the largest; the count states them all)
+LISTED_SPIKES = 50
+
 TERM_NAMES = {
     "white": "white noise",
     "quantization": "quantization noise",
@@ -363,8 +366,10 @@ def _time_item(name: str, tv: TimeView, p: float) -> Unexplained:
             [t - tv.window_s / 4, t + tv.window_s / 4] for t in tv.change_points_s
         ]
     elif name == "spike":
-        where["time_segments_s"] = [[t, t] for t in tv.spike_times_s[:50]]
+        listed = largest_spikes(tv.spike_amplitudes, LISTED_SPIKES)
+        where["time_segments_s"] = [[tv.spike_times_s[i]] * 2 for i in listed]
         size["count"] = float(len(tv.spike_times_s))
+        size["listed"] = float(len(listed))
         if tv.spike_amplitudes:
             size["rms_height"] = float(np.sqrt(np.mean(np.square(tv.spike_amplitudes))))
     elif name == "tail" and tv.tail:
@@ -415,7 +420,10 @@ def _time_item(name: str, tv: TimeView, p: float) -> Unexplained:
     elif segs and name != "spike":
         text += f" at {_segments_text(segs)}"
     elif name == "spike":
-        text += f" ({int(size['count'])} found)"
+        count, shown = int(size["count"]), int(size["listed"])
+        text += f" ({count:,} found" + (
+            f"; the {shown} largest of {count:,} listed)" if shown < count else ")"
+        )
     elif name.startswith("kurt"):
         real, sim = size["excess_kurtosis_real"], size["excess_kurtosis_sim"]
         departs = abs(real - sim)
