@@ -195,9 +195,12 @@ def _summary(d: Any) -> str:
                     else ""
                 )
             )
-    if d.holdout is not None:
+    if d.holdout is not None and d.holdout.note:
+        lines.append(d.holdout.note)
+    elif d.holdout is not None:
         shrink = d.holdout.shrinkage
         text = "n/a (no gap in the held-out data)" if d.holdout.gap_before <= 0 else percent(shrink)
+        text = text if d.holdout.checkable else "not checkable on the held-out part"
         lines.append(f"held-out shrinkage of {d.holdout.effect}: {text}")
     if d.explanation is not None and d.attribution:
         model = d.meta.get("sim") != "record"

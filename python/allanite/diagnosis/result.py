@@ -48,6 +48,17 @@ class Holdout:
         Length of the held-out record.
     source : str
         ``"fraction"`` (the end of the record) or ``"record"`` (a second real record).
+    checkable : bool
+        False when the effect's signature lies beyond the held-out part's taus (adding it
+        would not change a record of that length significantly); ``shrinkage`` is then nan.
+    disagrees : bool
+        ``holdout=`` a fraction: the fit part alone names other effects than the whole record.
+    fit_effects : tuple of str
+        The effects attributed on the fit part (a fraction held out).
+    deciding_length_s : float or None
+        Record length that would tell the fit part's and the whole record's effects apart.
+    note : str
+        The validation in one sentence (also appended to the headline for a fraction).
     """
 
     effect: str
@@ -57,17 +68,27 @@ class Holdout:
     consistent_after: bool
     n_samples: int
     source: str
+    checkable: bool = True
+    disagrees: bool = False
+    fit_effects: tuple[str, ...] = ()
+    deciding_length_s: float | None = None
+    note: str = ""
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dictionary."""
         return {
-            "shrinkage": self.shrinkage,
+            "shrinkage": self.shrinkage if self.checkable else None,
             "effect": self.effect,
             "gap_before": self.gap_before,
             "gap_after": self.gap_after,
             "consistent_after": self.consistent_after,
             "n_samples": self.n_samples,
             "source": self.source,
+            "checkable": self.checkable,
+            "disagrees": self.disagrees,
+            "fit_effects": list(self.fit_effects),
+            "deciding_length_s": self.deciding_length_s,
+            "note": self.note,
         }
 
 
