@@ -155,6 +155,8 @@ def _summary(d: Any) -> str:
 
     units = d.meta.get("units")
     status = "CLOSED" if d.closed else "NOT FULLY EXPLAINED"
+    if d.indistinguishable and not d.closed:
+        status = "NOT IDENTIFIED"
     if not d.significant:
         status = "NO GAP" if d.closed else "NO GAP IN THE NOISE, NOT FULLY EXPLAINED"
     lines = [f"{status}: {d.headline}"]

@@ -20,6 +20,7 @@ from allanite.diagnosis.holdout_validation import (
     disagreement,
     validation_note,
 )
+from allanite.diagnosis.identification import identified
 from allanite.diagnosis.inputs import (
     MIN_SAMPLES,
     SimSource,
@@ -270,6 +271,10 @@ def diagnose(
         view=analysis.time,
     )
     head = with_time_base(head, base_items)
+    head, rival_names = identified(
+        head, found.explanation, found.attribution, found.by_effect, model=source.model,
+        fs=rate, n=x_fit.size, alpha=significance, units=common_units,
+    )  # fmt: skip
     if parts is not None:
         explanation, held = _fraction_check(run, found, parts, effects)
         if held is not None and (held.disagrees or not held.checkable or not held.effect):
@@ -290,6 +295,7 @@ def diagnose(
         closed=head.closed,
         unexplained=head.unexplained,
         headline=head.headline,
+        indistinguishable=tuple(rival_names),
         meta={
             "fs": rate,
             "n_samples": int(x.size),

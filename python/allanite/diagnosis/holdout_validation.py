@@ -29,7 +29,7 @@ from allanite.diagnosis.joint import Explanation, combined_terms
 from allanite.diagnosis.tau_view import TauModel, octave_factors, tau_covariance
 from allanite.terms import term_from_dict
 
-__all__ = ["deciding_length", "detectable", "disagreement", "validation_note"]
+__all__ = ["deciding_length", "detectable", "disagreement", "duration_text", "validation_note"]
 
 #: record lengths tried by :func:`deciding_length`, as multiples of the whole record
 LENGTH_FACTORS = (1, 2, 4, 8, 16, 32, 64)
@@ -93,7 +93,8 @@ def disagreement(whole: Explanation | None, fit: Explanation | None) -> bool:
     return names[0] != names[1]
 
 
-def _duration(seconds: float) -> str:
+def duration_text(seconds: float) -> str:
+    """A duration in h, min or s, whichever reads best."""
     if seconds >= 7200.0:
         return f"{seconds / 3600.0:.3g} h"
     if seconds >= 120.0:
@@ -107,7 +108,7 @@ def _names(e: Explanation | None) -> str:
 
 def validation_note(check: dict[str, Any], whole: Explanation | None) -> str:
     """One sentence on the held-out validation (``check``: :func:`engine` fraction check)."""
-    fit_s, hold_s = _duration(check["fit_duration_s"]), _duration(check["held_duration_s"])
+    fit_s, hold_s = duration_text(check["fit_duration_s"]), duration_text(check["held_duration_s"])
     head = (
         f"held-out validation (attributed on the first {fit_s}, checked on the last {hold_s}; "
         f"gap p = {check['fit_p_value']:.2g} on the fit part, {check['held_p_value']:.2g} on "
@@ -136,7 +137,7 @@ def validation_note(check: dict[str, Any], whole: Explanation | None) -> str:
         )
         length = check.get("deciding_length_s")
         text += (
-            f"; a record of about {_duration(length)} would tell them apart"
+            f"; a record of about {duration_text(length)} would tell them apart"
             if length is not None
             else "; no record up to 64 times this one tells them apart in the tau view"
         )

@@ -126,6 +126,9 @@ class Diagnosis:
     headline : str
         One plain sentence: the effect with its parameters and units, and whether the records
         then agree in all three views or what remains.
+    indistinguishable : tuple of str
+        When the gap closes alike with several effects of different laws (not identified, so
+        ``closed`` is False): the effect and its rivals (:mod:`allanite.diagnosis.identification`).
     """
 
     statistic: float
@@ -141,6 +144,7 @@ class Diagnosis:
     closed: bool = False
     unexplained: list[Unexplained] = field(default_factory=list)
     headline: str = ""
+    indistinguishable: tuple[str, ...] = ()
 
     _repr_html_ = diagnosis_html  # Jupyter: a compact table and the plot (allanite.notebook)
 
@@ -204,6 +208,7 @@ class Diagnosis:
         out: dict[str, Any] = {
             "headline": self.headline,
             "closed": self.closed,
+            "indistinguishable": list(self.indistinguishable),
             "unexplained": [u.to_dict() for u in self.unexplained],
             "gap": {
                 "statistic": self.statistic,
