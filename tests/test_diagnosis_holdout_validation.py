@@ -17,6 +17,7 @@ from allanite.diagnosis.holdout import tau_model_for
 from allanite.diagnosis.holdout_validation import detectable
 from allanite.diagnosis.identification import rivals
 from allanite.diagnosis.inputs import make_source
+from allanite.diagnosis.verdict import headline_effects
 from allanite.model import NoiseModel
 from allanite.terms import Flicker, GaussMarkov, White
 
@@ -94,6 +95,23 @@ def test_holdout_names_what_the_whole_record_names_and_in_the_users_terms() -> N
         assert "rate random walk" in half.headline
         assert "stationary sigma" in half.headline
     assert "shrinkage 100 %" not in half.headline
+    # a stationary record: the time view's chance excursions are not listed as findings
+    fam = whole.time.family_p
+    if min(fam.values()) >= 0.05 / len(fam):
+        assert whole.where["time_segments_s"] == []
+
+
+def test_an_effect_with_no_share_and_no_evidence_is_not_named() -> None:
+    """An effect of the set with a 0 % share of the gap that explains no evidence stays out of
+    the headline (it was named)."""
+    big = _attribution("rrw", {"type": "rrw", "K": 1e-5}, True, [])
+    tiny = _attribution("flicker", {"type": "flicker", "B": 1e-9}, True, [])
+    level = _attribution("step", {"type": "bias_steps", "size": 1e-3}, True, [])
+    level.evidence["explained"] = ["jump"]
+    e = SimpleNamespace(
+        effects=[big, tiny, level], share={"rrw": 0.99, "flicker": 0.0, "step": 0.0}
+    )
+    assert [a.effect for a in headline_effects(e)] == ["rrw", "step"]  # type: ignore[arg-type]
 
 
 def test_an_effect_beyond_the_held_out_taus_is_not_detectable_there() -> None:

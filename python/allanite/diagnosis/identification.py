@@ -71,9 +71,15 @@ def identified(
     other = replace(explanation, effects=[found[0]], candidates=[by_effect[found[0].effect]])
     length = deciding_length(explanation, other, model, fs, n, alpha)
     if length is None:
-        tail = "no record up to 64 times this one (same rate) tells them apart in the tau view"
+        tail = (
+            f"no record up to 64 times this one tells {explanation.effects[0].effect} from "
+            f"{found[0].effect} in the tau view (the same Allan variance law)"
+        )
     elif length > duration:
-        tail = f"a record of about {duration_text(length)} (same rate) would tell them apart"
+        tail = (
+            f"a record of about {duration_text(length)} (same rate) would tell "
+            f"{explanation.effects[0].effect} from {found[0].effect}"
+        )
     else:
         tail = "a record this long tells them apart on average but this one does not: repeat it"
     text = (

@@ -194,9 +194,21 @@ class Diagnosis:
         return {
             "tau_bands_s": [list(b) for b in self.tau.bands_s],
             "frequency_lines_hz": [line.frequency_hz for line in self.frequency.lines],
-            "time_segments_s": [list(s) for s in self.time.segments_s],
+            "time_segments_s": [list(s) for s in self.time.segments_s]
+            if self._time_view_significant()
+            else [],
             "frequency_bands_hz": [list(b) for b in self.frequency.bands_hz],
         }
+
+    def _time_view_significant(self) -> bool:
+        """Whether any time-view statistic is significant (Bonferroni over the family).
+
+        Time segments are findings only then: on a record whose time view agrees with the
+        sensor they are the scan's chance excursions, not events.
+        """
+        fam = self.time.family_p
+        level = float(self.meta.get("significance", 0.05)) / max(len(fam), 1)
+        return bool(fam) and min(fam.values()) < level
 
     @property
     def best(self) -> Attribution | None:

@@ -547,6 +547,21 @@ def _tau_item(
     )
 
 
+#: an effect's share of the gap below which it is not named in the headline (unless it
+#: explains evidence of the frequency or time view)
+SHARE_NEGLIGIBLE = 0.005
+
+
+def headline_effects(explanation: Explanation) -> list[Attribution]:
+    """The set's effects worth naming: a share of the gap, or evidence they explain."""
+    shown = [
+        a
+        for a in explanation.effects
+        if explanation.share.get(a.effect, 1.0) >= SHARE_NEGLIGIBLE or a.evidence.get("explained")
+    ]
+    return shown or list(explanation.effects)
+
+
 def verdict(
     *,
     significant: bool,
@@ -632,7 +647,7 @@ def verdict(
     if explanation is not None:
         fs = 1.0 / tau_model.dt
         effect = "; and ".join(
-            describe_effect(a, units, fs, tau_model.duration) for a in explanation.effects
+            describe_effect(a, units, fs, tau_model.duration) for a in headline_effects(explanation)
         )
         it = "them" if len(explanation.effects) > 1 else "it"
         if closed:
