@@ -5,6 +5,7 @@ Records come from plain numpy/scipy generators written here, not from allanite.s
 
 from __future__ import annotations
 
+from dataclasses import replace
 from types import SimpleNamespace
 
 import numpy as np
@@ -146,14 +147,15 @@ def _attribution(effect: str, term: dict, consistent: bool, unexplained: list[st
 def test_rivals_are_other_laws_that_close_the_gap_and_explain_as_much() -> None:
     """A random walk and a Gauss-Markov term 100x slower than the record are one law (not
     rivals); a step that closes the tau view and leaves no more evidence is a rival; one that
-    leaves the gap or more evidence is not."""
+    leaves the gap or more evidence, or scores far worse (chi2_1 margin), is not."""
     best = _attribution("rescale:markov", {"type": "markov", "sigma": 1e-3, "tau_c": 1e6}, True, [])
     rrw = _attribution("rrw", {"type": "rrw", "K": 1e-5}, True, [])
     step = _attribution("step", {"type": "bias_steps", "size": 1e-3}, True, [])
     ramp = _attribution("ramp", {"type": "ramp", "R": 1e-6}, False, [])
     warm = _attribution("warmup", {"type": "warmup", "amplitude": 1.0}, True, ["kurt_lf"])
+    far = replace(_attribution("flicker", {"type": "flicker", "B": 1.0}, True, []), score=50.0)
     explanation = SimpleNamespace(effects=[best])
-    found = rivals(explanation, [best, rrw, step, ramp, warm], duration=1e4)  # type: ignore[arg-type]
+    found = rivals(explanation, [best, rrw, step, ramp, warm, far], duration=1e4)  # type: ignore[arg-type]
     assert [a.effect for a in found] == ["step"]
     # on a record longer than tau_c / 10 the Gauss-Markov is no random walk: rrw is a rival
     found = rivals(explanation, [best, rrw], duration=2e5)  # type: ignore[arg-type]

@@ -12,6 +12,8 @@ from __future__ import annotations
 from dataclasses import replace
 from typing import Any
 
+from scipy import stats
+
 from allanite.diagnosis.attribution import Attribution
 from allanite.diagnosis.holdout_validation import deciding_length, duration_text
 from allanite.diagnosis.joint import Explanation
@@ -28,20 +30,31 @@ def _law(a: Attribution, duration: float) -> str:
 
 
 def rivals(
-    explanation: Explanation | None, attribution: list[Attribution], duration: float
+    explanation: Explanation | None,
+    attribution: list[Attribution],
+    duration: float,
+    alpha: float = 0.05,
 ) -> list[Attribution]:
-    """Other effects that close the gap as well as a one-effect explanation (best first)."""
+    """Other effects that close the gap as well as a one-effect explanation (best first).
+
+    A rival closes the tau view, leaves no evidence unexplained that the best explains, and
+    its score (the penalised ``-2 ln p`` sum of the ranking) exceeds the best's by less than
+    the ``chi2_1`` quantile ``1 - alpha / n`` (``n`` the ranked effects: the family-wise
+    level of the one-parameter likelihood-ratio margin that lists ``alternatives``).
+    """
     if explanation is None or len(explanation.effects) != 1:
         return []
     best = explanation.effects[0]
     left = set(best.evidence.get("unexplained", []))
     law = _law(best, duration)
+    margin = float(stats.chi2.isf(alpha / max(len(attribution), 1), 1))
     return [
         b
         for b in attribution
         if b.consistent_after
         and _law(b, duration) != law
         and set(b.evidence.get("unexplained", [])) <= left
+        and b.score - best.score < margin
     ]
 
 
@@ -64,7 +77,7 @@ def identified(
     (:func:`~allanite.diagnosis.holdout_validation.deciding_length`).
     """
     duration = n / fs
-    found = rivals(explanation, attribution, duration) if head.closed else []
+    found = rivals(explanation, attribution, duration, alpha) if head.closed else []
     if not found or explanation is None:
         return head, []
     names = [describe_effect(a, units, fs, duration) for a in (explanation.effects[0], *found)]
@@ -83,7 +96,7 @@ def identified(
     else:
         tail = "a record this long tells them apart on average but this one does not: repeat it"
     text = (
-        "not identified: the gap closes alike with any of these (each closes the tau view and "
+        "the gap closes alike with any of these (each closes the tau view and "
         "explains the same evidence), indistinguishable on this record: "
         + "; or ".join(names)
         + f"; {tail}"
