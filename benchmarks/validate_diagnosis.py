@@ -1501,11 +1501,12 @@ HOLD_FS, HOLD_N = 10.0, 2**16
 
 
 def _hold_gm(rng: np.random.Generator, n: int, fs: float) -> np.ndarray:
-    """Gauss-Markov rate, tau_c 400 s (roll-over near 760 s, beyond the halves' taus)."""
+    """Gauss-Markov rate, tau_c 200 s: its turnover (378 s) lies within the whole record's taus
+    (to 655 s), beyond the held-out half's (to 328 s)."""
     from scipy.signal import lfilter
 
     dt, sigma = 1.0 / fs, 0.02
-    phi = np.exp(-dt / 400.0)
+    phi = np.exp(-dt / 200.0)
     drive = sigma * np.sqrt(1.0 - phi * phi) * rng.standard_normal(n)
     drive[0] = sigma * rng.standard_normal()
     return np.asarray(lfilter([1.0], [1.0, -phi], drive))

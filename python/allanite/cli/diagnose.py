@@ -85,9 +85,10 @@ def register(subparsers: Any) -> None:
     diag.add_argument(
         "--holdout",
         metavar="FRACTION|FILE",
-        help="fraction of the record held out from the fit (e.g. 0.5), or a second real "
-        "record read with the same options; the shrinkage of the best effect and of the "
-        "joint set of effects is measured there",
+        help="a fraction (e.g. 0.5): the gap is tested and attributed on the whole record, "
+        "then validated: attributed on the start, checked on the held-out end (effects beyond "
+        "its taus: 'not checkable'; a different attribution is flagged); or a second real "
+        "record read with the same options, where the effects' shrinkage is measured",
     )
     diag.add_argument(
         "--effects", help="comma-separated candidate effects (default: all), e.g. white,sine"
