@@ -247,41 +247,22 @@ def diagnose(
     if store is not None:
         store.release()  # the null's replicate blocks served the re-analysis (or nothing)
     head = verdict(
-        significant=significant,
-        p_value=p,
-        alpha=significance,
-        tau_model=analysis.tau_model,
-        tau=analysis.tau,
-        frequency=analysis.frequency,
-        time=analysis.time,
-        evidence_p=ev_p,
-        evidence_significant=found.significant,
-        explanation=found.explanation,
-        units=common_units,
-        after=after,
-    )
+        significant=significant, p_value=p, alpha=significance, tau_model=analysis.tau_model,
+        tau=analysis.tau, frequency=analysis.frequency, time=analysis.time, evidence_p=ev_p,
+        evidence_significant=found.significant, explanation=found.explanation,
+        units=common_units, after=after,
+    )  # fmt: skip
     # the time base (time stamps of a Record, held samples): reported next to the three views
     base_items = time_base_evidence(
-        real,
-        samples,
-        rate,
-        significance / 10.0,
-        input_kind=input_kind,
-        samples_rate=x,
+        real, samples, rate, significance / 10.0, input_kind=input_kind, samples_rate=x,
         view=analysis.time,
-    )
+    )  # fmt: skip
     head = with_time_base(head, base_items)
     head, rival_names = identified(
         head, found.explanation, found.attribution, found.by_effect, model=source.model,
         fs=rate, n=x_fit.size, alpha=significance, units=common_units,
     )  # fmt: skip
-    if parts is not None:
-        explanation, held = _fraction_check(run, found, parts, effects)
-        if held is not None and (held.disagrees or not held.checkable or not held.effect):
-            head = replace(head, headline=head.headline + "; " + held.note)
-    else:
-        explanation, held = _held_out(run, found, x_hold, hold_kind)
-    explanation = _claiming_only_what_is_left_explained(explanation, head.unexplained)
+    head, explanation, held = _validated(run, found, head, parts, (x_hold, hold_kind), effects)
     return Diagnosis(
         statistic=analysis.tau.gap,
         p_value=p,
@@ -496,6 +477,28 @@ def _held_out(
             holdout=holdout_set(pairs, tm_hold, alpha=run.significance, kind=hold_kind),
         )
     return explanation, held
+
+
+def _validated(
+    run: _Run,
+    found: _Found,
+    head: Any,
+    parts: tuple[NDArray[np.float64], NDArray[np.float64] | None] | None,
+    held_out: tuple[NDArray[np.float64] | None, str],
+    effects: list[str] | None,
+) -> tuple[Any, Explanation | None, Holdout | None]:
+    """The held-out check: of a fraction (``parts``, :func:`_fraction_check`) or a record.
+
+    A fraction's validation note joins the headline when it flags something: a disagreement
+    with the whole record, an effect not checkable there, or no gap in the fit part.
+    """
+    if parts is not None:
+        explanation, held = _fraction_check(run, found, parts, effects)
+        if held is not None and (held.disagrees or not held.checkable or not held.effect):
+            head = replace(head, headline=head.headline + "; " + held.note)
+    else:
+        explanation, held = _held_out(run, found, *held_out)
+    return head, _claiming_only_what_is_left_explained(explanation, head.unexplained), held
 
 
 def _fit_part_explanation(run: _Run, effects: list[str] | None) -> tuple[Analysis, _Found]:
