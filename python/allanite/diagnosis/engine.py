@@ -490,9 +490,13 @@ def _validated(
     """The held-out check: of a fraction (``parts``, :func:`_fraction_check`) or a record.
 
     A fraction's validation note joins the headline when it flags something: a disagreement
-    with the whole record, an effect not checkable there, or no gap in the fit part.
+    with the whole record, an effect not checkable there, or no gap in the fit part. Without
+    an attribution on the whole record (no gap) there is nothing to validate.
     """
-    if parts is not None:
+    if parts is not None and not found.attribution:
+        # nothing attributed on the whole record (no gap): nothing to validate
+        explanation, held = _held_out(run, found, None, "fraction")
+    elif parts is not None:
         explanation, held = _fraction_check(run, found, parts, effects)
         if held is not None and (held.disagrees or not held.checkable or not held.effect):
             head = replace(head, headline=head.headline + "; " + held.note)
