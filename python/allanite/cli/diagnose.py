@@ -33,16 +33,19 @@ EXAMPLES = """examples:
       --fs 100 --sim-model run1_model.json --holdout 0.5 --report gap.html
   allanite diagnose real.csv --fs 2000 --sim-record sim.npy --input angle --json
 
-JSON (--json) is one object: headline, closed (true only when the tau, frequency and time
-views all agree after the effects), unexplained [{view, evidence, where, size, p_value,
-text}, ...], gap {statistic, p_value, significant, T, T0, view_p_values}, where {tau_bands_s,
-frequency_lines_hz, time_segments_s, frequency_bands_hz}, attribution [{effect, params,
-params_units, gap_before, gap_after, shrinkage, consistent_after, ...}, ...] (single effects,
-best first), explanation {effects, gap_before, gap_after, consistent_after, p_after, share,
-explained, terms, holdout} or null (the joint set; terms: the model JSON "terms" with the
-effects added; with --sim-record, the effects' terms alone), holdout {shrinkage, ...} or null
-(the best single effect), meta, warnings. The text leads with the headline and what remains
-unexplained, and shows parameters in the customary units of `allanite fit` (N in
+JSON (--json) is one object: headline, closed (true only when the tau, frequency and time views
+all agree after the effects and no effect of another law closes the gap alike),
+indistinguishable (the effect and its rivals when not identified, else empty), unexplained
+[{view, evidence, where, size, p_value, text}, ...], gap {statistic, p_value, significant, T,
+T0, view_p_values}, where {tau_bands_s, frequency_lines_hz, time_segments_s,
+frequency_bands_hz}, attribution [{effect, params, params_units, gap_before, gap_after,
+shrinkage, consistent_after, ...}, ...] (single effects, best first), explanation {effects,
+gap_before, gap_after, consistent_after, p_after, share, explained, terms, holdout} or null
+(the joint set; terms: the model JSON "terms" with the effects added; with --sim-record, the
+effects' terms alone), holdout {shrinkage, checkable, disagrees, fit_effects,
+deciding_length_s, note, ...} or null (the best single effect; with a fraction, the fit part's,
+checked on the held-out part), meta, warnings. The text leads with the headline and what
+remains unexplained, and shows parameters in the customary units of `allanite fit` (N in
 deg/sqrt(h), ...); the JSON keeps them in the units of --units, named in params_units.
 """
 
