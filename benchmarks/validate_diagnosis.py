@@ -54,6 +54,8 @@ from allanite.model import NoiseModel
 from allanite.terms import TERM_TYPES
 
 RESULTS = Path(__file__).resolve().parent / "results"
+#: holdout of the suites' diagnose calls (``--holdout``; 0.5 the default of every result so far)
+HOLDOUT: float | None = 0.5
 UNITS = {"rate": "deg/s", "time": "s"}
 CLEAR_LAMBDA = 40.0
 
@@ -805,7 +807,9 @@ def real_clear(case: Case, real: np.ndarray, effect: np.ndarray, seed: int) -> d
 def evaluate(case: Case, seed: int, n_mc: int) -> dict[str, Any]:
     real, effect, effect2 = simulate_case(case, seed)
     t0 = time.perf_counter()
-    d = diagnose(real, case.base, fs=case.fs, units="deg/s", holdout=0.5, n_mc=n_mc, seed=seed + 1)
+    d = diagnose(
+        real, case.base, fs=case.fs, units="deg/s", holdout=HOLDOUT, n_mc=n_mc, seed=seed + 1
+    )
     elapsed = time.perf_counter() - t0
     row: dict[str, Any] = {
         "case": case.name,
@@ -1369,7 +1373,7 @@ def evaluate_oov(
     else:
         real, kwargs = oov_real(kind, base, fs, n, seed)
     t0 = time.perf_counter()
-    d = diagnose(real, base, holdout=0.5, n_mc=n_mc, seed=seed + 1, **kwargs)
+    d = diagnose(real, base, holdout=HOLDOUT, n_mc=n_mc, seed=seed + 1, **kwargs)
     named = sorted({x.effect for x in d.explanation.effects} if d.explanation else set())
     expected = OOV_KINDS[kind][1] if kind != "null" else None
     lines = list(d.where.get("frequency_lines_hz", [])) if d.significant else []
@@ -1489,6 +1493,135 @@ def run_oov(seeds: int, nulls: int, n_mc: int, seed0: int, tag: str) -> None:
     )
 
 
+# --- holdout suite (``--holdout-suite``): look-alikes beyond the held-out part's taus --------
+
+#: record of the holdout suite: 10 Hz, 2^16 samples (1.8 h); the held-out half reaches taus of
+#: about 330 s, the whole record 655 s
+HOLD_FS, HOLD_N = 10.0, 2**16
+
+
+def _hold_gm(rng: np.random.Generator, n: int, fs: float) -> np.ndarray:
+    """Gauss-Markov rate, tau_c 200 s: its turnover (378 s) lies within the whole record's taus
+    (to 655 s), beyond the held-out half's (to 328 s)."""
+    from scipy.signal import lfilter
+
+    dt, sigma = 1.0 / fs, 0.02
+    phi = np.exp(-dt / 200.0)
+    drive = sigma * np.sqrt(1.0 - phi * phi) * rng.standard_normal(n)
+    drive[0] = sigma * rng.standard_normal()
+    return np.asarray(lfilter([1.0], [1.0, -phi], drive))
+
+
+def _hold_rrw(rng: np.random.Generator, n: int, fs: float) -> np.ndarray:
+    """Rate random walk, K 4e-4 deg/s/sqrt(s) (cumulative sum of white increments)."""
+    return np.cumsum(4e-4 * np.sqrt(1.0 / fs) * rng.standard_normal(n))
+
+
+def _hold_flicker(rng: np.random.Generator, n: int, fs: float) -> np.ndarray:
+    """Flicker rate, B 0.01 deg/s (white noise shaped to ``B^2 / (pi f)`` in frequency)."""
+    f = np.fft.rfftfreq(n, 1.0 / fs)
+    amp = np.zeros_like(f)
+    amp[1:] = np.sqrt(0.01**2 / (np.pi * f[1:]) * fs * n / 2.0)
+    spec = amp * (rng.standard_normal(f.size) + 1j * rng.standard_normal(f.size)) / np.sqrt(2.0)
+    return np.fft.irfft(spec, n)
+
+
+#: kind -> (generator, the noise laws that name it correctly)
+HOLD_KINDS: dict[str, tuple[Any, tuple[str, ...]]] = {
+    "markov": (_hold_gm, ("markov",)),
+    "rrw": (_hold_rrw, ("rrw",)),
+    "flicker": (_hold_flicker, ("flicker",)),
+}
+
+
+def evaluate_holdout_case(kind: str, seed: int, n_mc: int, holdout: float | None) -> dict[str, Any]:
+    """One look-alike record (independent numpy generator) against white noise alone."""
+    make, laws = HOLD_KINDS[kind]
+    rng = np.random.default_rng(seed)
+    x = 0.05 * np.sqrt(HOLD_FS) * rng.standard_normal(HOLD_N) + make(rng, HOLD_N, HOLD_FS)
+    base = NoiseModel((T("white", N=0.05),), {"rate": "deg/s", "time": "s"})
+    t0 = time.perf_counter()
+    d = diagnose(x, base, fs=HOLD_FS, units="deg/s", holdout=holdout, n_mc=n_mc, seed=seed + 1)
+    named = [a.effect for a in d.explanation.effects] if d.explanation is not None else []
+    right = bool(named) and all(e.split(":")[-1] in laws for e in named)
+    hold = d.holdout
+    return {
+        "kind": kind, "seed": seed, "holdout": holdout, "significant": d.significant,
+        "closed": d.closed, "named": named, "right": right,
+        "wrong_closed": bool(d.closed and d.significant and not right),
+        "indistinguishable": list(d.indistinguishable),
+        "disagrees": bool(hold is not None and hold.disagrees),
+        "not_checkable": bool(hold is not None and not hold.checkable),
+        "headline": d.headline, "seconds": time.perf_counter() - t0,
+    }  # fmt: skip
+
+
+def run_holdout_suite(seeds: int, n_mc: int, seed0: int, holdouts: list[float | None]) -> None:
+    """The ``--holdout-suite``: every look-alike with ``seeds`` seeds, without and with holdout."""
+    rows = []
+    t0 = time.perf_counter()
+    plan = [(k, seed0 + 131 * i, h) for h in holdouts for k in HOLD_KINDS for i in range(seeds)]
+    for i, (kind, seed, h) in enumerate(plan):
+        row = evaluate_holdout_case(kind, seed, n_mc, h)
+        rows.append(row)
+        print(f"[{i + 1}/{len(plan)}] {kind:<8} holdout={h} sig={row['significant']!s:<5} "
+              f"closed={row['closed']!s:<5} named={','.join(row['named'])} "
+              f"rivals={','.join(row['indistinguishable'])} disagrees={row['disagrees']} "
+              f"{row['seconds']:.0f}s", flush=True)  # fmt: skip
+    summary = {
+        str(h): {
+            "cases": len(sel),
+            "significant": sum(r["significant"] for r in sel),
+            "closed": sum(r["closed"] and r["significant"] for r in sel),
+            "wrong_closed": sum(r["wrong_closed"] for r in sel),
+            "right_named": sum(r["right"] for r in sel),
+            "not_identified": sum(bool(r["indistinguishable"]) for r in sel),
+            "disagreement_flagged": sum(r["disagrees"] for r in sel),
+        }
+        for h in holdouts
+        for sel in [[r for r in rows if r["holdout"] == h]]
+    }
+    meta = {
+        "seconds": time.perf_counter() - t0, "n_mc": n_mc, "version": allanite.__version__,
+        "commit": _commit(), "command": "python benchmarks/validate_diagnosis.py "
+        + " ".join(sys.argv[1:]), "fs": HOLD_FS, "n": HOLD_N,
+    }  # fmt: skip
+    RESULTS.mkdir(parents=True, exist_ok=True)
+    stem = RESULTS / "validate_diagnosis_holdout"
+    stem.with_suffix(".json").write_text(
+        json.dumps({"meta": meta, "summary": summary, "cases": rows}, indent=1, default=float)
+    )
+    lines = [
+        "| holdout | cases | significant | closed | wrong closed | right set | "
+        "not identified | fit/whole disagreement flagged |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    lines += [
+        f"| {h} | {v['cases']} | {v['significant']} | {v['closed']} | {v['wrong_closed']} | "
+        f"{v['right_named']} | {v['not_identified']} | {v['disagreement_flagged']} |"
+        for h, v in summary.items()
+    ]
+    text = "\n".join(lines)
+    print(text)
+    stem.with_suffix(".md").write_text(
+        "# Sim-to-real diagnosis validation: holdout look-alikes\n\n"
+        f"`{meta['command']}` (commit {meta['commit']}, allanite {meta['version']}), n_mc = "
+        f"{n_mc}, fs {HOLD_FS:g} Hz, {HOLD_N} samples, {len(plan)} cases, "
+        f"{meta['seconds']:.0f} s.\n\n{text}\n"
+    )
+
+
+def _commit() -> str:
+    import subprocess
+
+    out = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True)
+    return out.stdout.strip() or "unknown"
+
+
+def _holdout_arg(text: str) -> float | None:
+    return None if text == "none" else float(text)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="one configuration, fewer cases")
@@ -1555,7 +1688,24 @@ def main() -> None:
         help="the out-of-vocabulary suite: every kind with --oov-seeds seeds, and --nulls nulls",
     )
     parser.add_argument("--oov-seeds", type=int, default=3, help="seeds per OOV kind")
+    parser.add_argument(
+        "--holdout",
+        default="0.5",
+        help="holdout of every suite's diagnose calls: a fraction, 'none', or 'both' (the "
+        "holdout suite only: each case without and with 0.5)",
+    )
+    parser.add_argument(
+        "--holdout-suite", action="store_true",
+        help="Gauss-Markov / random walk / flicker look-alikes beyond the held-out part's taus",
+    )  # fmt: skip
+    parser.add_argument("--holdout-seeds", type=int, default=3, help="seeds per look-alike")
     args = parser.parse_args()
+    global HOLDOUT
+    if args.holdout_suite:
+        hs = [None, 0.5] if args.holdout == "both" else [_holdout_arg(args.holdout)]
+        run_holdout_suite(args.holdout_seeds, args.n_mc or 40, args.seed, hs)
+        return
+    HOLDOUT = _holdout_arg(args.holdout)
     if args.oov:
         nulls = 20 if args.nulls is None else args.nulls
         run_oov(args.oov_seeds, nulls, args.n_mc or 60, args.seed, args.tag)

@@ -37,19 +37,23 @@ EXAMPLES = """examples:
       --fs 100 --sim-model run1_model.json --holdout 0.5 --report gap.html
   allanite diagnose real.csv --fs 2000 --sim-record sim.npy --input angle --json
 
-JSON (--json) is one object: headline, closed (true only when the tau, frequency and time
-views all agree after the effects), unexplained [{view, evidence, where, size, p_value,
-text}, ...], gap {statistic, p_value, significant, T, T0, view_p_values}, where {tau_bands_s,
-frequency_lines_hz, time_segments_s, frequency_bands_hz}, attribution [{effect, params,
-params_units, gap_before, gap_after, shrinkage, consistent_after, ...}, ...] (single effects,
-best first), explanation {effects, gap_before, gap_after, consistent_after, p_after, share,
-explained, terms, holdout} or null (the joint set; terms: the model JSON "terms" with the
-effects added; with --sim-record, the effects' terms alone), holdout {shrinkage, ...} or null
-(the best single effect), meta, warnings, corrected {path, format, folded, projections,
-adev_error, tau_range_s, recheck {statistic, p_value, significant, n_samples}} or null (with
---write-corrected: the file read back under its format's law and re-checked against the same
-record). The text leads with the headline and what remains
-unexplained, and shows parameters in the customary units of `allanite fit` (N in
+JSON (--json) is one object: headline, closed (true only when the tau, frequency and time views
+all agree after the effects and no effect of another law closes the gap alike),
+indistinguishable (the effect and its rivals when not identified, else empty), unexplained
+[{view, evidence, where, size, p_value, text}, ...], gap {statistic, p_value, significant, T,
+T0, view_p_values}, where {tau_bands_s, frequency_lines_hz, time_segments_s,
+frequency_bands_hz}, steps (the level changes found, with times and sizes and their
+intervals), attribution [{effect, params, params_units, gap_before, gap_after, shrinkage,
+consistent_after, ...}, ...] (single effects, best first), explanation {effects, gap_before,
+gap_after, consistent_after, p_after, share, explained, terms, holdout} or null (the joint set;
+terms: the model JSON "terms" with the effects added; with --sim-record, the effects' terms
+alone), holdout {shrinkage, checkable, disagrees, fit_effects, deciding_length_s, note, ...} or
+null (the best single effect; with a fraction, the fit part's, checked on the held-out part),
+meta, warnings, corrected {path, format, folded, projections, adev_error, tau_range_s, recheck
+{statistic, p_value, significant, n_samples}} or null (with --write-corrected: the file read
+back under its format's law and re-checked against the same record). The text leads with the
+headline and what remains unexplained, and shows parameters in the customary units of
+`allanite fit` (N in
 deg/sqrt(h), ...); the JSON keeps them in the units of --units, named in params_units.
 """
 
@@ -93,9 +97,10 @@ def register(subparsers: Any) -> None:
     diag.add_argument(
         "--holdout",
         metavar="FRACTION|FILE",
-        help="fraction of the record held out from the fit (e.g. 0.5), or a second real "
-        "record read with the same options; the shrinkage of the best effect and of the "
-        "joint set of effects is measured there",
+        help="a fraction (e.g. 0.5): the gap is tested and attributed on the whole record, "
+        "then validated: attributed on the start, checked on the held-out end (effects beyond "
+        "its taus: 'not checkable'; a different attribution is flagged); or a second real "
+        "record read with the same options, where the effects' shrinkage is measured",
     )
     diag.add_argument(
         "--effects", help="comma-separated candidate effects (default: all), e.g. white,sine"
@@ -163,6 +168,8 @@ def _summary(d: Any) -> str:
 
     units = d.meta.get("units")
     status = "CLOSED" if d.closed else "NOT FULLY EXPLAINED"
+    if d.indistinguishable and not d.closed:
+        status = "NOT IDENTIFIED"
     if not d.significant:
         status = "NO GAP" if d.closed else "NO GAP IN THE NOISE, NOT FULLY EXPLAINED"
     lines = [f"{status}: {d.headline}"]
@@ -207,9 +214,12 @@ def _summary(d: Any) -> str:
                     else ""
                 )
             )
-    if d.holdout is not None:
+    if d.holdout is not None and d.holdout.note:
+        lines.append(d.holdout.note)
+    elif d.holdout is not None:
         shrink = d.holdout.shrinkage
         text = "n/a (no gap in the held-out data)" if d.holdout.gap_before <= 0 else percent(shrink)
+        text = text if d.holdout.checkable else "not checkable on the held-out part"
         lines.append(f"held-out shrinkage of {d.holdout.effect}: {text}")
     if d.explanation is not None and d.attribution:
         model = d.meta.get("sim") != "record"

@@ -14,6 +14,13 @@ from allanite.diagnosis.attribution import LF_KURTOSIS_MAX_SAMPLES, TWO_LEVEL, A
 from allanite.diagnosis.band_shape import band_shapes
 from allanite.diagnosis.candidates import EVIDENCE, candidate_library, check_effects
 from allanite.diagnosis.holdout import holdout_check, holdout_set, tau_model_for
+from allanite.diagnosis.holdout_validation import (
+    deciding_length,
+    detectable,
+    disagreement,
+    validation_note,
+)
+from allanite.diagnosis.identification import identified
 from allanite.diagnosis.inputs import (
     MIN_SAMPLES,
     SimSource,
@@ -217,6 +224,10 @@ def diagnose(
     source = make_source(sim, rate, x.size, sim_units=sim_units, sim_input=sim_input)
     common_units = check_units(units, source.units)
     x_fit, x_hold, hold_kind = _split(x, holdout, rate, input_kind)
+    # a fraction held out validates (:func:`_fraction_check`): the gap is tested and the effects
+    # attributed on the whole record, the fit part's attribution is checked on the held-out part
+    parts = (x_fit, x_hold) if hold_kind == "fraction" else None
+    x_fit = x if parts is not None else x_fit
     # the long-record null keeps its replicate blocks for the re-analysis (shorter records and
     # simulated records have a full-length replicate null, simulated afresh each time)
     long_null = source.kind == "model" and uses_scaled_null(source.model, x_fit.size)
@@ -236,32 +247,22 @@ def diagnose(
     if store is not None:
         store.release()  # the null's replicate blocks served the re-analysis (or nothing)
     head = verdict(
-        significant=significant,
-        p_value=p,
-        alpha=significance,
-        tau_model=analysis.tau_model,
-        tau=analysis.tau,
-        frequency=analysis.frequency,
-        time=analysis.time,
-        evidence_p=ev_p,
-        evidence_significant=found.significant,
-        explanation=found.explanation,
-        units=common_units,
-        after=after,
-    )
+        significant=significant, p_value=p, alpha=significance, tau_model=analysis.tau_model,
+        tau=analysis.tau, frequency=analysis.frequency, time=analysis.time, evidence_p=ev_p,
+        evidence_significant=found.significant, explanation=found.explanation,
+        units=common_units, after=after,
+    )  # fmt: skip
     # the time base (time stamps of a Record, held samples): reported next to the three views
     base_items = time_base_evidence(
-        real,
-        samples,
-        rate,
-        significance / 10.0,
-        input_kind=input_kind,
-        samples_rate=x,
+        real, samples, rate, significance / 10.0, input_kind=input_kind, samples_rate=x,
         view=analysis.time,
-    )
+    )  # fmt: skip
     head = with_time_base(head, base_items)
-    explanation, held = _held_out(run, found, x_hold, hold_kind)
-    explanation = _claiming_only_what_is_left_explained(explanation, head.unexplained)
+    head, rival_names = identified(
+        head, found.explanation, found.attribution, found.by_effect, model=source.model,
+        fs=rate, n=x_fit.size, alpha=significance, units=common_units,
+    )  # fmt: skip
+    head, explanation, held = _validated(run, found, head, parts, (x_hold, hold_kind), effects)
     return Diagnosis(
         statistic=analysis.tau.gap,
         p_value=p,
@@ -275,10 +276,11 @@ def diagnose(
         closed=head.closed,
         unexplained=head.unexplained,
         headline=head.headline,
+        indistinguishable=tuple(rival_names),
         meta={
             "fs": rate,
             "n_samples": int(x.size),
-            "n_fit": int(x_fit.size),
+            "n_fit": int(parts[0].size if parts is not None else x_fit.size),
             "units": common_units,
             "sim": source.kind,
             "n_mc": run.n_mc,
@@ -475,3 +477,125 @@ def _held_out(
             holdout=holdout_set(pairs, tm_hold, alpha=run.significance, kind=hold_kind),
         )
     return explanation, held
+
+
+def _validated(
+    run: _Run,
+    found: _Found,
+    head: Any,
+    parts: tuple[NDArray[np.float64], NDArray[np.float64] | None] | None,
+    held_out: tuple[NDArray[np.float64] | None, str],
+    effects: list[str] | None,
+) -> tuple[Any, Explanation | None, Holdout | None]:
+    """The held-out check: of a fraction (``parts``, :func:`_fraction_check`) or a record.
+
+    A fraction's validation note joins the headline when it flags something: a disagreement
+    with the whole record, an effect not checkable there, or no gap in the fit part. Without
+    an attribution on the whole record (no gap) there is nothing to validate.
+    """
+    if parts is not None and not found.attribution:
+        # nothing attributed on the whole record (no gap): nothing to validate
+        explanation, held = _held_out(run, found, None, "fraction")
+    elif parts is not None:
+        explanation, held = _fraction_check(run, found, parts, effects)
+        if held is not None and (held.disagrees or not held.checkable or not held.effect):
+            head = replace(head, headline=head.headline + "; " + held.note)
+    else:
+        explanation, held = _held_out(run, found, *held_out)
+    return head, _claiming_only_what_is_left_explained(explanation, head.unexplained), held
+
+
+def _fit_part_explanation(run: _Run, effects: list[str] | None) -> tuple[Analysis, _Found]:
+    """The fit part's own analysis and attribution (``run.x_fit`` is the fit part)."""
+    analysis = analyze(
+        run.x_fit, run.source, n_mc=run.n_mc, seed=run.seed, alpha=run.significance,
+        progress=run.progress, stage="fit part (holdout)", store=run.store,
+    )  # fmt: skip
+    if not analysis.p_value < run.significance:
+        return analysis, _Found()
+    bands = band_shapes(run.x_fit, run.fs, analysis.frequency)
+    analysis = _lines_beyond_resonances(analysis, bands, run.fs)
+    return analysis, _attribute(run, analysis, _evidence(analysis), effects, bands)
+
+
+def _fraction_check(
+    run: _Run,
+    whole: _Found,
+    parts: tuple[NDArray[np.float64], NDArray[np.float64] | None],
+    effects: list[str] | None,
+) -> tuple[Explanation | None, Holdout | None]:
+    """Validation of ``holdout=`` a fraction (:mod:`~allanite.diagnosis.holdout_validation`).
+
+    ``run`` and ``whole`` are the whole record's; the effects are attributed again on the fit
+    part and carried to the held-out part, where the tau view judges them at the same level.
+    """
+    explanation, _ = _held_out(run, whole, None, "fraction")
+    x_fit, x_hold = parts
+    assert x_hold is not None
+    store = ReplicateStore(run.source.model) if _long(run, x_fit.size) else None
+    fit_run = replace(run, x_fit=x_fit, store=store)
+    fit_analysis, fit = _fit_part_explanation(fit_run, effects)
+    if store is not None:
+        store.release()
+    seed = run.seed + 1_000_003
+    tm_hold = tau_model_for(x_hold, run.source, n_mc=run.n_mc, seed=seed)
+    held_p = float(tm_hold.p_value())
+    fit_e = fit.explanation
+    pairs = list(zip(fit_e.effects, fit_e.candidates, strict=True)) if fit_e else []
+    check: dict[str, Any] = {"effects": [a.effect for a, _ in pairs], "shrinkage": 0.0}
+    check.update(
+        gap_before=tm_hold.gap(),
+        gap_after=tm_hold.gap(),
+        consistent_after=held_p > run.significance,
+    )
+    if pairs:
+        check.update(holdout_set(pairs, tm_hold, alpha=run.significance, kind="fraction"))
+    check.update(
+        source="fraction",
+        n_samples=int(x_hold.size),
+        fit_duration_s=x_fit.size / run.fs,
+        held_duration_s=x_hold.size / run.fs,
+        fit_p_value=float(fit_analysis.p_value),
+        held_p_value=held_p,
+        fit_significant=bool(fit_analysis.p_value < run.significance),
+        held_gap_before=tm_hold.gap(),
+        not_checkable=[a.effect for a, c in pairs if not _detectable_on(tm_hold, a, c, run)],
+        disagrees=bool(
+            fit_analysis.p_value < run.significance and disagreement(whole.explanation, fit_e)
+        ),
+        deciding_length_s=None,
+    )
+    if check["disagrees"] and whole.explanation is not None and fit_e is not None:
+        check["deciding_length_s"] = deciding_length(
+            whole.explanation, fit_e, run.source.model, run.fs, run.x_fit.size, run.significance
+        )
+    note = validation_note(check, whole.explanation)
+    check["note"] = note
+    if explanation is not None:
+        explanation = replace(explanation, holdout=check)
+    best = fit.attribution[0] if fit.attribution else None
+    held = Holdout(
+        effect=best.effect if best is not None else "",
+        shrinkage=float(check["shrinkage"]),
+        gap_before=float(check["gap_before"]),
+        gap_after=float(check["gap_after"]),
+        consistent_after=bool(check["consistent_after"]),
+        n_samples=int(x_hold.size),
+        source="fraction",
+        checkable=not check["not_checkable"],
+        disagrees=bool(check["disagrees"]),
+        fit_effects=tuple(check["effects"]),
+        deciding_length_s=check["deciding_length_s"],
+        note=note,
+    )
+    return explanation, held
+
+
+def _long(run: _Run, n: int) -> bool:
+    return bool(run.source.kind == "model" and uses_scaled_null(run.source.model, n))
+
+
+def _detectable_on(tm: Any, a: Attribution, c: Any, run: _Run) -> bool:
+    values = {n: a.params[n] for n in c.free}
+    extra = np.asarray(c.extra_avar(values, tm.tau, tm.dt), dtype=np.float64)
+    return detectable(tm, extra, run.significance)

@@ -48,6 +48,17 @@ class Holdout:
         Length of the held-out record.
     source : str
         ``"fraction"`` (the end of the record) or ``"record"`` (a second real record).
+    checkable : bool
+        False when the effect's signature lies beyond the held-out part's taus (adding it
+        would not change a record of that length significantly); ``shrinkage`` is then nan.
+    disagrees : bool
+        ``holdout=`` a fraction: the fit part alone names other effects than the whole record.
+    fit_effects : tuple of str
+        The effects attributed on the fit part (a fraction held out).
+    deciding_length_s : float or None
+        Record length that would tell the fit part's and the whole record's effects apart.
+    note : str
+        The validation in one sentence (also appended to the headline for a fraction).
     """
 
     effect: str
@@ -57,17 +68,27 @@ class Holdout:
     consistent_after: bool
     n_samples: int
     source: str
+    checkable: bool = True
+    disagrees: bool = False
+    fit_effects: tuple[str, ...] = ()
+    deciding_length_s: float | None = None
+    note: str = ""
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dictionary."""
         return {
-            "shrinkage": self.shrinkage,
+            "shrinkage": self.shrinkage if self.checkable else None,
             "effect": self.effect,
             "gap_before": self.gap_before,
             "gap_after": self.gap_after,
             "consistent_after": self.consistent_after,
             "n_samples": self.n_samples,
             "source": self.source,
+            "checkable": self.checkable,
+            "disagrees": self.disagrees,
+            "fit_effects": list(self.fit_effects),
+            "deciding_length_s": self.deciding_length_s,
+            "note": self.note,
         }
 
 
@@ -105,6 +126,9 @@ class Diagnosis:
     headline : str
         One plain sentence: the effect with its parameters and units, and whether the records
         then agree in all three views or what remains.
+    indistinguishable : tuple of str
+        When the gap closes alike with several effects of different laws (not identified, so
+        ``closed`` is False): the effect and its rivals (:mod:`allanite.diagnosis.identification`).
     """
 
     statistic: float
@@ -120,6 +144,7 @@ class Diagnosis:
     closed: bool = False
     unexplained: list[Unexplained] = field(default_factory=list)
     headline: str = ""
+    indistinguishable: tuple[str, ...] = ()
 
     _repr_html_ = diagnosis_html  # Jupyter: a compact table and the plot (allanite.notebook)
 
@@ -169,9 +194,21 @@ class Diagnosis:
         return {
             "tau_bands_s": [list(b) for b in self.tau.bands_s],
             "frequency_lines_hz": [line.frequency_hz for line in self.frequency.lines],
-            "time_segments_s": [list(s) for s in self.time.segments_s],
+            "time_segments_s": [list(s) for s in self.time.segments_s]
+            if self._time_view_significant()
+            else [],
             "frequency_bands_hz": [list(b) for b in self.frequency.bands_hz],
         }
+
+    def _time_view_significant(self) -> bool:
+        """Whether any time-view statistic is significant (Bonferroni over the family).
+
+        Time segments are findings only then: on a record whose time view agrees with the
+        sensor they are the scan's chance excursions, not events.
+        """
+        fam = self.time.family_p
+        level = float(self.meta.get("significance", 0.05)) / max(len(fam), 1)
+        return bool(fam) and min(fam.values()) < level
 
     @property
     def best(self) -> Attribution | None:
@@ -183,6 +220,7 @@ class Diagnosis:
         out: dict[str, Any] = {
             "headline": self.headline,
             "closed": self.closed,
+            "indistinguishable": list(self.indistinguishable),
             "unexplained": [u.to_dict() for u in self.unexplained],
             "gap": {
                 "statistic": self.statistic,

@@ -23,7 +23,7 @@ noise-level ratio in the flagged windows, the line amplitude, the excess kurtosi
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -266,7 +266,9 @@ def explanation_lines(
         "  share of the gap: " + ", ".join(f"{k} {percent(v)}" for k, v in e.share.items())
     )
     hold = e.holdout
-    if hold is not None:
+    if hold is not None and hold.get("note"):
+        lines.append("  " + str(hold["note"]))
+    elif hold is not None:
         if hold.get("gap_before", 0.0) <= 0:
             shrink = "n/a (no gap in the held-out data)"
         else:
@@ -301,8 +303,50 @@ def _term_class(a: Attribution) -> Any:
     return TERM_TYPES.get(str(a.term.get("type", "")))
 
 
-def describe_effect(a: Attribution, units: str | None, fs: float | None = None) -> str:
-    """The effect in words, with its parameters and units (``fs``: see :func:`format_params`)."""
+#: a Gauss-Markov term whose correlation time exceeds the record this many times is, on that
+#: record, the rate random walk ``K = sigma sqrt(2 / tau_c)`` (how its user meant it)
+WALK_TAU_FACTOR = 10.0
+
+
+def as_random_walk(a: Attribution, duration: float | None) -> Attribution | None:
+    """A Gauss-Markov effect far slower than the record, stated as the random walk it is.
+
+    None unless ``a`` is a (rescaled or added) Gauss-Markov term with ``tau_c`` beyond
+    :data:`WALK_TAU_FACTOR` times ``duration``; otherwise the attribution as a ``rrw`` term
+    with ``K = sigma sqrt(2 / tau_c)`` (the walk's rate in the Gauss-Markov's time units).
+    """
+    term = a.term
+    if duration is None or term.get("type") != "markov":
+        return None
+    tau_c, sigma = float(term.get("tau_c", 0.0)), float(term.get("sigma", 0.0))
+    if not tau_c > WALK_TAU_FACTOR * duration:
+        return None
+    k = sigma * float(np.sqrt(2.0 / tau_c))
+    return replace(a, effect="rrw", term={"type": "rrw", "K": k}, params={"K": k})
+
+
+def describe_effect(
+    a: Attribution, units: str | None, fs: float | None = None, duration: float | None = None
+) -> str:
+    """The effect in words, with its parameters and units (``fs``: see :func:`format_params`).
+
+    ``duration`` (s, the record's): a Gauss-Markov term far slower than the record (e.g. a
+    simulator's dynamic bias with ``tau_c = 1e5 s``) is described as the random walk it is
+    there (:func:`as_random_walk`), its stationary sigma in brackets.
+    """
+    walk = as_random_walk(a, duration)
+    if walk is not None:
+        what = (
+            f"is {a.params['scale']:.2f}x the simulated one"
+            if "scale" in a.params
+            else "is missing"
+        )
+        return (
+            f"the real sensor's rate random walk {what} ({format_params(walk, units, fs=fs)}; "
+            f"the simulated Gauss-Markov term with tau_c = {float(a.term['tau_c']):.3g} s, far "
+            f"beyond the {duration:.4g} s record, is that random walk: "
+            f"{format_params(a, units, skip=('scale', 'tau_c'), fs=fs)} as its stationary sigma)"
+        )
     if a.effect.startswith("rescale:"):
         kind = a.effect.split(":", 1)[1]
         name = TERM_NAMES.get(kind, f"{kind} term")
@@ -511,6 +555,21 @@ def _tau_item(
     )
 
 
+#: an effect's share of the gap below which it is not named in the headline (unless it
+#: explains evidence of the frequency or time view)
+SHARE_NEGLIGIBLE = 0.005
+
+
+def headline_effects(explanation: Explanation) -> list[Attribution]:
+    """The set's effects worth naming: a share of the gap, or evidence they explain."""
+    shown = [
+        a
+        for a in explanation.effects
+        if explanation.share.get(a.effect, 1.0) >= SHARE_NEGLIGIBLE or a.evidence.get("explained")
+    ]
+    return shown or list(explanation.effects)
+
+
 def verdict(
     *,
     significant: bool,
@@ -595,7 +654,9 @@ def verdict(
         explanation = None
     if explanation is not None:
         fs = 1.0 / tau_model.dt
-        effect = "; and ".join(describe_effect(a, units, fs) for a in explanation.effects)
+        effect = "; and ".join(
+            describe_effect(a, units, fs, tau_model.duration) for a in headline_effects(explanation)
+        )
         it = "them" if len(explanation.effects) > 1 else "it"
         if closed:
             headline = f"{effect}; after adding {it}, the records agree in all three views"

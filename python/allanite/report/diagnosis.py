@@ -151,9 +151,15 @@ def diagnosis_html(
     if diagnosis.holdout is not None:
         hold = diagnosis.holdout
         share = "–" if hold.gap_before <= 0 else percent(hold.shrinkage)
+        text = (
+            f"{h.escape(hold.effect)} explains {share} of the gap there."
+            if hold.checkable
+            else f"{h.escape(hold.effect)} is not checkable on the held-out part."
+        )
         parts.append(
             f"<p>Held-out check ({h.escape(hold.source)}, {hold.n_samples:,} samples): "
-            f"{h.escape(hold.effect)} explains {share} of the gap there.</p>"
+            + (h.escape(hold.note) if hold.note else text)
+            + "</p>"
         )
     explanation = getattr(diagnosis, "explanation", None)
     if explanation is not None and diagnosis.attribution:
@@ -215,7 +221,9 @@ def _explanation_html(e: Any, units: str | None, fs: float | None, model: bool) 
         f"{percent(e.share.get('remainder', 0.0))}).</p>",
     ]
     hold = e.holdout
-    if hold is not None:
+    if hold is not None and hold.get("note"):
+        out.append(f"<p>{h.escape(str(hold['note']))}</p>")
+    elif hold is not None:
         shrink = "–" if hold.get("gap_before", 0.0) <= 0 else percent(hold["shrinkage"])
         out.append(
             f"<p>Held-out check of the set ({h.escape(hold.get('source', ''))}, "
