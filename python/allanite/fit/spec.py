@@ -64,7 +64,7 @@ FILTER_CANDIDATES: tuple[LowPassWhite, ...] = (
     LowPassWhite(1.0, 1.0, "butterworth", 4.0),
     LowPassWhite(1.0, 1.0, "moving_average"),
 )
-_EXTRAS = {"markov": GaussMarkov, "gm": GaussMarkov, "sine": Sine}
+_EXTRAS: dict[str, type[Term]] = {"markov": GaussMarkov, "gm": GaussMarkov, "sine": Sine}
 
 
 @dataclass(frozen=True)
@@ -110,7 +110,7 @@ class TermSpec:
         return nonlinear_default
 
 
-_FITTABLE = (*AUTO_CANDIDATES, GaussMarkov, Sine, LowPassWhite)
+_FITTABLE: tuple[type[Term], ...] = (*AUTO_CANDIDATES, GaussMarkov, Sine, LowPassWhite)
 
 
 def known_names() -> list[str]:
