@@ -574,10 +574,10 @@ def fit(
         (:class:`~allanite.terms.LowPassWhite`, in place of white noise: it carries the
         unfiltered sensor's ``N``) by its kind: ``"lowpass"``/``"rc"``, ``"one_pole"``,
         ``"butterworth"``/``"butterworth4"``, ``"moving_average"``, ``"bartlett"``.
-        ``"auto"`` also tries these filters (one_pole, butterworth 2 and 4, moving average)
-        in place of white noise when the power-law fit misses the shortest taus as a
-        filter would (:mod:`allanite.fit.filters`); ``"auto+filter"`` on every curve,
-        ``"auto+markov"``, ``"auto+sine"``, ``"auto+<filter kind>"`` add candidates.
+        ``"auto+filter"`` also searches with these filters (one_pole, butterworth 2 and 4,
+        moving average) in place of white noise (:mod:`allanite.fit.filters`; plain
+        ``"auto"`` does not yet); ``"auto+markov"``, ``"auto+sine"``,
+        ``"auto+<filter kind>"`` add candidates.
     fs : float, optional
         Sampling frequency in Hz (records only).
     input : {"rate", "increment", "angle"}, optional
