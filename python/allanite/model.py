@@ -431,6 +431,8 @@ def json_schema() -> dict[str, Any]:
             if spec in cls.optional:
                 number = {"type": ["number", "null"], "description": number["description"]}
             props[spec.name] = number
+        for name, allowed in cls.settings.items():
+            props[name] = {"enum": list(allowed), "description": f"{name} (default {allowed[0]})"}
         variants.append(
             {
                 "title": f"{kind} ({cls.symbol})",

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 import warnings
 from typing import Any
@@ -67,10 +68,44 @@ def register(subparsers: Any) -> None:
         metavar="LIMITS.json",
         help="check the coefficients against datasheet limits (exit code 1 when one fails)",
     )
+    add_fit_arguments(parser)
     add_record_arguments(parser)
     add_still_argument(parser)
     add_grid_arguments(parser)
     parser.set_defaults(func=run)
+
+
+def add_fit_arguments(parser: Any) -> None:
+    """``--terms`` and ``--tau-range``: the options of :func:`allanite.fit.fit` of that name."""
+    parser.add_argument(
+        "--terms",
+        default="auto",
+        help="terms to fit: 'auto' (default), a list such as N,B,K or white,flicker,rrw "
+        "(a sensor filter by its kind: lowpass, one_pole, butterworth4, moving_average, "
+        "bartlett, in place of N), or auto+markov / auto+filter to add candidates",
+    )
+    parser.add_argument(
+        "--tau-range",
+        metavar="LO:HI",
+        help="fit only the taus from LO to HI seconds (either may be empty: 5: or :100)",
+    )
+
+
+def fit_options(args: argparse.Namespace) -> dict[str, Any]:
+    """The keyword arguments of :func:`allanite.fit.fit` that ``--terms``/``--tau-range`` give."""
+    options: dict[str, Any] = {"terms": getattr(args, "terms", None) or "auto"}
+    text = getattr(args, "tau_range", None)
+    if text:
+        lo, sep, hi = text.partition(":")
+        try:
+            if not sep:
+                raise ValueError
+            options["tau_range"] = (float(lo) if lo else 0.0, float(hi) if hi else math.inf)
+        except ValueError:
+            raise ValueError(
+                f"--tau-range {text!r}: write LO:HI in seconds, e.g. --tau-range 5:1000"
+            ) from None
+    return options
 
 
 def _fit_function() -> Any:
@@ -81,7 +116,7 @@ def _fit_function() -> Any:
     return fit
 
 
-def fit_result(result: AllanResult) -> Any:
+def fit_result(result: AllanResult, options: dict[str, Any] | None = None) -> Any:
     """Fit a noise model (terms chosen automatically) to one channel of an overlapping AVAR.
 
     Returns None when this installation has no fitter or the estimator is not the overlapping
@@ -95,13 +130,13 @@ def fit_result(result: AllanResult) -> Any:
         # spelling of the fix (--units), through warn_coefficients
         warnings.simplefilter("ignore", ImplausibleInputWarning)
         try:
-            return fit(result)
+            return fit(result, **(options or {}))
         except RecordTooShortError as exc:
             # the library's advice names the API call; on the command line a longer record is
-            # what works (the CLI chooses the terms itself)
+            # what works, or naming fewer terms (--terms)
             raise ValueError(
-                f"{exc.reason}; use a longer record (allanite "
-                "fit chooses the terms itself; it has no option to name them)"
+                f"{exc.reason}; use a longer record, or name fewer terms with "
+                "--terms (e.g. --terms N,K)"
             ) from None
 
 
@@ -205,7 +240,7 @@ def run(args: argparse.Namespace) -> int:
     channels = []
     fits = []
     for record, result, c in progress(work, desc="fitting", total=len(work)):
-        fit = fit_result(result.channel(c))
+        fit = fit_result(result.channel(c), fit_options(args))
         fits.append(fit)
         channels.append(_channel_summary(fit, record, result, c, sheet, args))
     _write_outputs(analysed[0], fits[0], args)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 from typing import Any, Literal
@@ -14,11 +15,12 @@ from allanite._deprecation import keyword_only_fs
 from allanite.errors import RecordTooShortError
 from allanite.fit.classic import ClassicReadout, classic_readout
 from allanite.fit.covariance import avar_covariance
+from allanite.fit.filters import select_with_filters
 from allanite.fit.gls import GLSData, GLSSolution, score_interval, solve
 from allanite.fit.result import NO_EVIDENCE_CHI2, Coefficient, FitResult
 from allanite.fit.seed import SCALE, coefficient_bounds, seed_fit
-from allanite.fit.select import Ambiguity, n_params, select_terms
-from allanite.fit.spec import AUTO_CANDIDATES, TermSpec, resolve_terms
+from allanite.fit.select import Ambiguity, n_params
+from allanite.fit.spec import AUTO_CANDIDATES, Resolved, TermSpec, resolve_terms
 from allanite.io.record import Record
 from allanite.model import NoiseModel
 from allanite.plausibility import warn_coefficients
@@ -238,8 +240,7 @@ def _coefficients(sol: GLSSolution, model: NoiseModel) -> dict[str, Coefficient]
 
 def _fit_gls(
     result: AllanResult,
-    specs: list[TermSpec],
-    auto: bool,
+    resolved: Resolved,
     units: str,
     penalty: float,
     max_fraction: float,
@@ -251,6 +252,8 @@ def _fit_gls(
             f"method='gls' models the overlapping Allan variance, got kind={result.kind!r}; "
             "compute avar(x, fs, kind='overlapping') or use method='seed'"
         )
+    specs, auto = resolved.specs, resolved.auto
+    filters, force_filters = resolved.filters, resolved.force_filters
     enough = _points(result, "gls", max_fraction)
     keep = _thin(result.m, enough, min_ratio)
     if auto:
@@ -278,8 +281,8 @@ def _fit_gls(
         usable = [s for s in specs if _n_params([s]) < int(keep.sum())]
         slope = _slope_start(classic, data, units)
         starts = [None] if slope is None else [None, slope]
-        sol, ambiguity, selection, subsets = select_terms(
-            usable, data, edf, penalty, misfit_level, starts
+        sol, ambiguity, selection, subsets = select_with_filters(
+            usable, filters, force_filters, data, edf, penalty, misfit_level, starts
         )
     else:
         sol, selection = solve(specs, data, edf, misfit_level=misfit_level), ()
@@ -486,6 +489,39 @@ def _fit_seed(result: AllanResult, units: str) -> FitResult:
     )
 
 
+def _check_tau_range(tau_range: Any) -> tuple[float, float] | None:
+    if tau_range is None:
+        return None
+    try:
+        lo, hi = (float(v) for v in tau_range)
+    except (TypeError, ValueError):
+        raise ValueError(
+            f"tau_range must be two numbers (lo, hi) in seconds, got {tau_range!r}"
+        ) from None
+    if not (0.0 <= lo < hi):
+        raise ValueError(f"tau_range needs 0 <= lo < hi seconds, got ({lo:g}, {hi:g})")
+    return lo, hi
+
+
+def _restrict(result: AllanResult, window: tuple[float, float]) -> AllanResult:
+    """The curve at the taus inside ``window`` (a clear error when too few remain)."""
+    inside = (result.tau >= window[0]) & (result.tau <= window[1])
+    if not inside.any():
+        raise ValueError(
+            f"no tau of the curve lies in tau_range {window[0]:g}..{window[1]:g} s (the curve "
+            f"spans {result.tau[0]:g}..{result.tau[-1]:g} s)"
+        )
+    return dataclasses.replace(
+        result,
+        tau=result.tau[inside],
+        m=result.m[inside],
+        var=result.var[inside],
+        n_terms=result.n_terms[inside],
+        edf=result.edf[inside],
+        alpha=result.alpha[inside],
+    )
+
+
 @keyword_only_fs
 def fit(
     result_or_record: AllanResult | Record | ArrayLike,
@@ -499,6 +535,7 @@ def fit(
     max_fraction: float = 0.125,
     misfit_level: float = 0.001,
     min_ratio: float = 2.0,
+    tau_range: tuple[float, float] | None = None,
 ) -> FitResult:
     r"""Fit noise terms to an Allan curve with honest uncertainty.
 
@@ -532,7 +569,15 @@ def fit(
         ``FitResult.selection``.
         Or a list of names (``"white"``/``"N"``, ``"quantization"``/``"Q"``, ``"flicker"``/
         ``"B"``, ``"rrw"``/``"K"``, ``"ramp"``/``"R"``, ``"markov"``, ``"sine"``), Term classes,
-        or Term instances (starting values; a Flicker's ``f0`` is kept).
+        or Term instances (starting values; a Flicker's ``f0`` is kept); a string with
+        commas is a list (``"N,B,K"``). The sensor's output filter
+        (:class:`~allanite.terms.LowPassWhite`, in place of white noise: it carries the
+        unfiltered sensor's ``N``) by its kind: ``"lowpass"``/``"rc"``, ``"one_pole"``,
+        ``"butterworth"``/``"butterworth4"``, ``"moving_average"``, ``"bartlett"``.
+        ``"auto+filter"`` also searches with these filters (one_pole, butterworth 2 and 4,
+        moving average) in place of white noise (:mod:`allanite.fit.filters`; plain
+        ``"auto"`` does not yet); ``"auto+markov"``, ``"auto+sine"``,
+        ``"auto+<filter kind>"`` add candidates.
     fs : float, optional
         Sampling frequency in Hz (records only).
     input : {"rate", "increment", "angle"}, optional
@@ -607,7 +652,8 @@ def fit(
         raise ValueError(f"min_ratio must be a number >= 1 (2: octave spacing), got {min_ratio!r}")
     if not 0.0 < max_fraction <= 0.5:
         raise ValueError(f"max_fraction must lie in (0, 0.5], got {max_fraction!r}")
-    specs, auto = resolve_terms(terms)
+    resolved = resolve_terms(terms)
+    window = _check_tau_range(tau_range)
     result = _curve(result_or_record, fs, input, units, method)
     # no silent deg/s: a curve without a unit is fitted in the record's own unit
     rate = rate_unit(units or result.units or RECORD_UNIT).text
@@ -615,9 +661,8 @@ def fit(
         fitted = _fit_seed(result, rate)
     else:
         fitted = _fit_gls(
-            result,
-            specs,
-            auto,
+            result if window is None else _restrict(result, window),
+            resolved,
             rate,
             float(penalty),
             float(max_fraction),

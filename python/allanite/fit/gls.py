@@ -146,6 +146,9 @@ def _nonlinear_grid(specs: Sequence[TermSpec], data: GLSData) -> list[NDArray[np
     for spec in specs:
         if spec.nonlinear_name == "tau_c":
             grids.append(np.log(np.geomspace(data.tau[0] / 4.0, data.tau[-1] * 2.0, 24)))
+        elif spec.nonlinear_name == "bandwidth":  # a sensor filter: up to the Nyquist frequency
+            low = max(0.05 / data.tau[-1], 1e-3 / data.dt)
+            grids.append(np.log(np.geomspace(low, 0.45 / data.dt, 24)))
         elif spec.nonlinear_name == "frequency":
             grids.append(np.log(np.geomspace(0.1 / data.tau[-1], 0.5 / data.dt, 32)))
     return grids

@@ -133,12 +133,18 @@ def _search(
     penalty: float,
     misfit_level: float,
     starts: Sequence[NDArray[np.float64] | None],
+    required: TermSpec | None = None,
 ) -> dict[tuple[TermSpec, ...], Candidate]:
-    """Fit every subset of ``specs`` (smallest first), with the starts described above."""
+    """Fit every subset of ``specs`` (smallest first), with the starts described above.
+
+    With ``required``, only the subsets that contain it.
+    """
     found: dict[tuple[TermSpec, ...], Candidate] = {}
     for size in range(1, len(specs) + 1):
         for subset in itertools.combinations(specs, size):
             if n_params(subset) >= data.y.size:
+                continue
+            if required is not None and required not in subset:
                 continue
             if not any(s.cls.stationary for s in subset):
                 continue  # a ramp alone has no noise: its estimates would have no spread
@@ -438,6 +444,8 @@ def select_terms(
     penalty: float,
     misfit_level: float,
     starts: Sequence[NDArray[np.float64] | None] = (None,),
+    required: TermSpec | None = None,
+    discrepancy: bool = True,
 ) -> tuple[GLSSolution, Ambiguity | None, tuple[dict[str, Any], ...], list[dict[str, Any]]]:
     """Choose the terms by the exhaustive, lexicographic search described in the module.
 
@@ -455,6 +463,11 @@ def select_terms(
         Significance level of the goodness-of-fit test.
     starts : sequence
         Starting covariances (None: the diagonal one from ``edf``).
+    required : TermSpec, optional
+        A term every evaluated subset contains (a sensor filter, which stands in for the
+        white noise: :func:`allanite.fit.fit` searches with and without it).
+    discrepancy : bool
+        False: no second search with the model discrepancy when every subset is rejected.
 
     Returns
     -------
@@ -469,13 +482,15 @@ def select_terms(
     subsets : list of dict
         Every subset evaluated: ``terms``, ``score``, ``chi2``, ``p_value``, ``rejected``.
     """
-    found = _search(specs, data, edf, penalty, 0.0, starts)
+    found = _search(specs, data, edf, penalty, 0.0, starts, required)
     accepted = {k: c for k, c in found.items() if not c.p_value < misfit_level}
     pool = accepted
-    if not pool and misfit_level > 0:  # every subset rejected: allow the model discrepancy
-        found = _search(specs, data, edf, penalty, misfit_level, starts)
+    if (
+        not pool and misfit_level > 0 and discrepancy
+    ):  # every subset rejected: allow the model discrepancy
+        found = _search(specs, data, edf, penalty, misfit_level, starts, required)
         pool = found
-    chosen = min(pool.values(), key=lambda c: c.score)
+    chosen = min((pool or found).values(), key=lambda c: c.score)
     by_names = {c.names: c for c in found.values()}
     ctx = _Context(specs, by_names, data, edf, penalty, misfit_level)
     ramp_test = _ramp_against_rrw(chosen, ctx)

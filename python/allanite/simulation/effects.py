@@ -18,6 +18,8 @@ is defined on point samples (the sinusoid, like :class:`allanite.terms.Sine`).
   at rate :math:`\lambda = 1/(2T_c)`; the sample mean over a period that starts in state
   :math:`s` and has switches at fractions :math:`u_1 < \dots < u_k` is
   :math:`s[(-1)^k + 2\sum_i (-1)^{i-1}u_i]`.
+* :class:`FilteredWhiteStream` -- white samples through a sensor's digital output filter
+  ``(b, a)`` (:class:`allanite.terms.LowPassWhite`), the filter state carried across blocks.
 """
 
 from __future__ import annotations
@@ -37,6 +39,7 @@ MAX_EVENTS_PER_SAMPLE = 100.0
 
 __all__ = [
     "ConstantStream",
+    "FilteredWhiteStream",
     "RampStream",
     "SineStream",
     "SpikeStream",
@@ -104,6 +107,50 @@ class ConstantStream(TermStream):
         return np.asarray(
             np.broadcast_to(self.value, (n, self.n_channels)).copy(), dtype=np.float64
         )
+
+
+class FilteredWhiteStream(TermStream):
+    """White samples of standard deviation ``sigma`` through a digital filter.
+
+    The filter is FIR ``taps`` followed by the IIR second-order sections ``sos``
+    (:func:`allanite.terms.filter_laws.filter_coefficients`). It starts in its stationary
+    state: the state reached after a burn-in of white input as long as its response (to a
+    relative energy of 1e-17), so the first sample already has the stationary law; the state
+    is then carried from block to block, so the samples depend on the seed alone.
+    """
+
+    def __init__(
+        self,
+        sigma: float,
+        taps: NDArray[np.float64],
+        sos: NDArray[np.float64],
+        fs: float,
+        n_channels: int,
+        seed: Any = None,
+    ) -> None:
+        from scipy import signal
+
+        from allanite.terms.filter_laws import response_length
+
+        super().__init__(fs, n_channels, seed)
+        self._signal = signal
+        self.sigma = float(sigma)
+        self.taps, self.sos = np.asarray(taps, dtype=np.float64), np.asarray(sos)
+        self._fir_state = np.zeros((self.taps.size - 1, self.n_channels))
+        self._iir_state = np.zeros((len(self.sos), 2, self.n_channels))
+        burn = self.taps.size + (response_length(self.sos) if len(self.sos) else 0)
+        for begin in range(0, burn, 1 << 16):
+            self._generate(0, min(1 << 16, burn - begin))
+
+    def _generate(self, start: int, n: int) -> NDArray[np.float64]:
+        y = self.sigma * self.rng.standard_normal((n, self.n_channels))
+        if self.taps.size > 1:
+            y, self._fir_state = self._signal.lfilter(
+                self.taps, [1.0], y, axis=0, zi=self._fir_state
+            )
+        if len(self.sos):
+            y, self._iir_state = self._signal.sosfilt(self.sos, y, axis=0, zi=self._iir_state)
+        return np.asarray(y, dtype=np.float64)
 
 
 class WarmUpStream(TermStream):

@@ -81,6 +81,8 @@ class Term(ABC):
     stationary: ClassVar[bool] = True
     #: parameters that may be omitted from JSON (then None, meaning "use the default")
     optional: ClassVar[tuple[ParamSpec, ...]] = ()
+    #: text settings (not parameters): name -> allowed values, the first the default
+    settings: ClassVar[dict[str, tuple[str, ...]]] = {}
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)
@@ -100,7 +102,12 @@ class Term(ABC):
             for p in self.optional
             if getattr(self, p.name) is not None
         }
-        return {"type": self.type, **self.values(), **extra}
+        text = {
+            name: getattr(self, name)
+            for name, allowed in self.settings.items()
+            if getattr(self, name) != allowed[0]
+        }
+        return {"type": self.type, **self.values(), **extra, **text}
 
     def with_values(self, **values: float) -> Term:
         """A copy with some parameters replaced."""
@@ -207,13 +214,25 @@ def term_from_dict(data: dict[str, Any]) -> Term:
     names = [p.name for p in cls.params]
     optional = [p.name for p in cls.optional]
     missing = [n for n in names if n not in data]
-    extra = [k for k in data if k != "type" and k not in names and k not in optional]
+    extra = [
+        k
+        for k in data
+        if k != "type" and k not in names and k not in optional and k not in cls.settings
+    ]
     if missing or extra:
         raise ValueError(
             f"term {kind!r} needs fields {names}; missing {missing or 'none'}, unexpected "
             f"{extra or 'none'}"
         )
-    values: dict[str, float | None] = {}
+    values: dict[str, float | str | None] = {}
+    for name, allowed in cls.settings.items():
+        if name in data:
+            if data[name] not in allowed:
+                raise ValueError(
+                    f"field {name!r} of term {kind!r} must be one of {', '.join(allowed)}, "
+                    f"got {data[name]!r}"
+                )
+            values[name] = data[name]
     for n in names + [o for o in optional if o in data]:
         value = data[n]
         if value is None and n in optional:

@@ -34,6 +34,14 @@ from allanite.terms._estimator_kurtosis import (
     telegraph_excess_variance,
 )
 from allanite.terms.base import ParamSpec, Term
+from allanite.terms.filter_laws import (
+    FILTER_KINDS,
+    box_length,
+    filter_avar,
+    filter_coefficients,
+    filter_gain,
+    filter_gain_analog,
+)
 
 __all__ = [
     "BiasSteps",
@@ -372,21 +380,38 @@ class Telegraph(Term):
 
 @dataclass(frozen=True)
 class LowPassWhite(Term):
-    r"""White rate noise ``N`` seen through the sensor's first-order low-pass of ``bandwidth``.
+    r"""The sensor's output filter: white rate noise ``N`` seen through a low-pass of ``bandwidth``.
 
-    With :math:`T_f = 1/(2\pi f_c)` the output is a Gauss-Markov process of variance
-    :math:`N^2/(2T_f)` and correlation time :math:`T_f`; its sample means have exactly
+    ``N`` is the density of the UNFILTERED sensor (what the Allan curve shows at taus well
+    above the filter, ``N^2/tau``), ``bandwidth`` the -3 dB frequency in Hz, ``filter`` the
+    kind (:mod:`allanite.terms.filter_laws`):
 
-    .. math:: \sigma^2(\tau) = \frac{N^2}{\tau}\left[1 - \frac{T_f}{2\tau}
-              \left(3 - 4e^{-\tau/T_f} + e^{-2\tau/T_f}\right)\right]
-              \approx \frac{N^2}{\tau} - \frac{3N^2T_f}{2\tau^2}\quad(\tau \gg T_f),
+    * ``rc`` (default): an analog first-order low-pass before the sampler, :math:`T_f =
+      1/(2\pi f_c)`. The output is a Gauss-Markov process of variance :math:`N^2/(2T_f)`
+      and correlation time :math:`T_f`; its sample means have exactly
 
-    which a fit with a free quantization term reads as :math:`Q^2 < 0`.
-    One-sided PSD :math:`2N^2/(1 + (f/f_c)^2)`.
+      .. math:: \sigma^2(\tau) = \frac{N^2}{\tau}\left[1 - \frac{T_f}{2\tau}
+                \left(3 - 4e^{-\tau/T_f} + e^{-2\tau/T_f}\right)\right]
+                \approx \frac{N^2}{\tau} - \frac{3N^2T_f}{2\tau^2}\quad(\tau \gg T_f),
+
+      which a fit with a free quantization term reads as :math:`Q^2 < 0`.
+      One-sided PSD :math:`2N^2/(1 + (f/f_c)^2)`.
+    * ``one_pole``, ``butterworth`` (of ``order``, default 2), ``moving_average`` and
+      ``bartlett`` (decimation filters; their length in samples :meth:`length`): digital
+      filters on the white samples, with the exact discrete law of
+      :func:`~allanite.terms.filter_laws.filter_avar`.
+
+    Only the white noise is filtered here: flicker, rate random walk and the other terms of
+    a model pass unchanged. That is exact to the filter's gain at their frequencies, which
+    differs from 1 by less than :math:`(f/f_c)^2` (first order) where they matter, at
+    taus far above :math:`1/f_c` (for B and K the error at :math:`\tau` is of order
+    :math:`(2\pi f_c\tau)^{-2}`).
     """
 
     N: float
     bandwidth: float
+    filter: str = "rc"
+    order: float | None = None
 
     type: ClassVar[str] = "lowpass_white"
     symbol: ClassVar[str] = "N"
@@ -400,32 +425,80 @@ class LowPassWhite(Term):
         ),
         ParamSpec("bandwidth", rate=0, time=-1, description="-3 dB bandwidth in Hz"),
     )
+    optional: ClassVar[tuple[ParamSpec, ...]] = (
+        ParamSpec("order", rate=0, time=0, description="Butterworth filter order"),
+    )
+    settings: ClassVar[dict[str, tuple[str, ...]]] = {"filter": FILTER_KINDS}
 
     def __post_init__(self) -> None:
         check_parameters(self, positive=("bandwidth",))
+        if self.filter not in FILTER_KINDS:
+            raise ValueError(
+                f"unknown filter {self.filter!r}; known filters: {', '.join(FILTER_KINDS)}"
+            )
+        if self.order is not None and (
+            self.filter != "butterworth" or not 1 <= self.order <= 12 or self.order % 1
+        ):
+            raise ValueError(
+                f"order is the order of a butterworth filter, a whole number 1..12; got "
+                f"order={self.order!r} for filter={self.filter!r}"
+            )
 
     @property
     def tau_f(self) -> float:
         """Filter time constant ``1 / (2 pi bandwidth)`` in seconds."""
         return 1.0 / (2.0 * math.pi * self.bandwidth)
 
+    @property
+    def n_order(self) -> int:
+        """Butterworth order (2 unless given)."""
+        return 2 if self.order is None else int(self.order)
+
+    def length(self, dt: float) -> float | None:
+        """Box length in samples of a ``moving_average`` or ``bartlett`` filter, else None."""
+        if self.filter not in ("moving_average", "bartlett"):
+            return None
+        return box_length(self.filter, self.bandwidth, dt)
+
+    def describe_filter(self, dt: float | None = None) -> str:
+        """Name the filter and its bandwidth, e.g. ``butterworth order 4, -3 dB at 5 Hz``."""
+        name = {"rc": "first-order (analog RC)", "one_pole": "first-order (digital)"}.get(
+            self.filter, self.filter.replace("_", " ")
+        )
+        if self.filter == "butterworth":
+            name += f" order {self.n_order}"
+        text = f"{name} low-pass, -3 dB at {self.bandwidth:.4g} Hz"
+        if dt is not None and self.filter in ("moving_average", "bartlett"):
+            text += f" ({self.length(dt):.3g} samples)"
+        return text
+
     def avar(self, tau: ArrayLike, dt: float) -> NDArray[np.float64]:
         """Exact Allan variance of the sample means (see the class docstring)."""
-        t, _, _ = averaging_factor(tau, dt)
-        return markov_avar_continuous(self.N**2 / (2.0 * self.tau_f), self.tau_f, t)
+        t, m, step = averaging_factor(tau, dt)
+        if self.filter == "rc":
+            return markov_avar_continuous(self.N**2 / (2.0 * self.tau_f), self.tau_f, t)
+        return self.N**2 * filter_avar(self.filter, self.bandwidth, self.n_order, m, step)
 
     def psd(self, f: ArrayLike) -> NDArray[np.float64]:
-        """One-sided PSD ``2 N^2 / (1 + (f / bandwidth)^2)``."""
+        """One-sided PSD ``2 N^2 |H(f)|^2`` of the continuous-time equivalent filter."""
         f = np.asarray(f, dtype=np.float64)
-        return 2.0 * self.N**2 / (1.0 + (f / self.bandwidth) ** 2)
+        return 2.0 * self.N**2 * filter_gain_analog(self.filter, self.bandwidth, self.n_order, f)
 
     def psd_sampled(self, f: ArrayLike, dt: float) -> NDArray[np.float64]:
-        """Exact PSD of the sample means (:func:`markov_psd_sampled`, aliasing included)."""
-        return markov_psd_sampled(self.N**2 / (2.0 * self.tau_f), self.tau_f, f, dt)
+        """Exact PSD of the samples (``rc``: :func:`markov_psd_sampled`, aliasing included)."""
+        if self.filter == "rc":
+            return markov_psd_sampled(self.N**2 / (2.0 * self.tau_f), self.tau_f, f, dt)
+        f = np.asarray(f, dtype=np.float64)
+        return 2.0 * self.N**2 * filter_gain(self.filter, self.bandwidth, self.n_order, f, dt)
 
     def stream(self, fs: float, n_channels: int, seed: Any, *, n_samples: int | None = None) -> Any:
-        """Exact sample means of the filtered process (C++ recursion)."""
-        from allanite.simulation.gaussian import averaged_gauss_markov
+        """Exact samples: the ``rc`` means by the C++ recursion, digital filters by lfilter."""
+        if self.filter == "rc":
+            from allanite.simulation.gaussian import averaged_gauss_markov
 
-        sigma = self.N / math.sqrt(2.0 * self.tau_f)
-        return averaged_gauss_markov(sigma, self.tau_f, fs, n_channels, seed)
+            sigma = self.N / math.sqrt(2.0 * self.tau_f)
+            return averaged_gauss_markov(sigma, self.tau_f, fs, n_channels, seed)
+        from allanite.simulation.effects import FilteredWhiteStream
+
+        taps, sos = filter_coefficients(self.filter, self.bandwidth, 1.0 / fs, self.n_order)
+        return FilteredWhiteStream(self.N * math.sqrt(fs), taps, sos, fs, n_channels, seed)
