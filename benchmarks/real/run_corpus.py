@@ -336,6 +336,21 @@ def markdown(
     return "\n".join(lines) + "\n"
 
 
+def _write(
+    out: Path, rows: list[dict[str, Any]], skipped: list[Any], t0: float, argv: list[str] | None
+) -> str:
+    """Write the JSON and markdown results; return the markdown."""
+    summ = summary(rows)
+    given = sys.argv[1:] if argv is None else argv
+    prov = provenance(["python", "benchmarks/real/run_corpus.py", *given], time.perf_counter() - t0)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    payload = {"provenance": prov, "summary": summ, "skipped": skipped, "channels": rows}
+    out.with_suffix(".json").write_text(json.dumps(payload, indent=1) + "\n", encoding="utf-8")
+    text = markdown(rows, summ, skipped, prov)
+    out.with_suffix(".md").write_text(text, encoding="utf-8")
+    return text
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument(
@@ -358,6 +373,7 @@ def main(argv: list[str] | None = None) -> int:
             continue
         row = run_channel(ch, args.n_mc, args.max_half)
         rows.append(row)
+        _write(args.out, rows, skipped, t0, argv)  # after every channel: a partial run is kept
         print(
             f"{row['channel']}: N default {_fmt(row['default']['N'])} "
             f"({'acc' if row['default']['accepted'] else 'REJ'}), PSD {_fmt(row['psd']['N'])}, "
@@ -365,23 +381,7 @@ def main(argv: list[str] | None = None) -> int:
             f"[{row['seconds']:.0f} s]",
             flush=True,
         )
-    summ = summary(rows)
-    prov = provenance(
-        [
-            Path(sys.argv[0]).name if argv is None else "run_corpus.py",
-            *(sys.argv[1:] if argv is None else argv),
-        ],
-        time.perf_counter() - t0,
-    )
-    prov["command"] = "python benchmarks/real/run_corpus.py " + " ".join(
-        sys.argv[1:] if argv is None else argv
-    )
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    payload = {"provenance": prov, "summary": summ, "skipped": skipped, "channels": rows}
-    args.out.with_suffix(".json").write_text(json.dumps(payload, indent=1) + "\n", encoding="utf-8")
-    text = markdown(rows, summ, skipped, prov)
-    args.out.with_suffix(".md").write_text(text, encoding="utf-8")
-    print(text)
+    print(_write(args.out, rows, skipped, t0, argv))
     return 0
 
 
