@@ -11,10 +11,11 @@ compares its N with two independent routes:
   S = 2 N^2), its interval from the chi-square law of the averaged periodogram (EDF 1.8 per
   segment and frequency, neighbouring frequencies counted 1/1.5 for the Hann window's
   correlation). The roll-off f_c is the first bin above the plateau that falls below half
-  its level; the filter's time constant is 1/(2 pi f_c).
+  its level (else the plateau's top edge, when it ends below 0.9 x Nyquist); the filter's
+  time constant is 1/(2 pi f_c).
 * **tau-restricted fit**: :func:`allanite.fit` (automatic terms) on the same Allan variance
   kept at tau >= 20 time constants (a first-order filter biases sigma^2 by about 1.5 tau_f/tau,
-  under 8 % there); no roll-off in the band: every tau.
+  under 8 % there); a plateau reaching Nyquist: every tau.
 
 It reports whether the default fit is accepted (chi-square), the filter it found (a model
 term whose type names a filter; None while the fit has none), the held-sample items
@@ -181,8 +182,11 @@ def run_channel(ch: corpus.Channel, n_mc: int, max_half: int) -> dict[str, Any]:
     x = ch.samples
     result, fitted = default_fit(x, ch)
     psd = psd_route(x, ch.fs)
-    tau_f = 1 / (2 * np.pi * psd["rolloff_hz"]) if psd["rolloff_hz"] else None
-    tau_lo = TAU_FACTOR * tau_f if tau_f else float(result.tau[0])
+    tau_lo = float(result.tau[0])
+    if psd["flat"]:  # the filter acts from the plateau's top (or its roll-off) up
+        edge = psd["rolloff_hz"] or psd["band_hz"][1]
+        if edge < 0.9 * ch.fs / 2:
+            tau_lo = max(tau_lo, TAU_FACTOR / (2 * np.pi * edge))
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
@@ -354,13 +358,16 @@ def _write(
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument(
-        "--n-mc", type=int, default=100, help="diagnosis Monte Carlo size (default 100)"
+        "--n-mc",
+        type=int,
+        default=50,
+        help="diagnosis Monte Carlo size (default 50, the time budget)",
     )
     parser.add_argument(
         "--max-half",
         type=int,
-        default=2**17,
-        help="samples per half of the half-versus-half diagnosis (default 2^17, the time budget)",
+        default=2**16,
+        help="samples per half of the half-versus-half diagnosis (default 2^16, the time budget)",
     )
     parser.add_argument("--only", help="run only channels whose label contains this text")
     parser.add_argument("--out", type=Path, default=RESULTS / "real_corpus", help="results stem")
