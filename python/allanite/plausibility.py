@@ -604,10 +604,10 @@ def check_coefficients(
     what = f"channel {channel}: " + "; ".join(_seen(evidence, bad, bounds, kind, unit))
 
     def typical(factor: float) -> float:
-        return sum(abs(np.log10(v * factor / bounds[s][2])) for s, v in scaled.items())
+        return float(sum(abs(np.log10(v * factor / bounds[s][2])) for s, v in scaled.items()))
 
     found = _candidates(unit, lambda f: not evidence.failures(kind, f, bounds), typical)
-    described = [(other, _would(evidence, factor, bounds, kind)) for other, factor in found]
+    described = [(other, _would(evidence, bad, factor, bounds, kind)) for other, factor in found]
     return [Finding("implausible_units", channel, _fix_text(what, unit, described, spelling))]
 
 
@@ -643,15 +643,19 @@ def _seen(
 
 def _would(
     evidence: _Evidence,
+    bad: list[str],
     factor: float,
     bounds: dict[str, tuple[float | None, float | None, float, str]],
     kind: str,
 ) -> str:
-    """What the checked numbers would be, each multiplied by ``factor``."""
+    """What the checked numbers would be, each multiplied by ``factor``.
+
+    The mean and the noise floor are shown only when they were out of range.
+    """
     parts = [f"{s} would be {v * factor:.3g} {bounds[s][3]}" for s, v in evidence.scaled.items()]
-    if evidence.mean is not None:
+    if evidence.mean is not None and "mean" in bad:
         parts.append(f"the mean {evidence.mean * factor:.3g} {_MEAN_UNIT[kind]}")
-    if not evidence.scaled and evidence.ceiling is not None:
+    if "noise" in bad and "N" not in evidence.scaled and evidence.ceiling is not None:
         parts.append(f"N <= {evidence.ceiling * factor:.3g} {bounds['N'][3]}")
     return ", ".join(parts)
 
