@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 import subprocess
 import sys
 from collections.abc import Callable
@@ -487,3 +488,26 @@ def test_too_short_for_a_fit_names_the_fit_rule(tmp_path, capsys):
     assert main(["analyze", str(path), "--fs", "100", "--units", "deg/s", "--points", "2"]) == 0
     out = capsys.readouterr().out
     assert "the tau grid gives only 1 usable tau for a fit (choosing the terms needs 3)" in out
+
+
+def test_accelerometer_readouts_use_accelerometer_words_and_units(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Issue 30 item 7: an accelerometer in g is read as fit and report read it: "velocity
+    random walk" in the region table, N in m/s/sqrt(h) (not "angle random walk", (g)*sqrt(s)).
+    """
+    import re
+
+    rng = np.random.default_rng(7)
+    sigma = 8.5e-4  # g at 100 Hz: N = sigma * sqrt(0.01 s) = 8.5e-5 g*sqrt(s)
+    path = tmp_path / "acc.npy"
+    np.save(path, 1.0 + sigma * rng.standard_normal(100_000))
+    code, out, _err = _run(["analyze", str(path), "--fs", "100", "--units", "g"], capsys)
+    assert code == 0
+    assert "velocity random walk (white acceleration noise)" in out
+    assert "angle random walk" not in out
+    match = re.search(r"N = ([0-9.e+-]+) m/s/sqrt\(h\)", out)
+    assert match is not None, out
+    expected = sigma * 0.1 * 9.80665 * 60.0  # m/s/sqrt(h)
+    # the readout at tau = 1 s has EDF ~ 1.5 * 1e5 / 100 = 1500: 3 sigma = 3/sqrt(2*1500)
+    assert float(match.group(1)) == pytest.approx(expected, rel=3 / math.sqrt(3000))

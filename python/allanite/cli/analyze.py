@@ -24,9 +24,8 @@ from allanite.cli.record_options import (
 from allanite.fit.classic import ClassicReadout, classic_readout
 from allanite.io.atomic import atomic_output
 from allanite.io.record import Record
-from allanite.report.coefficients import customary_rate
 from allanite.slopes import MIN_EDF, SlopeRow, slope_table
-from allanite.units import coefficient_unit, convert, display_unit
+from allanite.units import coefficient_text, customary_value, sensor_kind
 from allanite.variance import AllanResult
 
 __all__ = ["register", "run"]
@@ -115,19 +114,29 @@ _READOUT_UNITS = {"N": "*sqrt(s)", "B": "", "K": "/sqrt(s)"}
 
 
 def _readout_value(result: AllanResult, symbol: str, value: float) -> str:
-    """A slope-method readout in customary units (deg/sqrt(h), deg/h, ...) when known."""
+    """A slope-method readout in customary units (deg/sqrt(h), m/s/sqrt(h), ...) when known.
+
+    :func:`allanite.units.customary_value`, the one conversion ``fit`` and ``report`` use
+    (a gyro's N in deg/sqrt(h), an accelerometer's in m/s/sqrt(h), B in deg/h or ug).
+    """
     powers = {"N": 0.5, "B": 0.0, "K": -0.5}
     if result.units:
         try:
-            show = customary_rate(result.units)
-            if show is not None:
-                unit = display_unit(show, symbol)
-                base = coefficient_unit(result.units, 1.0, powers[symbol])
-                return f"{convert(value, base, unit):.4g} {unit}"
+            base = coefficient_text(result.units, 1.0, powers[symbol])
+            shown, unit = customary_value(symbol, value, base, result.units)
+            return f"{shown:.4g} {unit}"
         except ValueError:
             pass
         return f"{value:.4g} ({result.units}){_READOUT_UNITS[symbol]}"
     return f"{value:.4g} (rate unit){_READOUT_UNITS[symbol]}"
+
+
+def _sensor(result: AllanResult) -> str:
+    """``gyro`` or ``accelerometer`` (the slope table's wording) from the record's unit."""
+    try:
+        return sensor_kind(result.units) if result.units else "gyro"
+    except ValueError:
+        return "gyro"
 
 
 #: estimators whose curve the slope table and the slope-method readouts are defined on
@@ -145,7 +154,7 @@ def summary_parts(result: AllanResult) -> tuple[list[SlopeRow], ClassicReadout] 
     dev = np.asarray(result.dev, dtype=np.float64)
     reliable = np.asarray(result.edf) >= MIN_EDF
     return (
-        slope_table(result.tau, dev, result.edf),
+        slope_table(result.tau, dev, result.edf, sensor=_sensor(result)),
         classic_readout(result.tau[reliable], dev[reliable]),
     )
 
