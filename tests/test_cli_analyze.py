@@ -542,3 +542,31 @@ def test_bias_region_and_b_readout_agree(
     assert region or "B: —  (no region of slope 0 in the table above)" in out
     if (seed, ratio) == (0, 2.0):
         assert region  # the issue's case, which the old rule left without B
+
+
+def test_arcsec_records_show_datasheet_units_and_display_units_chooses(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Issue 30 item 9: a record in arcsec/s prints N in deg/sqrt(h) (as datasheets quote it)
+    in analyze, fit and report; --display-units arcsec shows arcsec/sqrt(h); a unit that is not
+    an angle is refused by name."""
+    path = tmp_path / "rlg.npy"
+    np.save(path, 36.0 * np.random.default_rng(9).standard_normal(60_000))  # arcsec/s, 100 Hz
+    base = [str(path), "--fs", "100", "--units", "arcsec/s"]
+    # N = 36 arcsec/s * sqrt(0.01 s) = 3.6 arcsec/sqrt(s) = 216 arcsec/sqrt(h) = 0.06 deg/sqrt(h)
+    for command in ("analyze", "fit"):
+        code, out, _err = _run([command, *base], capsys)
+        assert code == 0
+        assert "deg/sqrt(h)" in out, out
+        assert "arcsec/sqrt(h)" not in out
+        code, out, _err = _run([command, *base, "--display-units", "arcsec"], capsys)
+        assert code == 0
+        assert "arcsec/sqrt(h)" in out, out
+        assert "deg/sqrt(h)" not in out
+    html = tmp_path / "r.html"
+    code, _out, _err = _run(["report", *base, "-o", str(html)], capsys)
+    assert code == 0
+    assert "deg/sqrt(h)" in html.read_text() or "deg/√h" in html.read_text()
+    code, _out, err = _run(["fit", *base, "--display-units", "m/s"], capsys)
+    assert code == 2
+    assert "--display-units takes an angle unit" in err

@@ -111,7 +111,7 @@ def test_customary_units_and_coefficients() -> None:
     assert customary_rate("deg/s") == "deg/h"
     assert customary_rate("rad/s") == "deg/h"  # ROS/PX4 gyros read like datasheets
     assert customary_rate("dph") == "deg/h"
-    assert customary_rate("arcsec/s") == "arcsec/h"
+    assert customary_rate("arcsec/s") == "deg/h"  # ring-laser increments: datasheet units
     assert customary_rate("furlong/s") is None
     assert customary_rate(None) is None
     white = TERM_TYPES["white"](N=0.01)

@@ -82,6 +82,13 @@ def add_record_arguments(parser: argparse.ArgumentParser) -> None:
         "Without it coefficients are printed in record units",
     )
     group.add_argument(
+        "--display-units",
+        metavar="ANGLE",
+        help="angle a gyro's coefficients are shown in: N in ANGLE/sqrt(h), B in ANGLE/h "
+        "(deg, rad, arcsec, ...). Default: deg, as datasheets quote them, whatever the record's "
+        "angle (rad/s, arcsec increments); the model JSON keeps the record's unit",
+    )
+    group.add_argument(
         "--scale", type=float, help="factor from counts to units: samples = counts * SCALE"
     )
     group.add_argument(
