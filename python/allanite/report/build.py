@@ -24,7 +24,7 @@ from allanite.datasheet import verdict as checks_verdict
 from allanite.io.atomic import atomic_output
 from allanite.io.record import Record
 from allanite.report import html as h
-from allanite.report.coefficients import CoefficientRow, coefficient_table
+from allanite.report.coefficients import CoefficientRow, ambiguous_rows, coefficient_table
 from allanite.slopes import MIN_EDF, slope_table
 from allanite.units import sensor_kind
 from allanite.variance import AllanResult
@@ -306,7 +306,7 @@ def _coefficient_section(
                 k.unit,
                 k.slope or "–",
             ]
-            for k in coefs
+            for k in (*coefs, *ambiguous_rows(device.fit(c), rate))
         ]
         parts.append(
             h.table(
