@@ -416,7 +416,7 @@ def test_first_screen_summary_above_the_table(
     # the readout of a white-noise curve at tau = 1 s is N itself (1 deg/sqrt(s) = 60 deg/sqrt(h))
     assert value == pytest.approx(60 * n_true, rel=0.05)
     assert "read at tau = 1 s" in n_line
-    assert "    B: —  (no flat minimum on the curve)" in lines
+    assert "    B: —  (no region of slope 0 in the table above)" in lines
     fit_line = next(line for line in lines if "fitted coefficients with intervals:" in line)
     command = fit_line.split(": ", 1)[1].split()
     assert command[:3] == ["allanite", "fit", str(path)]
