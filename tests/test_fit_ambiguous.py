@@ -177,3 +177,18 @@ def test_an_ambiguous_addition_widens_the_chosen_terms_to_the_fit_with_it() -> N
     # the interval conditional on the selection alone is the one that missed
     slo, shi = f.meta["selected_coefficients"]["N"].ci(0.95)
     assert not slo <= truth["N"] <= shi
+
+
+def test_ambiguous_terms_are_rows_of_the_report_table(nav):
+    """Issue 30 item 10: the report's coefficient table carries the AMBIGUOUS term as a
+    marked row (value and interval in customary units), not only as a grey line under it."""
+    from allanite.report.coefficients import ambiguous_rows
+
+    f, _ = nav
+    (row,) = [r for r in ambiguous_rows(f, "deg/h", 0.95) if r.symbol == "B"]
+    assert row.quantity.startswith("AMBIGUOUS: flicker")
+    assert row.unit == "deg/h"
+    coef = f.exchangeable["B"]
+    assert row.value == pytest.approx(coef.value)  # deg/h in, deg/h shown
+    assert (row.low, row.high) == pytest.approx(coef.ci(0.95))
+    assert len(ambiguous_rows(f, "deg/h")) == len(f.ambiguous())

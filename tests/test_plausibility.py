@@ -157,13 +157,19 @@ def test_constant_record_refused_by_every_command(
         "report": ["-o", str(tmp_path / "r.html")],
         "diagnose": ["--sim-model", str(tmp_path / "model.json")],
     }.get(command, [])
+    inputs = ["dead.npy"]
+    if command == "diagnose":  # the config is read first (issue 30 item 2): a valid one
+        from allanite.examples import example_model
+
+        example_model().save(tmp_path / "model.json")
+        inputs.append("model.json")
     code, out, err = _cli([command, str(path), "--fs", "100", *extra], capsys)
     assert code == 2
     assert out == ""
     lines = err.strip().splitlines()
     assert len(lines) == 1
     assert "dead.npy: channel col0 (all 5000 samples equal 0.25) is constant" in lines[0]
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["dead.npy"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == inputs  # nothing written
 
 
 def test_warnings_reach_stderr_json_and_report(
@@ -306,9 +312,13 @@ def test_implausible_coefficients_name_the_likely_unit() -> None:
     assert finding.code == "implausible_units"
     assert finding.channel == "gz"
     assert "channel gz: N = 1080 deg/sqrt(h) is outside any real gyro's range" in (finding.message)
-    assert "deg/h given as deg/s: N would be 0.3 deg/sqrt(h); if so, pass --units deg/h" in (
+    # deg/h, rad/h and mrad/s would all make it plausible: listed, none proposed (issue 30
+    # item 12: a proposal can be worse than the input)
+    assert "deg/h given as deg/s: N would be 0.3 deg/sqrt(h); or rad/h given as" in (
         finding.message
     )
+    assert "no unit is proposed" in finding.message
+    assert "pass --units deg/h" not in finding.message
     # too small: a 0.01 deg/sqrt(h) gyro's deg/s numbers declared as mrad/h
     n = convert(0.01, "deg/sqrt(h)", "deg/s*sqrt(s)")
     (finding,) = check_coefficients({"N": n}, "mrad/h")
@@ -322,12 +332,15 @@ def test_implausible_coefficients_name_the_likely_unit() -> None:
     n = convert(0.05, "m/s/sqrt(h)", "ug*sqrt(s)")
     (finding,) = check_coefficients({"N": n}, "m/s^2")
     assert "real accelerometer's range" in finding.message
-    assert "ug given as m/s^2: N would be 0.05 m/s/sqrt(h)" in finding.message
+    assert "ug given as m/s^2: N would be 0.05 m/s/sqrt(h); if so, pass --units ug" in (
+        finding.message
+    )  # the one unit that restores the range: proposed
     # an angle record: the suggestion is an angle unit
     n = convert(0.3, "deg/sqrt(h)", "arcsec/s*sqrt(s)")
     (finding,) = check_coefficients({"N": n}, "deg", input="angle")
-    assert "arcsec given as deg" in finding.message
-    assert "--units arcsec" in finding.message
+    assert "arcsec given as deg: N would be 0.3 deg/sqrt(h); or mrad given as deg" in (
+        finding.message
+    )
 
 
 def test_wrong_units_warned_by_fit_and_analyze(
@@ -348,7 +361,7 @@ def test_wrong_units_warned_by_fit_and_analyze(
     (warning,) = channel["warnings"]
     assert f"N = {n:.4g} deg/sqrt(h) is outside any real gyro's range" in warning
     assert f"deg/h given as deg/s: N would be {n / 3600:.3g} deg/sqrt(h)" in warning
-    assert "pass --units deg/h" in warning
+    assert "no unit is proposed: pass the unit the logger writes with --units" in warning
     assert err.count("warning:") == 1
     assert warning in err
     code, out, err = _cli(["fit", str(path), "--fs", "100", "--units", "deg/h"], capsys)
@@ -381,7 +394,7 @@ def test_the_library_fit_runs_the_same_wrong_units_check() -> None:
     (expected,) = check_coefficients(fitted.model.coefficients(), "deg/s", spelling="python")
     assert message == expected.message
     assert "deg/h given as deg/s" in message
-    assert "pass units='deg/h' (CLI: --units deg/h)" in message
+    assert "pass the unit the logger writes with units= (CLI: --units)" in message
     assert warning.filename == __file__  # points at the caller's line
     with warnings.catch_warnings():
         warnings.simplefilter("error", ImplausibleInputWarning)
@@ -403,7 +416,114 @@ def test_batch_warns_about_wrong_units_as_the_cli_speaks(
     assert code == 0
     (line,) = err.strip().splitlines()
     assert line.startswith("allanite batch: warning: channel col0: N = ")
-    assert line.endswith("if so, pass --units deg/h")
+    assert line.endswith("pass the unit the logger writes with --units")
     assert "ImplausibleInputWarning" not in err
     code, _out, err = _cli(["batch", str(path), "--fs", "100", "--units", "deg/h"], capsys)
     assert "warning" not in err
+
+
+# --- issue 30 item 12: wrong units read from the record's mean and noise floor -------------
+
+
+def _write(tmp_path: Path, name: str, samples: np.ndarray) -> str:
+    path = tmp_path / name
+    np.save(path, samples)
+    return str(path)
+
+
+def test_still_gyro_reading_36_rad_s_is_named(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A still gyro's mean of 36 rad/s (2063 deg/s; Earth rate is 7.3e-5 rad/s) is beyond any
+    gyro's bias: named, with the bound; a 0.01 rad/s bias is silent."""
+    rng = np.random.default_rng(30)
+    noise = 0.002 * rng.standard_normal(40_000)
+    path = _write(tmp_path, "spin.npy", 36.0 + noise)
+    code, _out, err = _cli(["analyze", path, "--fs", "100", "--units", "rad/s"], capsys)
+    assert code == 0
+    assert "the mean, 2063 deg/s, is beyond any still gyro's bias (|mean| <= 30 deg/s" in err
+    assert "pass --units" not in err  # mrad/s, deg/h, rad/h all fit: no unit is proposed
+    path = _write(tmp_path, "still.npy", 0.01 + noise)
+    code, _out, err = _cli(["analyze", path, "--fs", "100", "--units", "rad/s"], capsys)
+    assert code == 0
+    assert "warning" not in err
+
+
+def test_rad_s_given_as_deg_h_is_named_without_a_fitted_n() -> None:
+    """A phone gyro's rad/s numbers (0.003 rad/s at 200 Hz) labelled deg/h: the deviation at
+    the shortest tau alone bounds N below any real gyro's, with no N read off the curve."""
+    sigma, tau0 = 0.003, 1 / 200
+    (finding,) = check_coefficients({}, "deg/h", n_ceiling=sigma * math.sqrt(tau0))
+    assert "bounds N to <= 3.54e-06 deg/sqrt(h), quieter than any real gyro" in finding.message
+    assert "rad/s given as deg/h" in finding.message
+    # the same numbers as rad/s are fine
+    assert check_coefficients({}, "rad/s", n_ceiling=sigma * math.sqrt(tau0)) == []
+
+
+def test_rad_s_given_as_deg_h_warned_by_analyze(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """End to end: the phone gyro's numbers as deg/h are named by analyze."""
+    rng = np.random.default_rng(31)
+    rate = 0.003 * rng.standard_normal(60_000) + 0.001
+    path = _write(tmp_path, "phone.npy", rate)
+    code, _out, err = _cli(["analyze", path, "--fs", "200", "--units", "deg/h"], capsys)
+    assert code == 0
+    assert "quieter than any real gyro" in err
+    code, _out, err = _cli(["analyze", path, "--fs", "200", "--units", "rad/s"], capsys)
+    assert "warning" not in err
+
+
+def _triad(mean: tuple[float, float, float], sigma: float, seed: int) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    return np.asarray(mean) + sigma * rng.standard_normal((40_000, 3))
+
+
+def test_accelerometer_triad_in_m_s2_given_as_g_and_back(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A still triad reads 1 g: magnitude 9.8 labelled g is m/s^2 given as g, magnitude 1
+    labelled m/s^2 is g given as m/s^2; each names the one unit that restores 1 g."""
+    ms2 = _triad((0.12, -0.25, 9.79), 0.02, 32)
+    path = _write(tmp_path, "acc_ms2.npy", ms2)
+    code, _out, err = _cli(["analyze", path, "--fs", "100", "--units", "g"], capsys)
+    assert code == 0
+    assert "the magnitude of the mean is 9.794 g, not the 1 g of gravity" in err
+    assert "m/s^2 given as g: the magnitude would be 0.9987 g; if so, pass --units m/s^2" in err
+    code, _out, err = _cli(["analyze", path, "--fs", "100", "--units", "m/s^2"], capsys)
+    assert "warning" not in err
+    g = ms2 / 9.80665
+    path = _write(tmp_path, "acc_g.npy", g)
+    code, _out, err = _cli(["analyze", path, "--fs", "100", "--units", "m/s^2"], capsys)
+    assert code == 0
+    assert "the magnitude of the mean is 0.1018 g" in err
+    assert "pass --units g" in err
+    code, _out, err = _cli(["analyze", path, "--fs", "100", "--units", "g"], capsys)
+    assert "warning" not in err
+
+
+def test_accelerometer_data_given_as_rad_s_is_named(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """An accelerometer triad (m/s^2) read as a gyro in rad/s: its mean has gravity's
+    magnitude, far beyond a gyro's bias; the accelerometer's unit is named."""
+    path = _write(tmp_path, "acc.npy", _triad((0.12, -0.25, 9.79), 0.02, 33))
+    code, _out, err = _cli(["analyze", path, "--fs", "100", "--units", "rad/s"], capsys)
+    assert code == 0
+    assert "accelerometer data given as rad/s? give the accelerometer's unit (--units m/s^2)" in err
+
+
+def test_logger_mrad_s_given_as_rad_s_draws_no_wrong_suggestion(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A 1 Hz logger's mrad/s labelled rad/s: deg/h, rad/h and mrad/s would all make it
+    plausible, so no unit is proposed (deg/h would make N 206x wrong); mrad/s is listed."""
+    rng = np.random.default_rng(34)
+    mrad_s = 0.5 + 2.0 * rng.standard_normal(20_000)
+    path = _write(tmp_path, "logger.npy", mrad_s)
+    code, _out, err = _cli(["analyze", path, "--fs", "1", "--units", "rad/s"], capsys)
+    assert code == 0
+    assert "outside any real gyro's range" in err
+    assert "mrad/s given as rad/s" in err
+    assert "pass --units deg/h" not in err
+    assert "the record alone cannot tell which, so no unit is proposed" in err

@@ -111,7 +111,7 @@ def test_customary_units_and_coefficients() -> None:
     assert customary_rate("deg/s") == "deg/h"
     assert customary_rate("rad/s") == "deg/h"  # ROS/PX4 gyros read like datasheets
     assert customary_rate("dph") == "deg/h"
-    assert customary_rate("arcsec/s") == "arcsec/h"
+    assert customary_rate("arcsec/s") == "deg/h"  # ring-laser increments: datasheet units
     assert customary_rate("furlong/s") is None
     assert customary_rate(None) is None
     white = TERM_TYPES["white"](N=0.01)
@@ -405,3 +405,28 @@ def test_every_check_status_has_a_coloured_badge() -> None:
         assert f'class="badge {status}">{status_text(status)}<' in h.badge(status)
     assert len({colours[s] for s in STATUSES}) == len(STATUSES)  # each its own colour
     assert ">NOT DETERMINED<" in h.badge("undetermined")  # as the CLI prints it
+
+
+def test_first_screen_has_coefficients_and_means(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Issue 30 item 10: the coefficients come right after the record summary (before the
+    plot), and the summary shows each channel's mean and, for an accelerometer triad, the
+    magnitude of the mean (1 g at rest)."""
+    rng = np.random.default_rng(10)
+    triad = np.array([0.12, -0.25, 9.79]) + 0.02 * rng.standard_normal((40_000, 3))
+    path = tmp_path / "acc.npy"
+    np.save(path, triad)
+    html_path = tmp_path / "r.html"
+    code = main(["report", str(path), "--fs", "100", "--units", "m/s^2", "-o", str(html_path)])
+    capsys.readouterr()
+    assert code == 0
+    html = html_path.read_text()
+    assert html.index('id="coefficients"') < html.index('id="adev"')
+    assert html.index('id="summary"') < html.index('id="coefficients"')
+    row = re.search(r"mean \(static bias; gravity on an accelerometer\)</td><td[^>]*>([^<]*)", html)
+    assert row is not None
+    text = row.group(1)
+    means = triad.mean(axis=0)
+    assert f"col2 {means[2]:.6g} m/s^2" in text
+    assert f"magnitude {np.linalg.norm(means):.6g} m/s^2" in text

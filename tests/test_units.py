@@ -380,8 +380,16 @@ def test_rad_per_second_gyros_show_degrees_and_keep_si_in_the_model():
             assert customary_unit(rate, name, coefficient_unit(rate, *_powers(name))) == unit
     assert customary_unit("rad/s", "Q", coefficient_unit("rad/s", *_powers("Q"))) == "deg"
     assert customary_unit("arcsec/s", "N", coefficient_unit("arcsec/s", 1, 0.5)) == (
-        "arcsec/sqrt(h)"
+        "deg/sqrt(h)"  # issue 30 item 9: datasheet units whatever the record's angle
     )
+    from allanite.units import display_angle
+
+    with display_angle("arcsec"):
+        assert customary_unit("arcsec/s", "N", coefficient_unit("arcsec/s", 1, 0.5)) == (
+            "arcsec/sqrt(h)"
+        )
+        assert customary_unit("rad/s", "B", coefficient_unit("rad/s", 1, 0)) == "arcsec/h"
+    assert customary_unit("rad/s", "B", coefficient_unit("rad/s", 1, 0)) == "deg/h"
     x = np.random.default_rng(5).standard_normal(50_000) * 0.01  # rad/s at 100 Hz
     fitted = allanite.fit(x, fs=100.0, units="rad/s", terms=["N"])
     (row,) = fitted.table("customary")

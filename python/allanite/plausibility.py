@@ -31,7 +31,7 @@ from __future__ import annotations
 
 import re
 import warnings
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, Literal
 
@@ -47,8 +47,10 @@ __all__ = [
     "check_allan",
     "check_channel_units",
     "check_coefficients",
+    "check_means",
     "check_samples",
     "constant_channels",
+    "is_triad",
     "refuse_constant",
     "stuck_segments",
     "warn_coefficients",
@@ -428,6 +430,102 @@ def _out_of_range(
     return bad
 
 
+_Bounds = dict[str, tuple[float | None, float | None, float, str]]
+#: the largest mean a still gyro reads, in deg/s: beyond the turn-on bias of any gyro
+#: (consumer MEMS datasheets give at most +-20 deg/s zero-rate offset; Earth rate is 4e-3
+#: deg/s). A gyro on a turntable may read more: the finding says "if the gyro was still".
+GYRO_MEAN_MAX = 30.0
+#: the largest mean one still accelerometer axis reads, in g (1 g of gravity plus a bias)
+ACCEL_MEAN_MAX = 2.0
+#: a still accelerometer triad's mean has a magnitude of 1 g within this (consumer MEMS
+#: offsets are up to ~0.1 g per axis)
+TRIAD_TOLERANCE = 0.2
+#: the mean of a still sensor in these units (the bound's unit)
+_MEAN_UNIT = {"gyro": "deg/s", "accelerometer": "g"}
+
+
+@dataclass(frozen=True)
+class _Evidence:
+    """What a channel's numbers say, in the units of the bounds, as given."""
+
+    scaled: dict[str, float]
+    mean: float | None  # |mean| in _MEAN_UNIT
+    ceiling: float | None  # upper bound on N in N's bound unit
+
+    def failures(
+        self,
+        kind: str,
+        factor: float,
+        bounds: dict[str, tuple[float | None, float | None, float, str]],
+    ) -> list[str]:
+        """Which checks fail when every number is multiplied by ``factor``."""
+        moved = {s: v * factor for s, v in self.scaled.items()}
+        bad = _out_of_range(moved, bounds)
+        if self.mean is not None and self.mean * factor > _mean_max(kind):
+            bad.append("mean")
+        lo = bounds["N"][0]
+        if self.ceiling is not None and lo is not None and self.ceiling * factor < lo:
+            bad.append("noise")
+        return bad
+
+
+def _mean_max(kind: str) -> float:
+    return GYRO_MEAN_MAX if kind == "gyro" else ACCEL_MEAN_MAX
+
+
+def _candidates(
+    unit: str, plausible: Callable[[float], bool], typical: Callable[[float], float]
+) -> list[tuple[str, float]]:
+    """Common units of the same quantity in which the numbers would be plausible.
+
+    Each is ``(unit, factor)``, the numbers given in ``unit`` being ``factor`` times theirs in
+    the candidate; most typical first.
+    """
+    found = []
+    for other in COMMON_UNITS:
+        if other == unit:
+            continue
+        try:
+            factor = convert(1.0, other, unit)
+        except ValueError:
+            continue
+        if plausible(factor):
+            found.append((typical(factor), other, factor))
+    return [(other, factor) for _, other, factor in sorted(found)]
+
+
+def _fix_text(
+    what: str,
+    unit: str,
+    candidates: Sequence[tuple[str, str]],
+    spelling: Literal["cli", "python"],
+) -> str:
+    """The finding's advice: one unit named when exactly one makes the record plausible.
+
+    A suggestion must never be worse than the input: when several units would make the
+    record plausible (a 1 Hz logger's mrad/s given as rad/s reads like deg/h as well), the
+    record alone cannot tell which, so they are listed and none is proposed.
+    """
+    if not candidates:
+        return (
+            f"{what}: check --units ({unit}) and --scale"
+            if spelling == "cli"
+            else f"{what}: check units={unit!r} (CLI: --units) and the reader's scale= (CLI: "
+            "--scale)"
+        )
+    if len(candidates) == 1:
+        ((other, would),) = candidates
+        return f"{what}: the record looks like {other} given as {unit}: {would}; if so, pass " + (
+            f"--units {other}" if spelling == "cli" else f"units={other!r} (CLI: --units {other})"
+        )
+    listed = "; or ".join(f"{other} given as {unit}: {would}" for other, would in candidates)
+    return (
+        f"{what}: it would be plausible as {listed} - the record alone cannot tell which, so "
+        "no unit is proposed: pass the unit the logger writes with "
+        + ("--units" if spelling == "cli" else "units= (CLI: --units)")
+    )
+
+
 def check_coefficients(
     values: Mapping[str, float | None],
     unit: str | None,
@@ -435,8 +533,10 @@ def check_coefficients(
     input: str = "rate",
     channel: str = "ch0",
     spelling: Literal["cli", "python"] = "cli",
+    mean: float | None = None,
+    n_ceiling: float | None = None,
 ) -> list[Finding]:
-    """Find noise coefficients outside any real sensor's range (a wrong ``--units``).
+    """Find noise coefficients or a mean outside any real sensor's range (a wrong ``--units``).
 
     Parameters
     ----------
@@ -455,13 +555,22 @@ def check_coefficients(
         How the fix is spelled: ``--units deg/h`` for the command line, ``units='deg/h'
         (CLI: --units deg/h)`` for a library call (the CLI prints it as ``--units deg/h``,
         :func:`allanite.cli.cli_spelling`).
+    mean : float, optional
+        The channel's mean in ``unit`` (rate records only): a still gyro reads at most
+        :data:`GYRO_MEAN_MAX` deg/s, an accelerometer axis :data:`ACCEL_MEAN_MAX` g.
+    n_ceiling : float, optional
+        An upper bound on N in the record's rate unit times sqrt(s): the deviation at the
+        shortest tau times sqrt(tau) (every noise adds to it). Below the lowest N of any
+        sensor, the numbers are too small for the unit (rad/s given as deg/h), even on a
+        record whose N cannot be read off the curve.
 
     Returns
     -------
     list of Finding
-        At most one (code ``"implausible_units"``), naming the coefficients out of range, the
-        bounds (:data:`COEFFICIENT_BOUNDS`) and, when one exists, the common unit
-        (:data:`COMMON_UNITS`) that would make every checked coefficient plausible.
+        At most one (code ``"implausible_units"``), naming what is out of range, the
+        bounds (:data:`COEFFICIENT_BOUNDS`) and the common units (:data:`COMMON_UNITS`) in
+        which everything checked would be plausible; a fix (``--units X``) is proposed only
+        when exactly one unit does, since a wrong proposal can be worse than the input.
     """
     from allanite.units import record_rate_unit
 
@@ -480,54 +589,177 @@ def check_coefficients(
         if symbol in bounds and value is not None and np.isfinite(value) and value > 0:
             own = coefficient_unit(rate, *SYMBOL_POWERS[symbol])
             scaled[symbol] = convert(float(value), own, bounds[symbol][3])
-    bad = _out_of_range(scaled, bounds)
+    evidence = _Evidence(
+        scaled,
+        abs(convert(float(mean), rate, _MEAN_UNIT[kind]))
+        if mean is not None and input == "rate" and np.isfinite(mean)
+        else None,
+        convert(float(n_ceiling), coefficient_unit(rate, *SYMBOL_POWERS["N"]), bounds["N"][3])
+        if n_ceiling is not None and n_ceiling > 0
+        else None,
+    )
+    bad = evidence.failures(kind, 1.0, bounds)
     if not bad:
         return []
-    seen = ", ".join(f"{s} = {scaled[s]:.4g} {bounds[s][3]}" for s in bad)
-    limits = "; ".join(f"{s} {_bounds_text(bounds[s])} {bounds[s][3]}" for s in bad)
-    # every coefficient scales with the unit of the samples: x given in `unit` but really in
-    # `other` is x * convert(1, other, unit) in `unit`
-    best: tuple[float, str, dict[str, float]] | None = None
-    for other in COMMON_UNITS:
-        if other == unit:
-            continue
-        try:
-            factor = convert(1.0, other, unit)
-        except ValueError:
-            continue
-        moved = {s: v * factor for s, v in scaled.items()}
-        if _out_of_range(moved, bounds):
-            continue
-        score = sum(abs(np.log10(v / bounds[s][2])) for s, v in moved.items())
-        if best is None or score < best[0]:
-            best = (score, other, moved)
-    verb = "is" if len(bad) == 1 else "are"
-    what = f"channel {channel}: {seen} {verb} outside any real {kind}'s range ({limits})"
-    if best is None:
-        return [
-            Finding(
-                "implausible_units",
-                channel,
-                f"{what}: check --units ({unit}) and --scale"
-                if spelling == "cli"
-                else f"{what}: check units={unit!r} (CLI: --units) and the reader's scale= (CLI: "
-                "--scale)",
-            )
-        ]
-    _, other, moved = best
-    would = ", ".join(f"{s} would be {moved[s]:.3g} {bounds[s][3]}" for s in moved)
-    return [
-        Finding(
-            "implausible_units",
-            channel,
-            f"{what}: the record looks like {other} given as {unit}: {would}; if so, pass "
-            + (
-                f"--units {other}"
-                if spelling == "cli"
-                else f"units={other!r} (CLI: --units {other})"
-            ),
+    what = f"channel {channel}: " + "; ".join(_seen(evidence, bad, bounds, kind, unit))
+
+    def typical(factor: float) -> float:
+        return float(sum(abs(np.log10(v * factor / bounds[s][2])) for s, v in scaled.items()))
+
+    found = _candidates(unit, lambda f: not evidence.failures(kind, f, bounds), typical)
+    described = [(other, _would(evidence, bad, factor, bounds, kind)) for other, factor in found]
+    return [Finding("implausible_units", channel, _fix_text(what, unit, described, spelling))]
+
+
+def _seen(
+    evidence: _Evidence,
+    bad: list[str],
+    bounds: dict[str, tuple[float | None, float | None, float, str]],
+    kind: str,
+    unit: str,
+) -> list[str]:
+    """The findings' first half: what is out of range, and the range."""
+    out = []
+    coefficients = [s for s in bad if s in evidence.scaled]
+    if coefficients:
+        seen = ", ".join(f"{s} = {evidence.scaled[s]:.4g} {bounds[s][3]}" for s in coefficients)
+        limits = "; ".join(f"{s} {_bounds_text(bounds[s])} {bounds[s][3]}" for s in coefficients)
+        verb = "is" if len(coefficients) == 1 else "are"
+        out.append(f"{seen} {verb} outside any real {kind}'s range ({limits})")
+    if "mean" in bad and evidence.mean is not None:
+        where = "Earth rate is 0.004 deg/s" if kind == "gyro" else "gravity is 1 g"
+        out.append(
+            f"the mean, {evidence.mean:.4g} {_MEAN_UNIT[kind]}, is beyond any still {kind}'s "
+            f"bias (|mean| <= {_mean_max(kind):g} {_MEAN_UNIT[kind]}; {where}; if the "
+            "sensor was moving, ignore this)"
         )
-    ]
+    if "noise" in bad and evidence.ceiling is not None:
+        out.append(
+            f"the deviation at the shortest tau bounds N to <= {evidence.ceiling:.3g} "
+            f"{bounds['N'][3]}, quieter than any real {kind} (N >= {bounds['N'][0]:g})"
+        )
+    return out
+
+
+def _would(
+    evidence: _Evidence,
+    bad: list[str],
+    factor: float,
+    bounds: dict[str, tuple[float | None, float | None, float, str]],
+    kind: str,
+) -> str:
+    """What the checked numbers would be, each multiplied by ``factor``.
+
+    The mean and the noise floor are shown only when they were out of range.
+    """
+    parts = [f"{s} would be {v * factor:.3g} {bounds[s][3]}" for s, v in evidence.scaled.items()]
+    if evidence.mean is not None and "mean" in bad:
+        parts.append(f"the mean {evidence.mean * factor:.3g} {_MEAN_UNIT[kind]}")
+    if "noise" in bad and "N" not in evidence.scaled and evidence.ceiling is not None:
+        parts.append(f"N <= {evidence.ceiling * factor:.3g} {bounds['N'][3]}")
+    return ", ".join(parts)
+
+
+#: the magnitude of gravity in the two units an accelerometer is commonly logged in
+_GRAVITY = (("m/s^2", 9.80665), ("g", 1.0))
+#: a gyro record's mean matches gravity within this fraction: accelerometer data?
+GRAVITY_MATCH = 0.05
+
+
+def _groups(n: int) -> list[list[int]]:
+    """Channel groups judged together: triads when the channels come in threes."""
+    return [[c, c + 1, c + 2] for c in range(0, n, 3)] if n % 3 == 0 else [[c] for c in range(n)]
+
+
+def is_triad(unit: str | None, n_channels: int, input: str = "rate") -> bool:
+    """True when the record is an accelerometer triad whose mean :func:`check_means` judges."""
+    return n_channels == 3 and input == "rate" and _kind(unit) == "accelerometer"
+
+
+def _kind(unit: str | None) -> str:
+    if unit is None:
+        return "unknown"
+    try:
+        return sensor_kind(unit)
+    except ValueError:
+        return "unknown"
+
+
+def check_means(
+    means: Sequence[float],
+    unit: str | None,
+    *,
+    input: str = "rate",
+    channels: Sequence[str] = (),
+    spelling: Literal["cli", "python"] = "cli",
+) -> list[Finding]:
+    """Means that betray a wrong unit across channels: gravity where it should (not) be.
+
+    * An accelerometer triad at rest reads gravity: the magnitude of its mean is 1 g within
+      :data:`TRIAD_TOLERANCE`. 9.8 in a record labelled g is m/s^2 given as g; 1.0 labelled
+      m/s^2 is g given as m/s^2 (the unit that restores 1 g is named when exactly one does).
+    * A gyro record whose mean (one channel, or a triad) has the magnitude of gravity in
+      m/s^2 or g, far beyond a still gyro's bias, is accelerometer data given a gyro's unit.
+
+    Parameters
+    ----------
+    means : sequence of float
+        Each channel's mean in ``unit``.
+    unit : str or None
+        The record's unit as given (no check without one; rate records only).
+    input, channels, spelling
+        As for :func:`check_coefficients`.
+
+    Returns
+    -------
+    list of Finding
+        Code ``"implausible_units"``.
+    """
+    kind = _kind(unit)
+    if unit is None or input != "rate" or kind not in ("gyro", "accelerometer"):
+        return []
+    names = list(channels) or [f"ch{i}" for i in range(len(means))]
+    out = []
+    if is_triad(unit, len(means), input):
+        magnitude = convert(float(np.linalg.norm(means)), unit, "g")
+        if abs(magnitude - 1.0) > TRIAD_TOLERANCE:
+            what = (
+                f"channels {', '.join(names)}: the magnitude of the mean is {magnitude:.4g} g, "
+                f"not the 1 g of gravity a still accelerometer triad reads (within "
+                f"{TRIAD_TOLERANCE:g} g; if the sensor was moving, ignore this)"
+            )
+            found = _candidates(
+                unit,
+                lambda f: abs(magnitude * f - 1.0) <= TRIAD_TOLERANCE,
+                lambda f: abs(np.log10(magnitude * f)),
+            )
+            described = [(o, f"the magnitude would be {magnitude * f:.4g} g") for o, f in found]
+            out.append(
+                Finding("implausible_units", names[0], _fix_text(what, unit, described, spelling))
+            )
+        return out
+    if kind != "gyro":
+        return out
+    for group in _groups(len(means)):
+        magnitude = float(np.linalg.norm([means[c] for c in group]))
+        if convert(magnitude, unit, "deg/s") <= GYRO_MEAN_MAX:
+            continue
+        for accel, g in _GRAVITY:
+            if abs(magnitude / g - 1.0) <= GRAVITY_MATCH:
+                which = ", ".join(names[c] for c in group)
+                out.append(
+                    Finding(
+                        "accelerometer_as_gyro",
+                        names[group[0]],
+                        f"channel{'s' if len(group) > 1 else ''} {which}: the magnitude of the "
+                        f"mean, {magnitude:.4g} {unit}, is gravity's in {accel} and far beyond "
+                        f"a still gyro's bias: accelerometer data given as {unit}? give the "
+                        f"accelerometer's unit (--units {accel}) or pick the gyro's columns "
+                        "(--channels)",
+                    )
+                )
+                break
+    return out
 
 
 def warn_coefficients(

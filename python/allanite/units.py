@@ -48,6 +48,9 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
 from dataclasses import dataclass
 
 __all__ = [
@@ -67,6 +70,7 @@ __all__ = [
     "customary_gyro_rate",
     "customary_unit",
     "customary_value",
+    "display_angle",
     "display_unit",
     "integral_unit",
     "integrated_unit",
@@ -668,24 +672,56 @@ ACCELEROMETER_CUSTOMARY: dict[str, str] = {
 }
 
 
-#: angles whose gyros datasheets quote in degrees: a rad/s (ROS, PX4) or rev/min gyro's
-#: coefficients are shown in deg/sqrt(h), deg/h, ...; the degree family keeps its own angle
+#: angles whose gyros datasheets quote in degrees: a rad/s (ROS, PX4), rev/min or arcsec
+#: (ring-laser increments) gyro's coefficients are shown in deg/sqrt(h), deg/h, ... (another
+#: angle on request: :func:`display_angle`, the CLI's ``--display-units``)
 CUSTOMARY_GYRO_ANGLE: dict[str, str] = {
     "rad": "deg",
     "mrad": "deg",
     "urad": "deg",
     "µrad": "deg",
     "rev": "deg",
+    "arcsec": "deg",
+    "arcmin": "deg",
+    "mdeg": "deg",
 }
+#: the angle gyro coefficients are shown in, when the user chose one (None: customary)
+_DISPLAY_ANGLE: ContextVar[str | None] = ContextVar("display_angle", default=None)
+
+
+@contextmanager
+def display_angle(angle: str | None) -> Iterator[None]:
+    """Show gyro coefficients in ``angle`` (N in angle/sqrt(h), B in angle/h) inside the block.
+
+    None keeps the customary choice (:data:`CUSTOMARY_GYRO_ANGLE`). The CLI's
+    ``--display-units`` sets it for a whole command (analyze, fit, report, diagnose).
+
+    Raises
+    ------
+    ValueError
+        If ``angle`` is not an angle unit (the message names what it is).
+    """
+    if angle is not None:
+        unit = parse_unit(angle)
+        if unit.quantity != "angle":
+            raise ValueError(
+                f"--display-units takes an angle unit (deg, rad, arcsec, ...), but {angle!r} is "
+                f"{_article(unit.quantity)}"
+            )
+    token = _DISPLAY_ANGLE.set(angle)
+    try:
+        yield
+    finally:
+        _DISPLAY_ANGLE.reset(token)
 
 
 def customary_gyro_rate(rate: str | None) -> str | None:
     """The rate unit whose :func:`display_unit` s are a gyro's customary ones, or None.
 
     The angle of ``rate`` per hour, radians and revolutions shown as degrees
-    (:data:`CUSTOMARY_GYRO_ANGLE`): ``deg/s`` and ``rad/s`` give ``deg/h`` (N in deg/√h, B in
-    deg/h, K in deg/h/√h, R in deg/h²), ``arcsec/s`` gives ``arcsec/h``. None when ``rate``
-    is not an angle per time unit.
+    (:data:`CUSTOMARY_GYRO_ANGLE`): ``deg/s``, ``rad/s`` and ``arcsec/s`` give ``deg/h`` (N in
+    deg/√h, B in deg/h, K in deg/h/√h, R in deg/h²); inside :func:`display_angle` the angle
+    chosen there. None when ``rate`` is not an angle per time unit.
 
     Parameters
     ----------
@@ -695,7 +731,8 @@ def customary_gyro_rate(rate: str | None) -> str | None:
     split = None if rate is None else _split_rate(rate)
     if split is None or split[0] not in ANGLE_UNITS:
         return None
-    return f"{CUSTOMARY_GYRO_ANGLE.get(split[0], split[0])}/h"
+    chosen = _DISPLAY_ANGLE.get()
+    return f"{chosen or CUSTOMARY_GYRO_ANGLE.get(split[0], split[0])}/h"
 
 
 def customary_unit(rate: str, name: str | tuple[float, float], unit: str | Unit) -> str:

@@ -117,7 +117,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             # findings about the input are advice the CLI prints, whatever the -W filters
             warnings.simplefilter("always", ImplausibleInputWarning)
             warnings.showwarning = _warning_printer(args.command, warnings.showwarning)
-            return int(args.func(args) or 0)
+            from allanite.units import display_angle
+
+            with display_angle(getattr(args, "display_units", None)):
+                return int(args.func(args) or 0)
     except BrokenPipeError:  # the reader of stdout went away (e.g. `| head`): not an error
         import os
 

@@ -3,11 +3,14 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
+import math
 import sys
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from allanite.cli.commands import SUMMARIES
 from allanite.cli.fit import fit_impossible_reason, fit_possible
@@ -25,9 +28,9 @@ from allanite.cli.record_options import (
 from allanite.fit.classic import ClassicReadout, classic_readout
 from allanite.io.atomic import atomic_output
 from allanite.io.record import Record
-from allanite.report.coefficients import customary_rate
 from allanite.slopes import MIN_EDF, SlopeRow, slope_table
-from allanite.units import coefficient_unit, convert, display_unit
+from allanite.terms.flicker import PLATEAU
+from allanite.units import coefficient_text, customary_value, sensor_kind
 from allanite.variance import AllanResult
 
 __all__ = ["register", "run"]
@@ -117,19 +120,29 @@ _READOUT_UNITS = {"N": "*sqrt(s)", "B": "", "K": "/sqrt(s)"}
 
 
 def _readout_value(result: AllanResult, symbol: str, value: float) -> str:
-    """A slope-method readout in customary units (deg/sqrt(h), deg/h, ...) when known."""
+    """A slope-method readout in customary units (deg/sqrt(h), m/s/sqrt(h), ...) when known.
+
+    :func:`allanite.units.customary_value`, the one conversion ``fit`` and ``report`` use
+    (a gyro's N in deg/sqrt(h), an accelerometer's in m/s/sqrt(h), B in deg/h or ug).
+    """
     powers = {"N": 0.5, "B": 0.0, "K": -0.5}
     if result.units:
         try:
-            show = customary_rate(result.units)
-            if show is not None:
-                unit = display_unit(show, symbol)
-                base = coefficient_unit(result.units, 1.0, powers[symbol])
-                return f"{convert(value, base, unit):.4g} {unit}"
+            base = coefficient_text(result.units, 1.0, powers[symbol])
+            shown, unit = customary_value(symbol, value, base, result.units)
+            return f"{shown:.4g} {unit}"
         except ValueError:
             pass
         return f"{value:.4g} ({result.units}){_READOUT_UNITS[symbol]}"
     return f"{value:.4g} (rate unit){_READOUT_UNITS[symbol]}"
+
+
+def _sensor(result: AllanResult) -> str:
+    """``gyro`` or ``accelerometer`` (the slope table's wording) from the record's unit."""
+    try:
+        return sensor_kind(result.units) if result.units else "gyro"
+    except ValueError:
+        return "gyro"
 
 
 #: estimators whose curve the slope table and the slope-method readouts are defined on
@@ -146,10 +159,34 @@ def summary_parts(result: AllanResult) -> tuple[list[SlopeRow], ClassicReadout] 
         return None
     dev = np.asarray(result.dev, dtype=np.float64)
     reliable = np.asarray(result.edf) >= MIN_EDF
-    return (
-        slope_table(result.tau, dev, result.edf),
-        classic_readout(result.tau[reliable], dev[reliable]),
-    )
+    rows = slope_table(result.tau, dev, result.edf, sensor=_sensor(result))
+    readout = classic_readout(result.tau[reliable], dev[reliable])
+    return rows, _bias_from_regions(readout, rows, result.tau[reliable], dev[reliable])
+
+
+def _bias_from_regions(
+    readout: ClassicReadout, rows: list[SlopeRow], tau: NDArray[Any], dev: NDArray[Any]
+) -> ClassicReadout:
+    """The B readout read where the region table shows bias instability: one rule for both.
+
+    B is read at the lowest deviation within the regions of slope 0 (divided by the flicker
+    plateau 0.664; every noise adds to the deviation, so it is an upper bound wherever it is
+    read), and only there: a region table showing "bias instability" always comes with a B
+    readout, and a B readout always with such a region.
+    """
+    flat = np.zeros(tau.size, dtype=bool)
+    for row in rows:
+        if row.canonical == 0.0:
+            flat |= (tau >= row.tau_min) & (tau <= row.tau_max)
+    values, where, slope = dict(readout.values), dict(readout.tau), dict(readout.slope)
+    if not flat.any():
+        values["B"] = where["B"] = slope["B"] = None
+    else:
+        i = int(np.flatnonzero(flat)[np.argmin(dev[flat])])
+        row = next(r for r in rows if r.canonical == 0.0 and r.tau_min <= tau[i] <= r.tau_max)
+        values["B"] = float(dev[i] / math.sqrt(PLATEAU))
+        where["B"], slope["B"] = float(tau[i]), row.slope
+    return dataclasses.replace(readout, values=values, tau=where, slope=slope)
 
 
 def summary_dict(result: AllanResult) -> dict[str, Any] | None:
@@ -202,13 +239,18 @@ def summary_lines(result: AllanResult, fit_command: str | None = None) -> list[s
             value = readout.values.get(symbol)
             at = readout.tau.get(symbol)
             if value is None or at is None:
-                what = {"N": "no -1/2 segment", "B": "no flat minimum", "K": "no +1/2 segment"}
-                lines.append(f"    {symbol}: —  ({what[symbol]} on the curve)")
+                what = {
+                    "N": "no -1/2 segment on the curve",
+                    "B": "no region of slope 0 in the table above",
+                    "K": "no +1/2 segment on the curve",
+                }
+                lines.append(f"    {symbol}: —  ({what[symbol]})")
                 continue
             how = {
                 "N": f"-1/2 segment near tau = {at:.3g} s, read at tau = 1 s",
                 "B": (
-                    f"upper bound: flat minimum at tau = {at:.3g} s divided by 0.664; "
+                    f"upper bound: lowest point of the slope-0 region, tau = {at:.3g} s, "
+                    "divided by 0.664; "
                     "white and random-walk noise there add to it"
                 ),
                 "K": f"+1/2 segment near tau = {at:.3g} s, read at tau = 3 s",

@@ -10,12 +10,14 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import math
 import os
 import sys
 from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from allanite.cli.progress import progress_bars
 from allanite.confidence import DEFAULT_LEVEL
@@ -24,11 +26,14 @@ from allanite.io.readers import FORMATS, read_record, stated_unit_conflict
 from allanite.io.record import INPUT_KINDS, Record
 from allanite.io.timebase import FS_SOURCES, GAP_POLICIES
 from allanite.plausibility import (
+    Finding,
     check_allan,
     check_channel_units,
     check_coefficients,
+    check_means,
     check_samples,
     constant_channels,
+    is_triad,
     refuse_constant,
 )
 from allanite.stillness import STILL_MODES, still_record
@@ -77,6 +82,13 @@ def add_record_arguments(parser: argparse.ArgumentParser) -> None:
         "(gx,gy,gz,ax,ay,az: deg/s,deg/s,deg/s,m/s^2,m/s^2,m/s^2) or one per group of "
         "consecutive channels (deg/s,m/s^2: first half gyro, second half accelerometer). "
         "Without it coefficients are printed in record units",
+    )
+    group.add_argument(
+        "--display-units",
+        metavar="ANGLE",
+        help="angle a gyro's coefficients are shown in: N in ANGLE/sqrt(h), B in ANGLE/h "
+        "(deg, rad, arcsec, ...). Default: deg, as datasheets quote them, whatever the record's "
+        "angle (rad/s, arcsec increments); the model JSON keeps the record's unit",
     )
     group.add_argument(
         "--scale", type=float, help="factor from counts to units: samples = counts * SCALE"
@@ -532,6 +544,44 @@ READOUT_SLOPES = {"N": -0.5, "B": 0.0}
 READOUT_TOLERANCE = 0.05
 
 
+def _unit_findings(
+    part: Record, result: AllanResult, dev: NDArray[np.float64], *, readouts: bool
+) -> list[Finding]:
+    """The wrong-unit checks: means, noise floor and (``readouts``) slope readouts N, B.
+
+    Means are judged per channel and across an accelerometer triad; the noise floor is the
+    deviation at the shortest tau; the readouts are those of an Allan deviation.
+    """
+    from allanite.fit.classic import classic_readout
+
+    means = [float(np.mean(part.samples[:, c], dtype=np.float64)) for c in range(part.n_channels)]
+    findings = check_means(means, part.units, input=part.input, channels=part.channels)
+    per_channel_mean = not is_triad(part.units, part.n_channels, part.input)
+    allan = result.kind in ("overlapping", "standard")
+    for c, name in enumerate(part.channels):
+        clean: dict[str, float | None] = {}
+        if readouts and allan:
+            readout = classic_readout(result.tau, dev[:, c])
+            # only lines that touch the curve where it has their slope (a -1/2 line laid on
+            # the noisy last taus of a record without white noise is not an N)
+            clean = {
+                s: v
+                for s, v in readout.values.items()
+                if s in READOUT_SLOPES
+                and readout.slope.get(s) is not None
+                and abs(float(readout.slope[s] or 0.0) - READOUT_SLOPES[s]) <= READOUT_TOLERANCE
+            }
+        findings += check_coefficients(
+            clean,
+            part.units,
+            input=part.input,
+            channel=name,
+            mean=means[c] if per_channel_mean else None,
+            n_ceiling=float(dev[0, c]) * math.sqrt(float(result.tau[0])) if allan else None,
+        )
+    return findings
+
+
 def warn_implausible(
     record: Record,
     args: argparse.Namespace,
@@ -564,21 +614,7 @@ def warn_implausible(
         scale=record.scale,
         short_dev=dev[0],
     ) + check_allan(result, part.channels)
-    if readouts and result.kind in ("overlapping", "standard"):  # readouts of an Allan dev.
-        from allanite.fit.classic import classic_readout
-
-        for c, name in enumerate(part.channels):
-            readout = classic_readout(result.tau, dev[:, c])
-            # only lines that touch the curve where it has their slope (a -1/2 line laid on
-            # the noisy last taus of a record without white noise is not an N)
-            clean = {
-                s: v
-                for s, v in readout.values.items()
-                if s in READOUT_SLOPES
-                and readout.slope.get(s) is not None
-                and abs(float(readout.slope[s] or 0.0) - READOUT_SLOPES[s]) <= READOUT_TOLERANCE
-            }
-            findings += check_coefficients(clean, part.units, input=part.input, channel=name)
+    findings += _unit_findings(part, result, dev, readouts=readouts)
     command = getattr(args, "command", None) or "allanite"
     for finding in findings:
         print(f"allanite {command}: warning: {finding.message}", file=sys.stderr)

@@ -263,11 +263,19 @@ class FitResult:
         (a six-axis file of white noise would otherwise print a dozen such lines); the JSON
         (:meth:`alternatives_dict`) keeps every alternative with its note.
         """
-        return "\n".join(
-            self._alternative_note(alt, level)
+        return "\n".join(self._alternative_note(alt, level) for alt in self.ambiguous())
+
+    def ambiguous(self) -> list[dict[str, Any]]:
+        """The alternatives printed AMBIGUOUS (:meth:`ambiguity_note`), as in ``alternatives``.
+
+        Those whose swapped-in coefficient was fitted (``exchangeable``) and that are not an
+        addition the record shows no evidence of.
+        """
+        return [
+            alt
             for alt in self.alternatives
             if alt["symbol_in"] in self.exchangeable and not self._empty_addition(alt)
-        )
+        ]
 
     def _empty_addition(self, alt: dict[str, Any]) -> bool:
         """An addition (no term swapped out) the record shows no evidence of.

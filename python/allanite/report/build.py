@@ -24,7 +24,7 @@ from allanite.datasheet import verdict as checks_verdict
 from allanite.io.atomic import atomic_output
 from allanite.io.record import Record
 from allanite.report import html as h
-from allanite.report.coefficients import CoefficientRow, coefficient_table
+from allanite.report.coefficients import CoefficientRow, ambiguous_rows, coefficient_table
 from allanite.slopes import MIN_EDF, slope_table
 from allanite.units import sensor_kind
 from allanite.variance import AllanResult
@@ -107,6 +107,7 @@ def _summary_rows(device: DeviceAnalysis) -> list[list[str]]:
             "(give --units for physical units)",
         ],
         ["sensor", _sensor_of(device.result.units)],
+        ["mean (static bias; gravity on an accelerometer)", _means(r)],
     ]
     if r.scale is not None:
         rows.append(["scale (counts → units)", f"{r.scale:g}"])
@@ -135,6 +136,20 @@ def _summary_rows(device: DeviceAnalysis) -> list[list[str]]:
         ]
     )
     return rows
+
+
+def _means(record: Any) -> str:
+    """Each channel's mean in the record's unit: a gyro's static bias, an accelerometer's 1 g.
+
+    For an accelerometer triad the magnitude of the mean follows (1 g at rest).
+    """
+    part = record.longest_segment()
+    means = [float(np.mean(part.samples[:, c], dtype=np.float64)) for c in range(part.n_channels)]
+    unit = f" {record.units}" if record.units else ""
+    text = ", ".join(f"{name} {m:.6g}{unit}" for name, m in zip(part.channels, means, strict=True))
+    if len(means) == 3 and _sensor_of(record.units) == "accelerometer":
+        text += f"; magnitude {float(np.linalg.norm(means)):.6g}{unit}"
+    return text
 
 
 def _sensor_of(rate: str | None) -> str:
@@ -291,7 +306,7 @@ def _coefficient_section(
                 k.unit,
                 k.slope or "–",
             ]
-            for k in coefs
+            for k in (*coefs, *ambiguous_rows(device.fit(c), rate))
         ]
         parts.append(
             h.table(
@@ -609,12 +624,13 @@ def build_report(
             f"{h.badge(verdict)}</p>"
         )
     body.append(_summary_section(devices))
-    body.append(_allan_section(figures, level))
+    # the answer first: coefficients on the first screen, the curve they come from next
     body.append(
         h.section(
             "Noise coefficients", _coefficient_section(devices, coefficients), anchor="coefficients"
         )
     )
+    body.append(_allan_section(figures, level))
     body.append(_slope_table_section(devices))
     body.append(_adev_table_section(devices, level))
     if datasheet is not None:

@@ -30,7 +30,7 @@ from allanite.units import (
     sensor_kind,
 )
 
-__all__ = ["CoefficientRow", "coefficient_table", "customary_rate"]
+__all__ = ["CoefficientRow", "ambiguous_rows", "coefficient_table", "customary_rate"]
 
 _SLOPES = {"Q": "−1", "N": "−1/2", "B": "0", "K": "+1/2", "R": "+1"}
 
@@ -170,3 +170,43 @@ def _model_unit(rate: str | None, spec: Any, text: str | None) -> Unit | None:
     if rate is None or spec is None:
         return None
     return coefficient_unit(rate, spec.rate, spec.time)
+
+
+def ambiguous_rows(
+    fit: Any, rate: str | None, level: float = DEFAULT_LEVEL
+) -> list[CoefficientRow]:
+    """Rows of the terms a fit printed AMBIGUOUS, for the coefficient table (marked there).
+
+    Each is the swapped-in coefficient of :meth:`allanite.fit.FitResult.ambiguous` with its
+    interval, in customary units; its ``quantity`` starts with ``AMBIGUOUS:``. Not part of
+    :func:`coefficient_table` (datasheet checks judge the chosen model only).
+    """
+    alternatives = getattr(fit, "ambiguous", None)
+    if alternatives is None:
+        return []
+    model_rate = fit.model.units.get("rate") if isinstance(fit.model.units, dict) else rate
+    sensor = _sensor(model_rate)
+    rows = []
+    for alt in alternatives():
+        symbol = alt["symbol_in"]
+        coef = fit.exchangeable[symbol]
+        own = _model_unit(model_rate, None, coef.unit)
+        unit = _customary(model_rate, symbol, own, coef.unit)
+        low, high = coef.ci(level)
+        values = [convert(v, coef.unit, unit) for v in (coef.value, low, high)]
+        rows.append(
+            CoefficientRow(
+                term=str(alt["swap_in"]),
+                symbol=symbol,
+                value=values[0],
+                low=values[1],
+                high=values[2],
+                unit=unit,
+                slope=_SLOPES.get(symbol),
+                model_unit=own,
+                quantity=f"AMBIGUOUS: {alt['swap_in']}"
+                + (f" (or {alt['symbol_out']})" if alt["symbol_out"] is not None else ""),
+                sensor=sensor,
+            )
+        )
+    return rows
