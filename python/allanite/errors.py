@@ -8,6 +8,7 @@ __all__ = [
     "InputError",
     "MissingExtraError",
     "RecordTooShortError",
+    "bounded",
     "check_fs_range",
     "choose_one",
 ]
@@ -29,6 +30,19 @@ def check_fs_range(value: float) -> float:
     return value
 
 
+#: characters of a message kept: a message never echoes unbounded input (a 3e6-column header
+#: listed in full was a 35 MB error line)
+MESSAGE_LIMIT = 2000
+
+
+def bounded(message: str, limit: int = MESSAGE_LIMIT) -> str:
+    """``message`` cut in the middle to at most about ``limit`` characters (head and tail kept)."""
+    if len(message) <= limit:
+        return message
+    half = limit // 2
+    return f"{message[:half]} ... ({len(message) - 2 * half} characters cut) ... {message[-half:]}"
+
+
 class InputError(ValueError):
     """A file or record the user supplied cannot be used as it is.
 
@@ -43,7 +57,7 @@ class InputError(ValueError):
             if line is not None:
                 where += f", line {line}"
             where += ": "
-        super().__init__(where + message)
+        super().__init__(where + bounded(message))
         self.path = path
         self.line = line
 
