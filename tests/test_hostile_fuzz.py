@@ -10,6 +10,7 @@ small file in ``tests/data/hostile/`` and replayed by :func:`test_corpus_is_refu
 
 from __future__ import annotations
 
+import os
 import tempfile
 from pathlib import Path
 
@@ -27,7 +28,8 @@ from allanite.terms import RateRandomWalk, White
 
 CORPUS = Path(__file__).parent / "data" / "hostile"
 #: examples per reader: the whole file runs in well under a minute on a loaded 2-core machine
-EXAMPLES = 40
+#: (a deeper run: ALLANITE_FUZZ_EXAMPLES=1000)
+EXAMPLES = int(os.environ.get("ALLANITE_FUZZ_EXAMPLES", "60"))
 FUZZ = settings(
     derandomize=True,
     max_examples=EXAMPLES,

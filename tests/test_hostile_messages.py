@@ -133,3 +133,25 @@ def test_wide_csv_error_message_is_bounded(tmp_path: Path) -> None:
         read_record(path, fs=100.0, columns="gz")
     assert len(str(info.value)) < MESSAGE_LIMIT + len(str(path)) + 100
     assert "characters cut" in str(info.value)
+
+
+DEEP = "[" * 100_000 + "]" * 100_000
+
+
+def test_json_nested_100000_deep_is_a_clean_error(tmp_path: Path) -> None:
+    """Python's json recursion ended in a RecursionError traceback (#31 item 8)."""
+    from allanite.datasheet import Datasheet
+    from allanite.formats import airsim
+
+    for read in (NoiseModel.from_json, airsim.read):
+        with pytest.raises(ValueError, match="nested too deeply"):
+            read(DEEP)
+    sheet = tmp_path / "sheet.json"
+    sheet.write_text(DEEP)
+    with pytest.raises(ValueError, match="nested too deeply"):
+        Datasheet.load(sheet)
+    model = tmp_path / "model.json"
+    model.write_text(DEEP)
+    out = tmp_path / "sim.npy"
+    assert main(["simulate", str(model), "--fs", "100", "-n", "1000", "-o", str(out)]) == 2
+    assert not out.exists()

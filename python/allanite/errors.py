@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 __all__ = [
     "FS_RANGE",
     "ImplausibleInputWarning",
@@ -11,6 +13,7 @@ __all__ = [
     "bounded",
     "check_fs_range",
     "choose_one",
+    "parse_json",
 ]
 
 #: sampling frequencies (Hz) the arithmetic supports: 1/fs, fs*tau and the variances of a
@@ -41,6 +44,24 @@ def bounded(message: str, limit: int = MESSAGE_LIMIT) -> str:
         return message
     half = limit // 2
     return f"{message[:half]} ... ({len(message) - 2 * half} characters cut) ... {message[-half:]}"
+
+
+def parse_json(text: str, what: str) -> Any:
+    """``json.loads(text)``; nesting deeper than Python's recursion limit is a ValueError.
+
+    A model or config is a few levels deep; JSON nested 100,000 deep (a few hundred kB) is
+    damaged or hostile and ended in a RecursionError traceback. Syntax errors are left to
+    the caller (``json.JSONDecodeError``, a ValueError) to word with its line and column.
+    """
+    import json
+
+    try:
+        return json.loads(text)
+    except RecursionError:
+        raise ValueError(
+            f"{what} is nested too deeply to be read (thousands of levels; a model or config "
+            "is a few levels deep): the file is damaged or not what it should be"
+        ) from None
 
 
 class InputError(ValueError):
