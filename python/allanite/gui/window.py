@@ -225,7 +225,7 @@ class MainWindow(QtWidgets.QMainWindow):
             except ImportError as exc:
                 self._set_status(str(exc), error=True)
                 return None
-            except Exception as exc:  # noqa: BLE001 - a defect: shown in the window, not lost
+            except Exception as exc:  # a defect: shown in the window, not lost on stderr
                 self._set_status(
                     f"unexpected error ({type(exc).__name__}: {' '.join(str(exc).split())[:300]});"
                     " please report it",
