@@ -155,3 +155,19 @@ def test_json_nested_100000_deep_is_a_clean_error(tmp_path: Path) -> None:
     out = tmp_path / "sim.npy"
     assert main(["simulate", str(model), "--fs", "100", "-n", "1000", "-o", str(out)]) == 2
     assert not out.exists()
+
+
+def test_dash_reads_a_text_record_from_standard_input(monkeypatch: pytest.MonkeyPatch) -> None:
+    """``-`` is standard input for text records (it was "no such file"); errors name <stdin>."""
+    import io
+    import sys
+
+    data = np.random.default_rng(9).normal(0.0, 0.01, (500, 2))
+    text = "gx,gy\n" + "\n".join(f"{float(a)!r},{float(b)!r}" for a, b in data) + "\n"
+    monkeypatch.setattr(sys, "stdin", io.TextIOWrapper(io.BytesIO(text.encode())))
+    record = read_record("-", fs=100.0)
+    np.testing.assert_array_equal(record.samples, data)
+    assert record.source == "<stdin>"
+    monkeypatch.setattr(sys, "stdin", io.TextIOWrapper(io.BytesIO(b"gx\n1\nzz\n3\n")))
+    with pytest.raises(InputError, match=r"^<stdin>, line 3: field 1 is 'zz'"):
+        read_record("-", fs=100.0)

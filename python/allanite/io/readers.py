@@ -817,6 +817,8 @@ def read_record(
         return source
     if not isinstance(source, (str, os.PathLike)):
         return from_frame(source, **opts.table())
+    if str(source) == STDIN:
+        return _read_stdin(opts)
     path = Path(source)
     if not path.exists():
         raise InputError("no such file; check the path", path=str(path))
@@ -828,7 +830,7 @@ def read_record(
         raise InputError(
             f"is not a regular file but {_special_kind(path)}: a record is read more than once "
             "(format, header, rows), which a stream cannot be; save it to a file first "
-            "(e.g. cat > rec.csv) and give that file",
+            "(e.g. cat > rec.csv), or give - to read a text record from standard input",
             path=str(path),
         )
     fmt = "rosbag" if path.is_dir() else _format_of(path, opts.format, list(opts.raw_layout()))
@@ -850,6 +852,34 @@ def read_record(
             path=str(path),
         ) from exc
     return make_record(table, names, source=str(path), where=where, **opts.table())
+
+
+#: the record name that reads standard input (text records)
+STDIN = "-"
+
+
+def _read_stdin(opts: ReadOptions) -> Record:
+    """A text record from standard input, spooled to a temporary file (read more than once)."""
+    import dataclasses
+    import shutil
+    import sys
+    import tempfile
+
+    if (opts.format or "text") != "text" or opts.raw_layout():
+        raise InputError(
+            "standard input is read as a text table only; save a binary record to a file "
+            "and give that file",
+            path="<stdin>",
+        )
+    with tempfile.TemporaryDirectory(prefix="allanite-stdin-") as tmp:
+        spool = Path(tmp) / "stdin.txt"
+        with spool.open("wb") as handle:
+            shutil.copyfileobj(sys.stdin.buffer, handle)
+        try:
+            record = read_record(spool, opts)
+        except InputError as exc:
+            raise InputError(str(exc).replace(str(spool), "<stdin>")) from None
+    return dataclasses.replace(record, source="<stdin>")
 
 
 def _special_kind(path: Path) -> str:
