@@ -127,7 +127,7 @@ def test_errors_are_rows_not_crashes(tmp_path):
     error = res.column("error")[1].lower()
     assert "not found" in error or "no such" in error
     assert res.column("channel")[2] == "0"
-    assert "usable taus" in res.column("error")[2]
+    assert "constant" in res.column("error")[2]  # the cause, not "too few usable taus" (#31)
 
 
 def test_paths_and_datasheet_files(tmp_path):
@@ -299,12 +299,14 @@ def test_cli_batch_takes_ros2_bag_directories(tmp_path, capsys):
     data = np.random.default_rng(12).standard_normal((n, 6)) * 1e-3
     for name in ("flight1", "flight2"):
         write_bag(tmp_path / name, "sqlite3", data, np.arange(n) / 200.0, topics=("/imu",))
-    (tmp_path / "notes").mkdir()  # a plain directory is no record
+    (tmp_path / "notes").mkdir()  # a plain directory is no record: an error row (#31)
     argv = ["batch", str(tmp_path / "*"), "--channels", "gyro_x", "--json"]
-    assert main(argv) == 0
+    assert main(argv) == 1
     table = json.loads(capsys.readouterr().out)
     rows = [dict(zip(table["columns"], row, strict=True)) for row in table["rows"]]
-    assert [r["record"] for r in rows] == [str(tmp_path / "flight1"), str(tmp_path / "flight2")]
+    records = [str(tmp_path / name) for name in ("flight1", "flight2", "notes")]
+    assert [r["record"] for r in rows] == records
+    assert "is a directory" in rows.pop()["error"]
     assert all(r["channel"] == "gyro_x" and r["units"] == "rad/s" for r in rows)
     assert all(r["n_samples"] == n and r["error"] in (None, "") for r in rows)
 

@@ -66,3 +66,18 @@ def test_default_is_the_log_grid() -> None:
     np.testing.assert_array_equal(res.m, taus.log_grid(5000, 50))
     with pytest.raises(ValueError, match="points"):
         allanite.avar(x, fs=1.0, points=1)
+
+
+def test_all_grid_on_a_long_record_is_refused_with_its_cost() -> None:
+    """``taus="all"`` on 2e6 samples is 4e5 passes over the record (hours): refused before
+    anything is computed, with the cost and the fix (#31); shorter records keep it."""
+    n = 2_000_000
+    with pytest.raises(ValueError, match=r"taus 'all' gives 500,000 averaging times") as info:
+        taus.averaging_factors("all", fs=1.0, n_samples=n, n_phase=n + 1, kind="overlapping")
+    assert "--points" in str(info.value)
+    assert "1.0e+12" in str(info.value)
+    n_ok = int(np.sqrt(4 * taus.ALL_COST_LIMIT))  # n * n/4 at the cap: still allowed
+    factors = taus.averaging_factors(
+        "all", fs=1.0, n_samples=n_ok, n_phase=n_ok + 1, kind="overlapping"
+    )
+    assert factors.size == n_ok // 4

@@ -144,3 +144,45 @@ def test_gui_offers_the_units_of_an_accelerometer_record() -> None:
     np.testing.assert_allclose(shown.dev, window.session.result.dev / (1e-3 * 9.80665), rtol=1e-12)
     assert "m/s^2" in [window.units_combo.itemText(i) for i in range(window.units_combo.count())]
     window.close()
+
+
+def test_gui_labels_show_file_names_as_plain_text(tmp_path: Path) -> None:
+    """A file name holding markup is shown as it is, not as a heading and a link (#31)."""
+    from PySide6.QtCore import Qt
+
+    data = np.random.default_rng(1).normal(size=(600, 1))
+    path = tmp_path / "<h1>big<a href='x'>link.csv"  # no '/' in a file name
+    np.savetxt(path, data)
+    window = create_window()
+    window.fs_spin.setValue(FS)
+    window.open_file(path)
+    assert window.file_label.text() == path.name
+    for label in (window.file_label, window.model_label, window.status_label):
+        assert label.textFormat() == Qt.TextFormat.PlainText
+    window.close()
+
+
+def test_gui_unexpected_error_is_shown_and_the_old_file_is_not_current(
+    record_file: tuple[Path, np.ndarray], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """An error outside the expected types is shown in the window; the file that was open
+    before is no longer shown as current (#31)."""
+    path, _ = record_file
+    window = create_window()
+    window.time_edit.setText("t")
+    window.fs_spin.setValue(0.0)
+    window.open_file(path)
+    assert window.file_label.text() == "stand.csv"
+
+    def broken(_path: object) -> None:
+        raise KeyError("library defect")
+
+    monkeypatch.setattr(window.session, "load", broken)
+    window._guard(lambda: window.open_file(tmp_path / "other.csv"))()
+    assert "KeyError" in window.status_label.text()
+    assert "library defect" in window.status_label.text()
+    assert "b03a2e" in window.status_label.styleSheet()
+    assert window.file_label.text() == "no file"
+    assert window.session.record is None
+    assert window.channel_list.count() == 0
+    window.close()

@@ -55,6 +55,7 @@ from allanite.datasheet import (
 )
 from allanite.errors import InputError
 from allanite.extras import require
+from allanite.plausibility import constant_channels, refuse_constant
 from allanite.units import record_rate_unit
 
 if TYPE_CHECKING:
@@ -299,6 +300,7 @@ def _analyse(task: _Task) -> list[dict[str, Any]]:
         return [{"record": task.name, "channel": None, "error": " ".join(str(exc).split())}]
     if len(names) == result.n_channels:  # the fit's findings name the channel as the table does
         result = dataclasses.replace(result, meta={**result.meta, "channels": list(names)})
+    dead = set(constant_channels(samples)) if np.ndim(samples) <= 2 else set()
     rows = []
     for c in range(result.n_channels):
         row: dict[str, Any] = {
@@ -310,6 +312,9 @@ def _analyse(task: _Task) -> list[dict[str, Any]]:
             "error": None,
         }
         try:
+            if c in dead:  # a dead channel: say so, not "too short for an automatic fit"
+                column = samples[:, c] if np.ndim(samples) == 2 else samples
+                refuse_constant(column, [row["channel"]], source=task.name)
             row.update(_fit_row(result.channel(c), task, rate))
         except (ValueError, TypeError) as exc:
             row["error"] = " ".join(str(exc).split())

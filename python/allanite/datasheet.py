@@ -62,7 +62,7 @@ from typing import Any
 
 import numpy as np
 
-from allanite.errors import InputError
+from allanite.errors import InputError, parse_json
 from allanite.extras import require
 from allanite.units import convert, parse_unit, sensor_kind
 
@@ -296,7 +296,7 @@ class Datasheet:
                 ) from exc
         else:
             try:
-                data = json.loads(text)
+                data = parse_json(text, "the datasheet")
             except json.JSONDecodeError as exc:
                 raise InputError(
                     f"not valid JSON ({exc.msg}, column {exc.colno}); fix the syntax",

@@ -2,14 +2,18 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 __all__ = [
     "FS_RANGE",
     "ImplausibleInputWarning",
     "InputError",
     "MissingExtraError",
     "RecordTooShortError",
+    "bounded",
     "check_fs_range",
     "choose_one",
+    "parse_json",
 ]
 
 #: sampling frequencies (Hz) the arithmetic supports: 1/fs, fs*tau and the variances of a
@@ -29,6 +33,37 @@ def check_fs_range(value: float) -> float:
     return value
 
 
+#: characters of a message kept: a message never echoes unbounded input (a 3e6-column header
+#: listed in full was a 35 MB error line)
+MESSAGE_LIMIT = 2000
+
+
+def bounded(message: str, limit: int = MESSAGE_LIMIT) -> str:
+    """``message`` cut in the middle to at most about ``limit`` characters (head and tail kept)."""
+    if len(message) <= limit:
+        return message
+    half = limit // 2
+    return f"{message[:half]} ... ({len(message) - 2 * half} characters cut) ... {message[-half:]}"
+
+
+def parse_json(text: str, what: str) -> Any:
+    """``json.loads(text)``; nesting deeper than Python's recursion limit is a ValueError.
+
+    A model or config is a few levels deep; JSON nested 100,000 deep (a few hundred kB) is
+    damaged or hostile and ended in a RecursionError traceback. Syntax errors are left to
+    the caller (``json.JSONDecodeError``, a ValueError) to word with its line and column.
+    """
+    import json
+
+    try:
+        return json.loads(text)
+    except RecursionError:
+        raise ValueError(
+            f"{what} is nested too deeply to be read (thousands of levels; a model or config "
+            "is a few levels deep): the file is damaged or not what it should be"
+        ) from None
+
+
 class InputError(ValueError):
     """A file or record the user supplied cannot be used as it is.
 
@@ -43,7 +78,7 @@ class InputError(ValueError):
             if line is not None:
                 where += f", line {line}"
             where += ": "
-        super().__init__(where + message)
+        super().__init__(where + bounded(message))
         self.path = path
         self.line = line
 

@@ -32,6 +32,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from allanite._deprecation import keyword_only_fs, renamed
+from allanite.errors import parse_json
 from allanite.terms import TERM_TYPES, Term, term_from_dict
 from allanite.units import Unit, coefficient_unit, convert, rate_unit, sensor_kind
 
@@ -329,7 +330,7 @@ class NoiseModel:
     def from_json(cls, text: str) -> NoiseModel:
         """Parse JSON text (see :meth:`from_dict`)."""
         try:
-            data = json.loads(text)
+            data = parse_json(text, "the noise model")
         except json.JSONDecodeError as exc:
             raise ValueError(f"the noise model is not valid JSON: {exc}") from None
         return cls.from_dict(data)

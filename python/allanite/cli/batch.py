@@ -108,8 +108,14 @@ def _expand(patterns: list[str]) -> list[str]:
         matches = sorted(glob.glob(pattern, recursive=True))
         if not matches and Path(pattern).exists():
             matches = [pattern]
+        # a directory the pattern names (not one ``**`` walks through) gets an error row
+        # from the reader ("is a directory"), never silently dropped
+        named_dirs = Path(pattern).name != "**"
         paths += [
-            m for m in matches if (Path(m).is_file() or is_ros2_bag_dir(Path(m))) and m not in paths
+            m
+            for m in matches
+            if (Path(m).is_file() or is_ros2_bag_dir(Path(m)) or (named_dirs and Path(m).is_dir()))
+            and m not in paths
         ]
     if not paths:
         raise ValueError(f"no files match {' '.join(patterns)}; check the pattern (quote it)")

@@ -25,7 +25,7 @@ from allanite.cli.sim_config import (
     recheck_corrected,
     write_corrected,
 )
-from allanite.io.atomic import atomic_output
+from allanite.io.atomic import atomic_output, check_output_path
 from allanite.io.readers import read_record
 from allanite.io.record import INPUT_KINDS, Record
 
@@ -248,6 +248,9 @@ def run(args: argparse.Namespace) -> int:
 
     if args.seed < 0:
         raise ValueError(f"--seed must be a non-negative integer, got {args.seed}")
+    for output in (args.output, args.report):  # before the computation, not after it
+        if output:
+            check_output_path(output)
     check_sim_model(args)  # before the record: a bag may take minutes to read
     record = read_from_args(args.real, args)
     print_reader_notes([record], args)

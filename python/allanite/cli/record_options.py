@@ -11,7 +11,6 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import math
-import os
 import sys
 from collections.abc import Sequence
 from typing import Any
@@ -25,6 +24,7 @@ from allanite.io.options import ReadOptions
 from allanite.io.readers import FORMATS, read_record, stated_unit_conflict
 from allanite.io.record import INPUT_KINDS, Record
 from allanite.io.timebase import FS_SOURCES, GAP_POLICIES
+from allanite.memory import available_memory
 from allanite.plausibility import (
     Finding,
     check_allan,
@@ -464,21 +464,6 @@ def rate_unit(record: Record) -> str | None:
 
 #: kinds whose phase array may live in a temporary file (allanite.variance.outofcore)
 OUT_OF_CORE_KINDS = ("overlapping", "standard", "hadamard", "standard_hadamard")
-
-
-def available_memory() -> int | None:
-    """Bytes of memory available to a new allocation (Linux ``MemAvailable``), or None."""
-    try:
-        with open("/proc/meminfo", encoding="ascii") as handle:
-            for line in handle:
-                if line.startswith("MemAvailable:"):
-                    return int(line.split()[1]) * 1024
-    except (OSError, ValueError, IndexError):
-        pass
-    try:
-        return int(os.sysconf("SC_AVPHYS_PAGES")) * int(os.sysconf("SC_PAGE_SIZE"))
-    except (AttributeError, OSError, ValueError):
-        return None
 
 
 def automatic_memory_limit(part: Record, kind: str) -> int | None:

@@ -26,6 +26,7 @@ from allanite.cli.sim_config import (
     config_changes,
     load_sim_model,
 )
+from allanite.io.atomic import check_output_path
 from allanite.report import Datasheet, DeviceAnalysis, build_report
 
 __all__ = ["register", "run"]
@@ -180,6 +181,7 @@ def run(args: argparse.Namespace) -> int:
         args.output = _default_output(args)
     if Path(args.output).suffix.lower() not in (".html", ".htm"):
         raise ValueError(f"output {args.output}: give an .html file name")
+    check_output_path(args.output)  # before the analysis, not after it
     if not args.files and not args.example:
         raise ValueError("give at least one record FILE, or --example")
     sheet = Datasheet.load(args.datasheet) if args.datasheet else None

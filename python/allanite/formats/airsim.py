@@ -16,6 +16,7 @@ import json
 import math
 from typing import Any
 
+from allanite.errors import parse_json
 from allanite.formats._densities import HOLDS
 from allanite.formats.base import ImuConfig, Written, notes_of_others, number, sensor_model
 from allanite.formats.projection import project_config
@@ -82,7 +83,7 @@ def _step(rate: float | None) -> tuple[float, float]:
 def read(text: str, *, rate: float | None = None) -> ImuConfig:
     """Read the IMU block (missing keys take AirSim's defaults, noted)."""
     try:
-        data = json.loads(text)
+        data = parse_json(text, "the AirSim settings")
     except json.JSONDecodeError as exc:
         raise ValueError(f"AirSim settings are not valid JSON: {exc}") from None
     block = _find_block(data)
@@ -130,7 +131,7 @@ def write(
     models, dropped, projections = project_config(config, HOLDS, rate=rate, tau_range=tau_range)
     if template is not None:
         try:
-            data = json.loads(template)
+            data = parse_json(template, "the AirSim template")
         except json.JSONDecodeError as exc:
             raise ValueError(f"the AirSim template is not valid JSON: {exc}") from None
         block = _find_block(data)

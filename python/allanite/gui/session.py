@@ -117,8 +117,8 @@ class Session:
         self.diagnosis = None
         return record
 
-    def use_record(self, record: Record) -> None:
-        """Work on an already built record (e.g. the example)."""
+    def use_record(self, record: Record | None) -> None:
+        """Work on an already built record (e.g. the example); None: no record."""
         self.path = None
         self.record = record
         self.result = None

@@ -85,6 +85,9 @@ class MainWindow(QtWidgets.QMainWindow):
         self.status_label = QtWidgets.QLabel()
         self.statusBar().addWidget(self.status_label, 1)
         self._build_menu()
+        for label in (self.status_label, self.file_label, self.model_label, self.table_title):
+            # file names and messages are text, never markup (a name may hold <h1> or <a href>)
+            label.setTextFormat(QtCore.Qt.TextFormat.PlainText)
         self._show_figure(self._empty_figure())
 
     def _record_box(self) -> QtWidgets.QGroupBox:
@@ -222,6 +225,13 @@ class MainWindow(QtWidgets.QMainWindow):
             except ImportError as exc:
                 self._set_status(str(exc), error=True)
                 return None
+            except Exception as exc:  # a defect: shown in the window, not lost on stderr
+                self._set_status(
+                    f"unexpected error ({type(exc).__name__}: {' '.join(str(exc).split())[:300]});"
+                    " please report it",
+                    error=True,
+                )
+                return None
 
         return run
 
@@ -312,13 +322,25 @@ class MainWindow(QtWidgets.QMainWindow):
     def open_file(self, path: str | Path) -> Record:
         """Load a record with the panel's options and compute its Allan deviation."""
         self._options_from_widgets()
-        record = self.session.load(path)
+        try:
+            record = self.session.load(path)
+        except BaseException:
+            self._forget_record()  # the previous file is no longer the one shown as current
+            raise
         if record.fs is not None and not self.session.options.fs:
             self.fs_spin.setValue(record.fs)
         self.file_label.setText(Path(path).name)
         self._fill_channels(record.channels)
         self.compute()
         return record
+
+    def _forget_record(self) -> None:
+        """No current record: a file that failed to load leaves nothing of the previous one."""
+        self.session.use_record(None)
+        self.file_label.setText("no file")
+        self._fill_channels(())
+        self._fill_table("", [], [])
+        self._show_figure(self._empty_figure())
 
     def use_record(self, record: Record) -> None:
         """Show an already built record (e.g. the example)."""

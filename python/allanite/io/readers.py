@@ -606,7 +606,19 @@ def _from_archive(path: Path, archive: Any, key: str | None) -> Loaded:
         key = choose_one(key, keys, what="array", option="key= (CLI: --key NAME)", path=str(path))
         try:
             arr = archive[key]
-        except (ValueError, zipfile.BadZipFile, EOFError, OSError) as exc:
+        except ValueError as exc:
+            if "allow_pickle" not in str(exc):
+                raise InputError(
+                    f"array {key!r} cannot be read ({exc}); the file may be truncated",
+                    path=str(path),
+                ) from exc
+            raise InputError(
+                f"array {key!r} holds Python objects (dtype object), not numbers: such arrays "
+                "are never loaded (unpickling can run code); save plain numeric arrays, e.g. "
+                "numpy.savez(path, gyro=np.asarray(data, dtype=float))",
+                path=str(path),
+            ) from exc
+        except (zipfile.BadZipFile, EOFError, OSError) as exc:
             raise InputError(
                 f"array {key!r} cannot be read ({exc}); the file may be truncated",
                 path=str(path),
@@ -805,6 +817,8 @@ def read_record(
         return source
     if not isinstance(source, (str, os.PathLike)):
         return from_frame(source, **opts.table())
+    if str(source) == STDIN:
+        return _read_stdin(opts)
     path = Path(source)
     if not path.exists():
         raise InputError("no such file; check the path", path=str(path))
@@ -812,6 +826,13 @@ def read_record(
 
     if path.is_dir() and not is_ros2_bag_dir(path):
         raise InputError("is a directory; give a file (or a ROS 2 bag directory)", path=str(path))
+    if not path.is_dir() and not path.is_file():
+        raise InputError(
+            f"is not a regular file but {_special_kind(path)}: a record is read more than once "
+            "(format, header, rows), which a stream cannot be; save it to a file first "
+            "(e.g. cat > rec.csv), or give - to read a text record from standard input",
+            path=str(path),
+        )
     fmt = "rosbag" if path.is_dir() else _format_of(path, opts.format, list(opts.raw_layout()))
     note_input(path)  # an output of this command must not replace it
     try:
@@ -831,6 +852,50 @@ def read_record(
             path=str(path),
         ) from exc
     return make_record(table, names, source=str(path), where=where, **opts.table())
+
+
+#: the record name that reads standard input (text records)
+STDIN = "-"
+
+
+def _read_stdin(opts: ReadOptions) -> Record:
+    """A text record from standard input, spooled to a temporary file (read more than once)."""
+    import dataclasses
+    import shutil
+    import sys
+    import tempfile
+
+    if (opts.format or "text") != "text" or opts.raw_layout():
+        raise InputError(
+            "standard input is read as a text table only; save a binary record to a file "
+            "and give that file",
+            path="<stdin>",
+        )
+    with tempfile.TemporaryDirectory(prefix="allanite-stdin-") as tmp:
+        spool = Path(tmp) / "stdin.txt"
+        with spool.open("wb") as handle:
+            shutil.copyfileobj(sys.stdin.buffer, handle)
+        try:
+            record = read_record(spool, opts)
+        except InputError as exc:
+            raise InputError(str(exc).replace(str(spool), "<stdin>")) from None
+    return dataclasses.replace(record, source="<stdin>")
+
+
+def _special_kind(path: Path) -> str:
+    """What a path that is neither a file nor a directory is, for a message."""
+    import stat
+
+    mode = path.stat().st_mode
+    if stat.S_ISFIFO(mode):
+        return "a pipe (FIFO)"
+    if stat.S_ISCHR(mode):
+        return "a character device"
+    if stat.S_ISBLK(mode):
+        return "a block device"
+    if stat.S_ISSOCK(mode):
+        return "a socket"
+    return "a special file"
 
 
 def _load(path: Path, fmt: str, opts: ReadOptions) -> Loaded:

@@ -206,8 +206,9 @@ def load_ulog(
             f"ULog topic {unknown[0]!r} is not an IMU topic; use one of {', '.join(ULOG_TOPICS)}",
             path=str(path),
         )
-    try:
-        log = ULog(str(path), message_name_filter_list=wanted)
+    try:  # our own handle: pyulog leaves its file open when it fails on a damaged log
+        with path.open("rb") as handle:
+            log = ULog(handle, message_name_filter_list=wanted)
     except Exception as exc:  # pyulog raises assorted errors on broken files
         raise InputError(f"not a readable ULog file ({exc})", path=str(path)) from exc
     if getattr(log, "file_corruption", False):
@@ -223,7 +224,8 @@ def load_ulog(
             break
     else:
         if len(wanted) < len(ULOG_TOPICS):  # the filter hid the other IMU topics: list them
-            every = ULog(str(path), message_name_filter_list=list(ULOG_TOPICS)).data_list
+            with path.open("rb") as handle:
+                every = ULog(handle, message_name_filter_list=list(ULOG_TOPICS)).data_list
             present = {(d.name, d.multi_id): d for d in every}
         found = ", ".join(f"{n}:{i}" for n, i in sorted(present)) or "none"
         raise InputError(

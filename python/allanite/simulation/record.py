@@ -23,8 +23,9 @@ from numpy.typing import NDArray
 
 from allanite import _core
 from allanite._deprecation import keyword_only_fs, renamed
+from allanite.memory import check_allocation
 from allanite.simulation.flicker import FLICKER_METHODS
-from allanite.simulation.streams import SumStream, check_fs, seed_sequence
+from allanite.simulation.streams import SumStream, block_length, check_fs, seed_sequence
 from allanite.terms.base import Term
 from allanite.terms.flicker import Flicker
 
@@ -149,6 +150,13 @@ def _open(
         )
     for term in terms:
         _check_band(term, fs, allow_aliasing)
+    # each term's stream holds a float64 block of block_length x channels values (and as many
+    # again in temporaries): refused before allocating, not a MemoryError halfway
+    check_allocation(
+        2 * 8 * len(terms) * block_length(int(n_channels)) * int(n_channels),
+        f"simulating {len(terms):,} term(s) x {int(n_channels):,} channel(s)",
+        "simulate fewer channels (or fewer terms) at a time",
+    )
     # per-type stream options: only flicker has a choice of method
     options: dict[str, dict[str, Any]] = {Flicker.type: {"method": flicker_method}}
     children = seed_sequence(seed).spawn(len(terms))

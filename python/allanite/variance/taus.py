@@ -92,6 +92,25 @@ def log_grid(n_samples: int, points: int) -> NDArray[np.int64]:
     return np.unique(grid).astype(np.int64)
 
 
+#: samples x averaging times a ``taus="all"`` grid may cost (each tau is one pass over the
+#: record): 2e10 is some tens of seconds; 2e6 samples (4e5 taus, 8e11) took hours
+ALL_COST_LIMIT = 2e10
+
+
+def _check_all_cost(n_taus: int, n_samples: int) -> None:
+    """Refuse an ``all`` grid whose cost (one pass over the record per tau) is hours."""
+    cost = float(n_taus) * float(n_samples)
+    if cost <= ALL_COST_LIMIT:
+        return
+    longest = int(ALL_COST_LIMIT // max(n_samples, 1))
+    raise ValueError(
+        f"taus 'all' gives {n_taus:,} averaging times on {n_samples:,} samples: one pass over "
+        f"the record each, about {cost:.1e} sample operations (hours; the cap is "
+        f"{ALL_COST_LIMIT:.0e}, about {longest:,} taus at this length); use the 'log' grid "
+        "with more points (CLI: --points 1000), 'octave'/'decade', or explicit taus"
+    )
+
+
 def averaging_factors(
     spec: TauSpec,
     *,
@@ -165,6 +184,8 @@ def averaging_factors(
             )
         limit = top if name == "log" else stable32_max_factor(kind, n_samples, n_phase)
         factors = factors[factors <= limit]
+        if name == "all":
+            _check_all_cost(factors.size, n_samples)
     else:
         taus = np.asarray(spec, dtype=np.float64).ravel()
         if taus.size == 0:
