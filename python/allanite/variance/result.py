@@ -250,7 +250,8 @@ class AllanResult:
         """JSON text of :meth:`to_dict`."""
         return json.dumps(self.to_dict(), **kwargs)
 
-    def _columns(self, level: float = ONE_SIGMA) -> dict[str, NDArray[Any]]:
+    def _columns(self, level: float | None = None) -> dict[str, NDArray[Any]]:
+        level = ONE_SIGMA if level is None else level
         lo, hi = self.ci(level)  # the dev_low_TAG/dev_high_TAG columns (TAG = level_tag)
         tag = level_tag(level)
         cols: dict[str, NDArray[Any]] = {"tau": self.tau, "m": self.m, "n_terms": self.n_terms}
@@ -274,11 +275,11 @@ class AllanResult:
         pd = require("pandas", extra="pandas", purpose="to_frame()")
         return pd.DataFrame(self._columns())
 
-    def to_csv(self, path: str | Path, level: float = ONE_SIGMA) -> None:
+    def to_csv(self, path: str | Path, level: float | None = None) -> None:
         """Write the table of :meth:`to_frame` as CSV (no pandas needed).
 
         The interval columns hold the two-sided interval at ``level``, named by it
-        (``dev_low_68`` for the default 1 sigma, ``dev_low_95`` for 0.95; see
+        (``dev_low_68`` for the default, None: 1 sigma; ``dev_low_95`` for 0.95; see
         :func:`allanite.confidence.level_tag`).
         """
         cols = self._columns(level)
