@@ -18,8 +18,9 @@ __all__ = [
 
 #: sampling frequencies (Hz) the arithmetic supports: 1/fs, fs*tau and the variances of a
 #: record stay far from float64 overflow and underflow (a subnormal 1e-320 Hz gave NaN/inf
-#: samples, 1e-300 an OverflowError); gyros sample between about 1 Hz and 100 kHz
-FS_RANGE = (1e-6, 1e9)
+#: samples, 1e-300 an OverflowError); gyros sample between about 1 Hz and 100 kHz, and a time
+#: column in ns read as seconds gives 1e-7 Hz, which must reach the time-scale note
+FS_RANGE = (1e-12, 1e12)
 
 
 def check_fs_range(value: float) -> float:
