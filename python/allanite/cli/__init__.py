@@ -102,11 +102,12 @@ def _warning_printer(command: str, default: Callable[..., None]) -> Callable[...
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``allanite`` console script; returns the exit code."""
     from allanite.errors import ImplausibleInputWarning, InputError, MissingExtraError
-    from allanite.io.atomic import guard_inputs
 
     words = list(sys.argv[1:] if argv is None else argv)
     if not any(word in SUBCOMMANDS for word in words):  # --version, --help: no imports
         build_parser(top_level_only=True).parse_args(words)
+    from allanite.io.atomic import guard_inputs  # imports numpy: only for a command
+
     parser = build_parser()
     args = parser.parse_args(words)
     if not getattr(args, "func", None):
