@@ -22,6 +22,7 @@ from allanite.diagnosis.band_shape import band_shape
 from allanite.diagnosis.inputs import SimSource
 from allanite.model import NoiseModel
 from allanite.terms import DriftingLine, RateRandomWalk, Resonance, Sine, White, term_from_dict
+from test_diagnosis_pairs import fit_half
 
 FS = 100.0
 DT = 1.0 / FS
@@ -262,7 +263,7 @@ def test_warmup_under_gauss_markov_noise_is_named_with_it():
     real = real + NoiseModel((warm,), UNITS).simulate(n, fs=FS, seed=1160, allow_aliasing=True)
     gm = GaussMarkov(sigma=0.04524, tau_c=2.0)
     real = real + NoiseModel((gm,), UNITS).simulate(n, fs=FS, seed=1166, allow_aliasing=True)
-    d = diagnose(real, base, fs=FS, units="deg/s", holdout=0.5, n_mc=40, seed=1154)
+    d = diagnose(fit_half(np.ravel(real)), base, fs=FS, units="deg/s", n_mc=40, seed=1154)
     assert d.explanation is not None
     named = {a.effect for a in d.explanation.effects}
     assert {"warmup", "markov"} <= named

@@ -17,7 +17,7 @@ from allanite.diagnosis.inputs import SimSource
 from allanite.diagnosis.level_shape import ramp_shape, warmup_shape
 from allanite.model import NoiseModel
 from allanite.terms import TERM_TYPES
-from test_diagnosis_pairs import UNITS, _pair_record
+from test_diagnosis_pairs import UNITS, _pair_record, fit_half
 
 T = TERM_TYPES
 FS = 100.0
@@ -25,14 +25,14 @@ FS = 100.0
 
 #: designed pair 'warmup + markov' at 5x/5x the clear level (seed 1000 + 17 * 28)
 WARMUP_SEED = 1000 + 17 * 28
-WARMUP_KW = {"fs": FS, "units": "deg/s", "holdout": 0.5, "n_mc": 60, "seed": WARMUP_SEED + 1}
+WARMUP_KW = {"fs": FS, "units": "deg/s", "holdout": None, "n_mc": 60, "seed": WARMUP_SEED + 1}
 
 
 def _warmup_markov() -> tuple[NoiseModel, np.ndarray, object]:
     warmup = T["warmup"](amplitude=4.904518776089969, tau_w=16.384, duration=655.36)
     gm = T["markov"](sigma=0.10679679985364646, tau_c=2.0)
     base, x = _pair_record(WARMUP_SEED, (warmup, gm))
-    return base, x, gm
+    return base, fit_half(x), gm
 
 
 def test_warmup_under_gauss_markov_noise_is_named_with_it() -> None:
@@ -64,7 +64,7 @@ def test_warmup_under_gauss_markov_noise_control(monkeypatch) -> None:  # type: 
 
 
 def tw_total(view: object) -> float:
-    """Duration of the time view's windows together (the fitted half)."""
+    """Duration of the time view's windows together."""
     return float(view.window_s * view.level.size)  # type: ignore[attr-defined]
 
 
@@ -77,7 +77,7 @@ def _ramp_markov() -> tuple[NoiseModel, np.ndarray, object, object]:
     ramp = T["ramp"](R=0.017007719341042296)
     gm = T["markov"](sigma=0.13458598142172354, tau_c=2.0)
     base, x = _pair_record(RAMP_SEED, (ramp, gm))
-    return base, x, ramp, gm
+    return base, fit_half(x), ramp, gm
 
 
 def test_ramp_under_gauss_markov_noise_is_named_with_it() -> None:
@@ -91,11 +91,11 @@ def test_ramp_under_gauss_markov_noise_is_named_with_it() -> None:
     by_effect = {a.effect: a for a in d.explanation.effects}
     assert {"ramp", "markov"} <= by_effect.keys(), by_effect.keys()
     assert not by_effect.keys() & {"rrw", "rescale:rrw"}
-    # the slope is the window means' least-squares slope of the fitted half (weighted by the
+    # the slope is the window means' least-squares slope of the record (weighted by the
     # null spreads, which vary by a few per cent between windows: the unweighted slope of the
     # raw window means agrees to within a tenth of its spread between records, 1.7e-4)
     view = d.time
-    n, w = x.size // 2, view.level.size
+    n, w = x.size, view.level.size
     t = view.t_s - view.window_s * w / 2
     means = x[: n - n % w].reshape(w, -1).mean(axis=1)
     ols = float(t @ (means - means.mean()) / (t @ t))
@@ -163,8 +163,8 @@ def _quick_case(name: str) -> tuple[NoiseModel, np.ndarray, dict[str, object]]:
     i = next(i for i, c in enumerate(cases) if c.name == name)
     seed = vd.pair_seed(1000, i)
     real, _, _ = vd.simulate_case(cases[i], seed)
-    kw = {"fs": FS, "units": "deg/s", "holdout": 0.5, "n_mc": 60, "seed": seed + 1}
-    return cases[i].base, np.asarray(real, dtype=np.float64), kw
+    kw = {"fs": FS, "units": "deg/s", "holdout": None, "n_mc": 60, "seed": seed + 1}
+    return cases[i].base, fit_half(np.asarray(real, dtype=np.float64)), kw
 
 
 def test_a_bias_step_is_not_a_warmup_that_never_settles() -> None:
@@ -173,7 +173,7 @@ def test_a_bias_step_is_not_a_warmup_that_never_settles() -> None:
     is not tried and the step stays the explanation."""
     base, x, kw = _quick_case("step-strong-fs100")
     d = diagnose(x, base, **kw)
-    duration = x.size / 2 / FS
+    duration = x.size / FS
     tau_w = warmup_shape(d.time, duration)[0]
     assert tau_w * joint.WARMUP_SETTLES > duration
     assert [a.effect for a in d.explanation.effects] == ["step"]

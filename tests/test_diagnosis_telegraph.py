@@ -27,6 +27,7 @@ from allanite.diagnosis.two_level import (
 )
 from allanite.model import NoiseModel
 from allanite.terms import TERM_TYPES
+from test_diagnosis_pairs import fit_half
 
 UNITS = {"rate": "deg/s", "time": "s"}
 T = TERM_TYPES
@@ -146,9 +147,8 @@ def _diagnosed(slow: object) -> set[str]:
     x = x + NoiseModel((slow,), UNITS).simulate(2 * N, fs=FS, seed=seed + 7, allow_aliasing=True)
     white = T["white"](N=0.018483015723988635)
     x = x + NoiseModel((white,), UNITS).simulate(2 * N, fs=FS, seed=seed + 13, allow_aliasing=True)
-    d = diagnose(
-        np.ravel(x), base_model(), fs=FS, units="deg/s", holdout=0.5, n_mc=60, seed=seed + 1
-    )
+    x = fit_half(np.ravel(x))
+    d = diagnose(x, base_model(), fs=FS, units="deg/s", holdout=None, n_mc=60, seed=seed + 1)
     assert d.explanation is not None
     return {a.effect for a in d.explanation.effects}
 
@@ -227,7 +227,7 @@ def _two_markov() -> set[str]:
     fast = T["markov"](sigma=0.25, tau_c=0.02)
     slow = T["markov"](sigma=0.05, tau_c=5.0)
     x = np.asarray(model.plus(fast, slow).simulate(2**16, fs=FS, seed=11), dtype=np.float64)
-    d = diagnose(np.ravel(x), model, fs=FS, units="deg/s", holdout=0.5, n_mc=60, seed=12)
+    d = diagnose(fit_half(np.ravel(x)), model, fs=FS, units="deg/s", n_mc=60, seed=12)
     assert d.explanation is not None
     return {a.effect for a in d.explanation.effects}
 

@@ -831,11 +831,11 @@ def time_view(
         t = k / fs
         change_points.append(t)
         segments.append((max(t - length / (4 * fs), 0.0), t + length / (4 * fs)))
-    for st in steps.steps:
-        # a located step replaces a largest-jump change point within a window of it
-        change_points = [t for t in change_points if abs(t - st.t_s) > length / fs]
-        segments.append(st.t_interval_s)
-    change_points = sorted(change_points + [st.t_s for st in steps.steps])
+    # the scan's located steps are reported (``steps``) and localised, but they are not the
+    # change points the step candidate's level misfit gets for free: a warm-up's settling
+    # reads as a staircase of located steps at the record's start, which would make a bias-step
+    # process the cheapest reading of every transient (the warm-up + Gauss-Markov pair)
+    segments.extend(st.t_interval_s for st in steps.steps)
     for fam in ("hf", "dyn") + (() if change_points else ("level",)):
         for a, b in runs(flagged[fam]):
             segments.append((a * length / fs, (b + 1) * length / fs))
