@@ -46,6 +46,12 @@ def test_warmup_under_gauss_markov_noise_is_named_with_it() -> None:
     by_effect = {a.effect: a for a in d.explanation.effects}
     assert {"warmup", "markov"} <= by_effect.keys(), by_effect.keys()
     assert not by_effect.keys() & {"rrw", "rescale:rrw"}
+    # the step scan locates the settling as steps at the start; they are not listed as steps
+    assert d.time.steps is not None
+    assert d.time.steps.steps
+    assert max(s.t_s for s in d.time.steps.steps) < 5 * by_effect["warmup"].params["tau_w"]
+    assert d.level_steps == []
+    assert d.to_dict(views=False)["level_steps"] == []
     # the process's correlation time within three of its Fisher standard errors
     a = by_effect["markov"]
     rel = a.params_sigma["tau_c"] / a.params["tau_c"]

@@ -195,8 +195,8 @@ def _summary(d: Any) -> str:
         lines.append(
             f"time segments:    {text}" + (f" (+{len(segs) - 8} more)" if len(segs) > 8 else "")
         )
-    steps = d.time.steps.steps if d.time.steps is not None else []
-    if d.significant and steps:
+    steps = d.level_steps
+    if steps and d.time.steps is not None:
         lines.append(f"level steps (p = {d.time.steps.p_value:.3g}):")
         lines.extend(f"  - {s.text(units)}" for s in steps)
     if d.attribution:

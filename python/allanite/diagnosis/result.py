@@ -17,6 +17,9 @@ from allanite.notebook import diagnosis_html
 
 __all__ = ["Diagnosis", "Holdout"]
 
+#: a warm-up ``A exp(-t / tau_w)`` has settled to 0.7 % of its amplitude after ``5 tau_w``
+WARMUP_SETTLED = 5.0
+
 
 def _clean(value: Any) -> Any:
     """Replace non-finite floats by None so the JSON is strict."""
@@ -211,6 +214,25 @@ class Diagnosis:
         return bool(fam) and min(fam.values()) < level
 
     @property
+    def level_steps(self) -> list[Any]:
+        """The located level steps that are findings (``changepoint.Step``).
+
+        None without a significant gap, and none inside the settling (``5 tau_w``) of a
+        warm-up the explanation names: a settling transient reads as a staircase of steps at
+        the record's start, and listing them next to "warm-up transient is missing" would
+        tell the user two stories.
+        """
+        scan = self.time.steps
+        if not self.significant or scan is None:
+            return []
+        effects = self.explanation.effects if self.explanation is not None else []
+        settled = max(
+            (WARMUP_SETTLED * a.params["tau_w"] for a in effects if a.effect == "warmup"),
+            default=0.0,
+        )
+        return [s for s in scan.steps if s.t_s > settled]
+
+    @property
     def best(self) -> Attribution | None:
         """The best attribution, if any."""
         return self.attribution[0] if self.attribution else None
@@ -236,6 +258,7 @@ class Diagnosis:
             },
             "where": self.where,
             "steps": self.time.steps.to_dict() if self.time.steps is not None else None,
+            "level_steps": [st.t_s for st in self.level_steps],
             "attribution": [a.to_dict() for a in self.attribution],
             "explanation": self.explanation.to_dict() if self.explanation is not None else None,
             "holdout": self.holdout.to_dict() if self.holdout is not None else None,

@@ -115,12 +115,11 @@ def diagnosis_html(
         h.table(["view", "p-value", "where the gap is"], views, text_columns=1),
     ]
     units = diagnosis.meta.get("units")
-    scan = getattr(diagnosis.time, "steps", None)
-    if diagnosis.significant and scan is not None and scan.steps:
+    scan = diagnosis.time.steps
+    if diagnosis.level_steps and scan is not None:
         parts.append(f"<h3>Level steps (p = {_p(scan.p_value, None)})</h3>")
-        parts.append(
-            "<ul>" + "".join(f"<li>{h.escape(s.text(units))}</li>" for s in scan.steps) + "</ul>"
-        )
+        items = "".join(f"<li>{h.escape(s.text(units))}</li>" for s in diagnosis.level_steps)
+        parts.append(f"<ul>{items}</ul>")
     if diagnosis.attribution:
         from allanite.diagnosis.verdict import format_params, percent
 
