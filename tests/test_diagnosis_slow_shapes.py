@@ -36,13 +36,14 @@ def _warmup_markov() -> tuple[NoiseModel, np.ndarray, object]:
 
 
 def test_warmup_under_gauss_markov_noise_is_named_with_it() -> None:
-    """The tau view alone reads a warm-up under Gauss-Markov noise as a random walk (the best
-    single effect); a warm-up fitted alone takes the process's Allan variance too and its
-    window-mean misfit counts the process's wander against it. With the warm-up measured on
-    the window means and the process fitted on top of it, the set is warm-up + Gauss-Markov."""
+    """The tau view alone reads a warm-up under Gauss-Markov noise as a random walk; the step
+    scan's located settling steps (``jump`` evidence a random walk leaves) now make the
+    warm-up the best single effect. A warm-up fitted alone takes the process's Allan variance
+    too; with the warm-up measured on the window means and the process fitted on top of it,
+    the set is warm-up + Gauss-Markov (not bias steps at the located settling steps)."""
     base, x, gm = _warmup_markov()
     d = diagnose(x, base, **WARMUP_KW)
-    assert d.attribution[0].effect in ("rrw", "rescale:rrw")  # the look-alike of the two
+    assert d.attribution[0].effect == "warmup"
     by_effect = {a.effect: a for a in d.explanation.effects}
     assert {"warmup", "markov"} <= by_effect.keys(), by_effect.keys()
     assert not by_effect.keys() & {"rrw", "rescale:rrw"}
@@ -60,13 +61,32 @@ def test_warmup_under_gauss_markov_noise_is_named_with_it() -> None:
 
 @pytest.mark.slow
 def test_warmup_under_gauss_markov_noise_control(monkeypatch) -> None:  # type: ignore[no-untyped-def]
-    """The control of the test above: without the warm-up + partner opening the set is the
-    random walk, and no warm-up."""
+    """The control of the test above: without the warm-up + partner opening the warm-up fitted
+    alone (it takes the process's Allan variance too) leaves room for a third effect, and
+    without the step scan in the jump evidence as well the set is the random walk, no warm-up
+    (the reading before the step scan)."""
+    import allanite.diagnosis.time_view as time_view
+
     base, x, _ = _warmup_markov()
     monkeypatch.setattr(joint, "_shape_and_noise", lambda *args, **kwargs: [])
+    named1 = [a.effect for a in diagnose(x, base, **WARMUP_KW).explanation.effects]
+    assert named1[0] == "warmup"
+    assert len(named1) == 3, named1
+    monkeypatch.setattr(time_view, "step_scan", _no_steps(time_view.step_scan))
     named0 = {a.effect for a in diagnose(x, base, **WARMUP_KW).explanation.effects}
     assert "warmup" not in named0
     assert named0 & {"rrw", "rescale:rrw"}
+
+
+def _no_steps(scan):  # type: ignore[no-untyped-def]
+    """The step scan with its p-value at 1 and no located steps (the jump family without it)."""
+    import dataclasses
+
+    def wrapped(*args, **kwargs):  # type: ignore[no-untyped-def]
+        out = scan(*args, **kwargs)
+        return dataclasses.replace(out, p_value=1.0, steps=[], jumps=out.jumps[:0])
+
+    return wrapped
 
 
 def tw_total(view: object) -> float:

@@ -43,7 +43,8 @@ indistinguishable (the effect and its rivals when not identified, else empty), u
 [{view, evidence, where, size, p_value, text}, ...], gap {statistic, p_value, significant, T,
 T0, view_p_values}, where {tau_bands_s, frequency_lines_hz, time_segments_s,
 frequency_bands_hz}, steps (the level changes found, with times and sizes and their
-intervals), attribution [{effect, params, params_units, gap_before, gap_after, shrinkage,
+intervals), level_steps (the times of those listed as findings: not inside a named warm-up's
+settling), attribution [{effect, params, params_units, gap_before, gap_after, shrinkage,
 consistent_after, ...}, ...] (single effects, best first), explanation {effects, gap_before,
 gap_after, consistent_after, p_after, share, explained, terms, holdout} or null (the joint set;
 terms: the model JSON "terms" with the effects added; with --sim-record, the effects' terms
