@@ -18,6 +18,7 @@ from allanite.diagnosis import diagnose
 from allanite.diagnosis.attribution import fit_candidate
 from allanite.model import NoiseModel
 from allanite.terms import TERM_TYPES
+from test_diagnosis_pairs import fit_half
 
 UNITS = {"rate": "deg/s", "time": "s"}
 T: dict[str, Any] = dict(TERM_TYPES)
@@ -56,7 +57,7 @@ def _diagnose_seen(
         return explain(best, cands, tm, **kw)
 
     monkeypatch.setattr(engine, "explain", spy)
-    d = diagnose(x, base, fs=FS, units="deg/s", holdout=0.5, n_mc=60, seed=seed + 1)
+    d = diagnose(fit_half(x), base, fs=FS, units="deg/s", n_mc=60, seed=seed + 1)
     return d, seen
 
 

@@ -280,8 +280,8 @@ def test_ramp_next_to_white_is_not_a_slow_telegraph(monkeypatch) -> None:  # typ
     seed = 1000 + 17 * 26
     terms = (T["ramp"](R=0.022224111096358436), T["white"](N=0.014394303739483087))
     base, x = _pair_record(seed, terms)
-    kw = {"fs": 100.0, "units": "deg/s", "holdout": 0.5, "n_mc": 60, "seed": seed + 1}
-    named = {a.effect for a in diagnose(x, base, **kw).explanation.effects}
+    kw = {"fs": 100.0, "units": "deg/s", "holdout": None, "n_mc": 60, "seed": seed + 1}
+    named = {a.effect for a in diagnose(fit_half(x), base, **kw).explanation.effects}
     assert "ramp" in named
     assert named & {"white", "rescale:white"}
     assert "telegraph" not in named
@@ -296,7 +296,7 @@ def test_ramp_next_to_white_is_not_a_slow_telegraph(monkeypatch) -> None:  # typ
         "_degenerate",
         lambda cand, logp, lo, dt, hi=None, extra=None: degenerate(cand, logp, lo, dt),
     )
-    named1 = {a.effect for a in diagnose(x, base, **kw).explanation.effects}
+    named1 = {a.effect for a in diagnose(fit_half(x), base, **kw).explanation.effects}
     assert "ramp" in named1  # the Welch spectrum alone keeps it
     assert "telegraph" not in named1
     # ... and without the rule that a telegraph explains block means, jumps and level only
@@ -308,7 +308,7 @@ def test_ramp_next_to_white_is_not_a_slow_telegraph(monkeypatch) -> None:  # typ
     monkeypatch.setitem(
         candidates.EXPLAINS, "telegraph", frozenset({"kurt_lf", "dyn", "jump", "level"})
     )
-    named0 = {a.effect for a in diagnose(x, base, **kw).explanation.effects}
+    named0 = {a.effect for a in diagnose(fit_half(x), base, **kw).explanation.effects}
     assert "telegraph" in named0
     assert "ramp" not in named0
 
@@ -343,7 +343,7 @@ def test_bias_steps_next_to_white_are_not_a_random_walk() -> None:
     terms = (T["bias_steps"](size=0.30890190151152863, interval=81.92),
              T["white"](N=0.01835577068005403))  # fmt: skip
     base, x = _pair_record(seed, terms)
-    d = diagnose(x, base, fs=100.0, units="deg/s", holdout=0.5, n_mc=60, seed=seed + 1)
+    d = diagnose(fit_half(x), base, fs=100.0, units="deg/s", n_mc=60, seed=seed + 1)
     named = {a.effect for a in d.explanation.effects}
     assert "step" in named
     assert named & {"white", "rescale:white"}
@@ -405,7 +405,7 @@ def _diagnose_seen(seed: int, terms: tuple[object, object], monkeypatch):  # typ
         return explain(best, cands, tm, **kw)
 
     monkeypatch.setattr(engine, "explain", spy)
-    d = diagnose(x, base, fs=100.0, units="deg/s", holdout=0.5, n_mc=60, seed=seed + 1)
+    d = diagnose(fit_half(x), base, fs=100.0, units="deg/s", n_mc=60, seed=seed + 1)
     return d, seen
 
 

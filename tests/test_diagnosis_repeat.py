@@ -24,6 +24,7 @@ from allanite.diagnosis.inputs import SimSource
 from allanite.diagnosis.joint import DISTINCT_FACTOR, _distinct, _same_slot, share_key
 from allanite.model import NoiseModel
 from allanite.terms import TERM_TYPES, term_from_dict
+from test_diagnosis_pairs import fit_half
 
 UNITS = {"rate": "deg/s", "time": "s"}
 T = TERM_TYPES
@@ -85,7 +86,7 @@ def two_markov() -> tuple[NoiseModel, tuple[object, object], object]:
     fast = T["markov"](sigma=0.25, tau_c=0.02)
     slow = T["markov"](sigma=0.05, tau_c=5.0)
     x = np.asarray(model.plus(fast, slow).simulate(n, fs=FS, seed=11), dtype=np.float64).ravel()
-    d = diagnose(x, model, fs=FS, units="deg/s", holdout=0.5, n_mc=60, seed=12)
+    d = diagnose(fit_half(x), model, fs=FS, units="deg/s", n_mc=60, seed=12)
     return model, (fast, slow), d
 
 
@@ -189,7 +190,7 @@ def test_real_base_gauss_markov_next_to_the_runs_own_wander(shared_data, monkeyp
     n = 2**16
     injected = NoiseModel((gm,), UNITS).simulate(n, fs=FS, seed=1092, allow_aliasing=True)
     x = load(3)[:n] + np.asarray(injected, dtype=np.float64).ravel()
-    kw = {"fs": FS, "units": "deg/s", "holdout": 0.5, "n_mc": 60, "seed": 1086}
+    kw = {"fs": FS, "units": "deg/s", "holdout": None, "n_mc": 60, "seed": 1086}
 
     def processes(d) -> list[Attribution]:  # type: ignore[no-untyped-def]
         return sorted(
@@ -197,17 +198,17 @@ def test_real_base_gauss_markov_next_to_the_runs_own_wander(shared_data, monkeyp
             key=lambda a: a.params["tau_c"],
         )
 
-    fast, slow = processes(diagnose(x, model, **kw))
+    fast, slow = processes(diagnose(fit_half(x), model, **kw))
     rel = slow.params_sigma["tau_c"] / slow.params["tau_c"]
     assert abs(np.log(slow.params["tau_c"] / gm.tau_c)) <= 3 * rel, (slow.params, rel)
     assert fast.params["tau_c"] < gm.tau_c / DISTINCT_FACTOR**2  # the run's own wander
     monkeypatch.setattr(joint, "_two_processes", lambda *args, **kwargs: None)
     # without the pair step the backfitting sweep (the run's own wander refitted with the
     # injected process on top) is a second route to both processes
-    backfit = processes(diagnose(x, model, **kw))
+    backfit = processes(diagnose(fit_half(x), model, **kw))
     assert any(abs(np.log(a.params["tau_c"] / gm.tau_c)) <= np.log(3.0) for a in backfit)
     monkeypatch.setattr(joint, "_moved", lambda *args, **kwargs: False)  # no refit adopted
-    before = processes(diagnose(x, model, **kw))
+    before = processes(diagnose(fit_half(x), model, **kw))
     assert all(abs(np.log(a.params["tau_c"] / gm.tau_c)) > np.log(3.0) for a in before)
 
 
@@ -254,7 +255,7 @@ def two_resonances() -> tuple[NoiseModel, tuple[object, object], object, object]
     low = T["resonance"](N=0.4, frequency=12.0, damping=0.05)
     high = T["resonance"](N=0.3, frequency=31.0, damping=0.08)
     x = np.asarray(model.plus(low, high).simulate(n, fs=FS, seed=21), dtype=np.float64).ravel()
-    d = diagnose(x, model, fs=FS, units="deg/s", holdout=0.5, n_mc=40, seed=22)
+    d = diagnose(fit_half(x), model, fs=FS, units="deg/s", n_mc=40, seed=22)
     return model, (low, high), d, x
 
 
@@ -297,7 +298,7 @@ def test_without_a_second_band_one_resonance_is_named(two_resonances, monkeypatc
     _, _, _, x = two_resonances
     model = two_resonances[0]
     monkeypatch.setattr(engine, "band_shapes", lambda *a: band_shapes(*a, n_max=1))
-    d = diagnose(x, model, fs=FS, units="deg/s", holdout=0.5, n_mc=40, seed=22)
+    d = diagnose(fit_half(x), model, fs=FS, units="deg/s", n_mc=40, seed=22)
     assert [a.effect for a in d.explanation.effects].count("resonance") <= 1
 
 
@@ -315,7 +316,7 @@ def test_real_base_resonance_next_to_the_gyros_own(shared_data, monkeypatch) -> 
     n = 2**16
     injected = NoiseModel((res,), UNITS).simulate(n, fs=FS, seed=1024, allow_aliasing=True)
     x = load(2)[:n] + np.asarray(injected, dtype=np.float64).ravel()
-    kw = {"fs": FS, "units": "deg/s", "holdout": 0.5, "n_mc": 60, "seed": 1018}
+    kw = {"fs": FS, "units": "deg/s", "holdout": None, "n_mc": 60, "seed": 1018}
 
     def resonances(d) -> list[tuple[float, float]]:  # type: ignore[no-untyped-def]
         """(frequency, damping) of the named resonances, lowest first."""
@@ -328,14 +329,14 @@ def test_real_base_resonance_next_to_the_gyros_own(shared_data, monkeypatch) -> 
     def frequencies(d) -> list[float]:  # type: ignore[no-untyped-def]
         return [f for f, _ in resonances(d)]
 
-    control = resonances(diagnose(load(2)[:n], model, **kw))
+    control = resonances(diagnose(fit_half(load(2)[:n]), model, **kw))
     assert len(control) == 1  # the gyro's own
     (f_own, zeta_own) = control[0]
-    own, injected_f = frequencies(diagnose(x, model, **kw))
+    own, injected_f = frequencies(diagnose(fit_half(x), model, **kw))
     assert abs(injected_f - res.frequency) <= res.damping * res.frequency
     assert abs(own - f_own) <= zeta_own * f_own
     monkeypatch.setattr(engine, "band_shapes", lambda *a: band_shapes(*a, n_max=1))
-    before = frequencies(diagnose(x, model, **kw))
+    before = frequencies(diagnose(fit_half(x), model, **kw))
     assert all(abs(f - res.frequency) > res.damping * res.frequency for f in before)
 
 
@@ -356,7 +357,7 @@ def test_a_narrow_resonance_is_not_reported_as_a_line() -> None:
     contrast 0.77 against a threshold of 0.71, and a 'line' at 11.85 Hz used to be reported
     and added to the set as a sine. With the resonance expected, it is not a line."""
     model = NoiseModel((T["white"](N=0.05),), UNITS)
-    d = diagnose(_narrow_pair(21), model, fs=FS, units="deg/s", holdout=0.5, n_mc=40, seed=22)
+    d = diagnose(fit_half(_narrow_pair(21)), model, fs=FS, units="deg/s", n_mc=40, seed=22)
     assert d.frequency.lines == []
     assert d.explanation is not None
     names = [a.effect for a in d.explanation.effects]
@@ -372,7 +373,7 @@ def test_a_sine_inside_a_resonance_band_is_still_a_line() -> None:
     at the threshold (1.24 before, within the resonance's peak contrast of it after)."""
     model = NoiseModel((T["white"](N=0.05),), UNITS)
     sine = T["sine"](amplitude=0.5, frequency=12.2)
-    d = diagnose(_narrow_pair(21, sine), model, fs=FS, units="deg/s", holdout=0.5, n_mc=40, seed=22)
+    d = diagnose(fit_half(_narrow_pair(21, sine)), model, fs=FS, units="deg/s", n_mc=40, seed=22)
     assert any(abs(ln.frequency_hz - 12.2) < 0.05 for ln in d.frequency.lines)
     assert d.frequency.line_p_value < 0.05
 

@@ -175,7 +175,7 @@ def test_random_walk_next_to_noise_bursts_is_not_a_long_gauss_markov_process() -
     bursts = T["white_bursts"](N=0.10899058294204789, duty=0.1, burst_s=16.384)
     walk = T["rrw"](K=0.07717463723772397)
     base, x = _pair_record(seed, (bursts, walk))
-    d = diagnose(x, base, fs=FS, units="deg/s", holdout=0.5, n_mc=60, seed=seed + 1)
+    d = diagnose(fit_half(x), base, fs=FS, units="deg/s", n_mc=60, seed=seed + 1)
     named = {a.effect for a in d.explanation.effects}
     assert "bursts" in named
     assert named & {"rrw", "rescale:rrw"}

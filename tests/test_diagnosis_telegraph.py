@@ -252,7 +252,7 @@ def _pure(slow: object) -> set[str]:
     """Base sensor + one slow process (no extra white noise), 2 x 2^15 samples, half held out."""
     x = base_model().simulate(2 * N, fs=FS, seed=41)
     x = x + NoiseModel((slow,), UNITS).simulate(2 * N, fs=FS, seed=48, allow_aliasing=True)
-    d = diagnose(np.ravel(x), base_model(), fs=FS, units="deg/s", holdout=0.5, n_mc=60, seed=42)
+    d = diagnose(fit_half(np.ravel(x)), base_model(), fs=FS, units="deg/s", n_mc=60, seed=42)
     assert d.explanation is not None
     return {a.effect for a in d.explanation.effects}
 
