@@ -56,6 +56,39 @@ def test_unknown_keys_are_warned_with_the_closest_known_key(tmp_path, capsys):
     assert "'gyr_ww'" in notes[0]
 
 
+def test_a_kalibr_file_without_one_sensor_says_kalibr_would_refuse_it(tmp_path, capsys):
+    """Kalibr's ConfigReader reads all four densities: a gyro-only file is read for the gyro,
+    with a note that Kalibr itself needs the accelerometer's too; a gyro-only model written as
+    Kalibr says the same in the file."""
+    src = tmp_path / "imu.yaml"
+    gyro_only = "".join(ln + "\n" for ln in KALIBR_TYPO.replace("denisty", "density").split("\n")
+                        if ln and not ln.startswith("accelerometer"))  # fmt: skip
+    src.write_text(gyro_only)
+    config = read_config(src)
+    assert config.gyro is not None
+    assert config.accel is None
+    assert any("accelerometer_noise_density" in n and "would refuse" in n for n in config.notes)
+    assert main(["model", "convert", str(src), str(tmp_path / "m.json")]) == 0
+    assert "would refuse" in capsys.readouterr().err
+    # the complete file has no such note
+    assert not any(
+        "would refuse" in n
+        for n in read_config(_written(tmp_path, KALIBR_TYPO.replace("denisty", "density"))).notes
+    )
+    # written back from a gyro-only model: the file says what Kalibr still needs
+    out = tmp_path / "back.yaml"
+    assert main(["model", "convert", str(tmp_path / "m.json"), str(out), "--to", "kalibr"]) == 0
+    text = out.read_text()
+    assert "gyroscope_noise_density" in text
+    assert "# Kalibr imu.yaml: no accelerometer_noise_density" in text
+
+
+def _written(tmp_path, text: str):  # type: ignore[no-untyped-def]
+    path = tmp_path / "full.yaml"
+    path.write_text(text)
+    return path
+
+
 def _sdf(noise_type: str) -> str:
     noise = (f'<noise type="{noise_type}"><mean>0.0</mean><stddev>0.002</stddev>'
              "<bias_mean>0.0</bias_mean></noise>")  # fmt: skip

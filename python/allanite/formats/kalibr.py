@@ -13,6 +13,9 @@ update_rate                 Hz                    the rate
 Kalibr's discrete law is std = density sqrt(rate) for the white noise and random-walk
 increments of std ``random_walk / sqrt(rate)``, exactly allanite's White and RateRandomWalk.
 Flicker and Gauss-Markov terms are projected onto the random walk over a stated tau range.
+Kalibr's own reader needs all four densities: a file with one sensor's pair is read for that
+sensor with a note saying Kalibr would refuse it, and a one-sensor model is written with a
+comment saying the same; a sensor with one of its two keys is refused, naming a misspelling.
 
 References
 ----------
@@ -65,8 +68,21 @@ def read(text: str, *, rate: float | None = None) -> ImuConfig:
     config = from_densities(
         data, KEYS, fmt=NAME, rate=rate, what="Kalibr imu.yaml", other_keys=OTHER_KEYS
     )
+    absent = [sensor for sensor, model in (("gyro", config.gyro), ("accel", config.accel))
+              if model is None]  # fmt: skip
+    if absent:
+        config = dataclasses.replace(config, notes=(*config.notes, incomplete_note(absent[0])))
     topic = data.get("rostopic")
     return dataclasses.replace(config, topic=topic) if isinstance(topic, str) else config
+
+
+def incomplete_note(sensor: str) -> str:
+    """The note on a file without one sensor's densities: Kalibr itself would not read it."""
+    n_key, w_key = KEYS[sensor]
+    return (
+        f"Kalibr imu.yaml: no {n_key} / {w_key}: Kalibr's own reader needs all four densities "
+        f"and would refuse this file; add the {sensor} densities before using it with Kalibr"
+    )
 
 
 def ros_topic(config: ImuConfig) -> str:
@@ -107,6 +123,7 @@ def write(
     lines.append(f"rostopic: {rostopic or ros_topic(config)}")
     if rate:
         lines.append(f"update_rate: {number_text(rate)}  # Hz")
+    lines.extend(f"# {incomplete_note(s)}" for s in KEYS if KEYS[s][0] not in values)
     lines.extend(f"# not representable in imu.yaml, dropped: {d}" for d in dropped)
     lines.extend(f"# projected: {p}" for p in projections)
     return Written("\n".join(lines) + "\n", dropped, projections)
