@@ -83,6 +83,22 @@ def test_a_kalibr_file_without_one_sensor_says_kalibr_would_refuse_it(tmp_path, 
     assert "# Kalibr imu.yaml: no accelerometer_noise_density" in text
 
 
+def test_write_corrected_onto_the_config_it_corrects_is_refused_before_the_diagnosis(
+    tmp_path, capsys
+):
+    """``--write-corrected`` naming the ``--sim-model`` file would replace the user's config:
+    refused like ``-o`` onto an input, before the record is read, the file untouched."""
+    src = _written(tmp_path, KALIBR_TYPO.replace("denisty", "density"))
+    before = src.read_bytes()
+    code = main(["diagnose", str(tmp_path / "no-record.csv"), "--fs", "200", "--units", "rad/s",
+                 "--sim-model", str(src), "--write-corrected", str(src)])  # fmt: skip
+    assert code == 2
+    err = capsys.readouterr().err
+    assert f"--write-corrected {src} is the --sim-model config itself" in err
+    assert "no-record.csv" not in err  # refused before the record is read
+    assert src.read_bytes() == before
+
+
 def _written(tmp_path, text: str):  # type: ignore[no-untyped-def]
     path = tmp_path / "full.yaml"
     path.write_text(text)

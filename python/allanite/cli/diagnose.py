@@ -25,7 +25,7 @@ from allanite.cli.sim_config import (
     recheck_corrected,
     write_corrected,
 )
-from allanite.io.atomic import atomic_output, check_output_path
+from allanite.io.atomic import atomic_output, check_output_path, note_input
 from allanite.io.readers import read_record
 from allanite.io.record import INPUT_KINDS, Record
 
@@ -243,15 +243,42 @@ def _progress_printer() -> Any:
     return show
 
 
+def _same_file(a: str, b: str) -> bool:
+    """Whether two paths name one existing file (links and relative paths resolved)."""
+    import os
+
+    try:
+        return os.path.samefile(a, b)
+    except OSError:
+        return False
+
+
+def _check_outputs(args: argparse.Namespace) -> None:
+    """Refuse, before the computation, outputs that cannot be written or would replace an input.
+
+    ``--write-corrected`` onto the ``--sim-model`` config itself is refused here; an unwritable
+    ``--write-corrected`` path is reported after the diagnosis, which stands without it.
+    """
+    if args.sim_model:
+        note_input(args.sim_model)  # no output may replace the config it is compared with
+    for output in (args.output, args.report):
+        if output:
+            check_output_path(output)
+    if args.write_corrected and args.sim_model and _same_file(args.write_corrected, args.sim_model):
+        raise ValueError(
+            f"--write-corrected {args.write_corrected} is the --sim-model config itself; "
+            "writing it would replace your config: give another output name (e.g. "
+            "corrected.yaml) and compare the two"
+        )
+
+
 def run(args: argparse.Namespace) -> int:
     """Run ``allanite diagnose``."""
     from allanite.diagnosis import diagnose
 
     if args.seed < 0:
         raise ValueError(f"--seed must be a non-negative integer, got {args.seed}")
-    for output in (args.output, args.report):  # before the computation, not after it
-        if output:
-            check_output_path(output)
+    _check_outputs(args)
     check_sim_model(args)  # before the record: a bag may take minutes to read
     record = read_from_args(args.real, args)
     print_reader_notes([record], args)
