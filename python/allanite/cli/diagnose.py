@@ -25,7 +25,7 @@ from allanite.cli.sim_config import (
     recheck_corrected,
     write_corrected,
 )
-from allanite.io.atomic import atomic_output, check_output_path, note_input
+from allanite.io.atomic import atomic_output, check_output_path, input_source, note_input
 from allanite.io.readers import read_record
 from allanite.io.record import INPUT_KINDS, Record
 
@@ -243,16 +243,6 @@ def _progress_printer() -> Any:
     return show
 
 
-def _same_file(a: str, b: str) -> bool:
-    """Whether two paths name one existing file (links and relative paths resolved)."""
-    import os
-
-    try:
-        return os.path.samefile(a, b)
-    except OSError:
-        return False
-
-
 def _check_outputs(args: argparse.Namespace) -> None:
     """Refuse, before the computation, outputs that cannot be written or would replace an input.
 
@@ -264,7 +254,7 @@ def _check_outputs(args: argparse.Namespace) -> None:
     for output in (args.output, args.report):
         if output:
             check_output_path(output)
-    if args.write_corrected and args.sim_model and _same_file(args.write_corrected, args.sim_model):
+    if args.write_corrected and args.sim_model and input_source(args.write_corrected) is not None:
         raise ValueError(
             f"--write-corrected {args.write_corrected} is the --sim-model config itself; "
             "writing it would replace your config: give another output name (e.g. "

@@ -68,10 +68,8 @@ def read(text: str, *, rate: float | None = None) -> ImuConfig:
     config = from_densities(
         data, KEYS, fmt=NAME, rate=rate, what="Kalibr imu.yaml", other_keys=OTHER_KEYS
     )
-    absent = [sensor for sensor, model in (("gyro", config.gyro), ("accel", config.accel))
-              if model is None]  # fmt: skip
-    if absent:
-        config = dataclasses.replace(config, notes=(*config.notes, incomplete_note(absent[0])))
+    absent = tuple(incomplete_note(s) for s in KEYS if getattr(config, s) is None)
+    config = dataclasses.replace(config, notes=(*config.notes, *absent))
     topic = data.get("rostopic")
     return dataclasses.replace(config, topic=topic) if isinstance(topic, str) else config
 

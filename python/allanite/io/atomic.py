@@ -105,15 +105,23 @@ def check_output_path(path: str | os.PathLike[str], suffix: str | None = None) -
         raise OSError(f"cannot write {given}: no permission to write in {directory}")
 
 
+def input_source(path: str | os.PathLike[str]) -> str | None:
+    """The input of the running command that ``path`` names (same device and inode), if any.
+
+    Symbolic links are followed; None outside :func:`guard_inputs` or for a new file.
+    """
+    if not _INPUTS:
+        return None
+    try:
+        info = os.stat(_resolved(Path(path)))
+    except OSError:
+        return None
+    return _INPUTS.get((info.st_dev, info.st_ino))
+
+
 def _check_not_input(given: Path, final: Path) -> None:
     """Refuse an output that is one of the command's inputs (same device and inode)."""
-    if not _INPUTS:
-        return
-    try:
-        info = os.stat(final)
-    except OSError:
-        return
-    source = _INPUTS.get((info.st_dev, info.st_ino))
+    source = input_source(final)
     if source is not None:
         raise OSError(
             f"cannot write {given}: it is the input file {source}; writing it would destroy "

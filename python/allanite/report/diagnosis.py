@@ -115,10 +115,10 @@ def diagnosis_html(
         h.table(["view", "p-value", "where the gap is"], views, text_columns=1),
     ]
     units = diagnosis.meta.get("units")
-    scan = diagnosis.time.steps
-    if diagnosis.level_steps and scan is not None:
+    scan, steps = diagnosis.time.steps, diagnosis.level_steps
+    if steps and scan is not None:
         parts.append(f"<h3>Level steps (p = {_p(scan.p_value, None)})</h3>")
-        items = "".join(f"<li>{h.escape(s.text(units))}</li>" for s in diagnosis.level_steps)
+        items = "".join(f"<li>{h.escape(s.text(units))}</li>" for s in steps)
         parts.append(f"<ul>{items}</ul>")
     if diagnosis.attribution:
         from allanite.diagnosis.verdict import format_params, percent
