@@ -15,7 +15,6 @@ if TYPE_CHECKING:
     from allanite.batch import BatchResult, batch
     from allanite.diagnosis import Diagnosis, diagnose
     from allanite.fit import Coefficient, FitResult, fit
-    from allanite.fit.thermal import ThermalFit, compensate_thermal, fit_thermal
     from allanite.io import Record, read_record
     from allanite.model import NoiseModel
     from allanite.terms import (
@@ -52,9 +51,6 @@ _LAZY: dict[str, str] = {
     "Coefficient": "allanite.fit",
     "FitResult": "allanite.fit",
     "fit": "allanite.fit",
-    "ThermalFit": "allanite.fit.thermal",
-    "fit_thermal": "allanite.fit.thermal",
-    "compensate_thermal": "allanite.fit.thermal",
     "Record": "allanite.io",
     "read_record": "allanite.io",
     "NoiseModel": "allanite.model",
@@ -138,17 +134,14 @@ __all__ = [
     "Record",
     "Sine",
     "Term",
-    "ThermalFit",
     "White",
     "__version__",
     "adev",
     "avar",
     "avar_large",
     "batch",
-    "compensate_thermal",
     "diagnose",
     "fit",
-    "fit_thermal",
     "hdev",
     "mdev",
     "oadev",

@@ -359,7 +359,7 @@ def fit_thermal(
         )
     lag, lag_scale = None, 1.0
     if rate_term:
-        lag = temperature_rate(temperature, fs, smooth_s=rate_smoothing)
+        lag = temperature_rate(temperature, fs=fs, smooth_s=rate_smoothing)
         lag_scale = float(np.std(lag)) or 1.0
         lag = lag / lag_scale
     unit = record.rate_unit()
@@ -474,7 +474,7 @@ def compensate_thermal(record: Record, fits: tuple[ThermalFit, ...]) -> Record:
     fs = record.require_fs()
     samples = np.array(record.samples, dtype=np.float64)
     for c, fit in enumerate(fits):
-        bias = fit.model.bias(record.temperature, fs)
+        bias = fit.model.bias(record.temperature, fs=fs)
         samples[:, c] -= bias / fs if record.input == "increment" else bias
     removed = ", ".join(
         f"{f.channel} (degree {f.degree})" for f in fits if f.degree or f.model.rate

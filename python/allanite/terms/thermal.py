@@ -24,7 +24,7 @@ __all__ = ["ThermalBias", "temperature_rate"]
 
 
 def temperature_rate(
-    temperature: ArrayLike, fs: float, *, smooth_s: float = 0.0
+    temperature: ArrayLike, *, fs: float, smooth_s: float = 0.0
 ) -> NDArray[np.float64]:
     """dT/dt in °C/s at every sample: the gradient of the temperature averaged over ``smooth_s``.
 
@@ -73,7 +73,7 @@ class ThermalBias:
         """Degree of the polynomial (0: no temperature dependence)."""
         return len(self.coefficients)
 
-    def bias(self, temperature: ArrayLike, fs: float | None = None) -> NDArray[np.float64]:
+    def bias(self, temperature: ArrayLike, *, fs: float | None = None) -> NDArray[np.float64]:
         """The thermal bias at every temperature sample (zero at ``reference``, no rate).
 
         Parameters
@@ -91,7 +91,7 @@ class ThermalBias:
             if fs is None:
                 raise ValueError("the thermal model has a rate term: give fs to evaluate it")
             out += self.rate * temperature_rate(
-                np.asarray(temperature, dtype=np.float64), fs, smooth_s=self.rate_smoothing
+                np.asarray(temperature, dtype=np.float64), fs=fs, smooth_s=self.rate_smoothing
             )
         return out
 
