@@ -235,3 +235,25 @@ def test_cli_fit_with_temperature_fits_noise_on_the_compensated_record(tmp_path,
     assert "deg/h/°C" in text
     assert main([*argv, "--temperature", "temp", "--thermal-degree", "two"]) == 2
     assert "--thermal-degree 'two'" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_cli_diagnose_notes_the_thermal_sensitivity(tmp_path, capsys):
+    from allanite.model import NoiseModel
+    from allanite.terms import RateRandomWalk, White
+
+    record, _ = cycle(21, c1=C1, hours=3.0)
+    _csv(tmp_path / "r.csv", record)
+    model = NoiseModel((White(N=N_ARW), RateRandomWalk(K=K_RRW)), {"rate": "deg/s", "time": "s"})
+    model.save(tmp_path / "m.json")
+    argv = ["diagnose", str(tmp_path / "r.csv"), "--time-column", "t", "--units", "deg/s"]
+    argv += ["--channels", "gz"]
+    argv += ["--sim-model", str(tmp_path / "m.json"), "--n-mc", "20", "--json"]
+    assert main([*argv, "--temperature", "temp"]) == 0
+    captured = capsys.readouterr()
+    thermal = json.loads(captured.out)["thermal"]
+    assert thermal["sensitivity"]["low"] <= 36.0 <= thermal["sensitivity"]["high"]
+    assert "note: thermal sensitivity of gz: " in captured.err
+    assert "does not use the temperature" in captured.err
+    assert main(argv) == 0
+    assert json.loads(capsys.readouterr().out)["thermal"] is None

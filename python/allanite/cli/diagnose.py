@@ -164,6 +164,35 @@ def _holdout(args: argparse.Namespace) -> Any:
     return samples
 
 
+def _thermal_note(part: Record, args: argparse.Namespace) -> dict[str, Any] | None:
+    """With ``--temperature``: the channel's thermal sensitivity as a note on stderr.
+
+    The diagnosis itself does not use the temperature yet (no thermal candidate): the note
+    gives the number a calibration engineer would fit by hand, and says so. Returns the
+    thermal fit's JSON (None without a temperature, or the reason it could not be fitted).
+    """
+    if part.temperature is None:
+        return None
+    from allanite.fit.thermal import fit_thermal
+
+    try:
+        (fit,) = fit_thermal(part)
+    except ValueError as exc:
+        print(f"allanite diagnose: note: no thermal fit: {exc}", file=sys.stderr)
+        return {"error": str(exc)}
+    value, low, high, unit = fit.customary_sensitivity()
+    verdict = "significant" if fit.significant else "not significant (the interval covers 0)"
+    print(
+        f"allanite diagnose: note: thermal sensitivity of {fit.channel}: {value:.4g} {unit} "
+        f"[{low:.4g}, {high:.4g}] ({100 * fit.level:g} %), {verdict}, degree {fit.degree} "
+        f"over {fit.temperature_range[0]:.4g} to {fit.temperature_range[1]:.4g} °C; the "
+        "diagnosis below does not use the temperature (allanite fit --temperature fits the "
+        "noise on the compensated record)",
+        file=sys.stderr,
+    )
+    return fit.to_dict()
+
+
 def _summary(d: Any) -> str:
     from allanite.diagnosis.verdict import explanation_lines, format_params, percent
 
@@ -283,6 +312,7 @@ def run(args: argparse.Namespace) -> int:
     record = read_from_args(args.real, args)
     print_reader_notes([record], args)
     real, part = _one_channel(record, "real")
+    thermal = _thermal_note(part, args)
     warnings = warn_implausible(part, args).warnings[len(part.warnings) :]
     fs = part.require_fs()
     if args.write_corrected and not args.sim_model:
@@ -346,6 +376,7 @@ def run(args: argparse.Namespace) -> int:
         data = json.loads(result.to_json(views=False))
         data["warnings"] = list(warnings)  # plausibility findings on the real record
         data["corrected"] = corrected.to_dict() if corrected is not None else None
+        data["thermal"] = thermal
         sys.stdout.write(json.dumps(data) + "\n")
     else:
         print(_summary(result))
