@@ -26,21 +26,24 @@ __all__ = ["ThermalBias", "temperature_rate"]
 def temperature_rate(
     temperature: ArrayLike, *, fs: float, smooth_s: float = 0.0
 ) -> NDArray[np.float64]:
-    """dT/dt in °C/s at every sample: the gradient of the temperature averaged over ``smooth_s``.
+    """dT/dt in °C/s at every sample, from a local quadratic over ``smooth_s`` seconds.
 
     A temperature sensor quantises (0.01-0.1 °C steps); its raw difference is mostly that
-    step, so the rate is taken from the moving average over ``smooth_s`` seconds (at least one
-    sample).
+    step, so the rate is the derivative of a least-squares quadratic over a window of
+    ``smooth_s`` seconds around each sample (Savitzky-Golay; at the ends the window's own
+    fit, not a padded copy, so the first and last samples get no spurious zero rate).
+    Without smoothing (a window under 5 samples) it is the central difference.
     """
+    from scipy.signal import savgol_filter
+
     values = np.asarray(temperature, dtype=np.float64)
-    width = max(1, round(smooth_s * fs))
-    if width > 1 and values.size > width:
-        kernel = np.ones(width) / width
-        padded = np.pad(values, (width // 2, width - 1 - width // 2), mode="edge")
-        values = np.convolve(padded, kernel, mode="valid")
+    width = round(smooth_s * fs) // 2 * 2 + 1
     if values.size < 2:
         return np.zeros(values.size)
-    return np.gradient(values) * fs
+    if width < 5 or values.size <= width:
+        return np.asarray(np.gradient(values) * fs, dtype=np.float64)
+    rate = savgol_filter(values, width, 2, deriv=1, delta=1.0 / fs, mode="interp")
+    return np.asarray(rate, dtype=np.float64)
 
 
 @dataclass(frozen=True)
