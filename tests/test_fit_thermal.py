@@ -257,3 +257,18 @@ def test_cli_diagnose_notes_the_thermal_sensitivity(tmp_path, capsys):
     assert "does not use the temperature" in captured.err
     assert main(argv) == 0
     assert json.loads(capsys.readouterr().out)["thermal"] is None
+
+
+@pytest.mark.slow
+def test_thermal_lag_interval_coverage_over_seeds():
+    """The rate regressor is a Savitzky-Golay derivative: an edge-padded moving average gave
+    the end blocks a spurious zero rate and 70 % coverage (benchmarks/thermal_coverage.py)."""
+    seeds, lag = 60, 200.0
+    covered = 0
+    for seed in range(seeds):
+        record, _ = cycle(700 + seed, c1=C1, lag=lag)
+        (fit,) = fit_thermal(record, degree=1, rate_term=True, rate_smoothing=120.0)
+        lo, hi = fit.coefficients[-1].ci(LEVEL)
+        covered += lo <= lag <= hi
+    low, high = _binomial_band(seeds)
+    assert low <= covered <= high, f"{covered}/{seeds} intervals cover c_rate"
