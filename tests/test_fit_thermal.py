@@ -272,3 +272,37 @@ def test_thermal_lag_interval_coverage_over_seeds():
         covered += lo <= lag <= hi
     low, high = _binomial_band(seeds)
     assert low <= covered <= high, f"{covered}/{seeds} intervals cover c_rate"
+
+
+def test_report_has_a_bias_versus_temperature_section(tmp_path, capsys):
+    pytest.importorskip("matplotlib")
+    record, _ = cycle(5, c1=C1, hours=3.0)
+    _csv(tmp_path / "r.csv", record)
+    out = tmp_path / "r.html"
+    argv = ["report", str(tmp_path / "r.csv"), "--time-column", "t", "--units", "deg/s"]
+    assert main([*argv, "--temperature", "temp", "-o", str(out), "--png"]) == 0
+    html = out.read_text()
+    assert "Bias against temperature" in html
+    assert "deg/h/°C" in html
+    assert (tmp_path / "r-thermal-0-0.png").stat().st_size > 0
+    capsys.readouterr()
+    assert main([*argv, "--channels", "gz", "-o", str(out)]) == 0
+    assert "Bias against temperature" not in out.read_text()
+
+
+def test_thermal_figure_draws_the_block_means_and_the_law():
+    pytest.importorskip("matplotlib")
+    from allanite.plot.thermal import thermal_figure
+
+    record, _ = cycle(3, c1=C1, hours=2.0)
+    (fit,) = fit_thermal(record)
+    fig = thermal_figure(record, fit)
+    ax = fig.axes[0]
+    points, law = ax.lines
+    assert len(points.get_xdata()) == fit.n_blocks
+    slope = np.polyfit(law.get_xdata(), law.get_ydata(), 1)[0]
+    assert slope == pytest.approx(fit.customary_sensitivity()[0], rel=1e-9)
+    assert ax.get_ylabel() == "bias [deg/h]"
+    compensated = compensate_thermal(record, (fit,))
+    again = thermal_figure(compensated, fit, compensated=True)
+    np.testing.assert_allclose(again.axes[0].lines[0].get_ydata(), points.get_ydata())

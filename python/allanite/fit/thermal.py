@@ -49,7 +49,13 @@ from allanite.io.record import Record
 from allanite.terms.thermal import ThermalBias, temperature_rate
 from allanite.units import convert, customary_gyro_rate, sensor_kind
 
-__all__ = ["ThermalFit", "compensate_thermal", "fit_thermal", "sensitivity_unit"]
+__all__ = [
+    "ThermalFit",
+    "bias_blocks",
+    "compensate_thermal",
+    "fit_thermal",
+    "sensitivity_unit",
+]
 
 #: default number of block means (a few hundred: cheap, and fine enough for thermal cycles)
 N_BLOCKS = 400
@@ -72,7 +78,9 @@ class ThermalFit:
     coefficients : tuple of Coefficient
         ``c_1 .. c_degree`` (and ``c_rate``) of the chosen law with standard errors.
     bias : Coefficient
-        ``b_0``: the bias at the reference temperature.
+        ``b_0``, the GLS intercept: the bias at the reference temperature when the noise has
+        no random walk; with one, the walk's level at the start of the record (a random
+        walk has no mean level), so read it with its interval.
     sensitivity : Coefficient
         ``dy/dT`` at the reference temperature (rate unit per °C), from a fit of degree at
         least 1 (so it exists, with an interval, when degree 0 is chosen).
@@ -113,16 +121,19 @@ class ThermalFit:
         low, high = self.sensitivity.ci(self.level)
         return low > 0.0 or high < 0.0
 
+    def display_scale(self) -> tuple[float, str]:
+        """Factor and unit that show a bias in customary units (deg/h for a gyro, mg)."""
+        rate = self.model.units
+        shown = sensitivity_unit(rate).removesuffix("/°C")
+        if rate is None or shown == rate:
+            return 1.0, shown
+        return convert(1.0, rate, shown), shown
+
     def customary_sensitivity(self) -> tuple[float, float, float, str]:
         """``(value, low, high, unit)`` of the sensitivity in deg/h/°C (gyro), mg/°C (accel)."""
         low, high = self.sensitivity.ci(self.level)
-        rate = self.model.units
-        target = sensitivity_unit(rate)
-        if rate is None or target == f"{rate}/°C":
-            return self.sensitivity.value, low, high, target
-        shown = target.removesuffix("/°C")
-        scale = convert(1.0, rate, shown)
-        return self.sensitivity.value * scale, low * scale, high * scale, target
+        scale, shown = self.display_scale()
+        return self.sensitivity.value * scale, low * scale, high * scale, f"{shown}/°C"
 
     def lines(self) -> list[str]:
         """The thermal part as text: the law, the sensitivity with its interval, the method."""
@@ -164,7 +175,7 @@ class ThermalFit:
                 {"name": c.name, "value": c.value, "stderr": c.stderr, "unit": c.unit}
                 for c in self.coefficients
             ],
-            "bias_at_reference": {"value": self.bias.value, "stderr": self.bias.stderr},
+            "intercept": {"value": self.bias.value, "stderr": self.bias.stderr},
             "selection": [{"degree": d, "bic": b} for d, b in self.selection],
             "noise": {"sigma": self.sigma, "walk": self.walk, "block_s": self.block_s},
             "n_blocks": self.n_blocks,
@@ -482,3 +493,24 @@ def compensate_thermal(record: Record, fits: tuple[ThermalFit, ...]) -> Record:
     note = f"thermal bias removed before the noise fit: {removed}" if removed else None
     warnings = record.warnings if note is None else (*record.warnings, note)
     return dataclasses.replace(record, samples=samples, warnings=warnings)
+
+
+def bias_blocks(
+    record: Record, fit: ThermalFit, channel: int, *, compensated: bool = False
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Block means of temperature and of the bias, as the fit saw them (for a plot).
+
+    ``record`` is the record the fit was made on, or (``compensated=True``) that record after
+    :func:`compensate_thermal`, whose thermal bias is added back.
+    """
+    if record.temperature is None:
+        raise ValueError(f"{record.source}: the record has no temperature")
+    rates, fs = _rates(record)
+    y = rates[:, channel]
+    if compensated:
+        y = y + fit.model.bias(record.temperature, fs=fs)
+    length = record.n_samples // fit.n_blocks
+    return (
+        _block_means(np.asarray(record.temperature, dtype=np.float64), fit.n_blocks, length),
+        _block_means(y, fit.n_blocks, length),
+    )
