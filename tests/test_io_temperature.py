@@ -274,3 +274,22 @@ def test_ros_temperature_topic_is_resampled_onto_the_imu_stamps(tmp_path):
     )
     with pytest.raises(InputError, match=r"no sensor_msgs/Temperature topic '/temp'.*/imu/temp"):
         read_record(tmp_path / "b.bag", temperature="/temp")
+
+
+def test_parquet_and_dataframe_temperature_columns(tmp_path, capsys):
+    pd = pytest.importorskip("pandas")
+    pytest.importorskip("pyarrow")
+    t, gyro, temp = _table()
+    frame = pd.DataFrame({"time": t, "gx": gyro[:, 0], "temp": temp, "note": ["x"] * N})
+    rec = read_record(frame, time_column="time", temperature="temp", columns="gx")
+    np.testing.assert_allclose(rec.temperature, temp)
+    frame.drop(columns="note").to_parquet(tmp_path / "r.parquet")
+    rec = read_record(tmp_path / "r.parquet", time_column="time", temperature="temp")
+    assert rec.channels == ("gx",)
+    np.testing.assert_allclose(rec.temperature, temp)
+    frame.assign(temp=["warm"] * N).to_parquet(tmp_path / "s.parquet")
+    with pytest.raises(InputError, match=r"column 'temp' is not numeric"):
+        read_record(tmp_path / "s.parquet", time_column="time", temperature="temp", columns="gx")
+    argv = ["analyze", str(tmp_path / "r.parquet"), "--time-column", "time"]
+    assert main([*argv, "--temperature", "temp"]) == 0
+    assert "temperature 20 to 22 °C" in capsys.readouterr().out

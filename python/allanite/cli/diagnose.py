@@ -52,7 +52,9 @@ alone), holdout {shrinkage, checkable, disagrees, fit_effects, deciding_length_s
 null (the best single effect; with a fraction, the fit part's, checked on the held-out part),
 meta, warnings, corrected {path, format, folded, projections, adev_error, tau_range_s, recheck
 {statistic, p_value, significant, n_samples}} or null (with --write-corrected: the file read
-back under its format's law and re-checked against the same record). The text leads with the
+back under its format's law and re-checked against the same record), thermal (with
+--temperature: the channel's thermal fit as allanite fit --json gives it, {sensitivity, degree,
+model, ...}; the diagnosis does not use it yet; else null). The text leads with the
 headline and what remains unexplained, and shows parameters in the customary units of
 `allanite fit` (N in
 deg/sqrt(h), ...); the JSON keeps them in the units of --units, named in params_units.

@@ -860,7 +860,7 @@ def _with_datasets(
     return np.column_stack(columns), (*col_names, *wanted), None
 
 
-def _load_parquet(path: Path, columns: list[Column] | None, time_column: Column | None) -> Loaded:
+def _load_parquet(path: Path, columns: list[Column] | None, *named: Column | None) -> Loaded:
     pq = require("pyarrow.parquet", extra="parquet", purpose="reading Parquet")
     try:
         table = pq.read_table(path)
@@ -873,7 +873,7 @@ def _load_parquet(path: Path, columns: list[Column] | None, time_column: Column 
         try:
             arrays.append(np.asarray(col.to_numpy(), dtype=np.float64))
         except (ValueError, TypeError) as exc:
-            wanted = {*(columns or []), time_column}
+            wanted = {*(columns or []), *named}  # the time and temperature columns
             if columns is None or name in wanted:
                 raise InputError(
                     f"column {name!r} is not numeric ({col.type}); select numeric columns "
@@ -906,7 +906,7 @@ def from_frame(frame: Any, *, source: str = "DataFrame", **options: Any) -> Reco
     names = tuple(str(c) for c in frame.columns)
     numeric = [c for c in frame.columns if pd.api.types.is_numeric_dtype(frame[c])]
     columns = _as_list(options.get("columns"))
-    wanted = set(columns or []) | {options.get("time_column")}
+    wanted = set(columns or []) | {options.get("time_column"), options.get("temperature")}
     for c in frame.columns:
         if c not in numeric and (columns is None or str(c) in wanted):
             raise InputError(
@@ -1067,7 +1067,7 @@ def _load(path: Path, fmt: str, opts: ReadOptions) -> Loaded:
         )
     if fmt == "hdf5":
         return _load_hdf5(path, opts.key, [opts.temperature, opts.time_column])
-    return _load_parquet(path, _as_list(opts.columns), opts.time_column)
+    return _load_parquet(path, _as_list(opts.columns), opts.time_column, opts.temperature)
 
 
 def _read_netcdf(path: Path, opts: ReadOptions) -> Record:
