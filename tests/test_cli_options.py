@@ -177,7 +177,7 @@ def test_reader_flags_are_the_read_options_and_survive_record_command() -> None:
         "--channels", "gx,gy", "--time-column", "t", "--time-scale", "1e-9", "--gaps", "split",
         "--scale", "0.05", "--format", "raw", "--delimiter", ";", "--header", "no",
         "--key", "imu", "--dtype", "int16", "--n-channels", "3", "--byte-order", "big",
-        "--offset", "16", "--topic", "/imu1", "--fs-source", "time",
+        "--offset", "16", "--topic", "/imu1", "--fs-source", "time", "--temperature", "temp",
     ]  # fmt: skip
     parser = build_parser()
     options = read_options(parser.parse_args(argv))

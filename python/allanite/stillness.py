@@ -37,7 +37,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import stats
 
-from allanite.io.record import Record, Segment
+from allanite.io.record import Record
 from allanite.units import sensor_kind
 
 __all__ = ["STILL_MODES", "Stillness", "find_motion", "still_record"]
@@ -220,9 +220,6 @@ def still_record(record: Record, mode: str = "warn") -> tuple[Record, Stillness 
         f"{found.times(found.moving[:5])}"
     )
     part = dataclasses.replace(
-        record,
-        samples=record.samples[a:b],
-        segments=(Segment(0, b - a, a / found.fs),),
-        warnings=(*record.warnings, note),
+        record.rows(a, b, t0=a / found.fs), warnings=(*record.warnings, note)
     )
     return part, found

@@ -302,6 +302,12 @@ def format_table(
             f"  {len(record.segments)} segments; analysed the longest "
             f"({longest.n_samples} samples from t = {longest.t0:g} s)"
         )
+    if record.temperature is not None:
+        lines.append(
+            f"  temperature {record.temperature.min():.4g} to {record.temperature.max():.4g} °C "
+            "(the noise is analysed as recorded; allanite fit --temperature fits the bias "
+            "against it)"
+        )
     lines.extend(f"  warning: {w}" for w in record.warnings)
     lo, hi = result.ci(level)
     name = _DEV_NAMES.get(result.kind, result.kind)

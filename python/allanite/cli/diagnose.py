@@ -52,7 +52,9 @@ alone), holdout {shrinkage, checkable, disagrees, fit_effects, deciding_length_s
 null (the best single effect; with a fraction, the fit part's, checked on the held-out part),
 meta, warnings, corrected {path, format, folded, projections, adev_error, tau_range_s, recheck
 {statistic, p_value, significant, n_samples}} or null (with --write-corrected: the file read
-back under its format's law and re-checked against the same record). The text leads with the
+back under its format's law and re-checked against the same record), thermal (with
+--temperature: the channel's thermal fit as allanite fit --json gives it, {sensitivity, degree,
+model, ...}; the diagnosis does not use it yet; else null). The text leads with the
 headline and what remains unexplained, and shows parameters in the customary units of
 `allanite fit` (N in
 deg/sqrt(h), ...); the JSON keeps them in the units of --units, named in params_units.
@@ -164,6 +166,35 @@ def _holdout(args: argparse.Namespace) -> Any:
     return samples
 
 
+def _thermal_note(part: Record, args: argparse.Namespace) -> dict[str, Any] | None:
+    """With ``--temperature``: the channel's thermal sensitivity as a note on stderr.
+
+    The diagnosis itself does not use the temperature yet (no thermal candidate): the note
+    gives the number a calibration engineer would fit by hand, and says so. Returns the
+    thermal fit's JSON (None without a temperature, or the reason it could not be fitted).
+    """
+    if part.temperature is None:
+        return None
+    from allanite.fit.thermal import fit_thermal
+
+    try:
+        (fit,) = fit_thermal(part)
+    except ValueError as exc:
+        print(f"allanite diagnose: note: no thermal fit: {exc}", file=sys.stderr)
+        return {"error": str(exc)}
+    value, low, high, unit = fit.customary_sensitivity()
+    verdict = "significant" if fit.significant else "not significant (the interval covers 0)"
+    print(
+        f"allanite diagnose: note: thermal sensitivity of {fit.channel}: {value:.4g} {unit} "
+        f"[{low:.4g}, {high:.4g}] ({100 * fit.level:g} %), {verdict}, degree {fit.degree} "
+        f"over {fit.temperature_range[0]:.4g} to {fit.temperature_range[1]:.4g} °C; the "
+        "diagnosis below does not use the temperature (allanite fit --temperature fits the "
+        "noise on the compensated record)",
+        file=sys.stderr,
+    )
+    return fit.to_dict()
+
+
 def _summary(d: Any) -> str:
     from allanite.diagnosis.verdict import explanation_lines, format_params, percent
 
@@ -273,6 +304,7 @@ def run(args: argparse.Namespace) -> int:
     record = read_from_args(args.real, args)
     print_reader_notes([record], args)
     real, part = _one_channel(record, "real")
+    thermal = _thermal_note(part, args)
     warnings = warn_implausible(part, args).warnings[len(part.warnings) :]
     fs = part.require_fs()
     if args.write_corrected and not args.sim_model:
@@ -336,6 +368,7 @@ def run(args: argparse.Namespace) -> int:
         data = json.loads(result.to_json(views=False))
         data["warnings"] = list(warnings)  # plausibility findings on the real record
         data["corrected"] = corrected.to_dict() if corrected is not None else None
+        data["thermal"] = thermal
         sys.stdout.write(json.dumps(data) + "\n")
     else:
         print(_summary(result))

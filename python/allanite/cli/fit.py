@@ -24,7 +24,15 @@ from allanite.errors import ImplausibleInputWarning, RecordTooShortError
 from allanite.io.atomic import atomic_output
 from allanite.variance import AllanResult
 
-__all__ = ["fit_lines", "fit_possible", "fit_result", "goodness", "register", "run"]
+__all__ = [
+    "fit_lines",
+    "fit_possible",
+    "fit_result",
+    "goodness",
+    "register",
+    "run",
+    "thermal_fits",
+]
 
 EXAMPLES = """examples:
   allanite fit --example
@@ -32,6 +40,8 @@ EXAMPLES = """examples:
   allanite fit run1.npz --key gyro_counts --fs 100 --scale 0.05 --units deg/s --channels 0 \\
       --plot fit.png --json
   allanite fit dut.csv --time-column t --units deg/s --datasheet limits.json
+  allanite fit logger.nc --key angular_velocity --units rad/s --temperature temperature
+      # thermal bias (deg/h/degC) fitted, the noise terms fitted on the compensated record
   allanite fit imu.csv --time-column t --channels gx,gy,gz,ax,ay,az \\
       --units deg/s,deg/s,deg/s,m/s^2,m/s^2,m/s^2          # six-axis: a table per sensor
 
@@ -69,6 +79,7 @@ def register(subparsers: Any) -> None:
         help="check the coefficients against datasheet limits (exit code 1 when one fails)",
     )
     add_fit_arguments(parser)
+    add_thermal_arguments(parser)
     add_record_arguments(parser)
     add_still_argument(parser)
     add_grid_arguments(parser)
@@ -89,6 +100,49 @@ def add_fit_arguments(parser: Any) -> None:
         metavar="LO:HI",
         help="fit only the taus from LO to HI seconds (either may be empty: 5: or :100)",
     )
+
+
+def add_thermal_arguments(parser: Any) -> None:
+    """``--thermal-degree`` and ``--thermal-lag``: the thermal fit with ``--temperature``."""
+    group = parser.add_argument_group("thermal bias (with --temperature)")
+    group.add_argument(
+        "--thermal-degree",
+        default="auto",
+        help="degree of the bias polynomial in temperature: auto (BIC from 0 to 3, default) "
+        "or a number from 0 to 6",
+    )
+    group.add_argument(
+        "--thermal-lag",
+        action="store_true",
+        help="add a term in the temperature rate dT/dt (thermal lag, hysteresis)",
+    )
+
+
+def thermal_fits(sensors: list[Any], args: argparse.Namespace) -> tuple[list[Any], list[Any]]:
+    """The records with their thermal bias removed, and one :class:`ThermalFit` per channel.
+
+    Without ``--temperature`` the records come back unchanged and the fits are None.
+    """
+    if all(record.temperature is None for record in sensors):
+        return sensors, [None for record in sensors for _ in record.channels]
+    from allanite.fit.thermal import compensate_thermal, fit_thermal
+
+    text = str(getattr(args, "thermal_degree", "auto") or "auto")
+    if text != "auto" and not text.isdigit():
+        raise ValueError(f"--thermal-degree {text!r}: give auto or a whole number from 0 to 6")
+    degree = None if text == "auto" else int(text)
+    out: list[Any] = []
+    fits: list[Any] = []
+    for record in sensors:
+        found = fit_thermal(
+            record,
+            degree=degree,
+            rate_term=bool(getattr(args, "thermal_lag", False)),
+            level=args.level,
+        )
+        out.append(compensate_thermal(record, found))
+        fits.extend(found)
+    return out, fits
 
 
 def fit_options(args: argparse.Namespace) -> dict[str, Any]:
@@ -231,7 +285,7 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError(
             f"--kind {args.kind}: the fit models the overlapping Allan variance; leave --kind out"
         )
-    sensors = read_sensors(args.file, args)
+    sensors, thermal = thermal_fits(read_sensors(args.file, args), args)
     analysed = []
     for record in sensors:
         result = avar_from_args(record, args)
@@ -239,13 +293,19 @@ def run(args: argparse.Namespace) -> int:
     work = [(record, result, c) for record, result in analysed for c in range(record.n_channels)]
     channels = []
     fits = []
-    for record, result, c in progress(work, desc="fitting", total=len(work)):
+    for (record, result, c), warm in zip(
+        progress(work, desc="fitting", total=len(work)), thermal, strict=True
+    ):
         fit = fit_result(result.channel(c), fit_options(args))
         fits.append(fit)
         channels.append(_channel_summary(fit, record, result, c, sheet, args))
+        channels[-1]["thermal"] = None if warm is None else warm.to_dict()
+        channels[-1]["thermal_lines"] = None if warm is None else warm.lines()
     _write_outputs(analysed[0], fits[0], args)
     failed = [k for item in channels for k in item["checks"] if k["status"] == "fail"]
     if args.json:
+        for item in channels:
+            item.pop("thermal_lines")
         summary = analysed[0][0].summary()
         if len(sensors) > 1:
             summary["units"] = [r.units for r in sensors for _ in r.channels]
@@ -316,6 +376,13 @@ def _write_outputs(first: tuple[Any, AllanResult], fit: Any, args: argparse.Name
     if args.output:
         with atomic_output(args.output) as tmp:
             tmp.write_text(_model_of(fit).to_json(), encoding="utf-8")
+        if record.temperature is not None:
+            print(
+                f"allanite fit: note: {args.output} holds the noise terms of the thermally "
+                "compensated record; the thermal law is not in the model file yet (it is in "
+                "the --json output, channels[].thermal.model)",
+                file=sys.stderr,
+            )
         if getattr(fit, "rejected", False):
             print(
                 f"allanite fit: warning: wrote {args.output}, but the model of channel "
@@ -333,6 +400,8 @@ def _print_channels(
 
     for item, fit in zip(channels, fits, strict=True):
         print(f"channel {item['channel']} ({_what(item)}):")
+        for line in item.get("thermal_lines") or ():
+            print(f"  {line}")
         for row in item["coefficients"]:
             interval = (
                 "" if row["low"] != row["low"] else f"  [{row['low']:.4g}, {row['high']:.4g}]"

@@ -102,6 +102,14 @@ def add_record_arguments(parser: argparse.ArgumentParser) -> None:
         "--time-column", help="column of time stamps (index or name); fs is inferred from it"
     )
     group.add_argument(
+        "--temperature",
+        metavar="NAME",
+        help="the sensor temperature (deg C): a column (index or name), an HDF5 dataset or "
+        "netCDF variable, a ROS sensor_msgs/Temperature topic, or a ULog field "
+        "(temperature of sensor_gyro/sensor_accel); resampled onto the sample times. "
+        "fit then fits the bias against it (see allanite.thermal)",
+    )
+    group.add_argument(
         "--time-scale",
         type=float,
         default=1.0,
@@ -407,6 +415,7 @@ def read_options(args: argparse.Namespace) -> ReadOptions:
         byteorder=args.byte_order,
         offset=args.offset,
         topic=getattr(args, "topic", None),
+        temperature=_time_column(getattr(args, "temperature", None)),
     )
 
 
@@ -430,6 +439,7 @@ _READER_FLAGS: dict[str, tuple[str, Any]] = {
     "byte_order": ("--byte-order", None),
     "offset": ("--offset", None),
     "topic": ("--topic", None),
+    "temperature": ("--temperature", None),
     "still": ("--still", "warn"),
 }
 

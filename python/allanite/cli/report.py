@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import re
 from pathlib import Path
 from typing import Any
@@ -184,22 +185,25 @@ def run(args: argparse.Namespace) -> int:
     check_output_path(args.output)  # before the analysis, not after it
     if not args.files and not args.example:
         raise ValueError("give at least one record FILE, or --example")
+    from allanite.cli.fit import thermal_fits
+
     sheet = Datasheet.load(args.datasheet) if args.datasheet else None
     check_sim_model(args)  # before the records: a bag may take minutes to read
     sources: list[str | None] = list(args.files) or [None]
     devices = []
     for path in progress(sources, desc="analysing", total=len(sources)):
-        sensors = read_sensors(path, args)
+        sensors, thermal = thermal_fits(read_sensors(path, args), args)
         for record in sensors:
+            warm, thermal = tuple(thermal[: record.n_channels]), thermal[record.n_channels :]
             name = ""
             if len(sensors) > 1:  # one device per sensor of a six-axis record
                 name = f"{Path(record.source).name} ({_sensor_name(record)})"
             result = avar_from_args(record, args)
-            device = DeviceAnalysis(warn_implausible(record, args, result), result, name=name)
+            device = DeviceAnalysis(
+                warn_implausible(record, args, result), result, name=name, thermal=warm
+            )
             if not args.no_fit:
-                device = DeviceAnalysis(
-                    device.record, device.result, fit_channels(device), name=name
-                )
+                device = dataclasses.replace(device, fits=fit_channels(device))
             devices.append(device)
     reference = None
     if args.reference:

@@ -22,6 +22,7 @@ TABLE_FIELDS = (
     "gaps",
     "scale",
     "fs_source",
+    "temperature",
 )
 
 
@@ -71,6 +72,11 @@ class ReadOptions:
     topic : str, optional
         ROS bag IMU topic, or ULog topic (``sensor_combined``, ``sensor_gyro[:instance]``,
         ``sensor_accel``); see :mod:`allanite.io.robot_logs`.
+    temperature : int or str, optional
+        The sensor temperature in °C: a column (text, Parquet, DataFrame), an HDF5 dataset or
+        netCDF variable, a ROS ``sensor_msgs/Temperature`` topic, or the ``temperature`` field
+        of a ULog ``sensor_gyro``/``sensor_accel`` topic; resampled onto the sample times
+        (:attr:`allanite.io.Record.temperature`).
     """
 
     fs: float | None = None
@@ -91,6 +97,7 @@ class ReadOptions:
     byteorder: str | None = None
     offset: int | None = None
     topic: str | None = None
+    temperature: Column | None = None
 
     def replace(self, **changes: Any) -> ReadOptions:
         """A copy with some fields changed; an unknown name is a TypeError listing the fields."""

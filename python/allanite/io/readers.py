@@ -44,6 +44,7 @@ FORMATS: dict[str, tuple[str, ...]] = {
     "npz": (".npz",),
     "raw": (".bin", ".raw", ".imu"),
     "hdf5": (".h5", ".hdf5", ".hdf"),
+    "netcdf": (".nc", ".nc4", ".cdf", ".netcdf"),
     "parquet": (".parquet", ".pq"),
     "rosbag": (".bag", ".db3", ".mcap"),  # ROS 1 and ROS 2 (a ROS 2 bag directory too)
     "ulog": (".ulg", ".ulog"),  # PX4 flight logs
@@ -53,12 +54,51 @@ Where = Callable[[int], str]
 
 
 def detect_format(path: str | os.PathLike[str]) -> str:
-    """Format name from the file suffix (unknown suffixes are read as text)."""
+    """Format name from the file's first bytes, else from its suffix (unknown: text).
+
+    Binary formats are recognised by their signature whatever the suffix (a netCDF file
+    named ``.dat``, an HDF5 file named ``.nc``: netCDF-4); a binary file of no known format
+    is never parsed as text (:func:`read_record` refuses it, naming ``--format raw``).
+    """
     suffix = Path(path).suffix.lower()
-    for name, suffixes in FORMATS.items():
-        if suffix in suffixes:
+    by_suffix = next((n for n, sfx in FORMATS.items() if suffix in sfx), "text")
+    sniffed = _sniff(Path(path))
+    if sniffed == "hdf5" and by_suffix == "netcdf":
+        return "netcdf"  # netCDF-4 is HDF5
+    if sniffed in (None, "binary"):
+        return by_suffix
+    return sniffed
+
+
+#: file signatures -> format (netCDF-4 files start with the HDF5 one)
+_MAGIC: tuple[tuple[bytes, str], ...] = (
+    (b"CDF\x01", "netcdf"),
+    (b"CDF\x02", "netcdf"),
+    (b"\x89HDF\r\n\x1a\n", "hdf5"),
+    (b"\x93NUMPY", "npy"),
+    (b"PK\x03\x04", "npz"),
+    (b"PAR1", "parquet"),
+    (b"ULog\x01\x12\x35", "ulog"),
+    (b"#ROSBAG V2.0", "rosbag"),
+)
+#: compressed text (read by the text reader when the suffix says so)
+_GZIP = b"\x1f\x8b"
+
+
+def _sniff(path: Path) -> str | None:
+    """The format a file's first bytes name, ``"binary"`` for unknown binary, None for text."""
+    if not path.is_file():
+        return None
+    with path.open("rb") as handle:
+        head = handle.read(4096)
+    for magic, name in _MAGIC:
+        if head.startswith(magic):
             return name
-    return "text"
+    if head.startswith(_GZIP) or head.startswith((b"\xff\xfe", b"\xfe\xff")):
+        return None
+    if b"\x00" in head or head.startswith(b"CDF\x05"):  # CDF-5: refused by name
+        return "binary"
+    return None
 
 
 _RAW_OPTIONS = {
@@ -78,6 +118,19 @@ def _format_of(path: Path, format: str | None, raw_options: list[str]) -> str:
     if format is not None and format not in FORMATS:
         raise ValueError(f"unknown format {format!r}; use one of {', '.join(FORMATS)}")
     fmt = format or detect_format(path)
+    if fmt == "text" and not raw_options and _sniff(path) == "binary":
+        from allanite.io.netcdf import CDF5_MAGIC, CDF5_REFUSED
+
+        with path.open("rb") as handle:
+            cdf5 = handle.read(4) == CDF5_MAGIC
+        raise InputError(
+            CDF5_REFUSED
+            if cdf5
+            else "a binary file of no format known here, not text: it is not parsed as "
+            "text; give its format (--format), or its layout for raw samples (--dtype, "
+            "--n-channels)",
+            path=str(path),
+        )
     if not raw_options or fmt == "raw":
         return fmt
     given = ", ".join(_RAW_OPTIONS[name] for name in raw_options)
@@ -192,25 +245,67 @@ def _sample_columns(
     columns: Column | Sequence[Column] | None,
     time_column: Column | None,
     source: str,
-) -> tuple[int | None, list[int]]:
-    """Index of the time column (or None) and of the sample columns (default: all others)."""
+    temperature: Column | None = None,
+) -> tuple[int | None, list[int], int | None]:
+    """Indices of the time column, the sample columns (default: all others), the temperature."""
     t_index = (
         None if time_column is None else _resolve(col_names, time_column, source, "time column")
     )
+    k_index = (
+        None
+        if temperature is None
+        else _resolve(col_names, temperature, source, "temperature column")
+    )
     chosen = _as_list(columns)
     if chosen is None:
-        idx = [i for i in range(len(col_names)) if i != t_index]
+        idx = [i for i in range(len(col_names)) if i not in (t_index, k_index)]
     else:
         idx = [_resolve(col_names, c, source, "column") for c in chosen]
     if not idx:
         raise InputError("no sample columns left after taking the time column", path=source)
-    if t_index is not None and t_index in idx:
+    for index, what in ((t_index, "time column"), (k_index, "temperature column")):
+        if index is not None and index in idx:
+            raise InputError(
+                f"column {col_names[index]!r} is both the {what} and a sample column; "
+                "leave it out of the columns",
+                path=source,
+            )
+    if t_index is not None and t_index == k_index:
         raise InputError(
-            f"column {col_names[t_index]!r} is both the time column and a sample column; "
-            "leave it out of the columns",
+            f"column {col_names[t_index]!r} is both the time column and the temperature "
+            "column; name the temperature column (--temperature NAME)",
             path=source,
         )
-    return t_index, idx
+    return t_index, idx, k_index
+
+
+def _temperature_values(
+    arr: NDArray[Any], index: int | None, t_index: int | None, name: str, source: str
+) -> NDArray[np.float64] | None:
+    """The temperature column with missing values (nan) interpolated over time (or row).
+
+    A temperature logged more slowly than the samples (a 1 Hz sensor in a 100 Hz table, nan
+    in the rows between) is resampled onto every sample time by linear interpolation; the
+    ends take the nearest logged value.
+    """
+    if index is None:
+        return None
+    values = np.asarray(arr[:, index], dtype=np.float64)
+    known = np.isfinite(values)
+    if np.all(known):
+        return values
+    if np.count_nonzero(known) < 1:
+        raise InputError(
+            f"the temperature column {name!r} holds no finite value; name the column that "
+            "holds the temperature (--temperature NAME)",
+            path=source,
+        )
+    x = (
+        np.arange(values.size, dtype=np.float64)
+        if t_index is None
+        else np.asarray(arr[:, t_index], dtype=np.float64)
+    )
+    return np.interp(x, x[known], values[known])
 
 
 def _scaled_samples(samples: NDArray[Any], scale: float | None) -> NDArray[Any]:
@@ -259,6 +354,7 @@ def make_record(
     scale: float | None = None,
     where: Where | None = None,
     fs_source: str | None = None,
+    temperature: Column | None = None,
 ) -> Record:
     """Build a :class:`Record` from a 2-D table of numbers.
 
@@ -292,6 +388,9 @@ def make_record(
     fs_source : {"time", "fs"}, optional
         Which rate wins when ``fs`` contradicts the time column (see
         :func:`allanite.io.timebase.resolve_time`).
+    temperature : int or str, optional
+        Column of the sensor temperature in °C (:attr:`Record.temperature`); nan rows are
+        interpolated over time, and it follows the samples through the gap policy.
 
     Returns
     -------
@@ -299,7 +398,8 @@ def make_record(
     """
     arr, col_names = _numeric_table(table, names, source)
     locate: Where = where if where is not None else (lambda row: f"row {row + 1}")
-    t_index, idx = _sample_columns(col_names, columns, time_column, source)
+    t_index, idx, k_index = _sample_columns(col_names, columns, time_column, source, temperature)
+    celsius = _temperature_values(arr, k_index, t_index, str(temperature), source)
     consecutive = idx == list(range(idx[0], idx[0] + len(idx))) if idx else False
     # a slice keeps a memory-mapped .npy/raw file mapped (a list of columns would copy it all)
     picked = arr[:, idx[0] : idx[0] + len(idx)] if consecutive else arr[:, idx]
@@ -318,14 +418,16 @@ def make_record(
             source=source,
             scale=scale,
             warnings=_time_channels(channels, samples) if fs is not None else (),
+            temperature=celsius,
         )
         return _with_header(record, scale)
     if not np.isfinite(time_scale) or time_scale <= 0:
         raise ValueError(f"time_scale must be a positive number of seconds, got {time_scale!r}")
     t = np.asarray(arr[:, t_index], dtype=np.float64) * time_scale
+    values = np.asarray(samples, dtype=np.float64)
     base = resolve_time(
         t,
-        np.asarray(samples, dtype=np.float64),
+        values if celsius is None else np.column_stack([values, celsius]),
         source=source,
         policy=gaps,
         fs=fs,
@@ -333,7 +435,8 @@ def make_record(
         fs_source=fs_source,
     )
     record = Record(
-        samples=base.samples,
+        samples=base.samples if celsius is None else base.samples[:, :-1],
+        temperature=None if celsius is None else base.samples[:, -1],
         fs=base.fs,
         input=input,
         units=units,
@@ -675,17 +778,14 @@ def _load_raw(
     return np.asarray(arr), None, None
 
 
-def _load_hdf5(path: Path, key: str | None) -> Loaded:
+def _load_hdf5(path: Path, key: str | None, extra: Sequence[Column | None] = ()) -> Loaded:
     h5py = require("h5py", extra="hdf5", purpose="reading HDF5")
     try:
         handle = h5py.File(path, "r")
     except OSError as exc:
         raise InputError(f"not a readable HDF5 file ({exc})", path=str(path)) from exc
     with handle:
-        datasets: list[str] = []
-        handle.visititems(
-            lambda name, obj: datasets.append(name) if isinstance(obj, h5py.Dataset) else None
-        )
+        datasets = _datasets(handle)
         if key is None:
             if len(datasets) != 1:
                 raise InputError(
@@ -708,10 +808,59 @@ def _load_hdf5(path: Path, key: str | None) -> Loaded:
             col_attr = ds.attrs.get("columns")
             if col_attr is not None and arr.ndim == 2 and len(col_attr) == arr.shape[1]:
                 names = tuple(c.decode() if isinstance(c, bytes) else str(c) for c in col_attr)
-    return arr, names, None
+        return _with_datasets(path, handle, key, arr, names, extra)
 
 
-def _load_parquet(path: Path, columns: list[Column] | None, time_column: Column | None) -> Loaded:
+def _datasets(handle: Any) -> list[str]:
+    """The paths of every dataset in an open HDF5 file."""
+    h5py = require("h5py", extra="hdf5", purpose="reading HDF5")
+    found: list[str] = []
+    handle.visititems(
+        lambda name, obj: found.append(name) if isinstance(obj, h5py.Dataset) else None
+    )
+    return found
+
+
+def _with_datasets(
+    path: Path,
+    handle: Any,
+    key: str,
+    arr: NDArray[Any],
+    names: tuple[str, ...] | None,
+    extra: Sequence[Column | None],
+) -> Loaded:
+    """The table with the other datasets the options name (temperature, time) as columns.
+
+    A name that is neither a column of the table nor a dataset with one value per row is
+    left to the column lookup, which lists the columns; a dataset of another length is
+    refused here.
+    """
+    table, col_names = _numeric_table(arr, names, str(path))
+    named = [e for e in extra if isinstance(e, str) and e not in col_names and not e.isdigit()]
+    missing = [e for e in named if e not in handle]
+    if missing:
+        raise InputError(
+            f"no dataset or column {missing[0]!r}; datasets: {', '.join(_datasets(handle))}; "
+            f"columns of {key!r}: {', '.join(col_names)}",
+            path=str(path),
+        )
+    wanted = [e for e in named if e in handle]
+    if not wanted:
+        return arr, names, None
+    columns = [table]
+    for name in wanted:
+        values = np.asarray(handle[name][()], dtype=np.float64)
+        if values.ndim != 1 or values.shape[0] != table.shape[0]:
+            raise InputError(
+                f"dataset {name!r} has shape {values.shape}, the samples ({key!r}) have "
+                f"{table.shape[0]} rows; give a dataset with one value per sample",
+                path=str(path),
+            )
+        columns.append(values.reshape(-1, 1))
+    return np.column_stack(columns), (*col_names, *wanted), None
+
+
+def _load_parquet(path: Path, columns: list[Column] | None, *named: Column | None) -> Loaded:
     pq = require("pyarrow.parquet", extra="parquet", purpose="reading Parquet")
     try:
         table = pq.read_table(path)
@@ -724,7 +873,7 @@ def _load_parquet(path: Path, columns: list[Column] | None, time_column: Column 
         try:
             arrays.append(np.asarray(col.to_numpy(), dtype=np.float64))
         except (ValueError, TypeError) as exc:
-            wanted = {*(columns or []), time_column}
+            wanted = {*(columns or []), *named}  # the time and temperature columns
             if columns is None or name in wanted:
                 raise InputError(
                     f"column {name!r} is not numeric ({col.type}); select numeric columns "
@@ -757,7 +906,7 @@ def from_frame(frame: Any, *, source: str = "DataFrame", **options: Any) -> Reco
     names = tuple(str(c) for c in frame.columns)
     numeric = [c for c in frame.columns if pd.api.types.is_numeric_dtype(frame[c])]
     columns = _as_list(options.get("columns"))
-    wanted = set(columns or []) | {options.get("time_column")}
+    wanted = set(columns or []) | {options.get("time_column"), options.get("temperature")}
     for c in frame.columns:
         if c not in numeric and (columns is None or str(c) in wanted):
             raise InputError(
@@ -838,6 +987,8 @@ def read_record(
     try:
         if fmt in ("rosbag", "ulog"):
             return _read_robot_log(path, fmt, opts.topic, opts.table())
+        if fmt == "netcdf":
+            return _read_netcdf(path, opts)
         if path.stat().st_size == 0:
             raise InputError(
                 "the file is empty; check that the recording was written", path=str(path)
@@ -915,18 +1066,45 @@ def _load(path: Path, fmt: str, opts: ReadOptions) -> Loaded:
             offset=opts.offset or 0,
         )
     if fmt == "hdf5":
-        return _load_hdf5(path, opts.key)
-    return _load_parquet(path, _as_list(opts.columns), opts.time_column)
+        return _load_hdf5(path, opts.key, [opts.temperature, opts.time_column])
+    return _load_parquet(path, _as_list(opts.columns), opts.time_column, opts.temperature)
+
+
+def _read_netcdf(path: Path, opts: ReadOptions) -> Record:
+    """A netCDF record: its time coordinate is the time column unless fs or one is given."""
+    import dataclasses
+
+    from allanite.io.netcdf import load_netcdf, netcdf_kind
+
+    classic = netcdf_kind(path)
+    loaded = load_netcdf(
+        path, key=opts.key, wanted=[opts.temperature, opts.time_column], classic=classic
+    )
+    options = opts.table()
+    notes: tuple[str, ...] = ()
+    if loaded.time is not None and opts.time_column is None and opts.fs is None:
+        name, scale = loaded.time
+        options |= {"time_column": name, "time_scale": scale}
+        notes = (f"time from the netCDF coordinate variable {name!r} ({scale:g} s per unit)",)
+    elif loaded.time is not None and opts.time_column is None and opts.columns is None:
+        options |= {
+            "columns": [n for n in loaded.names if n not in (loaded.time[0], opts.temperature)]
+        }
+    record = make_record(loaded.data, loaded.names, source=str(path), **options)
+    return dataclasses.replace(record, warnings=(*notes, *record.warnings))
 
 
 def _read_robot_log(path: Path, fmt: str, topic: str | None, options: dict[str, Any]) -> Record:
     """A ROS bag or ULog as a record: time stamps from the messages, units per axis."""
     import dataclasses
 
-    from allanite.io.robot_logs import CHANNEL_UNITS, load_rosbag, load_ulog
+    from allanite.io.robot_logs import CHANNEL_UNITS, TEMPERATURE, load_rosbag, load_ulog
 
     loader = load_rosbag if fmt == "rosbag" else load_ulog
-    table, names, warnings = loader(path, topic)
+    given = options.get("temperature")
+    table, names, warnings = loader(path, topic, None if given is None else str(given))
+    if given is not None:
+        options = {**options, "temperature": TEMPERATURE}
     if table.shape[0] < 3:
         raise InputError(f"only {table.shape[0]} IMU message(s); need at least 3", path=str(path))
     if options.get("time_column") is None:

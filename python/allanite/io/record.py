@@ -126,6 +126,9 @@ class Record:
         Analysis of the time column, when there was one.
     scale : float or None
         Scale factor that was applied (counts to units).
+    temperature : numpy.ndarray or None
+        Sensor temperature in °C at every sample, shape ``(N,)`` (a column, variable or topic
+        named by ``temperature=``, resampled onto the sample times), or None.
     """
 
     samples: NDArray[Any]
@@ -138,6 +141,7 @@ class Record:
     warnings: tuple[str, ...] = ()
     timing: Timing | None = None
     scale: float | None = None
+    temperature: NDArray[np.float64] | None = field(default=None, compare=False, repr=False)
     meta: dict[str, Any] = field(default_factory=dict, compare=False)
 
     def __post_init__(self) -> None:
@@ -161,6 +165,8 @@ class Record:
             )
         if not self.segments:
             object.__setattr__(self, "segments", (Segment(0, samples.shape[0]),))
+        if self.temperature is not None:
+            object.__setattr__(self, "temperature", _checked_temperature(self.temperature, samples))
 
     @property
     def n_samples(self) -> int:
@@ -214,14 +220,19 @@ class Record:
             channels=tuple(self.channels[i] for i in idx),
         )
 
+    def rows(self, start: int, stop: int, *, t0: float = 0.0) -> Record:
+        """Return samples ``start`` to ``stop - 1`` (and their temperatures) as one segment."""
+        return dataclasses.replace(
+            self,
+            samples=self.samples[start:stop],
+            segments=(Segment(0, stop - start, t0),),
+            temperature=None if self.temperature is None else self.temperature[start:stop],
+        )
+
     def segment(self, index: int) -> Record:
         """Return one segment of a split record as a record of its own."""
         seg = self.segments[index]
-        return dataclasses.replace(
-            self,
-            samples=self.samples[seg.start : seg.stop],
-            segments=(Segment(0, seg.n_samples, seg.t0),),
-        )
+        return self.rows(seg.start, seg.stop, t0=seg.t0)
 
     def longest_segment(self) -> Record:
         """Return the longest contiguous segment (the record itself when it has one segment)."""
@@ -244,7 +255,27 @@ class Record:
             "segments": [[s.start, s.stop, s.t0] for s in self.segments],
             "timing": None if self.timing is None else self.timing.to_dict(),
             "warnings": list(self.warnings),
+            "temperature": None
+            if self.temperature is None
+            else {"min": float(self.temperature.min()), "max": float(self.temperature.max())},
         }
+
+
+def _checked_temperature(values: Any, samples: NDArray[Any]) -> NDArray[np.float64]:
+    """The temperatures as a finite float64 ``(N,)`` array matching the samples, or ValueError."""
+    temperature = np.asarray(values, dtype=np.float64).reshape(-1)
+    if temperature.size != samples.shape[0]:
+        raise ValueError(
+            f"temperature has {temperature.size} values for {samples.shape[0]} samples; give "
+            "one temperature per sample (resample it onto the sample times)"
+        )
+    if not np.all(np.isfinite(temperature)):
+        bad = int(np.flatnonzero(~np.isfinite(temperature))[0])
+        raise ValueError(
+            f"temperature at sample {bad} is {temperature[bad]}; give a finite value at every "
+            "sample (interpolate the missing ones)"
+        )
+    return temperature
 
 
 def _channel_index(names: tuple[str, ...], key: int | str, source: str) -> int:

@@ -27,12 +27,16 @@ __all__ = [
     "is_ros2_bag_dir",
     "load_rosbag",
     "load_ulog",
+    "resample",
 ]
 
 CHANNELS = ("gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z")
 CHANNEL_UNITS = {c: ("rad/s" if c.startswith("gyro") else "m/s^2") for c in CHANNELS}
 LOG_SUFFIXES = {"rosbag": (".bag", ".db3", ".mcap"), "ulog": (".ulg", ".ulog")}
 IMU_TYPES = ("sensor_msgs/msg/Imu", "sensor_msgs/Imu")
+TEMPERATURE_TYPES = ("sensor_msgs/msg/Temperature", "sensor_msgs/Temperature")
+#: the column a temperature read from a log becomes (``Record.temperature``)
+TEMPERATURE = "temperature"
 #: ULog topic -> (time field, gyro fields, accel fields)
 ULOG_TOPICS: dict[str, tuple[str, tuple[str, ...], tuple[str, ...]]] = {
     "sensor_combined": (
@@ -72,11 +76,13 @@ def _as_in_bag(topic: str | None, topics: list[str]) -> str | None:
 
 
 def load_rosbag(
-    path: Path, topic: str | None = None
+    path: Path, topic: str | None = None, temperature: str | None = None
 ) -> tuple[NDArray[Any], tuple[str, ...], list[str]]:
     """Read the ``sensor_msgs/Imu`` messages of a ROS 1 or ROS 2 bag.
 
-    Returns ``(table, names, warnings)``: columns ``t`` and :data:`CHANNELS`.
+    Returns ``(table, names, warnings)``: columns ``t`` and :data:`CHANNELS`, and with
+    ``temperature`` (a ``sensor_msgs/Temperature`` topic) a column ``temperature``: its
+    readings interpolated onto the IMU stamps.
     """
     highlevel = require("rosbags.highlevel", extra="bags", purpose="reading ROS bags")
     typesys = require("rosbags.typesys", extra="bags", purpose="reading ROS bags")
@@ -112,6 +118,7 @@ def load_rosbag(
                 batch = []
         if batch:
             parts.append(_imu_table(reader, batch))
+        readings = None if temperature is None else _temperature_topic(reader, temperature, path)
     finally:
         reader.close()
     if not parts:
@@ -123,7 +130,59 @@ def load_rosbag(
     table = np.concatenate(parts)
     warnings: list[str] = []
     t, data = _sorted(table[:, 0], table[:, 1:], warnings)
-    return np.column_stack([t - t[0], data]), ("t", *CHANNELS), warnings
+    if readings is None:
+        return np.column_stack([t - t[0], data]), ("t", *CHANNELS), warnings
+    celsius = resample(t, readings[:, 0], readings[:, 1], str(temperature), warnings)
+    return np.column_stack([t - t[0], data, celsius]), ("t", *CHANNELS, TEMPERATURE), warnings
+
+
+def _temperature_topic(reader: Any, topic: str, path: Path) -> NDArray[np.float64]:
+    """Rows ``(stamp s, degrees C)`` of a ``sensor_msgs/Temperature`` topic of an open bag."""
+    kinds = [c for c in reader.connections if c.msgtype in TEMPERATURE_TYPES]
+    names = sorted({c.topic for c in kinds})
+    wanted = _as_in_bag(topic, names)
+    chosen = [c for c in kinds if c.topic == wanted]
+    if not chosen:
+        others = ", ".join(sorted({f"{c.topic} ({c.msgtype})" for c in reader.connections}))
+        raise InputError(
+            f"no sensor_msgs/Temperature topic {topic!r} in the bag; its topics: {others}",
+            path=str(path),
+        )
+    rows = []
+    for conn, _, raw in reader.messages(connections=chosen):
+        msg: Any = reader.deserialize(raw, conn.msgtype)
+        stamp = msg.header.stamp
+        rows.append((stamp.sec + stamp.nanosec * 1e-9, float(msg.temperature)))
+    if not rows:
+        raise InputError(f"the temperature topic {wanted} holds no messages", path=str(path))
+    return np.asarray(rows, dtype=np.float64)
+
+
+def resample(
+    t: NDArray[np.float64],
+    t_source: NDArray[np.float64],
+    values: NDArray[np.float64],
+    name: str,
+    warnings: list[str],
+) -> NDArray[np.float64]:
+    """``values`` logged at ``t_source`` interpolated onto the times ``t`` (ends held).
+
+    A note is added when the readings cover less than the samples' time span (the ends take
+    the nearest reading).
+    """
+    order = np.argsort(t_source, kind="stable")
+    ts, vs = t_source[order], np.asarray(values, dtype=np.float64)[order]
+    keep = np.isfinite(ts) & np.isfinite(vs)
+    ts, vs = ts[keep], vs[keep]
+    if ts.size == 0:
+        raise InputError(f"the temperature {name} holds no finite reading")
+    outside = float(np.mean((t < ts[0]) | (t > ts[-1])))
+    if outside > 0.01:
+        warnings.append(
+            f"the temperature {name} covers {100 * (1 - outside):.3g} % of the samples' time "
+            "span; the rest takes the nearest reading"
+        )
+    return np.interp(t, ts, vs)
 
 
 #: messages parsed at a time (bounded memory for long bags)
@@ -189,17 +248,22 @@ def _imu_bytes(raws: list[bytes], ros2: bool) -> NDArray[np.float64] | None:
 
 
 def load_ulog(
-    path: Path, topic: str | None = None
+    path: Path, topic: str | None = None, temperature: str | None = None
 ) -> tuple[NDArray[Any], tuple[str, ...], list[str]]:
     """Read ``sensor_combined`` (default), ``sensor_gyro`` or ``sensor_accel`` of a ULog.
 
     ``topic`` may carry an instance, ``sensor_gyro:1`` (default instance 0). Returns
-    ``(table, names, warnings)``: columns ``t`` and the axes the topic has.
+    ``(table, names, warnings)``: columns ``t`` and the axes the topic has, and with
+    ``temperature`` a column ``temperature``: a field of the IMU topic (``temperature`` of
+    ``sensor_gyro``/``sensor_accel``), or ``TOPIC[:instance].FIELD`` of another topic
+    (``sensor_gyro.temperature`` for ``sensor_combined``, which has none), interpolated onto
+    the samples' time stamps.
     """
     ULog = require("pyulog", extra="ulog", purpose="reading PX4 ULog").ULog
     name, _, inst = (topic or "").partition(":")
     instance = int(inst) if inst.isdigit() else 0
     wanted = [name] if name else list(ULOG_TOPICS)
+    other = _ulog_field(temperature)
     unknown = [n for n in wanted if n not in ULOG_TOPICS]
     if unknown:
         raise InputError(
@@ -208,7 +272,7 @@ def load_ulog(
         )
     try:  # our own handle: pyulog leaves its file open when it fails on a damaged log
         with path.open("rb") as handle:
-            log = ULog(handle, message_name_filter_list=wanted)
+            log = ULog(handle, message_name_filter_list=[*wanted, *(other[:1] if other else [])])
     except Exception as exc:  # pyulog raises assorted errors on broken files
         raise InputError(f"not a readable ULog file ({exc})", path=str(path)) from exc
     if getattr(log, "file_corruption", False):
@@ -248,4 +312,35 @@ def load_ulog(
     others = sorted(i for n, i in present if n == data.name and i != instance)
     if others:
         warnings.append(f"{data.name} has other instances {others}; read instance {instance}")
-    return np.column_stack([t - t[0], rows]), ("t", *names), warnings
+    if temperature is None:
+        return np.column_stack([t - t[0], rows]), ("t", *names), warnings
+    source = data if other is None else present.get((other[0], other[1]))
+    field = temperature if other is None else other[2]
+    if source is None or field not in source.data:
+        where = f"{data.name}" if other is None else f"{other[0]}:{other[1]}"
+        fields = "" if source is None else ", ".join(sorted(source.data))
+        raise InputError(
+            f"no temperature field {field!r} in {where}"
+            + (f" (its fields: {fields})" if fields else " (no such topic in the log)")
+            + "; sensor_combined has no temperature: give --topic sensor_gyro with "
+            "--temperature temperature, or --temperature sensor_gyro.temperature",
+            path=str(path),
+        )
+    t_field = "timestamp_sample" if "timestamp_sample" in source.data else "timestamp"
+    celsius = resample(
+        t,
+        np.asarray(source.data[t_field], dtype=np.float64) * 1e-6,
+        np.asarray(source.data[field], dtype=np.float64),
+        temperature,
+        warnings,
+    )
+    return np.column_stack([t - t[0], rows, celsius]), ("t", *names, TEMPERATURE), warnings
+
+
+def _ulog_field(spec: str | None) -> tuple[str, int, str] | None:
+    """``(topic, instance, field)`` of ``TOPIC[:instance].FIELD``, None for a plain field."""
+    if spec is None or "." not in spec:
+        return None
+    topic, _, field = spec.partition(".")
+    name, _, inst = topic.partition(":")
+    return name, int(inst) if inst.isdigit() else 0, field

@@ -38,13 +38,16 @@ _TABLE_ROWS = 14
 class DeviceAnalysis:
     """What the report shows of one record: the record, its Allan result, optional fits.
 
-    ``fits`` holds one fit result (or None) per channel of ``result``.
+    ``fits`` holds one fit result (or None) per channel of ``result``; ``thermal`` one
+    :class:`~allanite.fit.thermal.ThermalFit` per channel when the record had a temperature
+    (``record`` is then the compensated record the noise was analysed on).
     """
 
     record: Record
     result: AllanResult
     fits: tuple[Any, ...] = ()
     name: str = ""
+    thermal: tuple[Any, ...] = ()
 
     @property
     def label(self) -> str:
@@ -552,6 +555,37 @@ def _adev_table_section(devices: Sequence[DeviceAnalysis], level: float) -> str:
     )
 
 
+def _thermal_section(devices: Sequence[DeviceAnalysis], figures: dict[str, Any]) -> str:
+    """Bias against temperature: each channel's thermal fit as text and as a figure.
+
+    The figures are added to ``figures`` (``thermal-<device>-<channel>``).
+    """
+    parts = []
+    for d, device in enumerate(devices):
+        for c, fit in enumerate(device.thermal):
+            if fit is None:
+                continue
+            lines = "\n".join(fit.lines())
+            parts.append(f"<h3>{h.escape(device.label)}: {h.escape(fit.channel)}</h3>")
+            parts.append(f"<pre>{h.escape(lines)}</pre>")
+            try:
+                from allanite.plot import figure_bytes
+                from allanite.plot.thermal import thermal_figure
+            except ImportError:  # no plot extra: the text alone
+                continue
+            fig = thermal_figure(device.record, fit, c, compensated=True)
+            figures[f"thermal-{d}-{c}"] = fig
+            parts.append(
+                h.figure(
+                    figure_bytes(fig),
+                    f"Bias of {fit.channel} against temperature: block means of the record and "
+                    "the fitted law (the noise terms are fitted on the compensated record).",
+                    f"thermal {fit.channel}",
+                )
+            )
+    return h.section("Bias against temperature", "".join(parts), anchor="thermal")
+
+
 def _diagnosis_section(diagnosis_html: str, figures: dict[str, Any]) -> str:
     """The sim-to-real diagnosis text followed by its figures."""
     from allanite.plot import figure_bytes
@@ -631,6 +665,8 @@ def build_report(
         )
     )
     body.append(_allan_section(figures, level))
+    if any(fit is not None for device in devices for fit in device.thermal):
+        body.append(_thermal_section(devices, figures))
     body.append(_slope_table_section(devices))
     body.append(_adev_table_section(devices, level))
     if datasheet is not None:
