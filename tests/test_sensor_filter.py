@@ -201,3 +201,88 @@ def test_cli_terms_and_tau_range(tmp_path, capsys) -> None:
     assert "unknown term 'chebyshev'; fit one of:" in capsys.readouterr().err
     assert main([*args, "--tau-range", "5"]) == 2
     assert "--tau-range '5': write LO:HI" in capsys.readouterr().err
+
+
+def _one_pole(seed: int, n: int, N: float, fc: float) -> np.ndarray:
+    phi = math.exp(-2.0 * math.pi * fc * DT)
+    return _filtered_white(seed, n, N, np.array([1.0 - phi]), np.array([1.0, -phi]))
+
+
+def test_default_fit_selects_the_sensor_filter_and_names_it(tmp_path, capsys) -> None:
+    """Plain ``auto``: a one-pole record's roll-off asks for the filter (before: N alone,
+    chi2 1e6, N 3.7x low); N and the bandwidth of the generator are recovered."""
+    from allanite.cli import main
+
+    n, N, fc, K = 100_000, 0.01, 2.0, 1e-4
+    x = _one_pole(11, n, N, fc) + _random_walk(11, n, K)
+    fit = allanite.fit(x, fs=FS, units="deg/s")
+    (term,) = [t for t in fit.model.terms if isinstance(t, LowPassWhite)]
+    assert not fit.rejected
+    assert term.filter == "one_pole"
+    for name, truth in (("N", N), ("bandwidth", fc)):
+        lo, hi = fit.coefficients[name].ci(0.999)
+        assert lo < truth < hi, (name, lo, hi)
+    assert "first-order (digital) low-pass, -3 dB at 2" in fit.goodness_line()
+    data = tmp_path / "rate.npy"
+    np.save(data, x)
+    assert main(["fit", str(data), "--fs", "100", "--units", "deg/s"]) == 0
+    assert "sensor output filter: first-order (digital) low-pass" in capsys.readouterr().out
+
+
+def test_default_fit_does_not_try_filters_on_an_unfiltered_record(monkeypatch) -> None:
+    """The gate: white + random walk (accepted) and white + a drift the power laws reject
+    both leave the filters untried (the searches cost seconds to minutes each)."""
+    import importlib
+
+    filters = importlib.import_module("allanite.fit.filters")
+    tried: list[object] = []
+    real = filters.select_terms
+
+    def spy(specs, *args, **kwargs):
+        tried.extend(s for s in specs if s.cls is LowPassWhite)
+        return real(specs, *args, **kwargs)
+
+    monkeypatch.setattr(filters, "select_terms", spy)
+    n = 100_000
+    rng = np.random.default_rng(12)
+    white = 0.01 * math.sqrt(FS) * rng.standard_normal(n)
+    fit = allanite.fit(white + _random_walk(12, n, 1e-4), fs=FS)
+    assert not fit.rejected
+    t = np.arange(n) * DT
+    drift = allanite.fit(white + 0.01 * np.sin(2 * math.pi * t / 50.0), fs=FS)
+    assert drift.rejected
+    assert not [t for t in drift.model.terms if isinstance(t, LowPassWhite)]
+    assert tried == []
+
+
+def test_slope_regions_and_readouts_skip_the_filter_roll_off() -> None:
+    """The filter's hump (+0.3 then 0 slopes at the short taus) named no rate random walk
+    and no bias instability (before: K read at 0.03 s, 40x the generator's); the control,
+    white + flicker-like + random walk with no filter, keeps its rows."""
+    from allanite.fit.classic import classic_readout
+    from allanite.slopes import FILTER_ROLLOFF, rolloff_end, slope_table
+
+    n = 200_000
+    x = _one_pole(13, n, 0.01, 2.0) + _random_walk(13, n, 1e-5)
+    res = allanite.avar(x, fs=FS)
+    end = rolloff_end(res.tau, res.dev)
+    assert end is not None
+    assert 0.2 < end < 1.0
+    rows = slope_table(res.tau, res.dev, res.edf)
+    before = [r for r in rows if r.tau_max < end]
+    assert before
+    assert all(r.term == FILTER_ROLLOFF and r.symbol == "" for r in before)
+    assert not [r for r in rows if r.symbol in ("B", "K")]
+    readout = classic_readout(res.tau, res.dev)
+    assert readout.values["K"] is None
+    assert readout.values["B"] is None
+    assert readout.values["N"] == pytest.approx(0.01, rel=0.15)
+    rng = np.random.default_rng(14)
+    plain = allanite.avar(
+        0.01 * math.sqrt(FS) * rng.standard_normal(n) + _random_walk(14, n, 1e-3), fs=FS
+    )
+    assert rolloff_end(plain.tau, plain.dev) is None
+    symbols = [r.symbol for r in slope_table(plain.tau, plain.dev, plain.edf)]
+    assert symbols[0] == "N"
+    assert symbols[-1] == "K"
+    assert "" not in symbols

@@ -11,6 +11,7 @@ after the canonical slope nearest to its own least-squares slope.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -18,11 +19,13 @@ from numpy.typing import NDArray
 
 __all__ = [
     "ACCEL_SLOPE_TERMS",
+    "FILTER_ROLLOFF",
     "MIN_EDF",
     "MIN_POINTS",
     "SLOPE_TERMS",
     "SlopeRow",
     "local_slopes",
+    "rolloff_end",
     "slope_table",
 ]
 
@@ -65,6 +68,10 @@ ACCEL_SLOPE_TERMS = _slope_terms(
     )
 )
 _WINDOW_DECADES = 0.5
+#: what the rows before :func:`rolloff_end` show (they name no noise term)
+FILTER_ROLLOFF = "sensor output filter's roll-off (not a noise term)"
+#: a short-tau hump: the curve starts at least this flat before it falls to -1/2
+_HUMP_SLOPE = -0.1
 #: points with fewer equivalent degrees of freedom are not classified (about 16 % scatter)
 MIN_EDF = 20.0
 #: shortest run of points reported as a row
@@ -99,6 +106,39 @@ def local_slopes(tau: NDArray[np.float64], dev: NDArray[np.float64]) -> NDArray[
     return out
 
 
+def rolloff_end(tau: NDArray[np.float64], dev: NDArray[np.float64]) -> float | None:
+    """Where a hump at the shortest taus ends (a sensor output filter's roll-off), else None.
+
+    The log-log slope of a sum of power-law terms never decreases along tau (the curve is
+    convex). A curve that starts flat or rising and then falls to the -1/2 of white noise
+    is not such a sum: at its shortest taus it shows the roll-off of the sensor's own output
+    filter (or a correlated noise with a time constant near the sample interval), and its
+    slopes there name no noise term. Returns the first tau whose local slope (half-decade
+    window) is nearer -1/2 than 0, when a slope of ``_HUMP_SLOPE`` or more precedes it.
+    """
+    tau = np.asarray(tau, dtype=np.float64)
+    dev = np.asarray(dev, dtype=np.float64)
+    good = np.isfinite(dev) & (dev > 0) & np.isfinite(tau) & (tau > 0)
+    tau, dev = tau[good], dev[good]
+    if tau.size < 3:
+        return None
+    slopes = local_slopes(tau, dev)
+    falling = np.flatnonzero(slopes < -0.25)
+    if falling.size == 0 or falling[0] == 0 or slopes[: falling[0]].max() < _HUMP_SLOPE:
+        return None
+    return float(tau[falling[0]])
+
+
+def _rolloff_rows(rows: list[SlopeRow], end: float | None) -> list[SlopeRow]:
+    """The rows before ``end`` named as the filter's roll-off (no term, no symbol)."""
+    if end is None:
+        return rows
+    return [
+        dataclasses.replace(row, term=FILTER_ROLLOFF, symbol="") if row.tau_max < end else row
+        for row in rows
+    ]
+
+
 def slope_table(
     tau: NDArray[np.float64],
     dev: NDArray[np.float64],
@@ -126,7 +166,9 @@ def slope_table(
     -------
     list of SlopeRow
         In increasing tau; runs of a single point are merged into their neighbours and runs of
-        fewer than ``MIN_POINTS`` points are left out (two points do not make a slope).
+        fewer than ``MIN_POINTS`` points are left out (two points do not make a slope). Rows
+        before a short-tau hump's end (:func:`rolloff_end`) name the filter's roll-off
+        (:data:`FILTER_ROLLOFF`, empty symbol), not a noise term.
     """
     tau = np.asarray(tau, dtype=np.float64)
     dev = np.asarray(dev, dtype=np.float64)
@@ -169,7 +211,8 @@ def slope_table(
                 )
             )
             start = k
-    return [r for r in _merge_equal(rows, tau, dev, canon, sensor) if r.n_points >= MIN_POINTS]
+    merged = [r for r in _merge_equal(rows, tau, dev, canon, sensor) if r.n_points >= MIN_POINTS]
+    return _rolloff_rows(merged, rolloff_end(tau, dev))
 
 
 def _merge_equal(

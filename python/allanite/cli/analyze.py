@@ -176,14 +176,14 @@ def _bias_from_regions(
     """
     flat = np.zeros(tau.size, dtype=bool)
     for row in rows:
-        if row.canonical == 0.0:
+        if row.symbol == "B":
             flat |= (tau >= row.tau_min) & (tau <= row.tau_max)
     values, where, slope = dict(readout.values), dict(readout.tau), dict(readout.slope)
     if not flat.any():
         values["B"] = where["B"] = slope["B"] = None
     else:
         i = int(np.flatnonzero(flat)[np.argmin(dev[flat])])
-        row = next(r for r in rows if r.canonical == 0.0 and r.tau_min <= tau[i] <= r.tau_max)
+        row = next(r for r in rows if r.symbol == "B" and r.tau_min <= tau[i] <= r.tau_max)
         values["B"] = float(dev[i] / math.sqrt(PLATEAU))
         where["B"], slope["B"] = float(tau[i]), row.slope
     return dataclasses.replace(readout, values=values, tau=where, slope=slope)

@@ -574,10 +574,11 @@ def fit(
         (:class:`~allanite.terms.LowPassWhite`, in place of white noise: it carries the
         unfiltered sensor's ``N``) by its kind: ``"lowpass"``/``"rc"``, ``"one_pole"``,
         ``"butterworth"``/``"butterworth4"``, ``"moving_average"``, ``"bartlett"``.
-        ``"auto+filter"`` also searches with these filters (one_pole, butterworth 2 and 4,
-        moving average) in place of white noise (:mod:`allanite.fit.filters`; plain
-        ``"auto"`` does not yet); ``"auto+markov"``, ``"auto+sine"``,
-        ``"auto+<filter kind>"`` add candidates.
+        Plain ``"auto"`` tries the one-pole and moving-average filters in place of white
+        noise when the curve starts flatter than white noise and falls under the power-law
+        fit at its shortest taus, as a sensor filter's roll-off does, and keeps the first the
+        test accepts (:mod:`allanite.fit.filters`); ``"auto+filter"`` tries these and
+        Butterworth 2 and 4 on every curve; ``"auto+markov"``, ``"auto+sine"``, ``"auto+<filter kind>"`` add candidates.
     fs : float, optional
         Sampling frequency in Hz (records only).
     input : {"rate", "increment", "angle"}, optional

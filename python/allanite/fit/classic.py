@@ -9,6 +9,9 @@ plot; its coefficient is read where the line crosses a conventional tau:
 * rate random walk K: slope +1/2 line at tau = 3 s,
 * rate ramp R: slope +1 line at tau = sqrt(2) s.
 
+Points before a short-tau hump (a sensor output filter's roll-off,
+:func:`allanite.slopes.rolloff_end`) are not read: no power-law line runs there.
+
 These readouts carry no uncertainty and assume the term dominates somewhere on the curve; they
 are given for comparison with datasheets, not as estimates (use :func:`allanite.fit`).
 """
@@ -21,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from allanite.slopes import rolloff_end
 from allanite.terms.flicker import PLATEAU
 
 __all__ = ["ClassicReadout", "classic_readout"]
@@ -78,6 +82,10 @@ def classic_readout(
     a = np.asarray(adev, dtype=np.float64)
     ok = np.isfinite(t) & np.isfinite(a) & (a > 0) & (t > 0)
     t, a = t[ok], a[ok]
+    # a sensor filter's roll-off at the short taus names no term (allanite.slopes)
+    end = rolloff_end(t, a) if t.size >= 3 else None
+    if end is not None:
+        t, a = t[t >= end], a[t >= end]
     values: dict[str, float | None] = {}
     where: dict[str, float | None] = {}
     slopes: dict[str, float | None] = {}

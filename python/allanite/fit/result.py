@@ -16,6 +16,7 @@ from allanite.confidence import DEFAULT_LEVEL
 from allanite.fit.classic import ClassicReadout
 from allanite.model import NoiseModel
 from allanite.notebook import fit_html
+from allanite.terms import LowPassWhite
 from allanite.units import convert, customary_unit, display_unit, parse_unit
 
 __all__ = ["NO_EVIDENCE_CHI2", "Coefficient", "Comparison", "ComparisonRow", "FitResult"]
@@ -246,11 +247,30 @@ class FitResult:
             f"brackets: {100 * level:g} % intervals; chi2 = {self.chi2:.3g} for {self.dof} dof "
             f"(correlated GLS), p = {self.p_value:.3g}"
         )
-        note = "\n".join(x for x in (self.ambiguity_note(level), self.undetected_line(level)) if x)
+        lines = (self.filter_line(), self.ambiguity_note(level), self.undetected_line(level))
+        note = "\n".join(x for x in lines if x)
         note = "\n" + note if note else ""
         if not self.rejected:
             return text + ": model not rejected" + note
         return text + "\n" + self.rejection_warning() + note
+
+    def filter_line(self) -> str:
+        """The sensor output filter the model holds, named with its bandwidth (else empty).
+
+        E.g. ``sensor output filter: first-order (digital) low-pass, -3 dB at 2.01 Hz: ...``;
+        the fit's coefficients are then the unfiltered sensor's, and the curve's roll-off at
+        the short taus is the filter's, not a noise term.
+        """
+        fs = self.meta.get("fs")
+        for term in self.model.terms:
+            if isinstance(term, LowPassWhite):
+                dt = 1.0 / fs if fs else None
+                return (
+                    f"sensor output filter: {term.describe_filter(dt)}: the coefficients are "
+                    f"the unfiltered sensor's; the curve's roll-off below tau ~ "
+                    f"{10.0 * term.tau_f:.3g} s is the filter's, not a noise term"
+                )
+        return ""
 
     def ambiguity_note(self, level: float = DEFAULT_LEVEL) -> str:
         """One line per alternative the record cannot tell from the chosen terms (else empty).
