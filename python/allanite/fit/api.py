@@ -578,7 +578,8 @@ def fit(
         noise when the curve starts flatter than white noise and falls under the power-law
         fit at its shortest taus, as a sensor filter's roll-off does, and keeps the first the
         test accepts (:mod:`allanite.fit.filters`); ``"auto+filter"`` tries these and
-        Butterworth 2 and 4 on every curve; ``"auto+markov"``, ``"auto+sine"``, ``"auto+<filter kind>"`` add candidates.
+        Butterworth 2 and 4 on every curve; ``"auto+markov"``, ``"auto+sine"``,
+        ``"auto+<filter kind>"`` add candidates.
     fs : float, optional
         Sampling frequency in Hz (records only).
     input : {"rate", "increment", "angle"}, optional
