@@ -141,6 +141,23 @@ def test_a_term_left_out_without_evidence_gets_an_upper_limit():
     assert [u["name"] for u in json.loads(f.to_json())["undetected"]] == list(f.undetected)
 
 
+def test_a_swapped_in_term_estimated_at_zero_is_not_ambiguous() -> None:
+    """White + a weak random walk (independent numpy record): flicker swapped in for K
+    comes out at 0, which "fits the excess as well as K" only in that neither is needed
+    (K's own interval reaches 0). It was printed AMBIGUOUS ("flicker B = 0 [0, 5.08]");
+    now it is an upper limit, and every AMBIGUOUS line names a non-zero estimate."""
+    rng = np.random.default_rng(5)
+    n, fs = 360_000, 100.0
+    x = 0.1 * rng.standard_normal(n) + np.cumsum(rng.standard_normal(n)) * 1e-5
+    f = fit(x, fs=fs, units="deg/s")
+    swapped = [a for a in f.alternatives if a["symbol_in"] == "B" and a["symbol_out"] == "K"]
+    assert swapped  # the search did offer flicker in place of K
+    assert f.exchangeable["B"].value == 0.0
+    assert all(f.exchangeable[a["symbol_in"]].value > 0 for a in f.ambiguous())
+    assert "AMBIGUOUS: flicker" not in f.format_table()
+    assert "B" in f.upper_limits()
+
+
 def test_an_ambiguous_addition_widens_the_chosen_terms_to_the_fit_with_it() -> None:
     """An accelerometer record (found by ``benchmarks/audit_default_fit.py``, record 50)
     whose velocity quantum carries 3.5 % of the Allan variance at the first tau: "auto"

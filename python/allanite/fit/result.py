@@ -294,20 +294,25 @@ class FitResult:
         return [
             alt
             for alt in self.alternatives
-            if alt["symbol_in"] in self.exchangeable and not self._empty_addition(alt)
+            if alt["symbol_in"] in self.exchangeable and not self._shows_nothing(alt)
         ]
 
-    def _empty_addition(self, alt: dict[str, Any]) -> bool:
-        """An addition (no term swapped out) the record shows no evidence of.
+    def _shows_nothing(self, alt: dict[str, Any]) -> bool:
+        """An alternative the record shows no evidence of.
 
-        Its estimate is zero, or it lowers the chi-square by less than 1 (less than one
-        standard deviation of a one-parameter improvement: noise).
+        Its term's estimate is zero (swapped in, "B = 0 fits the excess as well as K" says
+        nothing: the chosen term's own interval reaching 0 says it), or, an addition (no
+        term swapped out), it lowers the chi-square by less than 1 (less than one standard
+        deviation of a one-parameter improvement: noise).
         """
         coef = self.exchangeable.get(alt["symbol_in"])
-        if alt["symbol_out"] is not None or coef is None:
+        if coef is None:
             return False
+        if not coef.value > 0:
+            return True
         drop = alt.get("delta_chi2")
-        return not coef.value > 0 or (drop is not None and float(drop) < NO_EVIDENCE_CHI2)
+        addition = alt["symbol_out"] is None
+        return addition and drop is not None and float(drop) < NO_EVIDENCE_CHI2
 
     def _alternative_note(self, alt: dict[str, Any], level: float) -> str:
         """The text line of one alternative (its swapped-in term in customary units)."""
@@ -337,7 +342,7 @@ class FitResult:
     def undetected_line(self, level: float = DEFAULT_LEVEL) -> str:
         """One line of upper limits of the candidates not detected (empty when none).
 
-        The terms of :attr:`undetected` and the additions the record shows no evidence of
+        The terms of :attr:`undetected` and the alternatives the record shows no evidence of
         (see :meth:`ambiguity_note`), in the order Q, N, B, K, R, customary units.
         """
         parts = [f"{s} <= {hi:.3g} {unit}" for s, (hi, unit) in self.upper_limits(level).items()]
@@ -348,14 +353,14 @@ class FitResult:
     def upper_limits(self, level: float = DEFAULT_LEVEL) -> dict[str, tuple[float, str]]:
         """Upper limits of the candidates not detected, in customary units.
 
-        The terms of :attr:`undetected` and the additions the record shows no evidence of
+        The terms of :attr:`undetected` and the alternatives the record shows no evidence of
         (see :meth:`ambiguity_note`), in the order Q, N, B, K, R: symbol -> (upper end of the
         ``level`` interval of the fit with the term, its customary unit). What
         :meth:`undetected_line` prints and ``allanite fit --json`` gives as ``"undetected"``.
         """
         left_out = dict(self.undetected)
         for alt in self.alternatives:
-            if alt["symbol_in"] in self.exchangeable and self._empty_addition(alt):
+            if alt["symbol_in"] in self.exchangeable and self._shows_nothing(alt):
                 left_out[alt["symbol_in"]] = self.exchangeable[alt["symbol_in"]]
         order = {s: k for k, s in enumerate("QNBKR")}
         out: dict[str, tuple[float, str]] = {}
