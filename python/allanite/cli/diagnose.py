@@ -378,9 +378,11 @@ def run(args: argparse.Namespace) -> int:
                 if args.write_corrected and corrected is not None
                 else "--write-corrected OUT writes it"
             )
-            print(
-                f"to close the gap, change in {Path(args.sim_model).name} ({loaded.format}; {how}):"
-            )
+            closes = corrected is not None and corrected.closes
+            lead = "to close the gap" if closes else "the diagnosed correction"
+            if corrected is not None and not closes:
+                how += "; the re-check below says whether it closes the gap"
+            print(f"{lead}, change in {Path(args.sim_model).name} ({loaded.format}; {how}):")
             print("\n".join(f"  {line}" for line in changes))
         if corrected is not None:
             print("\n".join(corrected.lines()))

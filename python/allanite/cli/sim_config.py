@@ -331,6 +331,12 @@ class CorrectedWrite:
     adev_error: float
     tau_range: tuple[float, float]
     recheck: Any = None
+    gap_before: float = 0.0
+
+    @property
+    def closes(self) -> bool:
+        """Whether the file as written, re-checked against the record, leaves no gap."""
+        return self.recheck is not None and not self.recheck.significant
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready fields (``corrected`` in ``diagnose --json``)."""
@@ -342,7 +348,14 @@ class CorrectedWrite:
             "adev_error": float(self.adev_error),
             "tau_range_s": list(self.tau_range),
             "recheck": self.recheck.to_dict() if self.recheck is not None else None,
+            "shrinkage": self._shrinkage(),
         }
+
+    def _shrinkage(self) -> float | None:
+        """The re-check's shrinkage of the gap: ``1 - G_written / G_diagnosed`` (None: none)."""
+        if self.recheck is None or not self.gap_before > 0:
+            return None
+        return float(1.0 - self.recheck.statistic / self.gap_before)
 
     def lines(self) -> list[str]:
         """The summary lines: the gap after projection into the format, with its error."""
@@ -363,8 +376,14 @@ class CorrectedWrite:
                 if r.significant
                 else "consistent with chance: the written config closes the gap"
             )
+            shrink = self._shrinkage()
+            was = (
+                f" (diagnosed G = {self.gap_before:.4g}: shrinkage {100 * shrink:.0f} %)"
+                if shrink is not None
+                else ""
+            )
             out.append(
-                f"  gap against the same record as written: G = {r.statistic:.4g}, "
+                f"  gap against the same record as written: G = {r.statistic:.4g}{was}, "
                 f"p = {r.p_value:.3g}: {verdict}"
             )
         return out
@@ -410,15 +429,21 @@ def write_corrected(args: argparse.Namespace, loaded: LoadedSim, diagnosis: Any)
         tau_range=_tau_range(diagnosis),
     )
     mine = [ln for ln in written.report() if ln.split(" ", 1)[1].startswith(f"{loaded.sensor}:")]
-    if mine:  # the file does not hold the effects as diagnosed: their shrinkage is not its
-        what = _UNPROJECTED_GAP.sub("", what) + "; as written, see the re-check"
+    # the gap the file leaves is the re-check's, never the fitted effects' shrinkage
+    what = _UNPROJECTED_GAP.sub("", what) + "; the gap as written: see the re-check"
     print(f"corrected config {args.write_corrected}: {what}", file=sys.stderr)
     for line in written.report():
         print(f"  {line}", file=sys.stderr)
     back = _read_back(args.write_corrected, loaded)
     error = _adev_error(model, back, diagnosis.tau.tau, 1.0 / float(diagnosis.meta["fs"]))
     return CorrectedWrite(
-        args.write_corrected, loaded.format, what, mine, error, _tau_range(diagnosis)
+        args.write_corrected,
+        loaded.format,
+        what,
+        mine,
+        error,
+        _tau_range(diagnosis),
+        gap_before=float(diagnosis.statistic),
     )
 
 

@@ -217,6 +217,11 @@ def _extra(cand: Candidate, logp: NDArray[np.float64], tm: TauModel) -> NDArray[
     return extra
 
 
+#: the smallest rescale factor fitted: a rescale there says the term is absent from the record
+#: as far as it can tell (not determined, bounded from above), never a measured factor
+RESCALE_FLOOR = 1e-3
+
+
 def _bounds(cand: Candidate, tm: TauModel) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Return log bounds of the free parameters.
 
@@ -225,7 +230,7 @@ def _bounds(cand: Candidate, tm: TauModel) -> tuple[NDArray[np.float64], NDArray
     ``[1e-3, 1e3]``.
     """
     if cand.base is not None:  # a rescale between 1/1000 (the term is absent) and 1000
-        return np.array([np.log(1e-3)]), np.array([np.log(1e3)])
+        return np.array([np.log(RESCALE_FLOOR)]), np.array([np.log(1.0 / RESCALE_FLOOR)])
     specs = {p.name: p for p in cand.term_cls.params}
     bounds = []
     for name in cand.free:
