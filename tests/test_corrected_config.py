@@ -86,3 +86,32 @@ def test_the_white_noise_stated_is_the_one_written_and_the_shrinkage_the_recheck
     corrected = data["corrected"]
     expect = 1 - corrected["recheck"]["statistic"] / data["gap"]["statistic"]
     assert math.isclose(corrected["shrinkage"], expect, rel_tol=1e-12)
+
+
+def test_an_sdf_correction_changes_only_the_measured_axis(bench, capsys):
+    """One channel measured: the x block is corrected, y and z keep what the file says."""
+    white = 2e-3 / 2 * math.sqrt(FS)  # per-sample stddev of half the real white noise
+
+    def noise(std):
+        return f"<noise type='gaussian'><stddev>{std}</stddev></noise>"
+
+    blocks = {"x": noise(white), "y": noise(0.0123), "z": noise(0.0456)}
+    axes = "".join(f"<{a}>{blocks[a]}</{a}>" for a in "xyz")
+    sdf = bench / "imu.sdf"
+    sdf.write_text(
+        f"<sensor type='imu'><update_rate>{FS}</update_rate><imu><angular_velocity>{axes}"
+        "</angular_velocity></imu></sensor>"
+    )
+    out = bench / "fixed.sdf"
+    assert main(_argv(bench, sdf, out)) == 0
+    captured = capsys.readouterr()
+    text = out.read_text()
+    assert blocks["y"].replace("'", '"') in text.replace("'", '"')
+    assert blocks["z"].replace("'", '"') in text.replace("'", '"')
+    assert "axes y, z were not measured and keep their values" in captured.err
+    # the x axis is the one corrected, and the changes list no value the file never held
+    fixed = read_config(out).model("gyro").terms_of_type("white")[0].N
+    assert fixed > 1.5 * 2e-3 / 2
+    changes = captured.out.split(f"change in {sdf.name}", 1)[1]
+    assert "(x3)" not in changes
+    assert "(x2)" not in changes

@@ -312,7 +312,8 @@ def run(args: argparse.Namespace) -> int:
             "--write-corrected needs --sim-model CONFIG: a simulated record has no config to "
             "correct"
         )
-    loaded = load_sim_model(args, fs, rate_unit(part)) if args.sim_model else None
+    channel = part.channels[0] if part.channels else None
+    loaded = load_sim_model(args, fs, rate_unit(part), channel) if args.sim_model else None
     sim: Any = loaded.model if loaded is not None else _sim_record(args, fs)
     effects = [e.strip() for e in args.effects.split(",") if e.strip()] if args.effects else None
     # auto: on a terminal (a diagnosis takes tens of seconds from 1e5 samples on), and in

@@ -129,8 +129,39 @@ def check_sim_model(args: argparse.Namespace) -> None:
         _noisy(config, sensor, path.name, fmt)
 
 
-def load_sim_model(args: argparse.Namespace, fs: float, units: str | None) -> LoadedSim:
-    """Read ``--sim-model`` in any format; the model comes in the record's rate unit."""
+#: formats that hold each axis apart (an SDF's x, y and z noise blocks)
+PER_AXIS = ("gz-sdf", "gazebo-classic")
+_AXIS = re.compile(r"(?:^|[^a-z0-9])([xyz])$", re.I)
+
+
+def record_axis(channel: str | None) -> tuple[str, bool]:
+    """``(axis, named)``: the axis a channel name ends in (``gyro_y`` -> y), else x, unnamed."""
+    found = _AXIS.search(channel or "")
+    return (found.group(1).lower(), True) if found else ("x", False)
+
+
+def _per_axis(config: ImuConfig, fmt: str, path: Any, rate: float, axis: str) -> ImuConfig:
+    """A per-axis config read for the measured ``axis`` only (its model; the write sets it)."""
+    import dataclasses
+
+    if fmt not in PER_AXIS:
+        return config
+    if axis != "x":
+        from allanite.formats import format_module
+
+        text = read_text_file(path, CONFIG_TEXT)
+        config = format_module(fmt).read(text, rate=rate, axis=axis)
+    return dataclasses.replace(config, axes=(axis,))
+
+
+def load_sim_model(
+    args: argparse.Namespace, fs: float, units: str | None, channel: str | None = None
+) -> LoadedSim:
+    """Read ``--sim-model`` in any format; the model comes in the record's rate unit.
+
+    A per-axis config (an SDF) gives the model of the axis ``channel`` names (``gyro_y``: y;
+    a name without an axis: x), and a corrected write sets only that axis.
+    """
     from pathlib import Path
 
     path = Path(args.sim_model)
@@ -148,6 +179,7 @@ def load_sim_model(args: argparse.Namespace, fs: float, units: str | None) -> Lo
         print(f"note: simulator IMU rate taken from the record: {fs:g} Hz", file=sys.stderr)
     elif config.rate is None and rate is None and fmt != "allanite":
         config = read_config(path, format=fmt, rate=fs)  # rate-dependent laws (AirSim > 1 kHz)
+    config = _per_axis(config, fmt, path, float(config.rate or fs), record_axis(channel)[0])
     sensor = args.sim_sensor or _sensor_of(units)
     _check_sensor(config, sensor, units, path.name, chosen=args.sim_sensor is not None)
     model = _noisy(config, sensor, path.name, fmt)
@@ -431,6 +463,12 @@ def write_corrected(args: argparse.Namespace, loaded: LoadedSim, diagnosis: Any)
     mine = [ln for ln in written.report() if ln.split(" ", 1)[1].startswith(f"{loaded.sensor}:")]
     # the gap the file leaves is the re-check's, never the fitted effects' shrinkage
     what = _UNPROJECTED_GAP.sub("", what) + "; the gap as written: see the re-check"
+    if loaded.config.axes:  # a per-axis format: the axes not measured keep their values
+        kept = ", ".join(a for a in ("x", "y", "z") if a not in loaded.config.axes)
+        what += (
+            f"; only axis {', '.join(loaded.config.axes)} was measured and changed: axes "
+            f"{kept} were not measured and keep their values"
+        )
     print(f"corrected config {args.write_corrected}: {what}", file=sys.stderr)
     for line in written.report():
         print(f"  {line}", file=sys.stderr)

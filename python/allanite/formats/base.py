@@ -70,6 +70,10 @@ class ImuConfig:
     topic : str
         The IMU topic the config names (an SDF's ``<topic>``, Kalibr's ``rostopic``), ``""``
         when it names none; written into formats that name one.
+    axes : tuple of str
+        The axes (``"x"``, ``"y"``, ``"z"``) the models describe, for formats that hold each
+        axis apart (an SDF): a write sets only these and keeps the others as the template has
+        them. Empty: every axis.
     """
 
     gyro: NoiseModel | None = None
@@ -79,6 +83,7 @@ class ImuConfig:
     source_format: str = ""
     notes: tuple[str, ...] = ()
     topic: str = ""
+    axes: tuple[str, ...] = ()
 
     @property
     def sensors(self) -> tuple[str, ...]:
@@ -117,6 +122,7 @@ class ImuConfig:
             source_format=self.source_format,
             notes=self.notes,
             topic=self.topic,
+            axes=self.axes,
         )
 
     def filled_from(self, template: ImuConfig) -> ImuConfig:

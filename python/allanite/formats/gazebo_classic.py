@@ -27,9 +27,9 @@ def sniff(text: str) -> bool:
     return False
 
 
-def read(text: str, *, rate: float | None = None) -> ImuConfig:
+def read(text: str, *, rate: float | None = None, axis: str = "x") -> ImuConfig:
     """Read like gz-sensors, then remove the dynamic bias Gazebo classic does not simulate."""
-    config = gz_sdf.read(text, rate=rate)
+    config = gz_sdf.read(text, rate=rate, axis=axis)
     notes = list(config.notes)
     models = {}
     for sensor in ("gyro", "accel"):

@@ -301,6 +301,8 @@ def write(
         if block is None:
             block = ET.SubElement(imu, BLOCKS[sensor])
         for a in AXES:
+            if config.axes and a not in config.axes and template is not None:
+                continue  # an axis the model does not describe keeps the template's values
             axis_el = _child(block, a)
             if axis_el is None:
                 axis_el = ET.SubElement(block, a)
