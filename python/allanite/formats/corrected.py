@@ -230,12 +230,11 @@ def _bounded(
         rest = NoiseModel(tuple(t for t in out.terms if t.type != kind), out.units)
         scale = _upper_scale(base, rest, diagnosis)
         kept = scale is None or scale >= 1.0
+        coef = base.params[0].name
         new = (
             base
-            if kept
-            else base.with_values(
-                **{base.params[0].name: float(scale) * float(base.values()[base.params[0].name])}
-            )
+            if scale is None or kept
+            else base.with_values(**{coef: scale * base.values()[coef]})
         )
         out = _replace_first(out, kind, new)
         what = what.replace(f"{a.effect} ({_params(a, model)}", f"{a.effect} (not determined")
