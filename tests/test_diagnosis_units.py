@@ -153,4 +153,8 @@ def test_corrected_config_note_uses_the_same_units():
     for model, n in ((MODEL, 0.016), (MODEL.in_units("rad/s"), 0.016 * np.pi / 180.0)):
         diagnosis = SimpleNamespace(significant=True, attribution=[white(n)], explanation=None)
         _, what = corrected_model(model, diagnosis)
-        assert what.startswith("folded in white (N = 0.96 deg/sqrt(h)); gap 100 -> 1"), what
+        # the added white merges with the configured one: the N written is said too
+        assert what.startswith(
+            "folded in white (N = 0.96 deg/sqrt(h) added to the configured white: written "
+            "N = 1.132 deg/sqrt(h)); gap 100 -> 1"
+        ), what

@@ -13,7 +13,7 @@ lists the rest (:mod:`.projection`).
 from __future__ import annotations
 
 import math
-from dataclasses import replace
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -147,6 +147,11 @@ def corrected_model(
 _ADDING = ("white", "rrw", "quantization", "turn_on_bias")
 
 
+def _stated(a: Any, params: dict[str, float]) -> Any:
+    """``a`` as :func:`_params` reads it, with other parameter values and no uncertainty."""
+    return SimpleNamespace(effect=a.effect, term=a.term, params=params, params_sigma={})
+
+
 def _written(a: Any, out: NoiseModel, model: NoiseModel) -> str:
     """What is written for an added term of a type the config already has (they merge).
 
@@ -159,7 +164,7 @@ def _written(a: Any, out: NoiseModel, model: NoiseModel) -> str:
     terms = out.terms_of_type(kind)
     coef = terms[0].params[0].name
     total = math.sqrt(sum(float(t.values()[coef]) ** 2 for t in terms))
-    shown = replace(a, params={coef: total}, params_sigma={})
+    shown = _stated(a, {coef: total})
     return f" added to the configured {kind}: written {_params(shown, model)}"
 
 
@@ -238,7 +243,7 @@ def _bounded(
         )
         out = _replace_first(out, kind, new)
         what = what.replace(f"{a.effect} ({_params(a, model)}", f"{a.effect} (not determined")
-        bound = replace(a, params={k: v for k, v in new.values().items()}, params_sigma={})
+        bound = _stated(a, dict(new.values()))
         tau, record = _deciding(new, rest, diagnosis)
         length = float(diagnosis.meta["n_samples"]) / float(diagnosis.meta["fs"])
         notes.append(
