@@ -771,19 +771,25 @@ def test_fit_prints_what_the_reader_noticed(
 
 
 @pytest.mark.parametrize(
-    ("name", "first", "step", "scale"),
-    [("t_ms", 0.0, 10.0, 1e-3), ("time[us]", 0.0, 1e4, 1e-6), ("stamp", 1.7e18, 1e7, 1e-9)],
+    ("name", "first", "step", "unit"),
+    [
+        ("t_ms", 0.0, 10.0, "milliseconds"),
+        ("time[us]", 0.0, 1e4, "microseconds"),
+        ("stamp", 1.7e18, 1e7, "nanoseconds"),
+        ("header.stamp", 1.7e18, 1e7, "nanoseconds"),
+    ],
 )
-def test_time_stamps_that_are_not_seconds_are_named(
+def test_time_stamps_whose_name_says_the_unit_are_converted(
     tmp_path: Path,
     capsys: pytest.CaptureFixture[str],
     name: str,
     first: float,
     step: float,
-    scale: float,
+    unit: str,
 ) -> None:
-    """Regression: a log with time stamps in ms (``t_ms``) or a Unix time in us/ns was read in
-    seconds without a word: fs 0.1 Hz instead of 100 Hz, N 32 times too large, yet plausible."""
+    """Regression: a log with time stamps in ms (``t_ms``) or ROS ns stamps was read in
+    seconds: fs 0.1 Hz (or 1e-7 Hz) instead of 100 Hz, N 32 times too large. A name stating
+    the unit is converted to seconds with a note."""
     path = tmp_path / "log.csv"
     n = 4000
     stamps = first + np.arange(n) * step  # 100 Hz in the stamps' own unit
@@ -793,14 +799,28 @@ def test_time_stamps_that_are_not_seconds_are_named(
         out.writelines(f"{s:.0f},{r:.10g}\n" for s, r in zip(stamps, rate, strict=True))
     argv = ["fit", str(path), "--time-column", name, "--units", "deg/s"]
     assert main(argv) == 0
-    err = capsys.readouterr().err
-    assert f"allanite fit: note: time column {name!r} is read in seconds (fs = " in err
-    assert f"give --time-scale {scale:g} (time_scale={scale:g})" in err
-    assert main([*argv, "--time-scale", f"{scale:g}"]) == 0
     out, err = capsys.readouterr()
-    assert "time-scale" not in err
+    assert f"time column {name!r} read as {unit} (its name says so), converted to seconds" in err
     value = float(out.split("N = ")[1].split(" deg/sqrt(h)")[0])
     assert abs(value / 0.6 - 1) < 0.05  # 4000 samples: s.e. of N about 1.5 %
+
+
+@pytest.mark.parametrize(("name", "first", "step"), [("t", 1.7e18, 1e7), ("t", 0.0, 1e-8)])
+def test_a_time_column_implying_no_imu_rate_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], name: str, first: float, step: float
+) -> None:
+    """Regression: nanosecond stamps in a column named ``t`` were fitted at fs = 1e-7 Hz."""
+    path = tmp_path / "log.csv"
+    n = 100
+    rate = np.random.default_rng(5).standard_normal(n)
+    with path.open("w") as out:
+        out.write(f"{name},gz\n")
+        out.writelines(f"{first + i * step!r},{r:.10g}\n" for i, r in enumerate(rate))
+    assert main(["fit", str(path), "--time-column", name, "--units", "deg/s"]) != 0
+    err = capsys.readouterr().err
+    assert f"time column {name!r} read in seconds implies fs = " in err
+    assert "--time-scale" in err
+    assert "--fs" in err
 
 
 def test_a_missing_ulog_topic_lists_the_ones_there(

@@ -423,7 +423,7 @@ def make_record(
         return _with_header(record, scale)
     if not np.isfinite(time_scale) or time_scale <= 0:
         raise ValueError(f"time_scale must be a positive number of seconds, got {time_scale!r}")
-    t = np.asarray(arr[:, t_index], dtype=np.float64) * time_scale
+    t, t_notes = _stamps_in_seconds(col_names[t_index], arr[:, t_index], time_scale, fs, source)
     values = np.asarray(samples, dtype=np.float64)
     base = resolve_time(
         t,
@@ -443,7 +443,7 @@ def make_record(
         channels=channels,
         source=source,
         segments=base.segments,
-        warnings=(*base.warnings, *_time_scale_note(col_names[t_index], t, time_scale, base.fs)),
+        warnings=(*t_notes, *base.warnings),
         timing=base.timing,
         scale=scale,
     )
@@ -456,33 +456,49 @@ _TIME_UNIT_SCALE = {"ms": 1e-3, "msec": 1e-3, "us": 1e-6, "usec": 1e-6, "µs": 1
 _TIME_UNIT_SCALE |= {"ns": 1e-9, "nsec": 1e-9}
 
 
-def _time_scale_note(
-    name: str, t: NDArray[np.float64], time_scale: float, fs: float | None
-) -> tuple[str, ...]:
-    """A note when time stamps read as seconds look like milli-, micro- or nanoseconds.
+#: sampling rates (Hz) an IMU record can plausibly have; a time column implying one outside
+#: them is in another unit than the reader assumed
+PLAUSIBLE_FS = (1e-3, 1e6)
+_NS_STAMP_NAME = re.compile(r"stamp|nsec|nanosec", re.IGNORECASE)
 
-    Either the column's name says so (``t_ms``, ``time[us]``) or the first stamp is beyond
-    1e11 s (year 5000): a Unix time in ms (~1.7e12), us (~1.7e15) or ns (~1.7e18). Read as
-    seconds, fs comes out 1e3-1e9 times too low and every coefficient wrong, yet plausible.
+
+def _stamps_in_seconds(
+    name: str, column: NDArray[np.float64], time_scale: float, fs: float | None, source: str
+) -> tuple[NDArray[np.float64], tuple[str, ...]]:
+    """Time stamps in seconds, with a note when the column's name said another unit.
+
+    A ``time_scale`` other than 1 is the user's word. Otherwise a name stating a unit
+    (``t_ms``, ``time[us]``, ``nsec``, ``stamp`` with stamps beyond 1e17 (ROS nanoseconds))
+    is converted with a note. A column whose implied rate is outside :data:`PLAUSIBLE_FS`
+    and whose name says no unit is refused (unless ``fs`` is given), naming the fix.
     """
-    if time_scale != 1.0 or t.size == 0:
-        return ()
+    t = np.asarray(column, dtype=np.float64)
+    if time_scale != 1.0 or t.size < 2:
+        return t * time_scale, ()
     named = _TIME_UNIT_NAME.search(name.strip())
-    if named is not None:
-        scale = _TIME_UNIT_SCALE[named.group(1).lower()]
-        why = f"its name says {named.group(1)}"
-    elif abs(float(t[0])) >= 1e11:
-        first = abs(float(t[0]))
-        scale = 1e-3 if first < 1e14 else 1e-6 if first < 1e17 else 1e-9
-        why = f"the first stamp {float(t[0]):.4g} is no time in seconds (year 5000 is 1e11 s)"
-    else:
-        return ()
-    unit = {1e-3: "milliseconds", 1e-6: "microseconds", 1e-9: "nanoseconds"}[scale]
-    rate = f" (fs = {fs:.4g} Hz)" if fs else ""
-    return (
-        f"time column {name!r} is read in seconds{rate}, but {why}: if the stamps are "
-        f"{unit}, give --time-scale {scale:g} (time_scale={scale:g})",
-    )
+    scale = _TIME_UNIT_SCALE[named.group(1).lower()] if named is not None else None
+    if scale is None and _NS_STAMP_NAME.search(name) and abs(float(t[0])) >= 1e17:
+        scale = 1e-9
+    if scale is not None:
+        unit = {1e-3: "milliseconds", 1e-6: "microseconds", 1e-9: "nanoseconds"}[scale]
+        note = (
+            f"time column {name!r} read as {unit} (its name says so), converted to seconds; "
+            "give --time-scale to override"
+        )
+        return t * scale, (note,)
+    step = float(np.median(np.diff(t)))
+    rate = 1.0 / step if step > 0 else float("inf")
+    low, high = PLAUSIBLE_FS
+    if fs is None and step > 0 and not low <= rate <= high:
+        guess = 1e-9 if abs(float(t[0])) >= 1e17 else 1e-6 if rate < 1e-4 * low else 1e-3
+        raise InputError(
+            f"time column {name!r} read in seconds implies fs = {rate:.4g} Hz, no IMU rate "
+            f"({low:g} to {high:g} Hz); give its unit with --time-scale (e.g. --time-scale "
+            f"{guess:g} for {'ns' if guess == 1e-9 else 'us' if guess == 1e-6 else 'ms'}) "
+            "or the rate with --fs",
+            path=source,
+        )
+    return t, ()
 
 
 def _with_header(record: Record, scale: float | None) -> Record:
