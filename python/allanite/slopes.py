@@ -122,7 +122,11 @@ def rolloff_end(tau: NDArray[np.float64], dev: NDArray[np.float64]) -> float | N
     tau, dev = tau[good], dev[good]
     if tau.size < 3:
         return None
-    slopes = local_slopes(tau, dev)
+    return _rolloff_at(tau, local_slopes(tau, dev))
+
+
+def _rolloff_at(tau: NDArray[np.float64], slopes: NDArray[np.float64]) -> float | None:
+    """:func:`rolloff_end` from the curve's local slopes (computed once by the slope table)."""
     falling = np.flatnonzero(slopes < -0.25)
     if falling.size == 0 or falling[0] == 0 or slopes[: falling[0]].max() < _HUMP_SLOPE:
         return None
@@ -212,7 +216,7 @@ def slope_table(
             )
             start = k
     merged = [r for r in _merge_equal(rows, tau, dev, canon, sensor) if r.n_points >= MIN_POINTS]
-    return _rolloff_rows(merged, rolloff_end(tau, dev))
+    return _rolloff_rows(merged, _rolloff_at(tau, slopes))
 
 
 def _merge_equal(

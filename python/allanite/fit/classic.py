@@ -83,7 +83,7 @@ def classic_readout(
     ok = np.isfinite(t) & np.isfinite(a) & (a > 0) & (t > 0)
     t, a = t[ok], a[ok]
     # a sensor filter's roll-off at the short taus names no term (allanite.slopes)
-    end = rolloff_end(t, a) if t.size >= 3 else None
+    end = rolloff_end(t, a)
     if end is not None:
         t, a = t[t >= end], a[t >= end]
     values: dict[str, float | None] = {}

@@ -197,10 +197,9 @@ def _deciding(term: Term, rest: NoiseModel, diagnosis: Any) -> tuple[float, floa
     measures that tau as this one measures its longest is longer by the same factor, and at
     least :data:`SEVERAL` times this one (the longest tau has few degrees of freedom).
     """
-    view = diagnosis.tau
-    longest = float(view.tau[-1])
+    longest = float(diagnosis.tau.tau[-1])
     dt = 1.0 / float(diagnosis.meta["fs"])
-    record = float(diagnosis.meta["n_samples"]) * dt
+    record = _length(diagnosis)
     tau = np.geomspace(longest, longest * 1e6, 241)
     above = np.asarray(term.avar(tau, dt)) >= 4.0 * np.asarray(rest.avar(tau, dt))
     at = float(tau[int(np.argmax(above))]) if np.any(above) else float(tau[-1])
@@ -211,6 +210,11 @@ def _deciding(term: Term, rest: NoiseModel, diagnosis: Any) -> tuple[float, floa
 
 #: how many times longer than this one a record must be to measure a term at its longest tau
 SEVERAL = 4.0
+
+
+def _length(diagnosis: Any) -> float:
+    """Duration of the diagnosed record in seconds."""
+    return float(diagnosis.meta["n_samples"]) / float(diagnosis.meta["fs"])
 
 
 def _bounded(
@@ -245,7 +249,7 @@ def _bounded(
         what = what.replace(f"{a.effect} ({_params(a, model)}", f"{a.effect} (not determined")
         bound = _stated(a, dict(new.values()))
         tau, record = _deciding(new, rest, diagnosis)
-        length = float(diagnosis.meta["n_samples"]) / float(diagnosis.meta["fs"])
+        length = _length(diagnosis)
         notes.append(
             f"{kind} not determined by this {length:.4g} s record (its rescale sits at the "
             f"search floor x{RESCALE_FLOOR:g}: no {kind} is seen, which bounds it from above); "
